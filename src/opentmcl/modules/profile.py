@@ -1,0 +1,211 @@
+"""Module profiles as data (DESIGN.md "Data-driven modules").
+
+A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
+
+    [module]
+    name = "TMCM-6212"            # canonical name
+    aliases = ["..."]             # other accepted names
+    axes = 6
+    engine = "sixpoint"           # sixpoint | linear | tmc429
+    firmware_version = "6212V105" # string reply of command 136 type 0 (8 chars)
+    firmware_binary = 0x...       # value of the reply of command 136 type 1
+    program_memory = 6144         # TMCL program memory size in commands
+    opcodes = [1, 2, ...]         # opcodes this firmware executes
+    ascii_mode = false            # command 139 / ASCII interface available
+    coordinates = 20              # coordinates per axis (coordinate 0 is RAM only)
+    user_variables = 256          # bank 2 size
+    storable_user_variables = 56  # variables 0..N-1 can be stored in EEPROM
+
+    [[axis_parameter]]            # one per axis parameter of the manual
+    number = 4
+    name = "max_positioning_speed"   # snake_case of the manual's name
+    title = "Maximum positioning speed"
+    description = "The maximum speed used for positioning ramps."
+    min = 0
+    max = 7999774
+    values = []                   # optional: the only allowed values (enumerations)
+    access = "RWE"                # letters of the manual: R read, W write, E storable (STAP), A auto-stored
+    default = 51200
+    unit = "pps"
+
+    [[global_parameter]]          # same fields plus `bank`
+    bank = 0
+    number = 66
+    ...
+
+    [[io]]                        # one per SIO/GIO port
+    bank = 0                      # 0 digital inputs, 1 analog inputs, 2 outputs (per manual)
+    port = 0
+    name = "IN0"
+    kind = "digital"              # digital | analog | output
+    access = "R"                  # R for inputs, RW for outputs
+    min = 0
+    max = 1
+
+    [[interrupt]]                 # interrupt vector table
+    number = 0
+    name = "TI_TIMER0"
+    description = "Timer 0"
+"""
+from __future__ import annotations
+
+import sys
+from dataclasses import dataclass, field
+from functools import cache
+from importlib import resources
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+@dataclass(frozen=True, slots=True)
+class Param:
+    number: int
+    name: str
+    title: str
+    min: int
+    max: int
+    access: str
+    default: int
+    unit: str = ""
+    description: str = ""
+    values: tuple[int, ...] = ()
+    bank: int | None = None
+
+    @property
+    def readable(self) -> bool:
+        return "R" in self.access
+
+    @property
+    def writable(self) -> bool:
+        return "W" in self.access
+
+    @property
+    def storable(self) -> bool:
+        """Can be stored to EEPROM with STAP/STGP."""
+        return "E" in self.access or "A" in self.access
+
+    @property
+    def auto_stored(self) -> bool:
+        return "A" in self.access
+
+    def accepts(self, value: int) -> bool:
+        if self.values:
+            return value in self.values
+        return self.min <= value <= self.max
+
+
+@dataclass(frozen=True, slots=True)
+class IOPort:
+    bank: int
+    port: int
+    name: str
+    kind: str
+    access: str
+    min: int = 0
+    max: int = 1
+
+
+@dataclass(frozen=True, slots=True)
+class Interrupt:
+    number: int
+    name: str
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class ModuleProfile:
+    name: str
+    aliases: tuple[str, ...]
+    axes: int
+    engine: str
+    firmware_version: str
+    firmware_binary: int
+    program_memory: int
+    opcodes: frozenset[int]
+    ascii_mode: bool
+    coordinates: int
+    user_variables: int
+    storable_user_variables: int
+    axis_parameters: dict[int, Param]
+    global_parameters: dict[tuple[int, int], Param]  # (bank, number) -> Param
+    io: dict[tuple[int, int], IOPort]  # (bank, port) -> IOPort
+    interrupts: dict[int, Interrupt]
+    extra: dict = field(default_factory=dict)
+
+    def axis_parameter(self, name_or_number: str | int) -> Param:
+        if isinstance(name_or_number, int):
+            return self.axis_parameters[name_or_number]
+        for p in self.axis_parameters.values():
+            if p.name == name_or_number:
+                return p
+        raise KeyError(name_or_number)
+
+    def global_parameter(self, name_or_number: str | int, bank: int = 0) -> Param:
+        if isinstance(name_or_number, int):
+            return self.global_parameters[(bank, name_or_number)]
+        for p in self.global_parameters.values():
+            if p.name == name_or_number:
+                return p
+        raise KeyError(name_or_number)
+
+
+def _param(d: dict) -> Param:
+    return Param(
+        number=d["number"], name=d["name"], title=d.get("title", d["name"]), min=d["min"], max=d["max"],
+        access=d["access"], default=d.get("default", 0), unit=d.get("unit", ""),
+        description=d.get("description", ""), values=tuple(d.get("values", ())), bank=d.get("bank"),
+    )
+
+
+def parse_profile(data: dict) -> ModuleProfile:
+    m = data["module"]
+    known = {"name", "aliases", "axes", "engine", "firmware_version", "firmware_binary", "program_memory",
+             "opcodes", "ascii_mode", "coordinates", "user_variables", "storable_user_variables"}
+    return ModuleProfile(
+        name=m["name"], aliases=tuple(m.get("aliases", ())), axes=m["axes"], engine=m["engine"],
+        firmware_version=m["firmware_version"], firmware_binary=m["firmware_binary"],
+        program_memory=m["program_memory"], opcodes=frozenset(m["opcodes"]),
+        ascii_mode=m.get("ascii_mode", False), coordinates=m.get("coordinates", 20),
+        user_variables=m.get("user_variables", 256),
+        storable_user_variables=m.get("storable_user_variables", 56),
+        axis_parameters={p["number"]: _param(p) for p in data.get("axis_parameter", [])},
+        global_parameters={(p["bank"], p["number"]): _param(p) for p in data.get("global_parameter", [])},
+        io={(p["bank"], p["port"]): IOPort(p["bank"], p["port"], p["name"], p["kind"], p["access"],
+                                           p.get("min", 0), p.get("max", 1)) for p in data.get("io", [])},
+        interrupts={i["number"]: Interrupt(i["number"], i["name"], i.get("description", ""))
+                    for i in data.get("interrupt", [])},
+        extra={k: v for k, v in m.items() if k not in known},
+    )
+
+
+_FILES = {"TMCM-6212": "tmcm6212.toml", "PD86-1180": "pd86_1180.toml", "PD28-1021": "pd28_1021.toml"}
+
+
+def _normalise(name: str) -> str:
+    return name.strip().upper().replace("_", "-")
+
+
+@cache
+def _all() -> dict[str, ModuleProfile]:
+    out: dict[str, ModuleProfile] = {}
+    for fname in _FILES.values():
+        text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
+        prof = parse_profile(tomllib.loads(text))
+        for key in (prof.name, *prof.aliases):
+            out[_normalise(key)] = prof
+    return out
+
+
+def load_profile(name: str) -> ModuleProfile:
+    """Profile by module name or alias ("TMCM-6212", "PD28-1021", "TMCM-1021", "PD86-1180", "TMCM-1180")."""
+    try:
+        return _all()[_normalise(name)]
+    except KeyError:
+        raise KeyError(f"unknown module {name!r}; known: {', '.join(sorted(_FILES))}") from None
+
+
+def module_names() -> list[str]:
+    return sorted(_FILES)
