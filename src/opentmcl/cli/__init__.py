@@ -11,7 +11,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ["demo"]
+COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug"]
 
 
 class CliError(Exception):

@@ -1,1 +1,29 @@
-"""host."""
+"""Client library: talk to TMCL modules, real or virtual, through byte transports (DESIGN.md "host").
+
+    import opentmcl
+    m = opentmcl.connect("sim://TMCM-6212")
+    m.axes[0].move_to(51200, wait=True)
+    print(m.axes[0].get("actual_position"))
+
+This layer never imports `opentmcl.firmware`, except lazily inside the sim:// factory.
+"""
+from __future__ import annotations
+
+from .client import Client, VersionReply
+from .connect import SCHEMES, connect, open_bus, open_transport
+from .errors import (
+    TmclConnectionError,
+    TmclError,
+    TmclProtocolError,
+    TmclStatusError,
+    TmclTimeout,
+    UnknownParameterError,
+)
+from .module import Axis, Module, profile_for_version
+from .transport import Transport
+
+__all__ = [
+    "SCHEMES", "Axis", "Client", "Module", "TmclConnectionError", "TmclError", "TmclProtocolError",
+    "TmclStatusError", "TmclTimeout", "Transport", "UnknownParameterError", "VersionReply", "connect",
+    "open_bus", "open_transport", "profile_for_version",
+]

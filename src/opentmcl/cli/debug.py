@@ -1,0 +1,248 @@
+"""`opentmcl debug PROGRAM`: an interactive, line-oriented TMCL debugger.
+
+The program is downloaded and verified (132/133/134) into the module at --to URL, or into a
+virtual module in this process (virtual time: `sleep` and WAITs pass instantly). Commands:
+
+  step [N]          execute N instructions (130); a WAIT is waited out
+  next              same as step
+  cont              continue to the next breakpoint or, without breakpoints, until STOP
+  until LABEL|ADDR  run to a label or address ("run to label")
+  break LABEL|ADDR  set a breakpoint (before that instruction runs); `break` lists them
+  delete [L|ADDR]   remove one breakpoint, or all
+  watch EXPR...     add watches: a x pc flags state varN outN inN adcN posN targetN speedN apP.M gpN[.B]
+  unwatch [EXPR]    remove one watch, or all
+  info              status, A, X, PC, flags and the watches
+  list [L|ADDR]     the program around the PC (or an address)
+  run [L|ADDR]      start freely (129) from a label/address (default: current)
+  stop / reset      128 / 131
+  sleep SECONDS     let time pass (virtual modules: instantly)
+  set var N VALUE   SGP N, 2, VALUE
+  quit              leave (the module keeps its state)
+
+Ctrl-C interrupts a running `cont`/`until` and stops the program (128).
+"""
+from __future__ import annotations
+
+import argparse
+import cmd
+import shlex
+import sys
+
+from . import CliError
+from .load import add_connection_options, module_name, read_program
+from .run import DEFAULT_MODULE, open_target
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("debug", help="interactive TMCL debugger: breakpoints, stepping, watches",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("program", help="TMCL source (.tmc) or binary (.bin)")
+    add_connection_options(p, required=False)
+    p.add_argument("--eeprom", help="file-backed EEPROM of the in-process virtual module")
+    p.add_argument("--scenario", metavar="FILE", help="physical-world scenario of the in-process module")
+    p.add_argument("-w", "--watch", action="append", default=[], metavar="EXPR[,EXPR...]",
+                   help="initial watches (repeatable)")
+    p.add_argument("-x", "--commands", metavar="FILE", help="read debugger commands from FILE first")
+    p.set_defaults(func=run)
+
+
+class DebugShell(cmd.Cmd):
+    prompt = "(tmcl) "
+    intro = "OpenTMCL debugger - type help for the commands, quit to leave."
+
+    def __init__(self, debugger, *, stdin=None, stdout=None):
+        super().__init__(stdin=stdin, stdout=stdout)
+        self.dbg = debugger
+        if stdin is not None:
+            self.use_rawinput = False
+
+    # --- output helpers ---------------------------------------------------------------------
+    def say(self, text: str = "") -> None:
+        self.stdout.write(text + "\n")
+        self.stdout.flush()
+
+    def show_stop(self, st) -> None:
+        from ..host.debugger import describe_flags
+
+        where = {0: "stopped", 1: "running", 2: "paused", 3: "reset"}.get(st.mode, str(st.mode))
+        self.say(f"[{where}{', waiting' if st.waiting else ''}] {self.dbg.line(st.pc).strip()}")
+        self.say(f"  A={st.accumulator} X={st.x_register} PC={st.pc} flags={describe_flags(st.flags)}")
+        for name, value in self.dbg.watch_values():
+            self.say(f"  {name} = {value}")
+
+    def onecmd(self, line):
+        from ..host import TmclError
+        from ..host.debugger import DebugError
+
+        try:
+            return super().onecmd(line)
+        except (DebugError, TmclError, ValueError) as exc:
+            self.say(f"error: {exc}")
+        except KeyboardInterrupt:
+            self.dbg.loader.stop()
+            self.say("interrupted; program stopped")
+            self.show_stop(self.dbg.status())
+        return False
+
+    def emptyline(self):
+        return False
+
+    def default(self, line):
+        self.say(f"unknown command {line.split()[0]!r}; type help")
+
+    def do_EOF(self, arg):  # noqa: N802 - cmd.Cmd's name for end of input
+        self.say()
+        return True
+
+    # --- commands ---------------------------------------------------------------------------
+    def do_quit(self, arg):
+        """quit: leave the debugger"""
+        return True
+
+    do_q = do_quit
+
+    def do_step(self, arg):
+        """step [N]: execute N instructions (default 1)"""
+        n = int(arg) if arg.strip() else 1
+        self.show_stop(self.dbg.step(n))
+
+    do_s = do_step
+    do_next = do_step
+
+    def do_cont(self, arg):
+        """cont: continue to the next breakpoint, or until the program stops"""
+        self.show_stop(self.dbg.cont())
+
+    do_c = do_cont
+
+    def do_until(self, arg):
+        """until LABEL|ADDR: run to a label or address"""
+        if not arg.strip():
+            self.say("usage: until LABEL|ADDR")
+            return
+        self.show_stop(self.dbg.until(arg))
+
+    def do_break(self, arg):
+        """break [LABEL|ADDR]: set a breakpoint, or list them"""
+        if not arg.strip():
+            for addr in sorted(self.dbg.breakpoints):
+                self.say(self.dbg.line(addr))
+            if not self.dbg.breakpoints:
+                self.say("no breakpoints")
+            return
+        addr = self.dbg.address(arg)
+        self.dbg.breakpoints.add(addr)
+        self.say(f"breakpoint at {addr} {self.dbg.where(addr)}".rstrip())
+
+    do_b = do_break
+
+    def do_delete(self, arg):
+        """delete [LABEL|ADDR]: remove a breakpoint, or all"""
+        if arg.strip():
+            self.dbg.breakpoints.discard(self.dbg.address(arg))
+        else:
+            self.dbg.breakpoints.clear()
+
+    def do_watch(self, arg):
+        """watch EXPR...: watch values (a x pc flags state varN outN inN adcN posN targetN speedN apP.M gpN[.B])"""
+        from ..host.debugger import parse_watches
+
+        if not arg.strip():
+            for name, value in self.dbg.watch_values():
+                self.say(f"  {name} = {value}")
+            return
+        self.dbg.watches.extend(parse_watches(arg))
+        for name, value in self.dbg.watch_values():
+            self.say(f"  {name} = {value}")
+
+    def do_unwatch(self, arg):
+        """unwatch [EXPR]: remove a watch, or all"""
+        name = arg.strip().lower()
+        self.dbg.watches[:] = [w for w in self.dbg.watches if name and w.name != name]
+
+    def do_info(self, arg):
+        """info: status, registers, flags and watches"""
+        self.show_stop(self.dbg.status())
+
+    do_i = do_info
+
+    def do_list(self, arg):
+        """list [LABEL|ADDR]: program listing around the PC or an address"""
+        center = self.dbg.address(arg) if arg.strip() else self.dbg.status().pc
+        end = len(self.dbg.instructions) or center + 1
+        for addr in range(max(0, center - 3), min(end, center + 7)):
+            marker = ">" if addr == center else " "
+            self.say(marker + self.dbg.line(addr))
+
+    do_l = do_list
+
+    def do_run(self, arg):
+        """run [LABEL|ADDR]: run freely (129) from a label/address or the current PC"""
+        self.dbg.loader.run(self.dbg.address(arg) if arg.strip() else None)
+        self.say("running")
+
+    def do_stop(self, arg):
+        """stop: stop the program (128)"""
+        self.dbg.loader.stop()
+        self.show_stop(self.dbg.status())
+
+    def do_reset(self, arg):
+        """reset: reset the program (131): PC, stack, A, X and flags to 0"""
+        self.dbg.loader.reset()
+        self.show_stop(self.dbg.status())
+
+    def do_sleep(self, arg):
+        """sleep SECONDS: let time pass"""
+        seconds = float(arg)
+        if seconds < 0:
+            raise ValueError("seconds must be >= 0")
+        self.dbg.loader.client.sleep(seconds)
+        self.show_stop(self.dbg.status())
+
+    def do_set(self, arg):
+        """set var N VALUE: set a user variable (SGP N, 2, VALUE)"""
+        parts = shlex.split(arg)
+        if len(parts) != 3 or parts[0] != "var":
+            self.say("usage: set var N VALUE")
+            return
+        self.dbg.loader.request(9, int(parts[1], 0), 2, int(parts[2], 0))
+        self.say(f"var{int(parts[1], 0)} = {int(parts[2], 0)}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..host import TmclError
+    from ..host.debugger import DebugError, Debugger, parse_watches
+    from ..host.loader import Loader
+
+    client, name = open_target(args)
+    try:
+        module = client.module(args.address, name)
+        if name is None and args.program.lower().endswith(".tmc"):
+            name = module_name(module, args.module)
+        program = read_program(args.program, name or args.module or DEFAULT_MODULE, args.include)
+        loader = Loader(module)
+        try:
+            loader.download(program.instructions)
+            loader.reset()
+            specs = [s for item in args.watch for s in item.split(",") if s.strip()]
+            dbg = Debugger(loader, program.instructions, program.labels, program.source,
+                           watches=parse_watches(specs))
+        except (TmclError, DebugError) as exc:
+            raise CliError(str(exc)) from None
+        shell = DebugShell(dbg)
+        print(f"loaded {len(program.instructions)} instructions from {program.filename}, verified")
+        if args.commands:
+            try:
+                with open(args.commands, encoding="utf-8") as fh:
+                    for line in fh:
+                        if shell.onecmd(line.strip()):
+                            return 0
+            except OSError as exc:
+                raise CliError(f"cannot read {args.commands}: {exc.strerror or exc}") from None
+        try:
+            shell.cmdloop()
+        except KeyboardInterrupt:
+            print(file=sys.stderr)
+    finally:
+        client.close()
+    return 0

@@ -1,0 +1,64 @@
+"""`opentmcl demo`: a virtual TMCM-6212 runs a few moves in virtual time and prints a table."""
+from __future__ import annotations
+
+import argparse
+
+from . import CliError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("demo", help="run a virtual module through a few moves and print a table")
+    p.add_argument("--module", default="TMCM-6212", help="module type (default TMCM-6212)")
+    p.add_argument("--duration", type=float, default=2.0, help="virtual seconds to run (default 2)")
+    p.add_argument("--interval", type=float, default=0.1, help="table row interval in seconds (default 0.1)")
+    p.set_defaults(func=run)
+
+
+def _plan(vm) -> list[tuple[int, int, int, int]]:
+    """Requests (command, type, motor, value): each axis gets its own ramp and target."""
+    reqs = []
+    fast = vm.profile.engine != "tmc429"
+    for axis in range(vm.profile.axes):
+        speed = (20000 + 10000 * axis) if fast else 400 + 200 * axis
+        accel = (40000 + 20000 * axis) if fast else 100 + 50 * axis
+        reqs += [(5, 4, axis, speed), (5, 5, axis, accel)]
+        if axis % 3 == 2:
+            reqs.append((1, 0, axis, speed // 2))       # ROR: velocity mode
+        else:
+            sign = 1 if axis % 2 == 0 else -1
+            reqs.append((4, 0, axis, sign * (12000 + 8000 * axis) * (1 if fast else 1)))  # MVP ABS
+    return reqs
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..firmware.vm import VirtualModule
+
+    if args.interval <= 0 or args.duration <= 0:
+        raise CliError("--duration and --interval must be positive")
+    try:
+        vm = VirtualModule(args.module)
+    except KeyError as exc:
+        raise CliError(exc.args[0]) from None
+    for cmd, type_, motor, value in _plan(vm):
+        reply = vm.request(cmd, type_, motor, value)
+        if reply is None or reply.status != 100:
+            raise CliError(f"module refused command {cmd} {type_} {motor} {value}")
+    unit = "pps" if vm.profile.engine != "tmc429" else "internal"
+    print(f"Virtual {vm.profile.name} (firmware {vm.profile.firmware_version}), virtual time; "
+          f"position in microsteps, velocity in {unit}")
+    head = "  time/s " + "".join(f"| axis {a}: position  velocity " for a in range(vm.profile.axes))
+    print(head)
+    print("-" * len(head))
+    steps = round(args.duration / args.interval)
+    for i in range(steps + 1):
+        if i:
+            vm.advance(args.interval)
+        cells = []
+        for a in range(vm.profile.axes):
+            pos = vm.request(6, 1, a).value
+            vel = vm.request(6, 3, a).value
+            cells.append(f"| {pos:>16} {vel:>9} ")
+        print(f"{vm.time:8.3f} " + "".join(cells))
+    reached = [a for a in range(vm.profile.axes) if vm.request(6, 8, a).value]
+    print(f"position reached (AP8) on axes: {reached or 'none'}")
+    return 0

@@ -1,0 +1,62 @@
+"""`opentmcl disasm OUT.bin`: turn a binary program file back into TMCL source."""
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+from . import CliError
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("disasm", help="disassemble a binary program (.bin) to TMCL source",
+                       description="Disassemble an 8-byte-record TMCL binary file; the output "
+                       "re-assembles to identical bytes.")
+    p.add_argument("binary", help="binary program file")
+    p.add_argument("-o", "--output", help="source output file (default: stdout)")
+    p.add_argument("-s", "--symbols", metavar="FILE",
+                   help="label table (as written by 'opentmcl asm -s') to name jump targets")
+    p.add_argument("-m", "--module", help="use this module's bundled names (AP..., GP..., TI_..., Motor<n>)")
+    p.add_argument("--no-comments", action="store_true", help="omit the '// address' comments")
+    p.set_defaults(func=run)
+
+
+def _read_symbols(path: str) -> dict[str, int]:
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
+    out = {}
+    for n, line in enumerate(text.splitlines(), 1):
+        if not line.strip():
+            continue
+        parts = line.split()
+        if len(parts) != 2 or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", parts[0]) or not parts[1].isdigit():
+            raise CliError(f"{path}:{n}: expected 'NAME ADDRESS'")
+        out[parts[0]] = int(parts[1])
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..lang.binfile import BinFileError
+    from ..lang.disassembler import disassemble
+
+    try:
+        data = Path(args.binary).read_bytes()
+    except OSError as exc:
+        raise CliError(f"cannot read {args.binary}: {exc.strerror or exc}") from None
+    labels = _read_symbols(args.symbols) if args.symbols else None
+    try:
+        text = disassemble(data, labels=labels, comments=not args.no_comments, module=args.module)
+    except BinFileError as exc:
+        raise CliError(f"{args.binary}: {exc}") from None
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+    if args.output:
+        try:
+            Path(args.output).write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise CliError(f"cannot write {args.output}: {exc.strerror or exc}") from None
+    else:
+        print(text, end="")
+    return 0

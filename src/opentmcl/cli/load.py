@@ -1,0 +1,116 @@
+"""`opentmcl load PROGRAM --to URL`: download a TMCL program into a module and verify it.
+
+PROGRAM is TMCL source (.tmc, assembled for the module) or a TMCL-IDE binary file (.bin).
+The download is what TMCL-IDE does: command 132 <start>, every instruction (each answered
+with status 101), 133, then every address read back with 134 and compared (TMCM-6212
+manual 3.6.36). `--run` starts the program afterwards (129).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from . import CliError
+
+ENV_URL = "OPENTMCL_URL"
+
+
+@dataclass
+class LoadedProgram:
+    """Instructions plus what the debugger and `run` show about them (labels, source lines)."""
+
+    instructions: list
+    labels: dict[str, int] = field(default_factory=dict)
+    source: list = field(default_factory=list)   # per address: lang SourceLine or None
+    filename: str = ""
+
+
+def read_program(path: str, module: str | None, include: list[str] | None = None) -> LoadedProgram:
+    """Assemble a .tmc file (for `module`) or read a .bin file; CliError on any problem."""
+    from ..lang.assembler import AsmError, assemble_file
+    from ..lang.binfile import BinFileError, decode
+
+    p = Path(path)
+    if p.suffix.lower() == ".bin":
+        try:
+            code = decode(p.read_bytes())
+        except OSError as exc:
+            raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
+        except BinFileError as exc:
+            raise CliError(f"{path}: {exc}") from None
+        return LoadedProgram(code, {}, [None] * len(code), str(p))
+    try:
+        prog = assemble_file(p, module=module, include_path=include or [])
+    except AsmError as exc:
+        raise CliError(str(exc)) from None
+    return LoadedProgram(prog.instructions, dict(prog.labels), list(prog.source), str(p))
+
+
+def add_connection_options(p: argparse.ArgumentParser, *, required: bool) -> None:
+    p.add_argument("--to", dest="url", default=os.environ.get(ENV_URL),
+                   help="module URL: sim://TMCM-6212, tcp://HOST:PORT, serial:///dev/ttyUSB0?baud=9600, "
+                        f"can://socketcan/can0?id=1 (default ${ENV_URL})"
+                        + ("" if required else "; without it a virtual module runs in this process"))
+    p.add_argument("--address", type=int, default=1, help="module address (default 1)")
+    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each reply (default 5)")
+    p.add_argument("-m", "--module", help="module type for assembling .tmc source (default: asked from the "
+                   "module with command 136, or TMCM-6212 for a new virtual module)")
+    p.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
+                   help="#include search directory (repeatable)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("load", help="download a TMCL program into a module and verify it",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("program", help="TMCL source (.tmc) or binary (.bin)")
+    add_connection_options(p, required=True)
+    p.add_argument("--start", type=int, default=0, help="program memory address to load at (default 0)")
+    p.add_argument("--no-verify", action="store_true", help="do not read the program back (134)")
+    p.add_argument("--run", action="store_true", help="start the program after loading (129)")
+    p.set_defaults(func=run)
+
+
+def module_name(module, given: str | None) -> str:
+    """The module type: --module, else the profile found from the version string (136)."""
+    from ..host import TmclError
+
+    if given:
+        return given
+    try:
+        return module.profile.name
+    except (TmclError, KeyError) as exc:
+        raise CliError(f"cannot tell the module type ({exc}); give --module") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..host import TmclError, open_bus
+    from ..host.loader import Loader, LoaderError
+
+    if not args.url:
+        raise CliError(f"no module URL: give --to URL (or set ${ENV_URL})")
+    if args.start < 0:
+        raise CliError("--start must be >= 0")
+    try:
+        client = open_bus(args.url, address=args.address, timeout=args.timeout)
+    except (TmclError, ValueError) as exc:
+        raise CliError(str(exc)) from None
+    try:
+        module = client.module(args.address)
+        name = module_name(module, args.module) if args.program.lower().endswith(".tmc") else args.module
+        program = read_program(args.program, name, args.include)
+        loader = Loader(module)
+        try:
+            loader.download(program.instructions, start=args.start, verify=not args.no_verify)
+            end = args.start + len(program.instructions) - 1
+            check = "" if args.no_verify else ", verified"
+            print(f"loaded {len(program.instructions)} instructions at {args.start}..{end}{check}")
+            if args.run:
+                loader.run(args.start)
+                print(f"running from {args.start}")
+        except (TmclError, LoaderError) as exc:
+            raise CliError(str(exc)) from None
+    finally:
+        client.close()
+    return 0

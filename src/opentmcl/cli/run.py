@@ -1,0 +1,141 @@
+"""`opentmcl run PROGRAM`: download a TMCL program, run it and print what changes.
+
+Without --to, a virtual module (--module, default TMCM-6212) runs in this process in virtual
+time: the run is deterministic and takes as long as the computation, not as long as the
+program. With --to URL the program runs on that module in real time.
+
+The program is downloaded as TMCL-IDE does (132, the instructions, 133, verify with 134),
+started with 129 (from --from, default 0), and the watched values are read every --sample
+seconds; a line is printed whenever one of them changed:
+
+    time [s]  changes
+       0.000  state=run out0=0 out3=0 pos0=0
+       0.500  out3=1
+
+The run ends when the program stops (STOP) or after --seconds. Watch expressions: see
+`opentmcl debug` (a, x, pc, flags, state, varN, outN, inN, adcN, posN, targetN, speedN, apP.M,
+gpN[.B]); default: state, the module's outputs and the position of motor 0.
+"""
+from __future__ import annotations
+
+import argparse
+
+from . import CliError
+from .load import add_connection_options, module_name, read_program
+
+DEFAULT_MODULE = "TMCM-6212"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("run", help="download a TMCL program, run it and print the watched values",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("program", help="TMCL source (.tmc) or binary (.bin)")
+    add_connection_options(p, required=False)
+    p.add_argument("-t", "--seconds", type=float, default=10.0, help="run at most this long (default 10)")
+    p.add_argument("--sample", type=float, default=0.01, help="seconds between two looks (default 0.01)")
+    p.add_argument("-w", "--watch", action="append", default=[], metavar="EXPR[,EXPR...]",
+                   help="values to print when they change (repeatable)")
+    p.add_argument("--from", dest="start", type=int, default=0, help="start address for 129 (default 0)")
+    p.add_argument("--eeprom", help="file-backed EEPROM of the in-process virtual module")
+    p.add_argument("--scenario", metavar="FILE", help="physical-world scenario for the in-process "
+                   "virtual module (switches, loads, inputs over time)")
+    p.set_defaults(func=run)
+
+
+def _scenario(path: str | None):
+    """Hook for the physical-world scenarios: loaded by opentmcl.motion.scenario when present."""
+    if path is None:
+        return None
+    try:
+        from ..motion.scenario import load_scenario  # type: ignore[attr-defined]
+    except ImportError:
+        raise CliError("scenario files are not supported by this version") from None
+    try:
+        return load_scenario(path)
+    except (OSError, ValueError, KeyError) as exc:
+        raise CliError(f"cannot load scenario {path}: {exc}") from None
+
+
+def open_target(args: argparse.Namespace):
+    """(client, module name) for --to URL, or for a new in-process virtual module."""
+    from ..host import Client, TmclError, open_bus
+    from ..host.transports.inprocess import InProcessTransport
+
+    if args.url:
+        if args.scenario or args.eeprom:
+            raise CliError("--scenario and --eeprom apply to the in-process virtual module only (no --to)")
+        try:
+            client = open_bus(args.url, address=args.address, timeout=args.timeout)
+        except (TmclError, ValueError) as exc:
+            raise CliError(str(exc)) from None
+        return client, None
+    from ..firmware.eeprom import EepromError
+    from ..firmware.vm import VirtualModule
+
+    name = args.module or DEFAULT_MODULE
+    try:
+        vm = VirtualModule(name, address=args.address, eeprom=args.eeprom, scenario=_scenario(args.scenario))
+    except KeyError as exc:
+        raise CliError(str(exc.args[0] if exc.args else exc)) from None
+    except EepromError as exc:
+        raise CliError(str(exc)) from None
+    return Client(InProcessTransport(vm, clock="virtual"), address=args.address, timeout=args.timeout), name
+
+
+def default_watches(profile) -> list[str]:
+    outs = sorted(port for (bank, port), p in profile.io.items() if bank == 2 and p.kind == "output")
+    return ["state", *(f"out{port}" for port in outs), "pos0"]
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..host import TmclError
+    from ..host.debugger import DebugError, parse_watches, read_watch
+    from ..host.loader import Loader
+
+    if args.seconds < 0 or args.sample <= 0:
+        raise CliError("--seconds must be >= 0 and --sample > 0")
+    client, name = open_target(args)
+    try:
+        module = client.module(args.address, name)
+        if name is None and args.program.lower().endswith(".tmc"):
+            name = module_name(module, args.module)
+        program = read_program(args.program, name or args.module, args.include)
+        try:
+            specs = [s for item in args.watch for s in item.split(",") if s.strip()]
+            watches = parse_watches(specs or default_watches(module.profile))
+        except DebugError as exc:
+            raise CliError(str(exc)) from None
+        loader = Loader(module)
+        try:
+            loader.download(program.instructions)
+            loader.run(args.start)
+            _trace(loader, watches, read_watch, args)
+        except TmclError as exc:
+            raise CliError(str(exc)) from None
+    finally:
+        client.close()
+    return 0
+
+
+def _trace(loader, watches, read_watch, args) -> None:
+    print(f"{'time [s]':>9}  changes", flush=True)
+    last: dict[str, object] = {}
+    elapsed, steps = 0.0, 0
+    total = round(args.seconds / args.sample)
+    while True:
+        values = [(w.name, read_watch(loader, w)) for w in watches]
+        changed = [f"{n}={v}" for n, v in values if last.get(n, object()) != v]
+        last.update(values)
+        if changed:
+            print(f"{elapsed:9.3f}  {' '.join(changed)}", flush=True)
+        st = loader.status()
+        if st.mode != 1:
+            print(f"program stopped at address {st.pc} after {elapsed:.3f} s (A={st.accumulator}, "
+                  f"X={st.x_register})")
+            return
+        if steps >= total:
+            print(f"{elapsed:.3f} s elapsed, program still running at address {st.pc}")
+            return
+        loader.client.sleep(args.sample)
+        steps += 1
+        elapsed = steps * args.sample

@@ -1,0 +1,113 @@
+"""`opentmcl send "MVP ABS, 0, 1000" --to URL`: send direct-mode commands and print the replies.
+
+An instruction is written as in TMCL source (TMCM-6212 manual 3.6: ``MVP ABS, 0, 1000``,
+``GAP 1, 0``, ``SAP 4, 0, 51200``) or, for control commands that have no mnemonic (manual
+3.6.36), as numbers ``COMMAND, TYPE, MOTOR, VALUE`` (e.g. ``136, 0, 0, 0``). Each reply's value
+is printed on its own line (the text for the version string of command 136 type 0).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+
+from . import CliError
+
+ENV_URL = "OPENTMCL_URL"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("send", help="send TMCL direct-mode commands to a module and print the replies",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("instructions", nargs="+", metavar="INSTRUCTION",
+                   help='e.g. "MVP ABS, 0, 1000", "GAP 1, 0" or "136, 0, 0, 0"')
+    p.add_argument("--to", dest="url", default=os.environ.get(ENV_URL),
+                   help=f"module URL: sim://TMCM-6212, tcp://HOST:PORT, serial:///dev/ttyUSB0?baud=9600, "
+                        f"can://socketcan/can0?id=1 (default ${ENV_URL})")
+    p.add_argument("--address", type=int, default=None,
+                   help="module address (default 1, or the address a sim:// URL sets)")
+    p.add_argument("--host-address", type=int, default=2, help="reply (host) address (default 2)")
+    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each reply (default 5)")
+    p.add_argument("-v", "--verbose", action="store_true", help="print the whole reply, not just the value")
+    p.set_defaults(func=run)
+
+
+def parse(text: str) -> tuple[int, int, int, int]:
+    """(command, type, motor, value) of one instruction; CliError if it cannot be read.
+
+    Mnemonic forms go through the assembler (symbolic names, expressions such as ``51200*2``);
+    control commands are written as up to four numbers.
+    """
+    from ..protocol.opcodes import parse_number
+
+    parts = [p.strip() for p in text.replace(",", " ").split()]
+    if parts and parse_number(parts[0]) is not None:  # numeric form for control commands
+        nums = [parse_number(p) for p in parts]
+        if len(nums) > 4 or any(n is None for n in nums):
+            raise CliError(f"{text!r}: expected COMMAND, TYPE, MOTOR, VALUE as numbers")
+        return tuple((nums + [0, 0, 0])[:4])  # type: ignore[return-value]
+    return _parse_mnemonic(text)
+
+
+def _parse_mnemonic(text: str) -> tuple[int, int, int, int]:
+    try:
+        from ..lang.assembler import AsmError, assemble
+    except ImportError:  # pragma: no cover - the assembler is part of the package
+        from ..protocol.opcodes import OperandError, UnknownCommand, parse_instruction
+        try:
+            return parse_instruction(text)
+        except (OperandError, UnknownCommand) as exc:
+            raise CliError(str(exc)) from None
+    if "\n" in text:
+        raise CliError(f"{text!r}: one instruction per argument")
+    try:
+        program = assemble(text, filename="<send>", append_stop=False)
+    except AsmError as exc:
+        raise CliError(f"{text!r}: {exc.message}") from None
+    if len(program.instructions) != 1:
+        raise CliError(f"{text!r}: expected one instruction")
+    ins = program.instructions[0]
+    return ins.command, ins.type, ins.motor, ins.value
+
+
+def _show(reply, verbose: bool) -> str:
+    from ..host import VersionReply
+    from ..protocol.replies import MemoryReply
+    from ..protocol.status import message
+
+    if isinstance(reply, VersionReply):
+        return f"host {reply.reply_address}: {reply.text}" if verbose else reply.text
+    if reply is None:
+        return "(no reply)"
+    if isinstance(reply, MemoryReply):  # command 134: the stored instruction
+        from ..protocol.opcodes import format_instruction
+
+        fields = (reply.command, reply.type, reply.motor, reply.value)
+        return format_instruction(*fields) or ", ".join(map(str, fields))
+    if not verbose:
+        return str(reply.value)
+    return (f"host {reply.reply_address}, module {reply.module_address}, status {reply.status} "
+            f"({message(reply.status)}), command {reply.command}, value {reply.value}")
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..host import TmclError, open_bus
+
+    if not args.url:
+        raise CliError(f"no module URL: give --to URL (or set ${ENV_URL})")
+    requests = [parse(text) for text in args.instructions]  # all parsed before anything is sent
+    if args.timeout <= 0:
+        raise CliError("--timeout must be positive")
+    try:
+        client = open_bus(args.url, address=args.address, timeout=args.timeout, host_address=args.host_address)
+    except (TmclError, ValueError) as exc:
+        raise CliError(str(exc)) from None
+    try:
+        for command, type_, motor, value in requests:
+            try:
+                reply = client.request(command, type_, motor, value)
+            except (TmclError, ValueError, TypeError) as exc:
+                raise CliError(str(exc)) from None
+            print(_show(reply, args.verbose), flush=True)
+    finally:
+        client.close()
+    return 0

@@ -1,0 +1,237 @@
+"""`opentmcl serve`: host virtual modules in real time on TCP, a pty and/or CAN.
+
+    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH]]
+                   [--can virtual:CH | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
+
+Several --module options put several modules on one bus; the n-th --address,
+--eeprom and --scenario belong to the n-th --module (a module without
+--address gets the next free address). Without any endpoint option the
+server listens on tcp 127.0.0.1:2323. Ctrl-C or SIGTERM stops it and flushes
+the EEPROM files. See docs/endpoints.md.
+"""
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+
+from . import CliError
+
+DEFAULT_TCP = "127.0.0.1:2323"
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("serve", help="host virtual modules on TCP, a pty or CAN in real time",
+                              description=__doc__.split("\n\n")[0])
+    p.add_argument("--module", "-m", action="append", required=True, metavar="NAME",
+                   help="module type, e.g. TMCM-6212 (repeat for several modules on one bus)")
+    p.add_argument("--address", "-a", action="append", type=_address, default=[], metavar="N",
+                   help="RS485 module address (global parameter 66) of the n-th module")
+    p.add_argument("--tcp", nargs="?", const=DEFAULT_TCP, metavar="[HOST:]PORT",
+                   help=f"serve raw 9-byte frames on TCP (default {DEFAULT_TCP}); loopback only unless --host")
+    p.add_argument("--host", metavar="ADDR",
+                   help="bind TCP to this address instead of loopback (reachable from the network!)")
+    p.add_argument("--max-clients", type=int, default=4, metavar="N", help="TCP clients at once (default 4)")
+    p.add_argument("--pty", action="store_true", help="create a pseudo-terminal and print its path")
+    p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
+    p.add_argument("--can", metavar="INTERFACE:CHANNEL",
+                   help="serve on a python-can bus, e.g. virtual:opentmcl or socketcan:vcan0")
+    p.add_argument("--eeprom", action="append", default=[], metavar="FILE",
+                   help="EEPROM file of the n-th module (created if missing)")
+    p.add_argument("--scenario", action="append", default=[], metavar="FILE",
+                   help="scenario file of the n-th module")
+    p.add_argument("--gap", type=float, default=0.1, metavar="SECONDS",
+                   help="silence after which a partial serial frame is discarded (default 0.1)")
+    p.add_argument("--pace", action="store_true",
+                   help="send reply bytes at the module's RS485 baud rate (global parameter 65)")
+    p.set_defaults(func=run)
+
+
+def _address(text: str) -> int:
+    import argparse
+
+    try:
+        value = int(text, 0)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not 1 <= value <= 255:
+        raise argparse.ArgumentTypeError("module address must be 1..255 (manual 5.1, parameter 66)")
+    return value
+
+
+def parse_hostport(text: str) -> tuple[str | None, int]:
+    """``PORT``, ``HOST:PORT`` or ``[IPv6]:PORT`` -> (host or None, port)."""
+    host: str | None = None
+    port_text = text
+    if text.startswith("["):
+        host, sep, rest = text[1:].partition("]")
+        if not sep or not rest.startswith(":"):
+            raise CliError(f"bad TCP address {text!r}; use [HOST]:PORT")
+        port_text = rest[1:]
+    elif ":" in text:
+        host, _, port_text = text.rpartition(":")
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise CliError(f"bad TCP port in {text!r}") from None
+    if not 0 <= port <= 65535:
+        raise CliError(f"TCP port {port} out of range 0..65535")
+    return (host or None), port
+
+
+def assign_addresses(count: int, given: list[int]) -> list[int]:
+    """Addresses for `count` modules: the given ones, then the next free ones."""
+    if len(given) > count:
+        raise CliError("more --address options than --module options")
+    out = list(given)
+    candidate = 1
+    while len(out) < count:
+        while candidate in out:
+            candidate += 1
+        out.append(candidate)
+    if len(set(out)) != len(out):
+        raise CliError(f"module addresses must be distinct on one bus, got {out}")
+    if max(out) > 255:
+        raise CliError("too many modules for the address range 1..255")
+    return out
+
+
+def load_scenario(path: str | None):
+    """A scenario file loaded by opentmcl.motion.scenario (the same hook as `opentmcl run`)."""
+    if path is None:
+        return None
+    try:
+        from ..motion.scenario import load_scenario as load  # type: ignore[attr-defined]
+    except ImportError:
+        raise CliError("scenario files are not supported by this version") from None
+    try:
+        return load(path)
+    except (OSError, ValueError, KeyError) as exc:
+        raise CliError(f"cannot load scenario {path}: {exc}") from None
+
+
+def build_modules(args) -> list:
+    from ..firmware.eeprom import EepromError
+    from ..firmware.vm import VirtualModule
+
+    names = args.module
+    addresses = assign_addresses(len(names), args.address)
+    for option in ("eeprom", "scenario"):
+        if len(getattr(args, option)) > len(names):
+            raise CliError(f"more --{option} options than --module options")
+    modules = []
+    for i, (name, address) in enumerate(zip(names, addresses, strict=True)):
+        eeprom = args.eeprom[i] if i < len(args.eeprom) else None
+        scenario = load_scenario(args.scenario[i] if i < len(args.scenario) else None)
+        try:
+            modules.append(VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario))
+        except KeyError as exc:
+            raise CliError(f"unknown module {name!r}: {exc.args[0] if exc.args else ''}") from None
+        except EepromError as exc:
+            raise CliError(str(exc)) from None
+    return modules
+
+
+def build_server(args, out=sys.stdout, err=sys.stderr):
+    """The Server with its endpoints, not started."""
+    from ..server import CanServer, PtyServer, Server, TcpServer
+    from ..server.tcp import is_loopback
+
+    if args.gap <= 0:
+        raise CliError("--gap must be positive")
+    if args.max_clients < 1:
+        raise CliError("--max-clients must be at least 1")
+    if args.link and not args.pty:
+        args.pty = True
+    tcp_spec = args.tcp
+    if tcp_spec is None and not args.pty and not args.can:
+        tcp_spec = DEFAULT_TCP
+    modules = build_modules(args)
+    if len(modules) > 1:
+        # Several modules on one CAN bus need distinct CAN IDs (GP 71, default 1 on every
+        # module): each gets its serial address as CAN ID, in RAM only (docs/notes/endpoints.md).
+        from ..server import vmapi
+
+        for vm in modules:
+            vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+    server = Server(modules)
+    if tcp_spec is not None or args.host:
+        host, port = parse_hostport(tcp_spec or DEFAULT_TCP)
+        if args.host:
+            host = args.host
+        host = host or "127.0.0.1"
+        if not is_loopback(host):
+            if not args.host:
+                raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
+            print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
+                  "anyone who can connect can move the motors", file=err)
+        server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
+                             pace_bytes=args.pace))
+    if args.pty:
+        if sys.platform == "win32":
+            raise CliError("--pty needs a POSIX system")
+        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace))
+    if args.can:
+        interface, sep, channel = args.can.partition(":")
+        if not sep or not interface or not channel:
+            raise CliError(f"bad --can {args.can!r}; use INTERFACE:CHANNEL, e.g. virtual:opentmcl")
+        server.add(CanServer(server.bus, interface, channel))
+    return server
+
+
+def describe(server) -> list[str]:
+    """Lines telling the user how to connect."""
+    from ..server import CanServer, PtyServer, TcpServer, vmapi
+
+    lines = []
+    for vm in server.modules:
+        name = getattr(getattr(vm, "profile", None), "name", type(vm).__name__)
+        can_id = vmapi.global_param(vm, vmapi.GP_CAN_ID)
+        lines.append(f"module {name} at address {vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS)}"
+                     f" (CAN ID {can_id}, reply ID {vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)})")
+    for ep in server.endpoints:
+        if isinstance(ep, TcpServer):
+            lines.append(f"tcp {ep.url}")
+        elif isinstance(ep, PtyServer):
+            link = f" (link {ep.link})" if ep.link else ""
+            lines.append(f"pty {ep.path}{link}  ->  serial://{ep.path}")
+        elif isinstance(ep, CanServer):
+            for vm in server.modules:
+                lines.append(f"can {ep.url}?id={vmapi.global_param(vm, vmapi.GP_CAN_ID)}"
+                             f"&reply_id={vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)}")
+    return lines
+
+
+def run(args) -> int:
+    try:
+        server = build_server(args)
+        server.start()
+    except OSError as exc:
+        raise CliError(f"cannot start server: {exc}") from None
+    except ImportError as exc:
+        raise CliError(f"cannot start server: {exc}") from None
+    except Exception as exc:  # python-can reports a missing interface with its own errors
+        if type(exc).__module__.split(".")[0] == "can":
+            raise CliError(f"cannot open CAN bus: {exc}") from None
+        raise
+    stop = threading.Event()
+
+    def on_signal(_signum, _frame):
+        stop.set()
+
+    previous = {}
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        previous[signum] = signal.signal(signum, on_signal)
+    try:
+        print("OpenTMCL serving in real time:", flush=True)
+        for line in describe(server):
+            print(f"  {line}", flush=True)
+        print("Press Ctrl-C to stop.", flush=True)
+        while not stop.wait(0.5):
+            pass
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        server.stop()
+    print("stopped; EEPROM flushed", flush=True)
+    return 0

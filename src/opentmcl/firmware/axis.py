@@ -1,0 +1,156 @@
+"""One axis of a virtual module: parameter RAM bound to its ramp engine.
+
+Implements the axis-parameter semantics of SAP/GAP (TMCM-6212 manual 4.1,
+PD86-1180 manual 5): reads of live values come from the engine, writes of
+ramp parameters reconfigure it, AP0/AP1/AP2 writes act like MVP ABS, a
+position overwrite and ROR/ROL. Velocity units follow the engine: pps for
+the TMC5130-style and linear engines (with AP255 = 0 selecting TMC5130
+internal units on the TMCM-6212), TMC429 internal units on the PD86-1180.
+"""
+from __future__ import annotations
+
+from ..modules.profile import ModuleProfile, Param
+from ..motion import Mode, RampEngine
+from ..motion.units import (
+    internal_acceleration_from_pps2,
+    internal_velocity_from_pps,
+    pps2_from_internal_acceleration,
+    pps_from_internal_velocity,
+)
+from ..protocol.frame import to_int32
+from .engines import ENGINE_PARAMS, make_engine
+from .status import TmclStatus
+
+VELOCITY_PARAMS = {2, 3, 4, 16, 19, 20, 22, 23, 29, 181, 182, 186, 194, 195}
+ACCEL_PARAMS = {5, 15, 17, 18}
+# Internal-unit ranges of the TMC5130 registers (FACTS.md) used when AP255 = 0.
+INTERNAL_VMAX = 2**23 - 512
+INTERNAL_AMAX = 2**16 - 1
+
+
+class Axis:
+    def __init__(self, index: int, profile: ModuleProfile, ram: dict[int, int]) -> None:
+        self.index = index
+        self.profile = profile
+        self.params = profile.axis_parameters
+        self.ram = ram
+        self.engine: RampEngine = make_engine(profile.engine)
+        self.engine_keys = ENGINE_PARAMS[profile.engine]
+        self.last_target = 0
+        self.error_flags = 0
+        self.reference_search_active = False
+        self._configure_all()
+
+    # --- units --------------------------------------------------------------
+    @property
+    def internal_units(self) -> bool:
+        """TMCM-6212 AP255 = 0: velocities and accelerations in TMC5130 units."""
+        return self.profile.engine == "sixpoint" and self.ram.get(255, 1) == 0
+
+    def to_engine(self, number: int, value: int) -> int | float:
+        if self.internal_units:
+            if number in VELOCITY_PARAMS:
+                return pps_from_internal_velocity(value)
+            if number in ACCEL_PARAMS:
+                return pps2_from_internal_acceleration(value)
+        return value
+
+    def from_engine(self, number: int, value: int | float) -> int:
+        if self.internal_units and number in VELOCITY_PARAMS:
+            return internal_velocity_from_pps(value)
+        if self.internal_units and number in ACCEL_PARAMS:
+            return internal_acceleration_from_pps2(value)
+        return int(value)
+
+    def _configure_all(self) -> None:
+        self.engine.configure(**{name: self.to_engine(num, self.ram[num])
+                                 for num, name in self.engine_keys.items() if num in self.ram})
+
+    # --- parameter access (status raised as TmclStatus) ------------------------
+    def param(self, number: int) -> Param:
+        p = self.params.get(number)
+        if p is None:
+            raise TmclStatus(3)
+        return p
+
+    def check_value(self, p: Param, value: int) -> None:
+        if self.internal_units and p.number in VELOCITY_PARAMS | ACCEL_PARAMS:
+            top = INTERNAL_VMAX if p.number in VELOCITY_PARAMS else INTERNAL_AMAX
+            low = -top if p.min < 0 else 0
+            if not low <= value <= top:
+                raise TmclStatus(4)
+        elif not p.accepts(value):
+            raise TmclStatus(4)
+
+    def get(self, number: int) -> int:
+        p = self.param(number)
+        if not p.readable:
+            raise TmclStatus(3)
+        e = self.engine
+        if number == 0:
+            return e.target_position
+        if number == 1:
+            return e.position
+        if number == 2:
+            return self.from_engine(2, e.target_velocity)
+        if number == 3:
+            return self.from_engine(3, e.velocity)
+        if number == 8:
+            return int(e.position_reached)
+        if number == 207:
+            flags, self.error_flags = self.error_flags, 0
+            return flags
+        return self.ram.get(number, p.default)
+
+    def set(self, number: int, value: int) -> None:
+        p = self.param(number)
+        if not p.writable:
+            raise TmclStatus(3)
+        self.check_value(p, value)
+        if number == 0:
+            self.move_to(value)
+        elif number == 1:
+            self.engine.set_position(to_int32(value))
+        elif number == 2:
+            self.rotate(value)
+        elif number == 3:  # actual speed writable (PD86-1180 5: TMC429 hold mode); else a rotation
+            self.error_flags = 0
+            hold = getattr(self.engine, "hold", None)
+            if hold is not None:
+                hold(value)
+            else:
+                self.rotate(value)
+        else:
+            self.ram[number] = value
+            if number == 255:
+                self._configure_all()
+            elif number in self.engine_keys:
+                self.engine.configure(**{self.engine_keys[number]: self.to_engine(number, value)})
+
+    # --- motion commands --------------------------------------------------------
+    def move_to(self, target: int) -> None:
+        target = to_int32(target)
+        self.last_target = target
+        self.error_flags = 0
+        e = self.engine
+        if e.mode is Mode.POSITION and e.target_position == target and not self.reference_search_active:
+            return  # already heading there (programs re-issue the same target in tight loops)
+        e.move_to(target)
+
+    def rotate(self, velocity: int) -> None:
+        self.error_flags = 0
+        self.engine.rotate(self.to_engine(2, velocity))
+
+    def stop(self) -> None:
+        self.engine.stop()
+
+    def relative_origin(self) -> int:
+        """Start of MVP REL: AP127 on the TMCM-6212 (0 last target, 1 actual, 2 encoder)."""
+        if 127 not in self.params:  # PD86-1180 manual 4.6.4: offset to the actual position
+            return self.engine.position
+        option = self.ram.get(127, 0)
+        if option == 1:
+            return self.engine.position
+        if option == 2:
+            return self.ram.get(209, 0)
+        return self.last_target

@@ -1,0 +1,310 @@
+"""Execution of TMCL commands (TMCM-6212 manual 3.6, PD86-1180 manual 4.6).
+
+`execute()` answers one command with (status, value), special reply bytes,
+or None when no reply is due. Status codes follow the manuals: 2 invalid
+command, 3 wrong type, 4 invalid value, 5 EEPROM locked, 6 not available.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+from ..protocol.frame import to_int32
+from ..protocol.status import Status
+from .status import TmclStatus
+
+if TYPE_CHECKING:
+    from .vm import VirtualModule
+
+Result = tuple[int, int] | bytes | None
+Handler = Callable[["VirtualModule", int, int, int, bool], Result]
+
+KNOWN_OPCODES = frozenset([*range(1, 58), *range(64, 72), *range(128, 140)])
+NO_SUPPRESS = frozenset({6, 10, 15})  # GP255 never suppresses GAP, GGP, GIO
+OK = int(Status.OK)
+
+
+def _axis(vm: VirtualModule, motor: int):
+    if not 0 <= motor < len(vm.axes):
+        raise TmclStatus(4)
+    return vm.axes[motor]
+
+
+# --- motion (3.6.1-3.6.4) --------------------------------------------------------
+def _rotate(vm, motor, value, sign):
+    ax = _axis(vm, motor)
+    velocity = to_int32(sign * value)
+    ax.check_value(ax.param(2), velocity)
+    ax.rotate(velocity)
+    return OK, 0
+
+
+def cmd_ror(vm, type, motor, value, program):
+    return _rotate(vm, motor, value, 1)
+
+
+def cmd_rol(vm, type, motor, value, program):
+    return _rotate(vm, motor, value, -1)
+
+
+def cmd_mst(vm, type, motor, value, program):
+    _axis(vm, motor).stop()
+    return OK, 0
+
+
+def cmd_mvp(vm, type, motor, value, program):
+    ax = _axis(vm, motor)
+    if type == 0:
+        target = value
+    elif type == 1:
+        target = ax.relative_origin() + value
+    elif type == 2:
+        if not 0 <= value <= vm.profile.coordinates:
+            raise TmclStatus(4)
+        target = vm.coords[motor][value]
+    else:
+        raise TmclStatus(3)
+    ax.move_to(to_int32(target))
+    vm.arm_position_event(motor)
+    return OK, 0
+
+
+# --- axis parameters (3.6.5, 3.6.6; STAP/RSAP PD86-1180 4.6.7, 4.6.8) -----------------
+def cmd_sap(vm, type, motor, value, program):
+    _axis(vm, motor).set(type, value)
+    return OK, 0
+
+
+def cmd_gap(vm, type, motor, value, program):
+    return OK, _axis(vm, motor).get(type)
+
+
+def _storable_axis_param(vm, type, motor):
+    ax = _axis(vm, motor)
+    p = ax.param(type)
+    if not p.storable:
+        raise TmclStatus(3)
+    return ax, p
+
+
+def cmd_stap(vm, type, motor, value, program):
+    ax, p = _storable_axis_param(vm, type, motor)
+    if vm.globals.eeprom_locked:
+        raise TmclStatus(5)
+    vm.eeprom.set_axis(motor, type, ax.ram.get(type, p.default))
+    return OK, 0
+
+
+def cmd_rsap(vm, type, motor, value, program):
+    ax, p = _storable_axis_param(vm, type, motor)
+    stored = vm.eeprom.get_axis(motor, type)
+    ax.set(type, p.default if stored is None else stored)
+    return OK, 0
+
+
+# --- global parameters (3.6.7-3.6.10) -----------------------------------------------
+def _bank(vm, bank):
+    if bank not in {b for b, _ in vm.profile.global_parameters} | {2}:
+        raise TmclStatus(4)
+    return bank
+
+
+def cmd_sgp(vm, type, bank, value, program):
+    vm.globals.set(_bank(vm, bank), type, value)
+    return OK, 0
+
+
+def cmd_ggp(vm, type, bank, value, program):
+    return OK, vm.globals.get(_bank(vm, bank), type)
+
+
+def cmd_stgp(vm, type, bank, value, program):
+    vm.globals.store(_bank(vm, bank), type)
+    return OK, 0
+
+
+def cmd_rsgp(vm, type, bank, value, program):
+    vm.globals.restore(_bank(vm, bank), type)
+    return OK, 0
+
+
+# --- reference search (3.6.11) --------------------------------------------------------
+def cmd_rfs(vm, type, motor, value, program):
+    ax = _axis(vm, motor)
+    if type == 0:
+        vm.reference_search(ax).start()
+    elif type == 1:
+        vm.reference_search(ax).stop()
+    elif type == 2:
+        return OK, vm.reference_search(ax).status()
+    else:
+        raise TmclStatus(3)
+    return OK, 0
+
+
+# --- I/O (3.6.12, 3.6.13) ----------------------------------------------------------------
+def cmd_sio(vm, port, bank, value, program):
+    vm.io.set(port, bank, value)
+    return OK, 0
+
+
+def cmd_gio(vm, port, bank, value, program):
+    return OK, vm.io.get(port, bank)
+
+
+# --- coordinates (3.6.22-3.6.25) ------------------------------------------------------------
+def _coord(vm, number, lowest=0):
+    if not lowest <= number <= vm.profile.coordinates:
+        raise TmclStatus(3)
+    return number
+
+
+def _eeprom_coords(vm, number):
+    """The coordinates selected by `number` for the 255 forms: 0 = all (except #0)."""
+    if number == 0:
+        return range(1, vm.profile.coordinates + 1)
+    return [_coord(vm, number, 1)]
+
+
+def _set_coord(vm, number, motor, value):
+    vm.coords[motor][number] = to_int32(value)
+    if number and vm.globals.get_raw(0, 84) == 1:  # GP84: coordinates always also in EEPROM
+        vm.eeprom.set_coord(motor, number, vm.coords[motor][number])
+
+
+def cmd_sco(vm, number, motor, value, program):
+    if motor == 255:  # "SCO <n>, 255, 0": copy RAM -> EEPROM
+        for c in _eeprom_coords(vm, number):
+            for a in range(len(vm.axes)):
+                vm.eeprom.set_coord(a, c, vm.coords[a][c])
+        return OK, 0
+    _axis(vm, motor)
+    _set_coord(vm, _coord(vm, number), motor, value)
+    return OK, 0
+
+
+def cmd_gco(vm, number, motor, value, program):
+    if motor == 255:  # "GCO <n>, 255, 0": copy EEPROM -> RAM
+        for c in _eeprom_coords(vm, number):
+            for a in range(len(vm.axes)):
+                stored = vm.eeprom.get_coord(a, c)
+                vm.coords[a][c] = 0 if stored is None else stored
+        return OK, 0
+    _axis(vm, motor)
+    return OK, vm.coords[motor][_coord(vm, number)]
+
+
+def cmd_cco(vm, number, motor, value, program):
+    ax = _axis(vm, motor)
+    position = ax.engine.position
+    _set_coord(vm, _coord(vm, number), motor, position)
+    return OK, position
+
+
+def cmd_aco(vm, number, motor, value, program):
+    _axis(vm, motor)
+    _set_coord(vm, _coord(vm, number), motor, vm.accumulator)
+    return OK, 0
+
+
+# --- accumulator to parameter (3.6.27, 3.6.28) ------------------------------------------------
+def cmd_aap(vm, type, motor, value, program):
+    _axis(vm, motor).set(type, vm.accumulator)
+    return OK, 0
+
+
+def cmd_agp(vm, type, bank, value, program):
+    vm.globals.set(_bank(vm, bank), type, vm.accumulator)
+    return OK, 0
+
+
+# --- error flags and interrupts (3.6.29-3.6.33) ------------------------------------------------
+def cmd_cle(vm, type, motor, value, program):
+    if not 0 <= type <= 5:
+        raise TmclStatus(3)
+    vm.clear_error_flags(type)
+    return OK, 0
+
+
+def cmd_ei(vm, type, motor, value, program):
+    vm.interrupts.enable(type, True)
+    return OK, 0
+
+
+def cmd_di(vm, type, motor, value, program):
+    vm.interrupts.enable(type, False)
+    return OK, 0
+
+
+def cmd_vect(vm, type, motor, value, program):
+    vm.interrupts.set_vector(type, value)
+    return OK, 0
+
+
+def cmd_no_effect(vm, type, motor, value, program):
+    """Program-flow and accumulator commands sent in direct mode: accepted,
+    without touching the program's accumulator or flow (TMCM-6212 manual 7.6)."""
+    return OK, 0
+
+
+# --- control commands (3.6.35, 3.6.36) --------------------------------------------------------
+def cmd_138(vm, type, motor, value, program):
+    if type not in (0, 1):
+        raise TmclStatus(3)
+    mask = value & ((1 << len(vm.axes)) - 1)
+    if value != mask:
+        raise TmclStatus(4)
+    vm.event_mask = mask
+    vm.event_permanent = mask if type == 1 else 0
+    return OK, mask
+
+
+def cmd_136(vm, type, motor, value, program):
+    if type == 0:  # special reply: host address + 8 characters, no checksum
+        text = vm.profile.firmware_version.encode("ascii")[:8].ljust(8, b" ")
+        return bytes([vm.host_address & 0xFF]) + text
+    if type == 1:
+        return OK, vm.profile.firmware_binary
+    raise TmclStatus(3)
+
+
+def cmd_137(vm, type, motor, value, program):
+    if value != 1234:
+        raise TmclStatus(4)
+    vm.restore_factory_defaults()
+    return None
+
+
+def cmd_139(vm, type, motor, value, program):
+    vm.ascii_mode = True
+    return OK, 0
+
+
+HANDLERS: dict[int, Handler] = {
+    1: cmd_ror, 2: cmd_rol, 3: cmd_mst, 4: cmd_mvp, 5: cmd_sap, 6: cmd_gap, 7: cmd_stap, 8: cmd_rsap,
+    9: cmd_sgp, 10: cmd_ggp, 11: cmd_stgp, 12: cmd_rsgp, 13: cmd_rfs, 14: cmd_sio, 15: cmd_gio,
+    30: cmd_sco, 31: cmd_gco, 32: cmd_cco, 34: cmd_aap, 35: cmd_agp, 36: cmd_cle, 37: cmd_vect,
+    25: cmd_ei, 26: cmd_di, 39: cmd_aco, 136: cmd_136, 137: cmd_137, 138: cmd_138, 139: cmd_139,
+}
+COMMANDS = HANDLERS
+PROGRAM_CONTROL = frozenset(range(128, 136))
+
+
+def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
+    """Run one command. In download mode (132) non-control commands are stored instead (status 101)."""
+    # 3.6.36: in download mode "All following commands (except control commands) are ... stored".
+    stored = vm.download_mode and not program and command < 128
+    if command not in KNOWN_OPCODES and not stored:
+        return int(Status.INVALID_COMMAND), 0
+    if command not in vm.profile.opcodes and not stored:
+        return int(Status.NOT_AVAILABLE), 0
+    vm.sync()
+    try:
+        if command in PROGRAM_CONTROL:
+            return vm.program_control(command, type, value)
+        if vm.download_mode and not program and command < 128:
+            return vm.store_instruction(command, type, motor, value)
+        handler = HANDLERS.get(command, cmd_no_effect)
+        return handler(vm, type, motor, value, program)
+    except TmclStatus as exc:
+        return exc.status, 0

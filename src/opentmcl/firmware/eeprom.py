@@ -1,0 +1,125 @@
+"""Non-volatile storage of a virtual module (DESIGN.md "Errors and bad input").
+
+The EEPROM holds what the manuals say survives power-off: stored axis
+parameters (STAP), bank-0 global parameters (auto-stored) and stored user
+variables (STGP), coordinates (SCO ..., 255 forms / GP84) and the TMCL
+program. In memory by default; with a path it is a JSON file written
+atomically (temp file, fsync, rename), so a killed process leaves either the
+old or the new file, never a torn one.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+FORMAT = "opentmcl-eeprom"
+VERSION = 1
+
+
+class EepromError(Exception):
+    """The EEPROM file exists but cannot be used (not ours, unreadable)."""
+
+
+def _empty() -> dict:
+    return {"axis": {}, "global": {}, "user": {}, "coord": {}, "program": []}
+
+
+class Eeprom:
+    """Dictionary-shaped EEPROM image; `flush()` persists it when file-backed."""
+
+    def __init__(self, path: str | os.PathLike | None = None, module: str = "") -> None:
+        self.path = Path(path) if path is not None else None
+        self.module = module
+        self.data = _empty()
+        self.dirty = False
+        self.deferred = False
+        if self.path is not None and self.path.exists():
+            self.data = self._read(self.path)
+
+    def _read(self, path: Path) -> dict:
+        try:
+            raw = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise EepromError(f"cannot read EEPROM file {path}: {exc}") from None
+        if not isinstance(raw, dict) or raw.get("format") != FORMAT:
+            raise EepromError(f"{path} is not an OpenTMCL EEPROM file")
+        if self.module and raw.get("module") not in (None, self.module):
+            raise EepromError(f"{path} belongs to a {raw.get('module')}, not a {self.module}")
+        data = _empty()
+        for key in data:
+            if key in raw:
+                data[key] = raw[key]
+        return data
+
+    # --- typed access (JSON keys are strings) -----------------------------
+    def get_axis(self, axis: int, number: int) -> int | None:
+        return self.data["axis"].get(str(axis), {}).get(str(number))
+
+    def set_axis(self, axis: int, number: int, value: int) -> None:
+        self.data["axis"].setdefault(str(axis), {})[str(number)] = int(value)
+        self._changed()
+
+    def get_global(self, bank: int, number: int) -> int | None:
+        return self.data["global"].get(str(bank), {}).get(str(number))
+
+    def set_global(self, bank: int, number: int, value: int) -> None:
+        self.data["global"].setdefault(str(bank), {})[str(number)] = int(value)
+        self._changed()
+
+    def get_user(self, number: int) -> int | None:
+        return self.data["user"].get(str(number))
+
+    def set_user(self, number: int, value: int) -> None:
+        self.data["user"][str(number)] = int(value)
+        self._changed()
+
+    def get_coord(self, axis: int, number: int) -> int | None:
+        return self.data["coord"].get(str(axis), {}).get(str(number))
+
+    def set_coord(self, axis: int, number: int, value: int) -> None:
+        self.data["coord"].setdefault(str(axis), {})[str(number)] = int(value)
+        self._changed()
+
+    @property
+    def program(self) -> list[list[int]]:
+        return self.data["program"]
+
+    def set_program(self, program: list[list[int]]) -> None:
+        self.data["program"] = [list(map(int, ins)) for ins in program]
+        self._changed()
+
+    def clear(self) -> None:
+        """Factory state (command 137): everything erased."""
+        self.data = _empty()
+        self._changed()
+
+    # --- persistence --------------------------------------------------------
+    def _changed(self) -> None:
+        self.dirty = True
+        if not self.deferred:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.path is None or not self.dirty:
+            self.dirty = False
+            return
+        payload = json.dumps({"format": FORMAT, "version": VERSION, "module": self.module, **self.data},
+                             separators=(",", ":"), sort_keys=True)
+        directory = self.path.parent
+        directory.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=self.path.name + ".", suffix=".tmp", dir=directory)
+        try:
+            with os.fdopen(fd, "w", encoding="utf-8") as fh:
+                fh.write(payload)
+                fh.flush()
+                os.fsync(fh.fileno())
+            os.replace(tmp, self.path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+        self.dirty = False

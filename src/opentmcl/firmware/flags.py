@@ -1,0 +1,56 @@
+"""The TMCL program flags (TMCM-6212 manual 3.6.15 COMP, 3.6.16 JC, 3.6.29 CLE).
+
+`vm.flags` holds the error flags in bits 0-4 in CLE order (ETO = CLE 1 is bit 0,
+..., ESD = CLE 5 is bit 4, so `VirtualModule.clear_error_flags(n)` clears bit
+n - 1) and the arithmetic flags in bits 8-11. The manual names the flags but
+not their layout; this one is our choice (docs/notes/interpreter.md).
+"""
+from __future__ import annotations
+
+ETO, EAL, EDV, EPO, ESD = 1, 2, 4, 8, 16
+ERROR_MASK = 0x1F
+ZERO, EQUAL, GREATER, LOWER = 0x100, 0x200, 0x400, 0x800
+ARITHMETIC_MASK = 0xF00
+
+# JC / CALL conditions 8-12 test these error flags (TMCM-6212 3.6.16, PD86-1180 4.6.18).
+CONDITION_ERROR = {8: ETO, 9: EAL, 10: EDV, 11: EPO, 12: ESD}
+
+
+def after_load(flags: int, accumulator: int) -> int:
+    """A value was written to the accumulator: the zero flag follows it (`GIO 0, 2` then
+    `JC NZ, ...` in the manual's timer interrupt example, 3.5.6.4)."""
+    return (flags & ~ZERO) | (ZERO if accumulator == 0 else 0)
+
+
+def after_compare(flags: int, accumulator: int, operand: int) -> int:
+    """COMP: signed comparison of the accumulator with the operand; the zero flag says equal."""
+    out = flags & ~ARITHMETIC_MASK
+    if accumulator == operand:
+        out |= EQUAL | ZERO
+    elif accumulator > operand:
+        out |= GREATER
+    else:
+        out |= LOWER
+    return out
+
+
+def condition(flags: int, cond: int) -> bool | None:
+    """JC condition 0-12 against `flags`; None for an unknown condition number."""
+    if cond in CONDITION_ERROR:
+        return bool(flags & CONDITION_ERROR[cond])
+    tests = {
+        0: flags & ZERO, 1: not flags & ZERO,
+        2: flags & EQUAL, 3: not flags & EQUAL,
+        4: flags & GREATER, 5: flags & (GREATER | EQUAL),
+        6: flags & LOWER, 7: flags & (LOWER | EQUAL),
+    }
+    if cond not in tests:
+        return None
+    return bool(tests[cond])
+
+
+def describe(flags: int) -> str:
+    """Readable flag set, e.g. ``ZE EQ ETO`` (debugger watch)."""
+    names = [(ZERO, "ZE"), (EQUAL, "EQ"), (GREATER, "GT"), (LOWER, "LT"),
+             (ETO, "ETO"), (EAL, "EAL"), (EDV, "EDV"), (EPO, "EPO"), (ESD, "ESD")]
+    return " ".join(n for bit, n in names if flags & bit) or "-"

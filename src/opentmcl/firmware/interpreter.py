@@ -1,0 +1,522 @@
+"""The TMCL program interpreter: standalone mode in virtual time
+(TMCM-6212 manual 3.3, 3.5.3-3.5.6, 3.6.14-3.6.33, 3.6.36, 7; PD86-1180 manual 4.6, 8;
+PD28-1021 manual 3.5 for the extended command set).
+
+Time: every instruction takes INSTRUCTION_TICKS of the 16 MHz clock (100 µs, i.e.
+10000 TMCL instructions per second) and takes effect at the end of its slot; a
+WAIT ends at its condition or timeout and the next instruction follows one slot
+later; dispatching an interrupt and returning from it (RETI) take one slot each.
+`VirtualModule.advance_to` asks `next_event()` when the program next needs
+service and calls `service()` at every event tick, so a run is deterministic.
+
+Registers live on the virtual module: vm.accumulator, vm.x_register, vm.flags
+(flags.py), vm.program_counter, vm.application_status. Direct-mode commands go
+through commands.execute(program=False) and never reach this class, so a host
+talking to the module never disturbs a running program (manual 7.6).
+
+An instruction that the module answers with an error status in direct mode
+(invalid motor, wrong type, ...) has no effect in a program and execution goes
+on with the next instruction; the last such error is kept in `last_error` for
+the debugger.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from ..protocol.frame import to_int32
+from ..protocol.status import Status
+from . import calc, flags, wait
+from .commands import execute
+from .program import RESET, RUNNING, STEPPING, STOPPED
+from .status import TmclStatus
+
+if TYPE_CHECKING:
+    from .vm import VirtualModule
+
+INSTRUCTION_TICKS = 1600      # 100 µs at 16 MHz per TMCL instruction
+STACK_DEPTH = 8               # "The number of entries in the internal stack is limited to 8."
+READS_VALUE = frozenset({6, 10, 15, 31})  # GAP, GGP, GIO, GCO (and RFS STATUS) load the accumulator
+CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number from public TMCL headers)
+EXTENDED_MARKER = 49          # a module with DJNZ has the PD28-1021 extended set, CALL included
+# Instructions that neither read nor change anything outside the program's registers, flags,
+# stack and user variables (SGP/GGP/AGP on bank 2): they may run ahead of the motors (below).
+PURE = frozenset({19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
+PURE_ON_BANK_2 = frozenset({9, 10, 35})
+
+
+@dataclass
+class Context:
+    """What an interrupt saves and RETI restores (manual 3.5.6.2, 3.6.33)."""
+
+    pc: int
+    accumulator: int
+    x_register: int
+    flags: int
+    wait: wait.Wait | None
+
+
+class Interpreter:
+    run_ahead = True  # batch pure instructions (see _run_ahead); False: one event per instruction
+
+    def __init__(self, vm: VirtualModule) -> None:
+        self.vm = vm
+        self.stack: list[int] = []
+        self.wait: wait.Wait | None = None
+        self.next_time: int | None = None   # tick of the next instruction (None: not scheduled)
+        self.saved: Context | None = None   # context of the interrupted program while in an ISR
+        self.last_error: tuple[int, int, int] | None = None  # (pc, command, status)
+        self.executed = 0                   # instructions executed since power-up
+        self._t: int | None = None          # tick of an instruction run ahead of vm.now
+        self._probing = False
+
+    @property
+    def waiting(self) -> bool:
+        return self.wait is not None
+
+    # --- hooks called by VirtualModule ----------------------------------------------------
+    def power_up(self) -> None:
+        """GP77 auto start mode: 1 starts the stored program after power-up (manual 5.1)."""
+        if self.vm.globals.get_raw(0, 77) == 1 and self.vm.program.length:
+            self.run(0)
+
+    def next_event(self) -> int | None:
+        """Absolute tick at which the program next needs service, > vm.now, or None."""
+        vm = self.vm
+        now = vm.now
+        status = vm.application_status
+        if self._probing:
+            return vm.interrupts.next_timer_event(now)
+        if status not in (RUNNING, STEPPING):
+            vm.interrupts.poll(now)  # keep the timers' phase
+            return None
+        vm.interrupts.poll(now)
+        candidates = []
+        if self.wait is not None:
+            if self.wait.deadline is not None:
+                candidates.append(self.wait.deadline)
+            if status == RUNNING and vm.interrupts.next_dispatch() is not None:
+                candidates.append(now + 1)
+        elif status == RUNNING and self.next_time is not None:
+            candidates.append(self.next_time)
+        timer = vm.interrupts.next_timer_event(now)
+        if timer is not None:
+            candidates.append(timer)
+        if not candidates:
+            return None
+        return max(min(candidates), now + 1)
+
+    def service(self) -> None:
+        """Execute what is due at vm.now: finish a WAIT, take an interrupt, run one instruction."""
+        vm = self.vm
+        now = vm.now
+        vm.interrupts.poll(now)
+        if vm.application_status not in (RUNNING, STEPPING):
+            return
+        if self.wait is not None:
+            self._check_wait()
+        if vm.application_status != RUNNING:
+            return
+        if self.wait is not None or (self.next_time is not None and self.next_time <= now):
+            if self._dispatch_interrupt():
+                return
+        if self.wait is None and self.next_time is not None and self.next_time <= now:
+            self._execute_next()
+            self._run_ahead()
+
+    def _run_ahead(self) -> None:
+        """Execute pure instructions (PURE) at their own ticks without stopping the motors'
+        clock, up to the next event of anything else and never past the end of the current
+        `advance` (vm.horizon). The result is the same as one event per instruction: nothing a
+        pure instruction reads can change in between, and no host command arrives during an
+        `advance`. A tight polling loop then costs one event per loop pass, not per instruction."""
+        vm = self.vm
+        horizon = getattr(vm, "horizon", None) if self.run_ahead else None
+        code = vm.program.code
+        limit = None
+        while (vm.application_status == RUNNING and self.wait is None and self.next_time is not None
+               and horizon is not None and self.next_time < horizon
+               and 0 <= vm.program_counter < len(code) and vm.interrupts.next_dispatch() is None):
+            command, _, bank, _ = code[vm.program_counter]
+            if not (command in PURE or (command in PURE_ON_BANK_2 and bank == 2)):
+                break
+            if limit is None:
+                self._probing = True
+                try:
+                    limit = vm._next_event(horizon)
+                finally:
+                    self._probing = False
+            if self.next_time >= limit:
+                break
+            self._t = self.next_time
+            try:
+                self._execute_next()
+            finally:
+                self._t = None
+
+    # --- control commands 128-131 (manual 3.6.36) ------------------------------------------
+    def run(self, address: int | None) -> None:
+        """129: from the current address (None) or from `address` (a fresh start there:
+        subroutine stack and interrupt context are dropped)."""
+        vm = self.vm
+        if address is not None:
+            vm.program_counter = address
+            self.stack.clear()
+            self.saved = None
+            vm.interrupts.active = None
+            self.wait = None
+        vm.application_status = RUNNING
+        if self.wait is None:
+            self.next_time = vm.now + INSTRUCTION_TICKS
+
+    def stop(self) -> None:
+        """128: the program stops before its next instruction; an unfinished WAIT is
+        abandoned (continuing executes the WAIT again)."""
+        vm = self.vm
+        if vm.application_status in (RUNNING, STEPPING):
+            vm.application_status = STOPPED
+        self.wait = None
+        self.next_time = None
+
+    def step(self) -> None:
+        """130: execute the next instruction now and pause. A pending interrupt is entered
+        instead (that step only moves the PC to the handler). A WAIT that is not yet satisfied
+        goes on waiting; the program pauses after it."""
+        vm = self.vm
+        vm.application_status = STEPPING
+        vm.interrupts.poll(vm.now)
+        if self.wait is not None:
+            return
+        if self._dispatch_interrupt():
+            self.next_time = None
+            return
+        self._execute_next()
+
+    def reset(self) -> None:
+        """131: stop; program counter, stack, A, X and all flags to zero; interrupts off."""
+        vm = self.vm
+        vm.application_status = RESET
+        vm.program_counter = 0
+        vm.accumulator = 0
+        vm.x_register = 0
+        vm.flags = 0
+        self.stack.clear()
+        self.wait = None
+        self.saved = None
+        self.next_time = None
+        vm.interrupts.reset()
+
+    def status(self, type: int) -> int:
+        """135: 0 mode/wait/memory pointer, 1 mode/wait/program counter, 2 A, 3 X.
+        Types 0 and 1 pack the mode in bits 24-31, the wait flag in bits 16-23 and the
+        address in bits 0-15 (the manual is silent on the layout). Type 4 (OpenTMCL
+        extension, used by the debugger) returns the flags."""
+        vm = self.vm
+        if type == 2:
+            return vm.accumulator
+        if type == 3:
+            return vm.x_register
+        if type == 4:
+            return vm.flags
+        if type not in (0, 1):
+            raise TmclStatus(3)
+        address = vm.download_pointer if type == 0 else vm.program_counter
+        return (vm.application_status << 24) | (int(self.waiting) << 16) | (address & 0xFFFF)
+
+    # --- error flags for the physical-world model -------------------------------------------
+    def set_error_flag(self, flag: int) -> None:
+        """Set EAL/EDV/EPO/ESD (flags.py) when the condition occurs (cleared by CLE)."""
+        self.vm.flags |= flag & flags.ERROR_MASK
+
+    # --- execution ---------------------------------------------------------------------------
+    def _pause_or_continue(self) -> None:
+        """After an instruction: schedule the next one, or pause when single-stepping."""
+        vm = self.vm
+        if vm.application_status == RUNNING:
+            self.next_time = (vm.now if self._t is None else self._t) + INSTRUCTION_TICKS
+        else:
+            self.next_time = None
+
+    def _check_wait(self) -> None:
+        vm = self.vm
+        w = self.wait
+        if wait.satisfied(vm, w):
+            pass
+        elif wait.expired(vm, w):
+            if w.condition != wait.TICKS:
+                vm.flags |= flags.ETO
+        else:
+            return
+        self.wait = None
+        vm.program_counter += 1
+        self._pause_or_continue()
+
+    def _dispatch_interrupt(self) -> bool:
+        vm = self.vm
+        ints = vm.interrupts
+        number = ints.next_dispatch()
+        if number is None:
+            return False
+        ints.pending.discard(number)
+        ints.active = number
+        self.saved = Context(vm.program_counter, vm.accumulator, vm.x_register, vm.flags, self.wait)
+        self.wait = None
+        vm.program_counter = ints.vectors[number]
+        self._pause_or_continue()
+        return True
+
+    def _fail(self, command: int, status: int) -> None:
+        self.last_error = (self.vm.program_counter, command, status)
+
+    def _execute_next(self) -> None:
+        vm = self.vm
+        pc = vm.program_counter
+        if not 0 <= pc < vm.program.size:  # ran off the end of program memory
+            vm.application_status = STOPPED
+            self.next_time = None
+            return
+        command, type, motor, value = vm.program.code[pc]
+        self.executed += 1
+        handler = FLOW.get(command)
+        available = command in vm.profile.opcodes or (
+            command == CALL and EXTENDED_MARKER in vm.profile.opcodes)
+        try:
+            if handler is not None and available:
+                if handler(self, type, motor, value):  # True: the handler set the PC itself
+                    return
+            elif command >= 128 or not available:
+                self._fail(command, int(Status.INVALID_COMMAND if command not in vm.profile.opcodes
+                                        else Status.NOT_AVAILABLE))
+            else:
+                self._generic(command, type, motor, value)
+        except TmclStatus as exc:
+            self._fail(command, exc.status)
+        vm.program_counter = pc + 1
+        self._pause_or_continue()
+
+    def _generic(self, command: int, type: int, motor: int, value: int) -> None:
+        """Motion, parameter, I/O and coordinate commands: the direct-mode handler, then the
+        value of a reading command goes to the accumulator (manual 3.5.5)."""
+        vm = self.vm
+        out = execute(vm, command, type, motor, value, program=True)
+        if not isinstance(out, tuple):
+            return
+        status, result = out
+        if status != Status.OK:
+            raise TmclStatus(status)
+        reads = command in READS_VALUE or (command == 13 and type == 2)
+        if command == 31 and motor == 255:  # GCO n, 255: EEPROM -> RAM copy, nothing read
+            reads = False
+        if reads:
+            self._load(result)
+
+    def _load(self, value: int) -> None:
+        vm = self.vm
+        vm.accumulator = to_int32(value)
+        vm.flags = flags.after_load(vm.flags, vm.accumulator)
+
+    def _jump(self, address: int) -> bool:
+        """Set the PC (a jump outside program memory is ignored: status 4 in `last_error`)."""
+        vm = self.vm
+        if not 0 <= address < vm.program.size:
+            raise TmclStatus(4)
+        vm.program_counter = address
+        self._pause_or_continue()
+        return True
+
+    # --- flow and calculation commands ---------------------------------------------------------
+    def _calc(self, type, motor, value):  # 19 CALC (3.6.14)
+        vm = self.vm
+        if not calc.ADD <= type <= calc.LOAD:
+            raise TmclStatus(3)
+        self._load(calc.binary(type, vm.accumulator, value))
+
+    def _comp(self, type, motor, value):  # 20 COMP (3.6.15)
+        vm = self.vm
+        vm.flags = flags.after_compare(vm.flags, vm.accumulator, to_int32(value))
+
+    def _condition(self, type: int) -> bool:
+        met = flags.condition(self.vm.flags, type)
+        if met is None:
+            raise TmclStatus(3)
+        return met
+
+    def _jc(self, type, motor, value):  # 21 JC (3.6.16)
+        if self._condition(type):
+            return self._jump(value)
+        return False
+
+    def _ja(self, type, motor, value):  # 22 JA (3.6.17)
+        return self._jump(value)
+
+    def _csub(self, type, motor, value):  # 23 CSUB (3.6.18): ignored when the stack is full
+        vm = self.vm
+        if len(self.stack) >= STACK_DEPTH:
+            return False
+        if not 0 <= value < vm.program.size:
+            raise TmclStatus(4)
+        self.stack.append(vm.program_counter + 1)
+        return self._jump(value)
+
+    def _rsub(self, type, motor, value):  # 24 RSUB (3.6.19): ignored when the stack is empty
+        if not self.stack:
+            return False
+        return self._jump(self.stack.pop())
+
+    def _wait(self, type, motor, value):  # 27 WAIT (3.6.20)
+        vm = self.vm
+        w = wait.start(vm, type, motor, value)
+        self.wait = w
+        self.next_time = None
+        if w.condition == wait.TICKS and w.deadline <= vm.now:  # WAIT TICKS, 0, 0
+            self.wait = None
+            return False
+        if wait.satisfied(vm, w):
+            self.wait = None
+            return False
+        return True  # the PC stays at the WAIT
+
+    def _stop(self, type, motor, value):  # 28 STOP (3.6.21): the PC stays at the STOP
+        self.vm.application_status = STOPPED
+        self.next_time = None
+        return True
+
+    def _calcx(self, type, motor, value):  # 33 CALCX (3.6.26)
+        vm = self.vm
+        a, x = vm.accumulator, vm.x_register
+        if type == calc.NOT:          # "logical invert X register"
+            vm.x_register = to_int32(~x)
+        elif type == calc.LOAD:       # "copy accumulator to X register"
+            vm.x_register = a
+        elif type == calc.SWAP:
+            vm.x_register = a
+            self._load(x)
+        elif calc.ADD <= type <= calc.XOR:
+            self._load(calc.binary(type, a, x))
+        else:
+            raise TmclStatus(3)
+
+    def _reti(self, type, motor, value):  # 38 RETI (3.6.33); ignored outside an ISR
+        vm = self.vm
+        ctx = self.saved
+        if ctx is None:
+            return False
+        self.saved = None
+        vm.interrupts.active = None
+        vm.program_counter = ctx.pc
+        vm.accumulator, vm.x_register, vm.flags = ctx.accumulator, ctx.x_register, ctx.flags
+        self.wait = ctx.wait
+        self._pause_or_continue()
+        if self.wait is not None:
+            self.next_time = None
+        return True
+
+    # --- PD28-1021 extended set (manual 3.5 Table 5; semantics: docs/notes/interpreter.md) -------
+    def _var(self, index: int) -> int:
+        if not 0 <= index < len(self.vm.user_vars):
+            raise TmclStatus(3)
+        return index
+
+    def _calc_into(self, op: int, dst: int, src: int | None) -> int:
+        """`dst <op> src` for the CALCxx family: LOAD copies src, NOT inverts dst."""
+        if op == calc.SWAP or src is None and op != calc.NOT:
+            raise TmclStatus(3)
+        result = calc.binary(op, dst, 0 if src is None else src)
+        if result is None:
+            raise TmclStatus(3)
+        return result
+
+    def _calc_vv(self, op, v1, v2):  # 40 CALCVV op, var1, var2: var1 = var1 op var2
+        vm, a, b = self.vm, self._var(v1), self._var(v2)
+        if op == calc.SWAP:
+            vm.user_vars[a], vm.user_vars[b] = vm.user_vars[b], vm.user_vars[a]
+        else:
+            vm.user_vars[a] = self._calc_into(op, vm.user_vars[a], vm.user_vars[b])
+
+    def _calc_va(self, op, var, value):  # 41 CALCVA op, var: var = var op A
+        vm, v = self.vm, self._var(var)
+        if op == calc.SWAP:
+            a = vm.accumulator
+            self._load(vm.user_vars[v])
+            vm.user_vars[v] = a
+        else:
+            vm.user_vars[v] = self._calc_into(op, vm.user_vars[v], vm.accumulator)
+
+    def _calc_av(self, op, var, value):  # 42 CALCAV op, var: A = A op var
+        vm, v = self.vm, self._var(var)
+        if op == calc.SWAP:
+            return self._calc_va(op, var, value)
+        self._load(self._calc_into(op, vm.accumulator, vm.user_vars[v]))
+
+    def _calc_vx(self, op, var, value):  # 43 CALCVX op, var: var = var op X
+        vm, v = self.vm, self._var(var)
+        if op == calc.SWAP:
+            vm.user_vars[v], vm.x_register = vm.x_register, vm.user_vars[v]
+        else:
+            vm.user_vars[v] = self._calc_into(op, vm.user_vars[v], vm.x_register)
+
+    def _calc_xv(self, op, var, value):  # 44 CALCXV op, var: X = X op var
+        vm, v = self.vm, self._var(var)
+        if op == calc.SWAP:
+            return self._calc_vx(op, var, value)
+        vm.x_register = self._calc_into(op, vm.x_register, vm.user_vars[v])
+
+    def _calc_v(self, op, var, value):  # 45 CALCV op, var, value: var = var op value
+        vm, v = self.vm, self._var(var)
+        vm.user_vars[v] = self._calc_into(op, vm.user_vars[v], value)
+
+    def _with_accu(self, command: int, type: int, motor: int) -> None:
+        self._generic(command, type, motor, self.vm.accumulator)
+
+    def _mvpa(self, type, motor, value):  # 46 MVPA ABS|REL|COORD, motor: MVP with A
+        self._with_accu(4, type, motor)
+
+    def _rola(self, type, motor, value):  # 50 ROLA motor
+        self._with_accu(2, 0, motor)
+
+    def _rora(self, type, motor, value):  # 51 RORA motor
+        self._with_accu(1, 0, motor)
+
+    def _rst(self, type, motor, value):  # 48 RST label: restart there, stack and ISR dropped
+        vm = self.vm
+        if not 0 <= value < vm.program.size:
+            raise TmclStatus(4)
+        self.stack.clear()
+        self.saved = None
+        vm.interrupts.active = None
+        return self._jump(value)
+
+    def _djnz(self, var, motor, value):  # 49 DJNZ var, label: var -= 1, jump unless 0
+        vm, v = self.vm, self._var(var)
+        vm.user_vars[v] = to_int32(vm.user_vars[v] - 1)
+        if vm.user_vars[v] != 0:
+            return self._jump(value)
+        return False
+
+    def _call(self, type, motor, value):  # 80 CALL cond, label: CSUB if the JC condition holds
+        if self._condition(type):
+            return self._csub(type, motor, value)
+        return False
+
+    def _siv(self, type, motor, value):  # 55 SIV value: variable[X] = value
+        vm = self.vm
+        vm.user_vars[self._var(vm.x_register)] = to_int32(value)
+
+    def _giv(self, type, motor, value):  # 56 GIV: A = variable[X]
+        vm = self.vm
+        self._load(vm.user_vars[self._var(vm.x_register)])
+
+    def _aiv(self, type, motor, value):  # 57 AIV: variable[X] = A
+        vm = self.vm
+        vm.user_vars[self._var(vm.x_register)] = vm.accumulator
+
+
+FLOW = {
+    19: Interpreter._calc, 20: Interpreter._comp, 21: Interpreter._jc, 22: Interpreter._ja,
+    23: Interpreter._csub, 24: Interpreter._rsub, 27: Interpreter._wait, 28: Interpreter._stop,
+    33: Interpreter._calcx, 38: Interpreter._reti,
+    40: Interpreter._calc_vv, 41: Interpreter._calc_va, 42: Interpreter._calc_av, 43: Interpreter._calc_vx,
+    44: Interpreter._calc_xv, 45: Interpreter._calc_v, 46: Interpreter._mvpa, 48: Interpreter._rst,
+    49: Interpreter._djnz, 50: Interpreter._rola, 51: Interpreter._rora, 55: Interpreter._siv,
+    56: Interpreter._giv, 57: Interpreter._aiv, CALL: Interpreter._call,
+}

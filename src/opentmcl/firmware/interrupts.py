@@ -1,0 +1,172 @@
+"""TMCL interrupts: vectors, enables, priority, timers and event sources
+(TMCM-6212 manual 3.5.6, 3.6.30-3.6.33, 5.4; PD86-1180 manual 4.4.2.6, 4.6.32-4.6.35, 6.4).
+
+An interrupt is latched (pending) when it occurs while a program is running,
+interrupt processing is globally on (EI 255), the interrupt itself is enabled
+(EI n) and a vector is defined (VECT n, label). The interpreter dispatches the
+pending interrupt with the lowest number first ("Interrupts with a lower number
+have a higher priority", manual 5.4); there is no nesting.
+
+Sources:
+
+- timers 0-2: period in ms in global parameter n of bank 3; the timer restarts
+  its phase whenever its period is written; period 0 = off;
+- target position reached 3 + axis: rising edge of the axis's position-reached flag;
+- stop switches 27 + 2 * axis (left, AP11) and 28 + 2 * axis (right, AP10), input
+  change 39 + port (digital input bank 0): level transitions selected by bank-3
+  parameter n (0 off, 1 low-high, 2 high-low, 3 both);
+- stallGuard 15 + axis and deviation 21 + axis: the physical-world model calls
+  `trigger(n)` (there is no level to poll).
+
+Levels are sampled whenever the virtual module asks for its next event and at
+every event tick, so a transition made between two `advance` calls (e.g.
+`vm.io.drive_input`) is seen at the time it was made.
+"""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..motion import CLOCK_HZ
+from .status import TmclStatus
+
+if TYPE_CHECKING:
+    from .vm import VirtualModule
+
+GLOBAL = 255
+TIMERS = (0, 1, 2)
+TARGET_REACHED, STALL, DEVIATION, STOP_SWITCH, INPUT_CHANGE = 3, 15, 21, 27, 39
+TICKS_PER_MS = CLOCK_HZ // 1000
+LOW_HIGH, HIGH_LOW = 1, 2
+
+
+class Interrupts:
+    def __init__(self, vm: VirtualModule) -> None:
+        self.vm = vm
+        self.vectors: dict[int, int] = {}
+        self.enabled: set[int] = set()
+        self.global_enable = False
+        self.pending: set[int] = set()
+        self.active: int | None = None          # number of the interrupt being handled
+        self._timers: dict[int, tuple[int, int | None]] = {}  # n -> (period ms, next tick)
+        self._levels: dict[int, int] = {}       # last sampled level of edge sources
+
+    # --- EI / DI / VECT ---------------------------------------------------------------
+    def _check(self, number: int) -> None:
+        if number != GLOBAL and number not in self.vm.profile.interrupts:
+            raise TmclStatus(3)
+
+    def enable(self, number: int, on: bool) -> None:
+        """EI / DI; 255 switches interrupt processing on or off as a whole."""
+        self._check(number)
+        if number == GLOBAL:
+            self.global_enable = on
+            return
+        self._levels.pop(number, None)  # start edge detection afresh
+        if on:
+            self.enabled.add(number)
+        else:
+            self.enabled.discard(number)
+            self.pending.discard(number)
+
+    def set_vector(self, number: int, address: int) -> None:
+        """VECT: the handler's address; vectors can be redefined (manual 3.6.32)."""
+        self._check(number)
+        if number == GLOBAL or not 0 <= address < self.vm.profile.program_memory:
+            raise TmclStatus(4)
+        self.vectors[number] = address
+
+    def reset(self) -> None:
+        """Everything off, as after power-up (command 131 reset application)."""
+        self.__init__(self.vm)
+
+    # --- occurrence ------------------------------------------------------------------
+    def accepting(self, number: int) -> bool:
+        """Would an occurrence of `number` be latched now?"""
+        from .program import RUNNING, STEPPING
+        return (self.global_enable and number in self.enabled and number in self.vectors
+                and self.vm.application_status in (RUNNING, STEPPING))
+
+    def trigger(self, number: int) -> bool:
+        """An interrupt source fired (also the entry point for the physical-world model and
+        tests). Returns True when it was latched."""
+        if self.accepting(number):
+            self.pending.add(number)
+            return True
+        return False
+
+    def next_dispatch(self) -> int | None:
+        """Number of the pending interrupt to handle next (lowest number), or None."""
+        if self.active is not None or not self.global_enable:
+            return None
+        ready = [n for n in self.pending if n in self.enabled and n in self.vectors]
+        return min(ready) if ready else None
+
+    # --- timers ----------------------------------------------------------------------
+    def _timer(self, n: int, now: int) -> int | None:
+        """Next expiry tick of timer n, re-phased when its period changed."""
+        period = self.vm.globals.ram.get((3, n), 0) & 0xFFFFFFFF
+        cached = self._timers.get(n)
+        if cached is None or cached[0] != period:
+            cached = (period, now + period * TICKS_PER_MS if period else None)
+            self._timers[n] = cached
+        return cached[1]
+
+    def _run_timers(self, now: int) -> None:
+        for n in TIMERS:
+            due = self._timer(n, now)
+            if due is None or due > now:
+                continue
+            step = self._timers[n][0] * TICKS_PER_MS
+            periods = (now - due) // step + 1
+            self._timers[n] = (self._timers[n][0], due + periods * step)
+            self.trigger(n)
+
+    def next_timer_event(self, now: int) -> int | None:
+        """Earliest expiry of a timer whose interrupt would be latched."""
+        best = None
+        for n in TIMERS:
+            due = self._timer(n, now)
+            if due is not None and self.accepting(n) and (best is None or due < best):
+                best = due
+        return best
+
+    # --- level sources -------------------------------------------------------------------
+    def _level(self, n: int) -> tuple[int, int] | None:
+        """(level, transition mode) of an edge source, or None if n is not one."""
+        vm = self.vm
+        axes = len(vm.axes)
+        if TARGET_REACHED <= n < TARGET_REACHED + axes:
+            return int(vm.axes[n - TARGET_REACHED].engine.position_reached), LOW_HIGH
+        if STOP_SWITCH <= n < STOP_SWITCH + 2 * axes:
+            axis = vm.axes[(n - STOP_SWITCH) // 2]
+            param = 11 if (n - STOP_SWITCH) % 2 == 0 else 10  # left / right limit switch state
+            try:
+                level = axis.get(param)
+            except TmclStatus:
+                return None
+            return int(bool(level)), vm.globals.get_raw(3, n)
+        if n >= INPUT_CHANGE and (0, n - INPUT_CHANGE) in vm.io.ports:
+            return int(bool(vm.io.read((0, n - INPUT_CHANGE)))), vm.globals.get_raw(3, n)
+        return None
+
+    def _sample_levels(self) -> None:
+        for n in self.enabled:
+            if not self.accepting(n):
+                self._levels.pop(n, None)
+                continue
+            got = self._level(n)
+            if got is None:
+                continue
+            level, mode = got
+            old = self._levels.get(n)
+            self._levels[n] = level
+            if old is None or old == level:
+                continue
+            if (mode & LOW_HIGH and level) or (mode & HIGH_LOW and not level):
+                self.pending.add(n)
+
+    def poll(self, now: int) -> None:
+        """Latch what occurred up to tick `now` (timers, level transitions)."""
+        self._run_timers(now)
+        if self.enabled and self.global_enable:
+            self._sample_levels()

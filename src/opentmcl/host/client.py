@@ -1,0 +1,293 @@
+"""Request/reply client over any `Transport` (TMCM-6212 manual 3.1, 3.2, 3.6.35, 3.6.36).
+
+One request is in flight at a time ("Do not send the next command before
+having received the reply!", manual 3.2); a lock lets threads share a client.
+Replies are matched to the request by module address and command number;
+unsolicited "target position reached" replies (status 128, command 138) that
+arrive in between are kept and handed to `wait_position_reached`.
+"""
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import ClassVar
+
+from ..protocol.frame import FRAME_LEN, Reply, Request, checksum, to_int32
+from ..protocol.replies import MemoryReply
+from ..protocol.status import Status, is_success
+from .errors import TmclProtocolError, TmclStatusError, TmclTimeout, describe_request
+from .transport import Transport
+
+READ_PROGRAM_MEMORY = 134  # control command with a special reply format (manual 3.6.36)
+GET_FIRMWARE_VERSION = 136  # control command, type 0 = string, 1 = binary (manual 3.6.36)
+RESTORE_FACTORY_SETTINGS = 137  # "This command does not send a reply."
+REQUEST_TARGET_POSITION_REACHED_EVENT = 138  # manual 3.6.35
+
+NO_REPLY = frozenset({RESTORE_FACTORY_SETTINGS})
+CAN_REPLY_LEN = 7  # module address, status, command, value (PD86-1180 manual 4.2)
+CAN_VERSION_LEN = 8  # the eight characters of the version string (PD86-1180 manual 4.6.39)
+_WAIT_SLICE = 0.05  # seconds the lock is held at a time while waiting for an event
+
+
+@dataclass(frozen=True, slots=True)
+class VersionReply:
+    """The special reply of command 136 type 0: host address and an 8-character string, no checksum
+    (PD86-1180 manual 4.6.39 "Special reply format of command 136")."""
+
+    reply_address: int
+    module_address: int  # the address the request went to (the frame does not carry it)
+    text: str
+
+    status: ClassVar[int] = Status.OK
+    command: ClassVar[int] = GET_FIRMWARE_VERSION
+
+    @property
+    def value(self) -> str:
+        return self.text
+
+
+def _is_event(frame: bytes) -> bool:
+    """A checksum-valid "target position reached" reply (manual 3.6.35)."""
+    return (len(frame) == FRAME_LEN and checksum(frame[:8]) == frame[8]
+            and frame[2] == Status.POSITION_REACHED_EVENT and frame[3] == REQUEST_TARGET_POSITION_REACHED_EVENT)
+
+
+def _check_byte(name: str, value: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"{name} must be an int, got {type(value).__name__}")
+    if not 0 <= value <= 255:
+        raise ValueError(f"{name} must be 0..255, got {value}")
+    return value
+
+
+def _check_value(value: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TypeError(f"value must be an int, got {type(value).__name__}")
+    if not -(2**31) <= value <= 2**32 - 1:
+        raise ValueError(f"value {value} does not fit in 32 bits")
+    return to_int32(value)
+
+
+class Client:
+    """Sends TMCL requests through a transport and returns the matching replies.
+
+    `address` is the default module address (1 by default, as shipped), `host_address`
+    the reply address the module uses (global parameter 76, default 2).
+    """
+
+    def __init__(self, transport: Transport, *, address: int = 1, host_address: int = 2,
+                 timeout: float = 5.0):
+        self.transport = transport
+        self.address = _check_byte("address", address)
+        self.host_address = _check_byte("host_address", host_address)
+        self.timeout = float(timeout)
+        self.stray_replies = 0  # replies received that matched no request (counted, then dropped)
+        self._events: dict[int, int] = {}  # module address -> OR of motor masks not yet consumed
+        self._lock = threading.RLock()
+        self._dirty = False  # a reply was lost or garbled: discard pending input before the next request
+
+    # ------------------------------------------------------------------ requests
+
+    def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
+                address: int | None = None, timeout: float | None = None,
+                ) -> Reply | VersionReply | MemoryReply | None:
+        """Send one request and return its reply; raise `TmclStatusError` unless the status is 100/101.
+
+        Command 136 type 0 returns a `VersionReply`, command 134 a `MemoryReply` (the stored
+        instruction); command 137 sends no reply and returns None.
+        """
+        req = Request(_check_byte("address", self.address if address is None else address),
+                      _check_byte("command", command), _check_byte("type", type),
+                      _check_byte("motor", motor), _check_value(value))
+        timeout = self.timeout if timeout is None else float(timeout)
+        with self._lock:
+            self._send(req)
+            if req.command in NO_REPLY:
+                return None
+            if req.command == GET_FIRMWARE_VERSION and req.type == 0:
+                return self._read_version(req, timeout)
+            if req.command == READ_PROGRAM_MEMORY:
+                return self._read_memory(req, timeout)
+            return self._read_reply(req, timeout)
+
+    def send_raw(self, frame: bytes, *, timeout: float | None = None) -> Reply | VersionReply | None:
+        """Send a ready-made 9-byte request frame (its checksum is not checked) and return the reply."""
+        req = Request.decode(bytes(frame), verify=False)
+        return self.request(req.command, req.type, req.motor, req.value, address=req.address,
+                            timeout=timeout)
+
+    def _send(self, req: Request) -> None:
+        if self._dirty:
+            self.transport.reset_input()
+            self._dirty = False
+        data = req.encode()
+        if self.transport.frame_format == "can":
+            data = data[1:]  # the CAN ID carries the module address
+        self.transport.send(data)
+
+    def _remaining(self, deadline: float) -> float:
+        return max(0.0, deadline - self.transport.monotonic())
+
+    def _recv(self, n: int, deadline: float) -> bytes:
+        try:
+            return self.transport.recv(n, self._remaining(deadline))
+        except TmclTimeout:
+            self._dirty = True
+            raise
+
+    def _read_frame(self, deadline: float) -> Reply:
+        """Read one reply frame, re-synchronising byte by byte past garbage on serial links."""
+        if self.transport.frame_format == "can":
+            b = self._recv(CAN_REPLY_LEN, deadline)
+            return Reply(self.host_address, b[0], b[1], b[2], int.from_bytes(b[3:7], "big", signed=True))
+        buf = self._recv(FRAME_LEN, deadline)
+        first_bad = None
+        while checksum(buf[:8]) != buf[8]:
+            first_bad = first_bad or buf
+            try:
+                buf = buf[1:] + self._recv(1, deadline)
+            except TmclTimeout:
+                raise TmclProtocolError(f"reply with wrong checksum: {first_bad.hex(' ')}") from None
+        return Reply.decode(buf)
+
+    def _read_reply(self, req: Request, timeout: float) -> Reply:
+        deadline = self.transport.monotonic() + timeout
+        while True:
+            try:
+                reply = self._read_frame(deadline)
+            except TmclTimeout:
+                raise TmclTimeout(f"no reply from module {req.address} to "
+                                  f"{describe_request(req)} within {timeout:g} s") from None
+            if self._take_event(reply):
+                continue
+            # On CAN the reply ID already names the module; its address byte is not compared.
+            same_module = self.transport.frame_format == "can" or reply.module_address == req.address
+            if not same_module or reply.command != req.command:
+                self.stray_replies += 1
+                continue
+            if not is_success(reply.status):
+                raise TmclStatusError(reply.status, req, reply)
+            return reply
+
+    def _read_memory(self, req: Request, timeout: float) -> MemoryReply:
+        """Command 134: the stored instruction in place of module address, status, command and
+        value, with a normal checksum (docs/notes/protocol.md). A normal frame with command 134 and
+        an error status is the module refusing the request."""
+        deadline = self.transport.monotonic() + timeout
+        while True:
+            try:
+                reply = self._read_frame(deadline)
+            except TmclTimeout:
+                raise TmclTimeout(f"no reply from module {req.address} to "
+                                  f"{describe_request(req)} within {timeout:g} s") from None
+            if self._take_event(reply):
+                continue
+            same_module = self.transport.frame_format == "can" or reply.module_address == req.address
+            if reply.command == READ_PROGRAM_MEMORY and same_module and not is_success(reply.status):
+                raise TmclStatusError(reply.status, req, reply)
+            return MemoryReply(reply.reply_address, reply.module_address, reply.status, reply.command,
+                               reply.value)
+
+    def _read_version(self, req: Request, timeout: float) -> VersionReply:
+        deadline = self.transport.monotonic() + timeout
+        can = self.transport.frame_format == "can"
+        while True:
+            try:
+                buf = self._recv(CAN_VERSION_LEN if can else FRAME_LEN, deadline)
+            except TmclTimeout:
+                raise TmclTimeout(f"no reply from module {req.address} to "
+                                  f"{describe_request(req)} within {timeout:g} s") from None
+            if not can and checksum(buf[:8]) == buf[8] and buf[3] & 0x80:
+                # A normal frame (command byte >= 128 is never an ASCII character).
+                reply = Reply.decode(buf)
+                if self._take_event(reply):
+                    continue
+                if reply.module_address == req.address and reply.command == req.command:
+                    if not is_success(reply.status):
+                        raise TmclStatusError(reply.status, req, reply)
+                self.stray_replies += 1
+                continue
+            text = buf if can else buf[1:]
+            if not all(32 <= c < 127 for c in text):
+                self._dirty = True
+                raise TmclProtocolError(f"not a version string reply: {buf.hex(' ')}")
+            return VersionReply(self.host_address if can else buf[0], req.address, text.decode("ascii"))
+
+    # ------------------------------------------------------------------ events (command 138)
+
+    def _event_key(self, address: int) -> int:
+        # A CAN transport talks to one module ID: its events all belong to that module.
+        return -1 if self.transport.frame_format == "can" else address
+
+    def _take_event(self, reply: Reply) -> bool:
+        if reply.status == Status.POSITION_REACHED_EVENT and reply.command == REQUEST_TARGET_POSITION_REACHED_EVENT:
+            key = self._event_key(reply.module_address)
+            self._events[key] = self._events.get(key, 0) | (reply.value & 0xFFFFFFFF)
+            return True
+        return False
+
+    def pending_events(self, address: int | None = None) -> int:
+        """Motor bit mask of "position reached" replies received and not yet consumed."""
+        return self._events.get(self._event_key(self.address if address is None else address), 0)
+
+    def clear_events(self, address: int | None = None) -> None:
+        with self._lock:
+            if address is None:
+                self._events.clear()
+            else:
+                self._events.pop(self._event_key(address), None)
+
+    def wait_position_reached(self, mask: int, timeout: float | None = None, *,
+                              address: int | None = None) -> int:
+        """Wait for the "target position reached" replies of command 138 (manual 3.6.35)
+        until every motor bit of `mask` has been reported; consume and return those bits.
+
+        Request the event first (command 138, e.g. `Module.request_position_reached_event`).
+        """
+        if not isinstance(mask, int) or isinstance(mask, bool) or not 0 < mask <= 0xFFFFFFFF:
+            raise ValueError(f"motor mask must be a non-zero 32-bit bit vector, got {mask!r}")
+        address = self.address if address is None else _check_byte("address", address)
+        key = self._event_key(address)
+        timeout = self.timeout if timeout is None else float(timeout)
+        deadline = self.transport.monotonic() + timeout
+        while True:
+            with self._lock:
+                got = self._events.get(key, 0)
+                if got & mask == mask:
+                    self._events[key] = got & ~mask
+                    return mask
+                left = self._remaining(deadline)
+                if left <= 0:
+                    raise TmclTimeout(f"module {address}: no position reached event for motor mask "
+                                      f"{mask & ~got:#x} within {timeout:g} s")
+                before = self.transport.monotonic()
+                try:
+                    frame = self._read_frame(before + min(left, _WAIT_SLICE))
+                except TmclTimeout:
+                    self._dirty = False  # nothing was lost: we were only listening
+                    if self.transport.monotonic() <= before:  # a clock that does not run: give up
+                        deadline = before
+                    continue
+                if not self._take_event(frame):
+                    self.stray_replies += 1
+
+    # ------------------------------------------------------------------ misc
+
+    def module(self, address: int | None = None, profile=None):
+        """A `Module` at `address` on this client's bus (several modules may share one client)."""
+        from .module import Module
+
+        return Module(self, address, profile)
+
+    def sleep(self, seconds: float) -> None:
+        """Let `seconds` pass on the transport's clock (virtual time for in-process modules)."""
+        self.transport.sleep(seconds)
+
+    def close(self) -> None:
+        self.transport.close()
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,100 @@
+"""Open a module by URL, the way pyserial's `serial_for_url` and python-can's `Bus(interface=...)` do.
+
+    connect("sim://TMCM-6212")                 # a virtual module in this process
+    connect("tcp://127.0.0.1:2323")            # a module (or server) behind a TCP socket
+    connect("serial:///dev/ttyUSB0?baud=9600") # RS-232 / RS-485 / USB
+    connect("can://socketcan/can0?id=1")       # CAN (python-can interface and channel)
+
+All return the same `Module` API. Several modules on one bus share one `Client`:
+``bus = open_bus(url); m1, m2 = bus.module(1), bus.module(2)``.
+"""
+from __future__ import annotations
+
+import importlib
+import urllib.parse
+
+from ..modules.profile import ModuleProfile
+from .client import Client
+from .errors import TmclConnectionError, TmclError
+from .module import Module
+from .transport import Transport
+
+# Lazy "module:function" references; function(url: urllib.parse.SplitResult) -> Transport.
+SCHEMES = {
+    "sim": "opentmcl.host.transports.inprocess:open_sim",
+    "tcp": "opentmcl.host.transports.tcp:open_tcp",
+    "serial": "opentmcl.host.transports.serial:open_serial",
+    "can": "opentmcl.host.transports.can:open_can",
+}
+
+
+def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
+    if not isinstance(url, str) or "://" not in url:
+        raise TmclConnectionError(f"not a module URL: {url!r} (expected e.g. sim://TMCM-6212, "
+                                  f"tcp://HOST:PORT, serial:///dev/ttyUSB0, can://socketcan/can0?id=1)")
+    parts = urllib.parse.urlsplit(url.strip())
+    scheme = parts.scheme.lower()
+    if scheme not in SCHEMES:
+        raise TmclConnectionError(f"unknown URL scheme {parts.scheme!r} in {url!r}; "
+                                  f"use one of {', '.join(s + '://' for s in SCHEMES)}")
+    parts = parts._replace(scheme=scheme)
+    if scheme == "sim" and address is not None:
+        # A single virtual module takes the address the caller will talk to,
+        # unless the URL sets one ("?address=N" or "NAME@N").
+        query = dict(urllib.parse.parse_qsl(parts.query))
+        if "address" not in query and "@" not in parts.netloc and "," not in parts.netloc:
+            query["address"] = str(address)
+            parts = parts._replace(query=urllib.parse.urlencode(query))
+    return parts
+
+
+def open_transport(url: str, *, address: int | None = None) -> Transport:
+    """The transport for `url` (see SCHEMES); `TmclConnectionError` if it cannot be opened."""
+    parts = _split(url, address)
+    target = SCHEMES[parts.scheme]
+    mod_name, _, func_name = target.partition(":")
+    try:
+        factory = getattr(importlib.import_module(mod_name), func_name)
+    except (ImportError, AttributeError) as exc:
+        raise TmclConnectionError(f"{parts.scheme}:// transport is not available: {exc}") from None
+    try:
+        return factory(parts)
+    except TmclError:
+        raise
+    except (OSError, ValueError, KeyError) as exc:
+        raise TmclConnectionError(f"cannot open {url}: {exc}") from exc
+
+
+def _default_address(url: str) -> int:
+    """1, or the address a sim:// URL gives its first module (``?address=N`` or ``NAME@N``)."""
+    parts = urllib.parse.urlsplit(url.strip()) if isinstance(url, str) else None
+    if parts is None or parts.scheme.lower() != "sim":
+        return 1
+    first = parts.netloc.split(",")[0]
+    text = first.partition("@")[2] or dict(urllib.parse.parse_qsl(parts.query)).get("address", "1")
+    try:
+        return int(text, 0)
+    except ValueError:
+        return 1  # open_sim reports the bad address
+
+
+def open_bus(url: str, *, address: int | None = None, timeout: float = 5.0, host_address: int = 2) -> Client:
+    """A `Client` on the bus at `url`; `address` is its default module address (default 1, or the
+    address a sim:// URL sets)."""
+    if address is None:
+        address = _default_address(url)
+    return Client(open_transport(url, address=address), address=address, timeout=timeout,
+                  host_address=host_address)
+
+
+def connect(url: str, *, address: int | None = None, timeout: float = 5.0, host_address: int = 2,
+            profile: ModuleProfile | str | None = None) -> Module:
+    """The module at `address` (default 1, or the address a sim:// URL sets) behind `url`. Its
+    profile is read from the firmware version string (command 136) on first use unless `profile`
+    is given."""
+    client = open_bus(url, address=address, timeout=timeout, host_address=host_address)
+    try:
+        return Module(client, client.address, profile)
+    except BaseException:
+        client.close()
+        raise

@@ -1,0 +1,224 @@
+"""A TMCL program debugger over any client connection (TMCM-6212 manual 3.6.36: "Most of these
+commands are only used by the TMCL-IDE (in order to implement e.g. the debugging functions ...)").
+
+Everything goes through the control commands: 130 executes one instruction, 135 reports
+mode, wait flag, PC, A and X, 128/129/131 stop, run and reset. Breakpoints and "run to label"
+are host-side: the debugger single-steps (130) and stops when the PC reaches a breakpoint
+address, before that instruction runs. A WAIT that is not yet satisfied keeps the module in
+step mode with the wait flag set; the debugger lets time pass (client.sleep) until it ends.
+Without breakpoints `cont()` lets the program run freely (129) and polls until it stops.
+
+Watch expressions (case-insensitive): ``a``, ``x``, ``pc``, ``flags``, ``state``,
+``varN`` (user variable N), ``outN`` / ``inN`` / ``adcN`` (GIO N on bank 2 / 0 / 1),
+``posN`` / ``targetN`` / ``speedN`` (AP1 / AP0 / AP3 of motor N), ``apP.M`` (axis parameter P
+of motor M), ``gpN`` or ``gpN.B`` (global parameter N of bank B, default 0).
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+from ..protocol.opcodes import format_instruction
+from .errors import TmclStatusError
+from .loader import MODES, AppStatus, Loader
+
+INSTRUCTION_SECONDS = 0.0001  # one TMCL instruction of the virtual modules (100 µs)
+WAIT_SLICE = 0.01             # how long the debugger lets a WAIT run between two looks
+POLL = 0.05                   # status polling period while the program runs freely
+
+# Bits of the flags word of 135 type 4 (OpenTMCL extension; layout of firmware/flags.py).
+FLAG_NAMES = ((0x100, "ZE"), (0x200, "EQ"), (0x400, "GT"), (0x800, "LT"),
+              (1, "ETO"), (2, "EAL"), (4, "EDV"), (8, "EPO"), (16, "ESD"))
+
+
+class DebugError(ValueError):
+    """A debugger command the user got wrong (unknown label, bad watch expression, ...)."""
+
+
+def describe_flags(flags: int | None) -> str:
+    if flags is None:
+        return "n/a"
+    return " ".join(n for bit, n in FLAG_NAMES if flags & bit) or "-"
+
+
+@dataclass(frozen=True)
+class Watch:
+    """A named value read from the module: `read(loader)` returns an int or a short text."""
+
+    name: str
+    read: Callable[[Loader], int | str]
+
+
+def _gio(port: int, bank: int):
+    return lambda ld: ld.request(15, port, bank).value
+
+
+def _gap(param: int, motor: int):
+    return lambda ld: ld.request(6, param, motor).value
+
+
+def _ggp(number: int, bank: int):
+    return lambda ld: ld.request(10, number, bank).value
+
+
+_SIMPLE: dict[str, Callable[[Loader], int | str]] = {
+    "a": lambda ld: ld.request(135, 2).value,
+    "x": lambda ld: ld.request(135, 3).value,
+    "pc": lambda ld: ld.request(135, 1).value & 0xFFFF,
+    "state": lambda ld: MODES.get((ld.request(135, 1).value >> 24) & 0xFF, "?"),
+}
+_INDEXED = {
+    "var": lambda n: _ggp(n, 2), "out": lambda n: _gio(n, 2), "in": lambda n: _gio(n, 0),
+    "adc": lambda n: _gio(n, 1), "pos": lambda n: _gap(1, n), "target": lambda n: _gap(0, n),
+    "speed": lambda n: _gap(3, n),
+}
+
+
+def _flags(ld: Loader) -> str:
+    try:
+        return describe_flags(ld.request(135, 4).value)
+    except TmclStatusError:
+        return "n/a"
+
+
+def parse_watch(spec: str) -> Watch:
+    """One watch expression (see the module docstring); DebugError if it cannot be read."""
+    text = spec.strip().lower()
+    if text in _SIMPLE:
+        return Watch(text, _SIMPLE[text])
+    if text == "flags":
+        return Watch(text, _flags)
+    m = re.fullmatch(r"(var|out|in|adc|pos|target|speed)(\d+)", text)
+    if m:
+        return Watch(text, _INDEXED[m.group(1)](int(m.group(2))))
+    m = re.fullmatch(r"ap(\d+)\.(\d+)", text)
+    if m:
+        return Watch(text, _gap(int(m.group(1)), int(m.group(2))))
+    m = re.fullmatch(r"gp(\d+)(?:\.(\d+))?", text)
+    if m:
+        return Watch(text, _ggp(int(m.group(1)), int(m.group(2) or 0)))
+    raise DebugError(f"cannot watch {spec!r}: use a, x, pc, flags, state, varN, outN, inN, adcN, "
+                     f"posN, targetN, speedN, apP.M or gpN[.B]")
+
+
+def parse_watches(specs: str | Sequence[str]) -> list[Watch]:
+    if isinstance(specs, str):
+        specs = [s for s in re.split(r"[,\s]+", specs) if s]
+    return [parse_watch(s) for s in specs]
+
+
+def read_watch(loader: Loader, watch: Watch) -> int | str:
+    try:
+        return watch.read(loader)
+    except TmclStatusError as exc:
+        return f"<status {exc.status}>"
+
+
+@dataclass
+class Debugger:
+    """Debugging session on the module behind `loader` for a program with `labels` and, per
+    address, its `source` line (objects with .file, .line, .text, or None)."""
+
+    loader: Loader
+    instructions: list = field(default_factory=list)
+    labels: dict[str, int] = field(default_factory=dict)
+    source: list = field(default_factory=list)
+    breakpoints: set[int] = field(default_factory=set)
+    watches: list[Watch] = field(default_factory=list)
+
+    # --- addresses ----------------------------------------------------------------------------
+    def address(self, text: str) -> int:
+        """A label name or a number."""
+        t = text.strip()
+        if t in self.labels:
+            return self.labels[t]
+        lower = {k.lower(): v for k, v in self.labels.items()}
+        if t.lower() in lower:
+            return lower[t.lower()]
+        try:
+            value = int(t, 0)
+        except ValueError:
+            raise DebugError(f"no label {t!r}") from None
+        if value < 0:
+            raise DebugError(f"address must be >= 0, got {value}")
+        return value
+
+    def where(self, address: int) -> str:
+        """``Label`` or ``Label+3`` for an address (nearest label at or before it)."""
+        best = None
+        for name, addr in self.labels.items():
+            if addr <= address and (best is None or addr > best[1] or (addr == best[1] and name < best[0])):
+                best = (name, addr)
+        if best is None:
+            return ""
+        return best[0] if best[1] == address else f"{best[0]}+{address - best[1]}"
+
+    def line(self, address: int) -> str:
+        """One listing line: address, label, instruction text (source text when known)."""
+        text = ""
+        src = self.source[address] if address < len(self.source) else None
+        if src is not None:
+            text = src.text.strip()
+            text = re.sub(r"^\s*[A-Za-z_]\w*\s*:\s*", "", text)  # the label is shown separately
+        elif address < len(self.instructions):
+            ins = self.instructions[address]
+            names = {a: n for n, a in sorted(self.labels.items(), reverse=True)}
+            text = format_instruction(*ins, labels=names) or f"RAW {', '.join(map(str, ins))}"
+        mark = "*" if address in self.breakpoints else " "
+        where = self.where(address)
+        return f"{mark}{address:5d}  {where:<16} {text}".rstrip()
+
+    # --- execution ------------------------------------------------------------------------------
+    def status(self) -> AppStatus:
+        return self.loader.status()
+
+    def _settle(self, st: AppStatus) -> AppStatus:
+        """Let time pass while a stepped WAIT is still waiting."""
+        while st.waiting and st.mode in (1, 2):
+            self.loader.client.sleep(WAIT_SLICE)
+            st = self.loader.status()
+        return st
+
+    def step(self, count: int = 1) -> AppStatus:
+        """Execute `count` instructions (130), each waited out if it is a WAIT."""
+        st = self.status()
+        for _ in range(max(1, count)):
+            self.loader.step()
+            self.loader.client.sleep(INSTRUCTION_SECONDS)
+            st = self._settle(self.status())
+            if st.mode in (0, 3):
+                break
+        return st
+
+    def run_to(self, stops: set[int], *, max_steps: int | None = None) -> AppStatus:
+        """Single-step until the PC is in `stops` (before that instruction runs) or the program
+        stops; the instruction at the current PC is always executed first."""
+        steps = 0
+        while True:
+            st = self.step()
+            steps += 1
+            if st.mode in (0, 3) or st.pc in stops:
+                return st
+            if max_steps is not None and steps >= max_steps:
+                return st
+
+    def cont(self, *, max_seconds: float | None = None) -> AppStatus:
+        """Continue: to the next breakpoint by stepping, or freely (129) until the program stops."""
+        if self.breakpoints:
+            return self.run_to(self.breakpoints)
+        self.loader.run()
+        waited = 0.0
+        while True:
+            self.loader.client.sleep(POLL)
+            waited += POLL
+            st = self.status()
+            if st.mode != 1 or (max_seconds is not None and waited >= max_seconds):
+                return st
+
+    def until(self, target: str) -> AppStatus:
+        """Run to a label or address (a temporary breakpoint)."""
+        return self.run_to({self.address(target)} | self.breakpoints)
+
+    def watch_values(self) -> list[tuple[str, int | str]]:
+        return [(w.name, read_watch(self.loader, w)) for w in self.watches]

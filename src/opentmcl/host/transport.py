@@ -1,0 +1,66 @@
+"""The byte pipe between the host library and a module (shared transport contract).
+
+A transport moves bytes and nothing else, like python-can's `BusABC`: the
+`Client` builds frames, a transport sends them and returns exactly the number
+of bytes asked for, or raises `TmclTimeout`. Concrete transports live in
+`opentmcl.host.transports.*` and are chosen by URL scheme in `connect.py`.
+
+`frame_format` tells the client how to frame a request:
+
+- ``"serial"``: nine-byte frames with module address and checksum, as on
+  RS-232/RS-485/USB and TCP (TMCM-6212 manual 3.1, 3.2);
+- ``"can"``: CAN payloads, one frame per `send`/`recv` call. A request is
+  eight bytes (command, type, motor, value, checksum; the module address is
+  the CAN ID chosen when the transport was opened); a reply is seven bytes
+  (module address, status, command, value) because "the first byte (reply
+  address) and the last byte (checksum) are left out" (PD86-1180 manual 4.2);
+  the string reply of command 136 is eight bytes, the version string (PD86-1180
+  manual 4.6.39).
+"""
+from __future__ import annotations
+
+import time
+from abc import ABC, abstractmethod
+
+
+class Transport(ABC):
+    """Abstract byte transport. Implementations must be safe to close twice."""
+
+    frame_format: str = "serial"
+
+    @abstractmethod
+    def send(self, data: bytes) -> None:
+        """Send all of `data`; raise `TmclConnectionError` if the link is gone."""
+
+    @abstractmethod
+    def recv(self, n: int, timeout: float) -> bytes:
+        """Return exactly `n` bytes, waiting at most `timeout` seconds, else raise `TmclTimeout`.
+
+        Bytes that arrived before a timeout stay buffered for the next call: the client listens
+        for event replies in short slices, and a frame may straddle two of them.
+        """
+
+    @abstractmethod
+    def close(self) -> None:
+        """Release the link (idempotent)."""
+
+    # Optional hooks with defaults that suit real (wall-clock) links.
+
+    def reset_input(self) -> None:
+        """Discard bytes already received but not read (used after a garbled reply)."""
+        return None
+
+    def sleep(self, seconds: float) -> None:
+        """Let `seconds` pass on the module's clock (real links: wall clock)."""
+        if seconds > 0:
+            time.sleep(seconds)
+
+    def monotonic(self) -> float:
+        """The clock that `timeout`/`sleep` are measured on (real links: wall clock)."""
+        return time.monotonic()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,255 @@
+"""In-process transport: the host talks to virtual modules by plain method calls.
+
+Any object with the VirtualModule interface can sit behind it:
+``handle(frame9) -> bytes`` (the reply, b"" when none is due),
+``drain_events() -> list[bytes]`` (unsolicited replies such as the command-138
+"position reached" reply, TMCM-6212 manual 3.6.35) and ``advance(seconds)``.
+Several modules may share one transport, like modules on one RS-485 bus: each
+request is offered to every module and only the addressed one answers.
+
+No thread and no socket: time passes only as the clock policy says (DESIGN.md
+"Time"):
+
+- ``"virtual"`` (default): waiting for a reply or an event advances the modules'
+  virtual time in slices of `step` seconds (or from one internal event to the
+  next, if the modules offer ``next_event_in()``) until the bytes are there or
+  the timeout is used up; `sleep(s)` advances `s` seconds at once. Deterministic.
+- ``"real"``: the modules follow the wall clock; waiting really waits.
+- ``"none"``: time never passes by itself (only through `advance`).
+"""
+from __future__ import annotations
+
+import importlib
+import threading
+import time
+import urllib.parse
+from collections.abc import Callable, Iterable
+
+from ..errors import TmclConnectionError, TmclTimeout
+from ..transport import Transport
+
+
+class Clock:
+    """How time passes for the modules behind an `InProcessTransport` (policy ``"none"``)."""
+
+    def sync(self, transport: InProcessTransport) -> None:
+        """Called before every request: bring the modules up to date."""
+
+    def wait(self, transport: InProcessTransport, ready: Callable[[], bool], timeout: float) -> None:
+        """Let time pass until `ready()` or `timeout` seconds have passed."""
+
+    def sleep(self, transport: InProcessTransport, seconds: float) -> None:
+        """Let `seconds` pass."""
+
+    def now(self, transport: InProcessTransport) -> float:
+        return transport.elapsed
+
+
+class VirtualClock(Clock):
+    """Virtual time that advances only while the host waits."""
+
+    def __init__(self, step: float = 0.001):
+        if not step > 0:
+            raise ValueError("virtual clock step must be > 0")
+        self.step = float(step)
+
+    def wait(self, transport, ready, timeout):
+        left = max(0.0, float(timeout))
+        while not ready() and left > 0:
+            dt = min(self._jump(transport), left)
+            transport.advance(dt)
+            left -= dt
+
+    def _jump(self, transport) -> float:
+        """Seconds to advance next: up to the modules' next internal event when every module
+        tells it (optional ``next_event_in() -> float | None``), else one `step`."""
+        nearest = None
+        for m in transport.modules:
+            probe = getattr(m, "next_event_in", None)
+            if probe is None:
+                return self.step
+            t = probe()
+            if t is not None and (nearest is None or t < nearest):
+                nearest = t
+        if nearest is None:
+            return float("inf")  # nothing will happen: the whole timeout passes at once
+        return nearest if nearest > 0 else self.step
+
+    def sleep(self, transport, seconds):
+        if seconds > 0:
+            transport.advance(seconds)
+
+
+class RealClock(Clock):
+    """The modules follow the wall clock, advanced lazily at each access."""
+
+    def __init__(self, poll: float = 0.002):
+        self.poll = poll
+        self._last: float | None = None
+
+    def sync(self, transport):
+        now = time.monotonic()
+        if self._last is not None and now > self._last:
+            transport.advance(now - self._last)
+        self._last = now
+
+    def wait(self, transport, ready, timeout):
+        deadline = time.monotonic() + max(0.0, timeout)
+        self.sync(transport)
+        while not ready():
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return
+            time.sleep(min(self.poll, left))
+            self.sync(transport)
+
+    def sleep(self, transport, seconds):
+        if seconds > 0:
+            time.sleep(seconds)  # without holding the transport's lock
+        with transport.lock:
+            self.sync(transport)
+
+    def now(self, transport):
+        return time.monotonic()
+
+
+CLOCKS: dict[str, Callable[[], Clock]] = {"virtual": VirtualClock, "real": RealClock, "none": Clock}
+
+
+def make_clock(clock: str | Clock) -> Clock:
+    if isinstance(clock, Clock):
+        return clock
+    try:
+        return CLOCKS[clock]()
+    except (KeyError, TypeError):
+        raise ValueError(f"unknown clock policy {clock!r}; use one of {', '.join(CLOCKS)}") from None
+
+
+class InProcessTransport(Transport):
+    """Transport to one or more VirtualModule-like objects in this process."""
+
+    frame_format = "serial"
+
+    def __init__(self, modules, clock: str | Clock = "virtual"):
+        if not isinstance(modules, Iterable):
+            modules = [modules]
+        self.modules = list(modules)
+        if not self.modules:
+            raise ValueError("InProcessTransport needs at least one module")
+        self.clock = make_clock(clock)
+        self.elapsed = 0.0  # virtual seconds advanced through this transport
+        self._rx = bytearray()
+        self._closed = False
+        self.lock = threading.RLock()  # the modules are not thread-safe; one caller at a time
+
+    @property
+    def module(self):
+        """The first (often the only) module."""
+        return self.modules[0]
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise TmclConnectionError("in-process transport is closed")
+
+    def _collect_events(self) -> None:
+        for m in self.modules:
+            for event in m.drain_events():
+                self._rx += event
+
+    def advance(self, seconds: float) -> None:
+        """Advance every module by `seconds` of virtual time, collecting their events."""
+        with self.lock:
+            self._check_open()
+            for m in self.modules:
+                m.advance(seconds)
+            self.elapsed += seconds
+            self._collect_events()
+
+    def send(self, data: bytes) -> None:
+        with self.lock:
+            self._check_open()
+            self.clock.sync(self)
+            self._collect_events()
+            for m in self.modules:
+                reply = m.handle(bytes(data))
+                if reply:
+                    self._rx += reply
+            self._collect_events()
+
+    def recv(self, n: int, timeout: float) -> bytes:
+        with self.lock:
+            self._check_open()
+            self._collect_events()
+            if len(self._rx) < n:
+                self.clock.wait(self, lambda: len(self._rx) >= n, timeout)
+            if len(self._rx) < n:
+                raise TmclTimeout(f"no reply within {timeout:g} s ({len(self._rx)} of {n} bytes received)")
+            out = bytes(self._rx[:n])
+            del self._rx[:n]
+            return out
+
+    def reset_input(self) -> None:
+        with self.lock:
+            self._rx.clear()
+
+    def sleep(self, seconds: float) -> None:
+        self._check_open()
+        if isinstance(self.clock, RealClock):
+            self.clock.sleep(self, seconds)
+        else:
+            with self.lock:
+                self.clock.sleep(self, seconds)
+
+    def monotonic(self) -> float:
+        return self.clock.now(self)
+
+    def close(self) -> None:
+        self._closed = True
+
+
+def _parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
+    """``TMCM-6212`` or ``TMCM-6212@1,PD86-1180@2`` -> [(name, address), ...]."""
+    out = []
+    names = [p for p in urllib.parse.unquote(netloc).split(",") if p.strip()]
+    if not names:
+        raise TmclConnectionError("sim:// URL names no module, e.g. sim://TMCM-6212")
+    for i, part in enumerate(names):
+        name, sep, addr = part.strip().partition("@")
+        if sep:
+            try:
+                address = int(addr, 0)
+            except ValueError:
+                raise TmclConnectionError(f"bad module address {addr!r} in sim:// URL") from None
+        else:
+            address = default_address + i
+        if not 0 <= address <= 255:
+            raise TmclConnectionError(f"module address {address} out of range 0..255")
+        out.append((name.strip(), address))
+    return out
+
+
+def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
+    """Factory for ``sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S]``."""
+    query = dict(urllib.parse.parse_qsl(url.query))
+    try:
+        default_address = int(query.get("address", "1"), 0)
+    except ValueError:
+        raise TmclConnectionError(f"bad address {query['address']!r} in sim:// URL") from None
+    specs = _parse_modules(url.netloc or url.path.lstrip("/"), default_address)
+    # The only place where the host layer touches the firmware layer (DESIGN.md "Layers").
+    vm_class = importlib.import_module("opentmcl.firmware.vm").VirtualModule
+    modules = []
+    for name, address in specs:
+        try:
+            modules.append(vm_class(name, address=address))
+        except KeyError as exc:
+            raise TmclConnectionError(f"sim://: {exc.args[0] if exc.args else exc}") from None
+    clock_name = query.get("clock", "virtual")
+    try:
+        if clock_name == "virtual" and "step" in query:
+            clock: str | Clock = VirtualClock(float(query["step"]))
+        else:
+            clock = make_clock(clock_name)
+    except ValueError as exc:
+        raise TmclConnectionError(f"sim://: {exc}") from None
+    return InProcessTransport(modules, clock=clock)

@@ -1,0 +1,98 @@
+"""Serial transport through pyserial: RS-232, RS-485 adapters, USB, a pty (TMCM-6212 manual 3.1, 3.2).
+
+    serial:///dev/ttyUSB0?baud=9600        (POSIX path)
+    serial://COM3?baud=115200              (Windows port name)
+
+`baud` defaults to 9600, the modules' default (global parameter 65). Any other
+pyserial port name works too, including pyserial URLs given as
+``serial://?port=URL`` (e.g. ``port=opentmcl://TMCM-6212`` after
+``import opentmcl.urlhandler``).
+"""
+from __future__ import annotations
+
+import time
+import urllib.parse
+
+from ..errors import TmclConnectionError, TmclTimeout
+from ..transport import Transport
+
+DEFAULT_BAUD = 9600
+
+
+class SerialTransport(Transport):
+    """A pyserial port; `recv` returns exactly n bytes or raises `TmclTimeout`."""
+
+    frame_format = "serial"
+
+    def __init__(self, port: str, baud: int = DEFAULT_BAUD) -> None:
+        import serial
+
+        self.port = port
+        try:
+            self._ser = serial.serial_for_url(port, baudrate=baud, timeout=0.1, write_timeout=5.0)
+        except (serial.SerialException, ValueError, OSError) as exc:
+            raise TmclConnectionError(f"cannot open serial port {port}: {exc}") from None
+        self._closed = False
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise TmclConnectionError(f"serial port {self.port} is closed")
+
+    def send(self, data: bytes) -> None:
+        import serial
+
+        self._check_open()
+        try:
+            self._ser.write(data)
+            self._ser.flush()
+        except (serial.SerialException, OSError) as exc:
+            raise TmclConnectionError(f"serial port {self.port}: write failed: {exc}") from None
+
+    def recv(self, n: int, timeout: float) -> bytes:
+        import serial
+
+        self._check_open()
+        deadline = time.monotonic() + max(0.0, timeout)
+        buf = bytearray()
+        while len(buf) < n:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TmclTimeout(f"serial port {self.port}: no reply within {timeout:g} s "
+                                  f"({len(buf)} of {n} bytes received)")
+            try:
+                self._ser.timeout = left
+                buf += self._ser.read(n - len(buf))
+            except (serial.SerialException, OSError) as exc:
+                raise TmclConnectionError(f"serial port {self.port}: read failed: {exc}") from None
+        return bytes(buf)
+
+    def reset_input(self) -> None:
+        if not self._closed:
+            try:
+                self._ser.reset_input_buffer()
+            except Exception:  # pyserial raises various types on a vanished port
+                pass
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._ser.close()
+        except Exception:  # closing a vanished port must not raise
+            pass
+
+
+def open_serial(url: urllib.parse.SplitResult) -> SerialTransport:
+    """Factory for ``serial:///dev/ttyX?baud=N``, ``serial://COM3?baud=N`` or ``serial://?port=URL``."""
+    query = dict(urllib.parse.parse_qsl(url.query))
+    port = query.get("port") or (url.netloc + url.path if url.netloc else url.path)
+    if not port:
+        raise TmclConnectionError(f"serial URL names no port, e.g. serial:///dev/ttyUSB0, got {url.geturl()!r}")
+    try:
+        baud = int(query.get("baud", DEFAULT_BAUD))
+    except ValueError:
+        raise TmclConnectionError(f"bad baud rate in {url.geturl()!r}") from None
+    if baud <= 0:
+        raise TmclConnectionError(f"bad baud rate {baud}")
+    return SerialTransport(port, baud)

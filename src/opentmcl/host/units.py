@@ -1,0 +1,115 @@
+"""Unit helpers: pps <-> rps/rpm, and ramp-generator internal units <-> pps.
+
+- pps and rounds: TMCM-6212 manual 6.5 "Velocity and Acceleration Calculation":
+  ``v_rps = v_pps / (r_fullstep * r_microstep)``, ``v_rpm = 60 * v_rps``, where
+  r_microstep = 2**(axis parameter 140) microsteps per full step (0 = full step ...
+  8 = 256 microsteps) and r_fullstep is axis parameter 202 (200 for a 1.8° motor).
+- TMC429 units (TMCM-1180 / PD86-1180, whose velocity parameters are 0..2047
+  internal units): TMC4210 datasheet 6.1.12.1 and PD86-1180 manual ch. 5 units:
+  ``R[Hz] = f_CLK * velocity / (2**pulse_div * 2048 * 32)`` and
+  ``dR[Hz/s] = f_CLK**2 * A_MAX / 2**(pulse_div + ramp_div + 29)``, f_CLK = 16 MHz.
+- TMC5130 units (TMCM-6212 with axis parameter 255 = 0, FACTS.md "TMC5130"):
+  ``v = v_internal * f_CLK / 2**24``, ``a = a_internal * f_CLK**2 / 2**41``.
+
+Conversions to physical units return floats; conversions to module units return
+the nearest integer (halves away from zero), as the module takes only integers.
+"""
+from __future__ import annotations
+
+F_CLK = 16_000_000  # Hz, the clock of the TMCM-1180 / TMCM-6212 motion controllers
+
+MICROSTEP_CODES = range(0, 9)  # axis parameter 140: 0 = full step ... 8 = 256 microsteps
+DIVISORS = range(0, 14)  # pulse_div / ramp_div (axis parameters 154 / 153): 0 .. 13
+
+
+def _round(x: float) -> int:
+    """Nearest integer, halves away from zero (as the motion layer rounds)."""
+    r = int(abs(x) + 0.5)
+    return r if x >= 0 else -r
+
+
+def _int_in(name: str, value: int, allowed: range) -> int:
+    if isinstance(value, bool) or not isinstance(value, int) or value not in allowed:
+        raise ValueError(f"{name} must be an integer {allowed.start}..{allowed.stop - 1}, got {value!r}")
+    return value
+
+
+def microsteps_per_fullstep(microstep_resolution: int) -> int:
+    """Axis parameter 140 code -> microsteps per full step (TMCM-6212 manual 4.1, parameter 140)."""
+    return 2 ** _int_in("microstep resolution (axis parameter 140)", microstep_resolution, MICROSTEP_CODES)
+
+
+def _steps_per_round(microstep_resolution: int, fullstep_resolution: int) -> int:
+    if isinstance(fullstep_resolution, bool) or not isinstance(fullstep_resolution, int) \
+            or fullstep_resolution <= 0:
+        raise ValueError(f"full step resolution (axis parameter 202) must be a positive integer, "
+                         f"got {fullstep_resolution!r}")
+    return fullstep_resolution * microsteps_per_fullstep(microstep_resolution)
+
+
+def pps_to_rps(pps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> float:
+    """Microsteps per second -> rounds per second (TMCM-6212 manual 6.5)."""
+    return pps / _steps_per_round(microstep_resolution, fullstep_resolution)
+
+
+def rps_to_pps(rps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> int:
+    """Rounds per second -> microsteps per second, rounded to an integer (TMCM-6212 manual 6.5)."""
+    return _round(rps * _steps_per_round(microstep_resolution, fullstep_resolution))
+
+
+def pps_to_rpm(pps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> float:
+    """Microsteps per second -> rounds per minute (``v_rpm = v_rps * 60``, TMCM-6212 manual 6.5)."""
+    return 60 * pps_to_rps(pps, microstep_resolution, fullstep_resolution)
+
+
+def rpm_to_pps(rpm: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> int:
+    """Rounds per minute -> microsteps per second, rounded to an integer."""
+    return _round(rpm * _steps_per_round(microstep_resolution, fullstep_resolution) / 60)
+
+
+# ---------------------------------------------------------------- TMC429 / TMC4210 (TMCM-1180)
+
+def tmc429_velocity_to_pps(velocity: int, pulse_div: int, f_clk: int = F_CLK) -> float:
+    """Internal velocity (0..2047) -> microsteps per second (TMC4210 datasheet 6.1.12.1)."""
+    _int_in("pulse_div", pulse_div, DIVISORS)
+    return f_clk * velocity / (2 ** pulse_div * 2048 * 32)
+
+
+def pps_to_tmc429_velocity(pps: float, pulse_div: int, f_clk: int = F_CLK) -> int:
+    """Microsteps per second -> internal velocity, rounded (inverse of `tmc429_velocity_to_pps`)."""
+    _int_in("pulse_div", pulse_div, DIVISORS)
+    return _round(pps * 2 ** pulse_div * 2048 * 32 / f_clk)
+
+
+def tmc429_accel_to_pps2(a_max: int, pulse_div: int, ramp_div: int, f_clk: int = F_CLK) -> float:
+    """Internal acceleration A_MAX (0..2047) -> microsteps per second² (TMC4210 datasheet 6.1.12.1)."""
+    _int_in("pulse_div", pulse_div, DIVISORS)
+    _int_in("ramp_div", ramp_div, DIVISORS)
+    return f_clk * f_clk * a_max / 2 ** (pulse_div + ramp_div + 29)
+
+
+def pps2_to_tmc429_accel(pps2: float, pulse_div: int, ramp_div: int, f_clk: int = F_CLK) -> int:
+    """Microsteps per second² -> internal A_MAX, rounded (inverse of `tmc429_accel_to_pps2`)."""
+    _int_in("pulse_div", pulse_div, DIVISORS)
+    _int_in("ramp_div", ramp_div, DIVISORS)
+    return _round(pps2 * 2 ** (pulse_div + ramp_div + 29) / (f_clk * f_clk))
+
+
+# ---------------------------------------------------------------- TMC5130 (TMCM-6212, unit mode 0)
+
+def tmc5130_velocity_to_pps(velocity: int, f_clk: int = F_CLK) -> float:
+    """Internal VMAX-style velocity -> microsteps per second (``v * f_CLK / 2**24``)."""
+    return velocity * f_clk / 2**24
+
+
+def pps_to_tmc5130_velocity(pps: float, f_clk: int = F_CLK) -> int:
+    return _round(pps * 2**24 / f_clk)
+
+
+def tmc5130_accel_to_pps2(accel: int, f_clk: int = F_CLK) -> float:
+    """Internal AMAX-style acceleration -> microsteps per second² (``a * f_CLK**2 / 2**41``)."""
+    return accel * f_clk * f_clk / 2**41
+
+
+def pps2_to_tmc5130_accel(pps2: float, f_clk: int = F_CLK) -> int:
+    return _round(pps2 * 2**41 / (f_clk * f_clk))

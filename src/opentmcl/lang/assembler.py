@@ -1,0 +1,600 @@
+"""Assembler for TMCL-IDE source (TMCM-6212 manual 2.4, 3.3, 3.5.6.4, chapter 7).
+
+Source syntax, one statement per line:
+
+- ``// comment`` to the end of the line;
+- ``Label:`` defines a label (the address of the next instruction); it may share the line with an
+  instruction (``Loop: MVP ABS, 0, 1000``) and may have spaces before the colon (``Loop :``);
+- ``Name = expression`` defines a constant (7.3 "Using Symbolic Constants");
+- ``#include file`` reads another source file (searched in the including file's directory, the
+  include path, then the bundled include files of the selected module); a file is read once;
+- ``#nostop`` suppresses the STOP that is otherwise appended after the last instruction;
+- ``MNEMONIC operand, operand, ...`` - mnemonics are case-insensitive; operands are expressions of
+  decimal, ``0x``/``$`` hex and ``0b`` binary literals, constants and labels with ``+ - * / % & | ^
+  ~ << >>`` and parentheses, or the command's symbolic names (ABS, TICKS, ADD, GE, ETO, ...);
+- ``RAW command, type, motor, value`` emits any instruction verbatim (used by the disassembler for
+  records that have no mnemonic form).
+
+Output: the program (a list of instructions), its 8-byte-record image, the label table and a
+listing. Errors raise AsmError naming file, line and column.
+"""
+from __future__ import annotations
+
+import os
+import re
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..protocol import opcodes
+from ..protocol.frame import to_int32
+from ..protocol.opcodes import MOTOR, TYPE, VALUE, Command
+from .binfile import Instruction, encode
+
+STOP = Instruction(28, 0, 0, 0)
+RAW = "RAW"
+INCLUDE_DIR = Path(__file__).resolve().parent / "include"
+DEFAULT_MODULE = "TMCM-6212"
+MAX_INCLUDE_DEPTH = 32
+MAX_EXPR_DEPTH = 100
+MAX_INTERMEDIATE = 1 << 64  # expression results beyond this are errors (keeps numbers small)
+
+_IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
+_LABEL_RE = re.compile(rf"\s*({_IDENT})\s*:")
+_CONST_RE = re.compile(rf"\s*({_IDENT})\s*=(.*)\Z", re.S)
+_WORD_RE = re.compile(rf"\s*({_IDENT})")
+_TOKEN_RE = re.compile(
+    r"\s*(?:(?P<num>0[xX][0-9A-Fa-f]+|\$[0-9A-Fa-f]+|0[bB][01]+|[0-9]+)"
+    rf"|(?P<name>{_IDENT})|(?P<op><<|>>|[-+*/%&|^~()]))"
+)
+
+
+class AsmError(Exception):
+    """An error in TMCL source, with its position (1-based line and column)."""
+
+    def __init__(self, file: str, line: int, column: int, message: str):
+        super().__init__(f"{file}:{line}:{column}: {message}")
+        self.file, self.line, self.column, self.message = file, line, column, message
+
+
+@dataclass(frozen=True)
+class SourceLine:
+    file: str
+    line: int
+    text: str
+
+
+@dataclass
+class Program:
+    """Result of assembly."""
+
+    instructions: list[Instruction]
+    labels: dict[str, int]
+    constants: dict[str, int]
+    source: list[SourceLine | None]  # per instruction; None for the appended STOP
+    module: str | None = None
+    filename: str = "<source>"
+
+    def image(self) -> bytes:
+        """The binary file contents (TMCL-IDE format: 8-byte records, no header)."""
+        return encode(self.instructions)
+
+    def symbol_file(self) -> str:
+        """Labels and their addresses, one per line: ``Name<TAB>address``, by address."""
+        rows = sorted(self.labels.items(), key=lambda kv: (kv[1], kv[0]))
+        return "".join(f"{name}\t{addr}\n" for name, addr in rows)
+
+    def listing(self) -> str:
+        """Address, record bytes and source of every instruction, with labels on their own lines."""
+        by_addr: dict[int, list[str]] = {}
+        for name, addr in self.labels.items():
+            by_addr.setdefault(addr, []).append(name)
+        out = []
+        for addr, ins in enumerate(self.instructions):
+            for name in sorted(by_addr.get(addr, ())):
+                out.append(f"{'':4}  {'':23}  {'':>6}  {name}:")
+            raw = " ".join(f"{b:02X}" for b in ins.encode())
+            src = self.source[addr]
+            if src is None:
+                out.append(f"{addr:04d}  {raw}  {'':>6}  STOP  // appended")
+                continue
+            where = str(src.line) if src.file == self.filename else f"{src.file}:{src.line}"
+            out.append(f"{addr:04d}  {raw}  {where:>6}  {src.text.strip()}")
+        for name in sorted(by_addr.get(len(self.instructions), ())):
+            out.append(f"{'':4}  {'':23}  {'':>6}  {name}:")
+        return "\n".join(out) + "\n"
+
+
+# --- expressions -----------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Expr:
+    kind: str  # num | name | un | bin
+    column: int
+    value: int = 0
+    name: str = ""
+    op: str = ""
+    args: tuple[_Expr, ...] = ()
+
+
+_BINARY_LEVELS = (("|",), ("^",), ("&",), ("<<", ">>"), ("+", "-"), ("*", "/", "%"))
+
+
+class _ExprParser:
+    def __init__(self, text: str, col0: int, err):
+        self.tokens: list[tuple[str, str, int]] = []
+        self.err = err
+        pos = 0
+        while pos < len(text):
+            if text[pos:].strip() == "":
+                break
+            m = _TOKEN_RE.match(text, pos)
+            if not m:
+                bad = len(text) - len(text[pos:].lstrip())
+                err(col0 + bad, f"unexpected character {text[bad]!r} in expression")
+            kind = m.lastgroup
+            self.tokens.append((kind, m.group(kind), col0 + m.start(kind)))
+            pos = m.end()
+        self.i = 0
+        self.depth = 0
+        self.end_col = col0 + len(text.rstrip())
+
+    def parse(self) -> _Expr:
+        if not self.tokens:
+            self.err(self.end_col, "missing operand")
+        e = self._binary(0)
+        if self.i < len(self.tokens):
+            _, tok, col = self.tokens[self.i]
+            self.err(col, f"unexpected {tok!r} in expression")
+        return e
+
+    def _peek(self) -> tuple[str, str, int] | None:
+        return self.tokens[self.i] if self.i < len(self.tokens) else None
+
+    def _binary(self, level: int) -> _Expr:
+        if level == len(_BINARY_LEVELS):
+            return self._unary()
+        left = self._binary(level + 1)
+        while (t := self._peek()) and t[0] == "op" and t[1] in _BINARY_LEVELS[level]:
+            self.i += 1
+            right = self._binary(level + 1)
+            left = _Expr("bin", t[2], op=t[1], args=(left, right))
+        return left
+
+    def _unary(self) -> _Expr:
+        t = self._peek()
+        if t is None:
+            self.err(self.end_col, "expression ends too early")
+        kind, tok, col = t
+        self.i += 1
+        self.depth += 1
+        if self.depth > MAX_EXPR_DEPTH:
+            self.err(col, f"expression nested deeper than {MAX_EXPR_DEPTH} levels")
+        try:
+            return self._primary(kind, tok, col)
+        finally:
+            self.depth -= 1
+
+    def _primary(self, kind: str, tok: str, col: int) -> _Expr:
+        if kind == "op" and tok in "+-~":
+            return _Expr("un", col, op=tok, args=(self._unary(),))
+        if kind == "op" and tok == "(":
+            e = self._binary(0)
+            close = self._peek()
+            if not close or close[1] != ")":
+                self.err(close[2] if close else self.end_col, "missing ')'")
+            self.i += 1
+            return e
+        if kind == "num":
+            return _Expr("num", col, value=opcodes.parse_number(tok))
+        if kind == "name":
+            return _Expr("name", col, name=tok)
+        self.err(col, f"unexpected {tok!r} in expression")
+        raise AssertionError  # pragma: no cover
+
+
+def _apply(op: str, a: int, b: int | None = None) -> int:
+    if b is None:
+        return a if op == "+" else -a if op == "-" else ~a
+    if op in "/%" and b == 0:
+        raise ZeroDivisionError
+    if op == "/":
+        q = abs(a) // abs(b)
+        return q if (a >= 0) == (b >= 0) else -q  # C-style truncation
+    if op == "%":
+        return a - b * _apply("/", a, b)
+    if op in ("<<", ">>"):
+        if not 0 <= b <= 63:
+            raise ValueError(f"shift count {b} out of range 0..63")
+        return a << b if op == "<<" else a >> b
+    ops = {"+": int.__add__, "-": int.__sub__, "*": int.__mul__, "&": int.__and__, "|": int.__or__,
+           "^": int.__xor__}
+    return ops[op](a, b)
+
+
+# --- statements ------------------------------------------------------------------------------
+
+@dataclass
+class _Where:
+    file: str
+    line: int
+    text: str
+
+
+@dataclass
+class _Operand:
+    text: str
+    column: int
+    expr: _Expr
+
+
+@dataclass
+class _Stmt:
+    where: _Where
+    command: Command | None  # None for RAW
+    mnemonic: str
+    column: int
+    operands: list[_Operand]
+
+
+@dataclass
+class _Const:
+    where: _Where
+    column: int
+    expr: _Expr
+
+
+@dataclass
+class _State:
+    module: str | None
+    include_path: list[Path]
+    append_stop: bool = True
+    filename: str = "<source>"
+    statements: list[_Stmt] = field(default_factory=list)
+    labels: dict[str, tuple[int, _Where]] = field(default_factory=dict)
+    constants: dict[str, list[_Const]] = field(default_factory=dict)
+    included: set[str] = field(default_factory=set)
+    values: dict[str, int] = field(default_factory=dict)
+    resolving: list[str] = field(default_factory=list)
+
+
+def _fail(where: _Where, column: int, message: str):
+    raise AsmError(where.file, where.line, column, message)
+
+
+def bundled_include(name: str, module: str | None = None) -> Path | None:
+    """Path of a bundled include file: the module's own variant (``<key>_<name>``) first."""
+    try:
+        key = include_key(module)
+    except KeyError:
+        key = None
+    for candidate in ([f"{key}_{name}"] if key else []) + [name]:
+        path = INCLUDE_DIR / candidate
+        if _is_file(path):
+            return path
+    return None
+
+
+def _is_file(path: Path) -> bool:
+    try:
+        return path.is_file()
+    except (OSError, ValueError):  # e.g. a NUL byte or an over-long name
+        return False
+
+
+def include_key(module: str | None) -> str:
+    """File-name key of a module's bundled includes: TMCM-6212 -> tmcm6212, PD86-1180 -> pd86_1180."""
+    from ..modules.profile import load_profile
+    name = load_profile(module or DEFAULT_MODULE).name
+    head, _, tail = name.lower().partition("-")
+    return f"{head}{tail}" if head == "tmcm" else f"{head}_{tail}"
+
+
+def _find_include(name: str, current: Path | None, st: _State) -> Path | None:
+    dirs = ([current.parent] if current else []) + st.include_path
+    for d in dirs:
+        p = d / name
+        if _is_file(p):
+            return p
+    return bundled_include(name, st.module)
+
+
+def _strip_comment(text: str) -> str:
+    cut = text.find("//")
+    return text if cut < 0 else text[:cut]
+
+
+def _split_operands(text: str, col0: int) -> list[tuple[str, int]]:
+    """Comma-separated operand texts with the 1-based column where each starts."""
+    out, start = [], 0
+    for i, ch in enumerate(text + ","):
+        if ch == ",":
+            piece = text[start:i]
+            lead = len(piece) - len(piece.lstrip())
+            out.append((piece.strip(), col0 + start + lead))
+            start = i + 1
+    return out
+
+
+def _read_file(path: Path, display: str, st: _State, where: _Where | None, depth: int) -> None:
+    key = str(path.resolve())
+    if key in st.included:
+        return
+    st.included.add(key)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        if where:
+            _fail(where, 1, f"cannot read include file {display}: {exc.strerror or exc}")
+        raise AsmError(display, 0, 0, f"cannot read file: {exc.strerror or exc}") from None
+    _read_text(text, display, path, st, depth)
+
+
+def _read_text(text: str, display: str, path: Path | None, st: _State, depth: int) -> None:
+    text = text.removeprefix("\ufeff")
+    for lineno, raw in enumerate(text.splitlines(), 1):
+        where = _Where(display, lineno, raw)
+        _read_line(raw, where, path, st, depth)
+
+
+def _read_line(raw: str, where: _Where, path: Path | None, st: _State, depth: int) -> None:
+    stripped = raw.lstrip()
+    if stripped.startswith("#"):
+        _directive(raw, where, path, st, depth)
+        return
+    line = _strip_comment(raw)
+    pos = 0
+    while m := _LABEL_RE.match(line, pos):
+        name = m.group(1)
+        _define_label(name, m.start(1) + 1, where, st)
+        pos = m.end()
+    rest = line[pos:]
+    if not rest.strip():
+        return
+    if m := _CONST_RE.match(rest):
+        name = m.group(1)
+        col = pos + m.start(1) + 1
+        expr_col = pos + m.start(2) + 1
+        expr = _ExprParser(m.group(2), expr_col, lambda c, msg: _fail(where, c, msg)).parse()
+        _define_constant(name, col, expr, where, st)
+        return
+    m = _WORD_RE.match(rest)
+    if not m:
+        col = pos + len(rest) - len(rest.lstrip()) + 1
+        _fail(where, col, "expected a label, a constant definition or an instruction")
+    mnemonic = m.group(1)
+    col = pos + m.start(1) + 1
+    after = rest[m.end():]
+    if after and not after[0].isspace():
+        _fail(where, col + len(mnemonic), f"expected a space after {mnemonic!r}")
+    command = None
+    if mnemonic.upper() != RAW:
+        try:
+            command = opcodes.by_mnemonic(mnemonic)
+        except opcodes.UnknownCommand:
+            _fail(where, col, f"unknown mnemonic {mnemonic!r}")
+    ops_col = pos + m.end() + 1
+    operands = []
+    if after.strip():
+        for text, ocol in _split_operands(after, ops_col):
+            if not text:
+                usage = command.usage() if command else "RAW <command>, <type>, <motor>, <value>"
+                _fail(where, ocol, f"empty operand; expected {usage}")
+            expr = _ExprParser(text, ocol, lambda c, msg: _fail(where, c, msg)).parse()
+            operands.append(_Operand(text, ocol, expr))
+    st.statements.append(_Stmt(where, command, mnemonic.upper(), col, operands))
+
+
+def _directive(raw: str, where: _Where, path: Path | None, st: _State, depth: int) -> None:
+    body = raw.lstrip()
+    col = len(raw) - len(body) + 1
+    m = re.match(r"#\s*(\w+)", body)
+    word = m.group(1).lower() if m else ""
+    if word == "include":
+        arg = body[m.end():]
+        arg_stripped = arg.strip()
+        if arg_stripped.startswith(('"', "<")):
+            close = '"' if arg_stripped[0] == '"' else ">"
+            end = arg_stripped.find(close, 1)
+            if end < 0:
+                _fail(where, col, f"missing closing {close} in #include")
+            name = arg_stripped[1:end]
+        else:
+            name = _strip_comment(arg).strip()
+        if not name:
+            _fail(where, col, "expected a file name: #include <file>")
+        if depth >= MAX_INCLUDE_DEPTH:
+            _fail(where, col, f"includes nested deeper than {MAX_INCLUDE_DEPTH}")
+        found = _find_include(name, path, st)
+        if found is None:
+            _fail(where, col, f"include file {name!r} not found (searched the source directory, "
+                  f"the include path and the bundled includes)")
+        display = f"<bundled>/{found.name}" if found.parent == INCLUDE_DIR else str(found)
+        _read_file(found, display, st, where, depth + 1)
+    elif word == "nostop":
+        if _strip_comment(body[m.end():]).strip():
+            _fail(where, col, "#nostop takes no argument")
+        st.append_stop = False
+    else:
+        _fail(where, col, f"unknown directive {body.split()[0]!r}; expected #include <file> or #nostop")
+
+
+def _define_label(name: str, col: int, where: _Where, st: _State) -> None:
+    if name in st.labels:
+        first = st.labels[name][1]
+        _fail(where, col, f"label {name!r} already defined at {first.file}:{first.line}")
+    if name in st.constants:
+        first = st.constants[name][0].where
+        _fail(where, col, f"{name!r} is already a constant (defined at {first.file}:{first.line})")
+    st.labels[name] = (len(st.statements), where)
+
+
+def _define_constant(name: str, col: int, expr: _Expr, where: _Where, st: _State) -> None:
+    if name in st.labels:
+        first = st.labels[name][1]
+        _fail(where, col, f"{name!r} is already a label (defined at {first.file}:{first.line})")
+    st.constants.setdefault(name, []).append(_Const(where, col, expr))
+
+
+# --- evaluation ------------------------------------------------------------------------------
+
+def _names_like(name: str, st: _State) -> list[str]:
+    low = name.lower()
+    return sorted(n for n in (*st.labels, *st.constants) if n.lower() == low and n != name)
+
+
+def _lookup(name: str, col: int, where: _Where, st: _State) -> int:
+    if name in st.labels:
+        return st.labels[name][0]
+    if name in st.values:
+        return st.values[name]
+    if name in st.constants:
+        if name in st.resolving:
+            chain = " -> ".join(st.resolving[st.resolving.index(name):] + [name])
+            _fail(where, col, f"constant defined in terms of itself: {chain}")
+        st.resolving.append(name)
+        defs = st.constants[name]
+        first = _eval(defs[0].expr, defs[0].where, st)
+        for other in defs[1:]:
+            v = _eval(other.expr, other.where, st)
+            if v != first:
+                _fail(other.where, other.column,
+                      f"constant {name!r} redefined as {v} (was {first} at "
+                      f"{defs[0].where.file}:{defs[0].where.line})")
+        st.resolving.pop()
+        st.values[name] = first
+        return first
+    hint = _names_like(name, st)
+    extra = f" (names are case-sensitive; did you mean {hint[0]!r}?)" if hint else ""
+    _fail(where, col, f"undefined symbol {name!r}{extra}")
+    raise AssertionError  # pragma: no cover
+
+
+def _eval(e: _Expr, where: _Where, st: _State) -> int:
+    if e.kind == "num":
+        return e.value
+    if e.kind == "name":
+        return _lookup(e.name, e.column, where, st)
+    vals = [_eval(a, where, st) for a in e.args]
+    try:
+        result = _apply(e.op, *vals)
+        if abs(result) > MAX_INTERMEDIATE:
+            _fail(where, e.column, "expression value out of range (more than 64 bits)")
+        return result
+    except ZeroDivisionError:
+        _fail(where, e.column, "division by zero")
+    except ValueError as exc:
+        _fail(where, e.column, str(exc))
+    raise AssertionError  # pragma: no cover
+
+
+def _operand_value(stmt: _Stmt, op: _Operand, fld: str, st: _State) -> int:
+    cmd = stmt.command
+    if cmd is not None and fld == TYPE and cmd.symbols and op.expr.kind == "name":
+        sym = opcodes.lookup_symbol(cmd, op.expr.name)
+        if sym is not None:
+            return sym
+        if op.expr.name not in st.labels and op.expr.name not in st.constants:
+            table = "|".join(cmd.symbol_table())
+            _fail(stmt.where, op.column, f"unknown {cmd.mnemonic} type {op.expr.name!r}; expected {table}")
+    v = _eval(op.expr, stmt.where, st)
+    if fld in (TYPE, MOTOR, "command"):
+        if not 0 <= v <= 255:
+            what = {"type": "type", "motor": "motor/bank", "command": "command"}[fld]
+            _fail(stmt.where, op.column, f"{what} operand must be 0..255, got {v}")
+    elif not -(1 << 31) <= v <= 0xFFFFFFFF:
+        _fail(stmt.where, op.column, f"value operand out of 32-bit range: {v}")
+    return to_int32(v) if fld == VALUE else v
+
+
+def _available(number: int, opcodes_: frozenset[int]) -> bool:
+    """CALL (80) is listed in the PD28-1021 manual's contents but not in its Table 5 nor in the
+    profile's opcodes: a module with the extended set (DJNZ, 49) has it, as the firmware assumes."""
+    return number in opcodes_ or (number == 80 and 49 in opcodes_)
+
+
+def _encode_stmt(stmt: _Stmt, st: _State, profile) -> Instruction:
+    if stmt.command is None:  # RAW
+        if len(stmt.operands) != 4:
+            col = stmt.operands[-1].column if stmt.operands else stmt.column
+            _fail(stmt.where, col, "expected RAW <command>, <type>, <motor>, <value>")
+        c, t, m, v = (_operand_value(stmt, op, f, st) for op, f in
+                      zip(stmt.operands, ("command", TYPE, MOTOR, VALUE), strict=True))
+        return Instruction(c, t, m, v)
+    cmd = stmt.command
+    form = cmd.form_for(len(stmt.operands))
+    if form is None:
+        col = stmt.operands[-1].column if stmt.operands else stmt.column
+        n = len(stmt.operands)
+        _fail(stmt.where, col, f"{cmd.mnemonic} does not take {n} operand{'s' if n != 1 else ''}; "
+              f"expected {cmd.usage()}")
+    if profile is not None and not _available(cmd.number, profile.opcodes):
+        _fail(stmt.where, stmt.column, f"{cmd.mnemonic} (command {cmd.number}) is not available on {profile.name}")
+    fields = {TYPE: 0, MOTOR: 0, VALUE: 0}
+    for op, fld in zip(stmt.operands, form, strict=True):
+        fields[fld] = _operand_value(stmt, op, fld, st)
+    return Instruction(cmd.number, fields[TYPE], fields[MOTOR], fields[VALUE])
+
+
+def _finish(st: _State, profile) -> Program:
+    instructions, sources = [], []
+    for stmt in st.statements:
+        instructions.append(_encode_stmt(stmt, st, profile))
+        sources.append(SourceLine(stmt.where.file, stmt.where.line, stmt.where.text))
+    if st.append_stop:
+        instructions.append(STOP)
+        sources.append(None)
+    if profile is not None and len(instructions) > profile.program_memory:
+        over = st.statements[min(profile.program_memory, len(st.statements) - 1)]
+        _fail(over.where, over.column, f"program has {len(instructions)} instructions; "
+              f"{profile.name} program memory holds {profile.program_memory}")
+    constants = {}
+    for name in st.constants:
+        constants[name] = _lookup(name, 1, st.constants[name][0].where, st)
+    labels = {name: addr for name, (addr, _) in st.labels.items()}
+    return Program(instructions, labels, constants, sources, profile.name if profile else None,
+                   st.filename)
+
+
+def _profile(module: str | None):
+    if module is None:
+        return None
+    from ..modules.profile import load_profile
+    try:
+        return load_profile(module)
+    except KeyError as exc:
+        raise AsmError("<options>", 0, 0, str(exc.args[0])) from None
+
+
+def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[str | os.PathLike] = (),
+             module: str | None = None, append_stop: bool = True,
+             defines: Mapping[str, int] | None = None) -> Program:
+    """Assemble TMCL source text.
+
+    `module` ("TMCM-6212", "PD86-1180", "PD28-1021" or an alias) selects the bundled include files
+    and checks that every command exists on that module and the program fits its memory; without
+    it the TMCM-6212 includes are used and nothing is checked. `defines` are extra constants.
+    """
+    profile = _profile(module)
+    st = _State(module, [Path(p) for p in include_path], append_stop, filename)
+    where = _Where("<defines>", 0, "")
+    for name, value in (defines or {}).items():
+        st.constants[name] = [_Const(where, 0, _Expr("num", 0, value=int(value)))]
+    path = Path(filename) if filename and not filename.startswith("<") else None
+    if path is not None:
+        st.included.add(str(path.resolve()))
+    _read_text(source, filename, path, st, 0)
+    return _finish(st, profile)
+
+
+def assemble_file(path: str | os.PathLike, *, include_path: Iterable[str | os.PathLike] = (),
+                  module: str | None = None, append_stop: bool = True,
+                  defines: Mapping[str, int] | None = None) -> Program:
+    """Assemble a source file; AsmError (line 0) if it cannot be read."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise AsmError(str(p), 0, 0, f"cannot read file: {exc.strerror or exc}") from None
+    return assemble(text, filename=str(p), include_path=include_path, module=module,
+                    append_stop=append_stop, defines=defines)

@@ -1,0 +1,151 @@
+"""Disassembler: program records back to TMCL source that re-assembles to identical bytes.
+
+- Symbolic type names (ABS, TICKS, ADD, GE, ETO, ...) where the command has them;
+- labels for the targets of JA, JC, CSUB, VECT, RST, DJNZ and CALL inside the program (given names,
+  or ``L<address>``);
+- with a module: ``#include <module>.inc`` and the bundled names for axis parameters (``AP...``),
+  global parameters (``GP...``), interrupt vectors (``TI_...``) and motors (``Motor<n>``);
+- a record that has no mnemonic form (a control command, an unknown opcode, a non-zero field that
+  the command's operand forms cannot carry) becomes ``RAW command, type, motor, value``;
+- the assembler appends a STOP, so one trailing ``STOP`` record is left out of the text; when the
+  program does not end with a plain STOP the text starts with ``#nostop``.
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cache
+
+from ..protocol import opcodes
+from ..protocol.opcodes import MOTOR, TYPE, VALUE
+from .assembler import RAW, STOP, AsmError, assemble, include_key
+from .binfile import Instruction, decode
+
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+_RESERVED = {RAW}
+
+AXIS_COMMANDS = {5, 6, 7, 8, 34}          # SAP GAP STAP RSAP AAP: type = axis parameter
+GLOBAL_COMMANDS = {9, 10, 11, 12, 35}     # SGP GGP STGP RSGP AGP: type = parameter, motor = bank
+INTERRUPT_COMMANDS = {25, 26, 37}         # EI DI VECT: type = interrupt number
+MOTOR_COMMANDS = {1, 2, 3, 4, 5, 6, 7, 8, 13, 30, 31, 32, 34, 39, 46, 50, 51}
+
+
+@dataclass
+class _Names:
+    """Module names for operands (empty without a module)."""
+
+    include: str = ""
+    axis: dict[int, str] = field(default_factory=dict)
+    globals: dict[tuple[int, int], str] = field(default_factory=dict)
+    interrupts: dict[int, str] = field(default_factory=dict)
+    motors: dict[int, str] = field(default_factory=dict)
+    constants: set[str] = field(default_factory=set)
+
+
+@cache
+def _module_names(module: str) -> _Names:
+    from ..modules.profile import load_profile
+    from .gen_includes import camel
+    prof = load_profile(module)
+    key = include_key(prof.name)
+    consts = assemble(f"#include {key}.inc", module=prof.name).constants
+
+    def checked(name: str, number: int) -> str | None:
+        return name if consts.get(name) == number else None
+
+    names = _Names(include=f"{key}.inc", constants=set(consts))
+    for p in prof.axis_parameters.values():
+        if n := checked(f"AP{camel(p.name)}", p.number):
+            names.axis[p.number] = n
+    for g in prof.global_parameters.values():
+        base = f"GP{camel(g.name)}"
+        if n := checked(base, g.number) or checked(f"{base}_B{g.bank}", g.number):
+            names.globals[(g.bank or 0, g.number)] = n
+    for i in prof.interrupts.values():
+        if n := checked(i.name, i.number):
+            names.interrupts[i.number] = n
+    if consts.get("TI_GLOBAL") == 255:
+        names.interrupts.setdefault(255, "TI_GLOBAL")
+    for a in range(prof.axes):
+        if n := checked(f"Motor{a}", a):
+            names.motors[a] = n
+    return names
+
+
+def _text(ins: Instruction, labels: Mapping[int, str], names: _Names) -> str:
+    cmd = opcodes.COMMANDS.get(ins.command)
+    form = opcodes.choose_form(cmd, ins.type, ins.motor, ins.value) if cmd and cmd.mnemonic else None
+    if form is None:
+        return f"{RAW} {ins.command}, {ins.type}, {ins.motor}, {ins.value}"
+    parts = []
+    for fld in form:
+        num = {TYPE: ins.type, MOTOR: ins.motor, VALUE: ins.value}[fld]
+        text = None
+        if fld == TYPE:
+            text = opcodes.symbol_name(cmd, num)
+            if text is None and cmd.number in AXIS_COMMANDS:
+                text = names.axis.get(num)
+            elif text is None and cmd.number in GLOBAL_COMMANDS:
+                text = names.globals.get((ins.motor, num))
+            elif text is None and cmd.number in INTERRUPT_COMMANDS:
+                text = names.interrupts.get(num)
+        elif fld == MOTOR and cmd.number in MOTOR_COMMANDS:
+            text = names.motors.get(num)
+        elif fld == VALUE and cmd.label:
+            text = labels.get(num)
+        parts.append(text if text is not None else str(num))
+    return f"{cmd.mnemonic} {', '.join(parts)}".rstrip()
+
+
+def disassemble(program: bytes | list[Instruction], *, labels: Mapping[str, int] | None = None,
+                comments: bool = True, module: str | None = None) -> str:
+    """TMCL source for a binary image (8-byte records) or a list of instructions.
+
+    `labels` (name -> address, e.g. from Program.labels) names the jump targets; other targets
+    get ``L<address>``. With `comments`, each line ends with ``// <address>``. With `module`, the
+    text includes that module's bundled names (the output then needs the bundled include files).
+    """
+    instrs = decode(program) if isinstance(program, (bytes, bytearray, memoryview)) else \
+        [Instruction(*i) for i in program]
+    tail_stop = bool(instrs) and instrs[-1] == STOP
+    body = instrs[:-1] if tail_stop else instrs
+    try:
+        names = _module_names(module) if module else _Names()
+    except (KeyError, AsmError) as exc:
+        raise ValueError(f"cannot use the names of module {module!r}: {exc}") from None
+
+    given: dict[int, str] = {}
+    for name, addr in sorted((labels or {}).items(), key=lambda kv: kv[0]):
+        if _IDENT.fullmatch(name) and name.upper() not in _RESERVED and name not in names.constants:
+            given.setdefault(addr, name)
+    targets: dict[int, str] = {}
+    taken = set(given.values()) | names.constants
+    for ins in body:
+        cmd = opcodes.COMMANDS.get(ins.command)
+        if cmd is None or not cmd.label or opcodes.format_instruction(*ins) is None:
+            continue
+        if 0 <= ins.value <= len(body) and ins.value not in targets:
+            name = given.get(ins.value, f"L{ins.value}")
+            while ins.value not in given and name in taken:
+                name += "_"
+            targets[ins.value] = name
+            taken.add(name)
+    for addr, name in given.items():  # keep every given label that lies inside the program
+        if 0 <= addr <= len(body):
+            targets.setdefault(addr, name)
+
+    lines = []
+    if not tail_stop:
+        lines.append("#nostop")
+    if names.include:
+        lines.append(f"#include {names.include}")
+    texts = [_text(i, targets, names) for i in body]
+    width = max((len(t) for t in texts), default=0)
+    for addr, text in enumerate(texts):
+        if addr in targets:
+            lines.append(f"{targets[addr]}:")
+        lines.append(f"    {text:<{width}}  // {addr}" if comments else f"    {text}")
+    if len(body) in targets:
+        lines.append(f"{targets[len(body)]}:")
+    return "\n".join(lines) + "\n"

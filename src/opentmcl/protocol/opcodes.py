@@ -1,0 +1,429 @@
+"""The TMCL command set as data: numbers, mnemonics, operand forms, symbolic operands.
+
+Sources: TMCM-6212 manual 3.4.1 (overview), 3.6.1-3.6.36 (each command's "Mnemonic:" line and
+binary representation); PD86-1180 manual 4.4.1, 4.6.1-4.6.39; PD28-1021 manual 3.5 (overview of the
+extended command set 40-57). The PD28-1021 manual is cut off before its detailed descriptions: the
+field mapping of the extended commands is inferred from the overview's operand order (see
+docs/notes/protocol.md).
+
+An operand form is the order in which the binary fields appear in TMCL-IDE source, e.g.
+``MVP ABS, 0, 1000`` is ``("type", "motor", "value")`` and ``ROL 0, 500`` is ``("motor", "value")``.
+A command may have several accepted forms (``GAP 1, 0`` and ``GAP 1, 0, 0`` both appear in the
+manuals); the first one is canonical. Fields absent from the form used are 0.
+"""
+from __future__ import annotations
+
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import IntEnum
+from types import MappingProxyType
+
+from .frame import to_int32
+
+TYPE, MOTOR, VALUE = "type", "motor", "value"
+FIELDS = (TYPE, MOTOR, VALUE)
+
+
+# --- symbolic operands -------------------------------------------------------------------------
+
+class MvpType(IntEnum):
+    """MVP / MVPA type field (TMCM-6212 3.6.4)."""
+    ABS = 0
+    REL = 1
+    COORD = 2
+
+
+class RfsType(IntEnum):
+    """RFS type field (TMCM-6212 3.6.11)."""
+    START = 0
+    STOP = 1
+    STATUS = 2
+
+
+class CalcOp(IntEnum):
+    """CALC operations (TMCM-6212 3.6.14); CALCX adds SWAP (3.6.26)."""
+    ADD = 0
+    SUB = 1
+    MUL = 2
+    DIV = 3
+    MOD = 4
+    AND = 5
+    OR = 6
+    XOR = 7
+    NOT = 8
+    LOAD = 9
+    SWAP = 10
+
+
+class Condition(IntEnum):
+    """JC conditions (TMCM-6212 3.6.16: 0-11; PD86-1180 4.6.18 adds ESD = 12)."""
+    ZE = 0
+    NZ = 1
+    EQ = 2
+    NE = 3
+    GT = 4
+    GE = 5
+    LT = 6
+    LE = 7
+    ETO = 8
+    EAL = 9
+    EDV = 10
+    EPO = 11
+    ESD = 12
+
+
+class WaitCondition(IntEnum):
+    """WAIT conditions (TMCM-6212 3.6.20). One tick is 10 ms."""
+    TICKS = 0
+    POS = 1
+    REFSW = 2
+    LIMSW = 3
+    RFS = 4
+
+
+class ErrorFlag(IntEnum):
+    """CLE flags (TMCM-6212 3.6.29)."""
+    ALL = 0
+    ETO = 1
+    EAL = 2
+    EDV = 3
+    EPO = 4
+    ESD = 5
+
+
+class TargetReachedMode(IntEnum):
+    """Type field of command 138 (TMCM-6212 3.6.35): 0 = only for the next MVP, 1 = for every MVP."""
+    NEXT = 0
+    EVERY = 1
+
+
+class RunMode(IntEnum):
+    """Type field of command 129 run application (TMCM-6212 3.6.36)."""
+    FROM_CURRENT = 0
+    FROM_ADDRESS = 1
+
+
+class ApplicationStatusType(IntEnum):
+    """Type field of command 135 get application status (TMCM-6212 3.6.36)."""
+    MODE_WAIT_MEMORY_POINTER = 0
+    MODE_WAIT_PROGRAM_COUNTER = 1
+    ACCUMULATOR = 2
+    X_REGISTER = 3
+
+
+class VersionFormat(IntEnum):
+    """Type field of command 136 get firmware version (TMCM-6212 3.6.36)."""
+    STRING = 0
+    BINARY = 1
+
+
+def _names(enum: type[IntEnum], only: tuple[str, ...] | None = None) -> Mapping[str, int]:
+    return MappingProxyType({m.name: int(m) for m in enum if only is None or m.name in only})
+
+
+MVP_TYPES = _names(MvpType)
+RFS_TYPES = _names(RfsType)
+CALC_OPS = _names(CalcOp, tuple(n for n in CalcOp.__members__ if n != "SWAP"))
+CALCX_OPS = _names(CalcOp)
+JC_CONDITIONS = _names(Condition)
+WAIT_CONDITIONS = _names(WaitCondition)
+CLE_FLAGS = _names(ErrorFlag)
+
+# Symbol tables by the name used in Command.symbols.
+SYMBOL_TABLES: Mapping[str, Mapping[str, int]] = MappingProxyType({
+    "mvp": MVP_TYPES, "rfs": RFS_TYPES, "calc": CALC_OPS, "calcx": CALCX_OPS,
+    "jc": JC_CONDITIONS, "wait": WAIT_CONDITIONS, "cle": CLE_FLAGS,
+})
+
+
+# --- commands ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Command:
+    """One TMCL command.
+
+    `forms` lists the accepted source operand orders (first = canonical); `symbols` names the
+    symbol table of the type field (a key of SYMBOL_TABLES) or is empty; `label` is True when the
+    value field is a program address (JA, JC, CSUB, VECT, ...). `program` is False for the control
+    commands (direct mode only, TMCM-6212 3.6.36); `direct` is False for the commands the manuals
+    call "intended for standalone mode only" (informational: whether a firmware rejects them in
+    direct mode is the firmware's decision). `mnemonic` is None for control commands.
+    """
+
+    number: int
+    mnemonic: str | None
+    title: str
+    forms: tuple[tuple[str, ...], ...] = ((),)
+    symbols: str = ""
+    label: bool = False
+    program: bool = True
+    direct: bool = True
+    source: str = "TMCM-6212"
+    notes: str = field(default="", compare=False)
+
+    @property
+    def operands(self) -> tuple[str, ...]:
+        """The canonical operand form."""
+        return self.forms[0]
+
+    def symbol_table(self) -> Mapping[str, int]:
+        return SYMBOL_TABLES.get(self.symbols, MappingProxyType({}))
+
+    def form_for(self, count: int) -> tuple[str, ...] | None:
+        """The accepted form with `count` operands, or None."""
+        for form in self.forms:
+            if len(form) == count:
+                return form
+        return None
+
+    def usage(self) -> str:
+        """Human-readable accepted forms, for error messages: 'MVP <type>, <motor>, <value>'."""
+        out = []
+        for form in self.forms:
+            names = ", ".join(self._placeholder(f) for f in form)
+            out.append(f"{self.mnemonic} {names}".rstrip())
+        return " or ".join(out)
+
+    def _placeholder(self, fld: str) -> str:
+        if fld == TYPE and self.symbols:
+            return "|".join(self.symbol_table())
+        if fld == VALUE and self.label:
+            return "<label>"
+        return f"<{fld}>"
+
+
+T, M, V = TYPE, MOTOR, VALUE
+
+_COMMANDS: tuple[Command, ...] = (
+    # Motion, parameter and I/O commands (TMCM-6212 3.6.1-3.6.13, PD86-1180 4.6.1-4.6.15).
+    Command(1, "ROR", "Rotate right", ((M, V),)),
+    Command(2, "ROL", "Rotate left", ((M, V),)),
+    Command(3, "MST", "Motor stop", ((M,), (M, V))),
+    Command(4, "MVP", "Move to position", ((T, M, V),), symbols="mvp"),
+    Command(5, "SAP", "Set axis parameter", ((T, M, V),)),
+    Command(6, "GAP", "Get axis parameter", ((T, M), (T, M, V))),
+    Command(7, "STAP", "Store axis parameter", ((T, M), (T, M, V)), source="PD86-1180"),
+    Command(8, "RSAP", "Restore axis parameter", ((T, M), (T, M, V)), source="PD86-1180"),
+    Command(9, "SGP", "Set global parameter", ((T, M, V),)),
+    Command(10, "GGP", "Get global parameter", ((T, M), (T, M, V))),
+    Command(11, "STGP", "Store global parameter", ((T, M), (T, M, V))),
+    Command(12, "RSGP", "Restore global parameter", ((T, M), (T, M, V))),
+    Command(13, "RFS", "Reference search", ((T, M), (T,)), symbols="rfs"),
+    Command(14, "SIO", "Set output", ((T, M, V),)),
+    Command(15, "GIO", "Get input", ((T, M), (T, M, V))),
+    # Calculation and branch commands (3.6.14-3.6.21).
+    Command(19, "CALC", "Calculate", ((T, V), (T,)), symbols="calc"),
+    Command(20, "COMP", "Compare", ((V,),), direct=False),
+    Command(21, "JC", "Jump conditional", ((T, V),), symbols="jc", label=True, direct=False),
+    Command(22, "JA", "Jump always", ((V,),), label=True, direct=False),
+    Command(23, "CSUB", "Call subroutine", ((V,),), label=True, direct=False),
+    Command(24, "RSUB", "Return from subroutine", ((),), direct=False),
+    Command(25, "EI", "Enable interrupt", ((T,),)),
+    Command(26, "DI", "Disable interrupt", ((T,),)),
+    Command(27, "WAIT", "Wait for an event", ((T, M, V),), symbols="wait", direct=False),
+    Command(28, "STOP", "Stop TMCL program execution", ((),), direct=False),
+    # Coordinates, X register, accumulator transfers, interrupts (3.6.22-3.6.33).
+    Command(30, "SCO", "Set coordinate", ((T, M, V),)),
+    Command(31, "GCO", "Get coordinate", ((T, M), (T, M, V))),
+    Command(32, "CCO", "Capture coordinate", ((T, M), (T, M, V))),
+    Command(33, "CALCX", "Calculate using the X register", ((T,),), symbols="calcx"),
+    Command(34, "AAP", "Accu to axis parameter", ((T, M), (T, M, V))),
+    Command(35, "AGP", "Accu to global parameter", ((T, M), (T, M, V))),
+    Command(36, "CLE", "Clear error flags", ((T,),), symbols="cle"),
+    Command(37, "VECT", "Define interrupt vector", ((T, V),), label=True, direct=False),
+    Command(38, "RETI", "Return from interrupt", ((),), direct=False),
+    Command(39, "ACO", "Accu to coordinate", ((T, M), (T, M, V))),
+    # PD28-1021 extended command set (PD28-1021 manual 3.5, Table 5).
+    Command(40, "CALCVV", "Calculate using two user variables", ((T, M, V),), symbols="calcx",
+            source="PD28-1021"),
+    Command(41, "CALCVA", "Calculate using a user variable and the accumulator", ((T, M),),
+            symbols="calcx", source="PD28-1021"),
+    Command(42, "CALCAV", "Calculate using the accumulator and a user variable", ((T, M),),
+            symbols="calcx", source="PD28-1021"),
+    Command(43, "CALCVX", "Calculate using a user variable and the X register", ((T, M),),
+            symbols="calcx", source="PD28-1021"),
+    Command(44, "CALCXV", "Calculate using the X register and a user variable", ((T, M),),
+            symbols="calcx", source="PD28-1021"),
+    Command(45, "CALCV", "Calculate using a user variable and a direct value", ((T, M, V), (T, V)),
+            symbols="calcx", source="PD28-1021"),
+    Command(46, "MVPA", "Move to position specified by the accumulator", ((T, M),), symbols="mvp",
+            source="PD28-1021"),
+    Command(48, "RST", "Restart", ((V,),), label=True, direct=False, source="PD28-1021"),
+    Command(49, "DJNZ", "Decrement and jump if not zero", ((T, V),), label=True, direct=False,
+            source="PD28-1021"),
+    Command(50, "ROLA", "Rotate left using the accumulator", ((M,),), source="PD28-1021"),
+    Command(51, "RORA", "Rotate right using the accumulator", ((M,),), source="PD28-1021"),
+    Command(55, "SIV", "Set indexed variable", ((V,),), source="PD28-1021"),
+    Command(56, "GIV", "Get indexed variable", ((),), source="PD28-1021"),
+    Command(57, "AIV", "Accumulator to indexed variable", ((),), source="PD28-1021"),
+    Command(80, "CALL", "Conditional subroutine call", ((T, V),), symbols="jc", label=True,
+            direct=False, source="PD28-1021",
+            notes="number 80 from public TMCL headers; not in the cut-off manual's Table 5"),
+    # User functions UF0..UF7 (TMCM-6212 3.6.34).
+    *(Command(64 + i, f"UF{i}", f"User function {i}", ((T, M, V), (T, M), (T,), ()))
+      for i in range(8)),
+    # Control commands: direct mode only, no mnemonic (TMCM-6212 3.6.35, 3.6.36; PD86-1180 4.6.39).
+    Command(128, None, "Stop application", program=False),
+    Command(129, None, "Run application", program=False),
+    Command(130, None, "Step application", program=False),
+    Command(131, None, "Reset application", program=False),
+    Command(132, None, "Enter download mode", program=False),
+    Command(133, None, "Exit download mode", program=False),
+    Command(134, None, "Read program memory", program=False),
+    Command(135, None, "Get application status", program=False),
+    Command(136, None, "Get firmware version", program=False),
+    Command(137, None, "Restore factory settings", program=False),
+    Command(138, None, "Request target position reached event", program=False),
+    Command(139, None, "Enter ASCII mode", program=False, source="PD86-1180"),
+)
+
+COMMANDS: Mapping[int, Command] = MappingProxyType({c.number: c for c in _COMMANDS})
+_BY_MNEMONIC: Mapping[str, Command] = MappingProxyType({c.mnemonic: c for c in _COMMANDS if c.mnemonic})
+
+# Control command numbers by name (TMCM-6212 3.6.36).
+STOP_APPLICATION = 128
+RUN_APPLICATION = 129
+STEP_APPLICATION = 130
+RESET_APPLICATION = 131
+ENTER_DOWNLOAD_MODE = 132
+EXIT_DOWNLOAD_MODE = 133
+READ_PROGRAM_MEMORY = 134
+GET_APPLICATION_STATUS = 135
+GET_FIRMWARE_VERSION = 136
+RESTORE_FACTORY_SETTINGS = 137
+REQUEST_TARGET_REACHED_EVENT = 138
+ENTER_ASCII_MODE = 139
+FACTORY_RESET_KEY = 1234  # value that command 137 requires
+
+
+class UnknownCommand(KeyError):
+    """No command with that number or mnemonic."""
+
+    def __str__(self) -> str:  # KeyError quotes its argument; keep the message readable
+        return str(self.args[0])
+
+
+def by_number(number: int) -> Command:
+    """The command with opcode `number`; UnknownCommand if none."""
+    try:
+        return COMMANDS[number]
+    except KeyError:
+        raise UnknownCommand(f"unknown TMCL command number {number}") from None
+
+
+def by_mnemonic(mnemonic: str) -> Command:
+    """The command with this mnemonic, case-insensitive; UnknownCommand if none."""
+    try:
+        return _BY_MNEMONIC[mnemonic.strip().upper()]
+    except KeyError:
+        raise UnknownCommand(f"unknown TMCL mnemonic {mnemonic!r}") from None
+
+
+def lookup_symbol(command: Command, name: str) -> int | None:
+    """Value of a symbolic type operand of `command` (case-insensitive), or None."""
+    return command.symbol_table().get(name.strip().upper())
+
+
+def symbol_name(command: Command, number: int) -> str | None:
+    """Symbolic name of type field value `number` for `command`, or None."""
+    for name, value in command.symbol_table().items():
+        if value == number:
+            return name
+    return None
+
+
+def mnemonics() -> list[str]:
+    return sorted(_BY_MNEMONIC)
+
+
+_NUMBER = re.compile(r"([+-]?)\s*(?:0[xX]([0-9A-Fa-f]+)|\$([0-9A-Fa-f]+)|0[bB]([01]+)|([0-9]+))\Z")
+
+
+def parse_number(text: str) -> int | None:
+    """An integer literal: decimal (optionally signed), 0x/$ hex, 0b binary. None if not a literal.
+
+    A typographic minus or dash (as printed in the manuals) counts as '-'."""
+    m = _NUMBER.match(text.strip().replace("\u2212", "-").replace("\u2013", "-"))
+    if not m:
+        return None
+    sign = -1 if m.group(1) == "-" else 1
+    hex_a, hex_b, binary, decimal = m.group(2, 3, 4, 5)
+    if decimal is not None:
+        return sign * int(decimal, 10)
+    if binary is not None:
+        return sign * int(binary, 2)
+    return sign * int(hex_a or hex_b, 16)
+
+
+# --- source text of one instruction --------------------------------------------------------------
+
+class OperandError(ValueError):
+    """An instruction whose operands do not fit the command's operand forms."""
+
+
+def fields_of(form: tuple[str, ...], type: int, motor: int, value: int) -> list[int]:
+    """The field values in the order of `form`."""
+    return [{TYPE: type, MOTOR: motor, VALUE: value}[f] for f in form]
+
+
+def choose_form(command: Command, type: int, motor: int, value: int) -> tuple[str, ...] | None:
+    """The canonical form if it expresses every non-zero field, else the shortest accepted form
+    that does, or None."""
+    nonzero = {f for f, v in ((TYPE, type), (MOTOR, motor), (VALUE, value)) if v}
+    for form in (command.forms[0], *sorted(command.forms[1:], key=len)):
+        if nonzero <= set(form):
+            return form
+    return None
+
+
+def format_instruction(command: int, type: int, motor: int, value: int, *,
+                       labels: Mapping[int, str] | None = None) -> str | None:
+    """Canonical source text (symbolic type names, labels for addresses), or None if the command
+    has no mnemonic or its fields cannot be written in any accepted form."""
+    cmd = COMMANDS.get(command)
+    if cmd is None or cmd.mnemonic is None:
+        return None
+    form = choose_form(cmd, type, motor, value)
+    if form is None:
+        return None
+    parts = []
+    for name in form:
+        num = {TYPE: type, MOTOR: motor, VALUE: value}[name]
+        text = str(num)
+        if name == TYPE:
+            text = symbol_name(cmd, num) or text
+        elif name == VALUE and cmd.label and labels and num in labels:
+            text = labels[num]
+        parts.append(text)
+    return f"{cmd.mnemonic} {', '.join(parts)}".rstrip()
+
+
+def parse_instruction(text: str, labels: Mapping[str, int] | None = None) -> tuple[int, int, int, int]:
+    """(command, type, motor, value) of one instruction such as 'MVP ABS, 0, 90000'.
+
+    Operands are numbers, the command's symbolic type names, or names from `labels`. This is the
+    minimal form used by codecs and tests; the assembler (opentmcl.lang) adds constants, includes
+    and expressions.
+    """
+    head, _, rest = text.strip().partition(" ")
+    cmd = by_mnemonic(head)
+    operands = [p.strip() for p in rest.split(",")] if rest.strip() else []
+    form = cmd.form_for(len(operands))
+    if form is None or any(not p for p in operands):
+        raise OperandError(f"{text.strip()!r}: expected {cmd.usage()}")
+    out = {TYPE: 0, MOTOR: 0, VALUE: 0}
+    for name, op in zip(form, operands, strict=True):
+        num = lookup_symbol(cmd, op) if name == TYPE else None
+        if num is None:
+            num = parse_number(op)
+        if num is None and labels is not None:
+            num = labels.get(op)
+        if num is None:
+            raise OperandError(f"{text.strip()!r}: cannot read {name} operand {op!r}")
+        if name in (TYPE, MOTOR) and not 0 <= num <= 255:
+            raise OperandError(f"{text.strip()!r}: {name} must be 0..255, got {num}")
+        if not -(1 << 31) <= num <= 0xFFFFFFFF:
+            raise OperandError(f"{text.strip()!r}: {name} out of 32-bit range: {num}")
+        out[name] = to_int32(num)
+    return cmd.number, out[TYPE], out[MOTOR], out[VALUE]

@@ -1,0 +1,71 @@
+"""A running server: one bus of virtual modules, its clock thread, its endpoints.
+
+    server = Server([VirtualModule("TMCM-6212", address=1)])
+    server.add(TcpServer(server.bus, "127.0.0.1", 0))
+    server.start()
+    ...
+    server.stop()        # endpoints closed, EEPROM flushed (vm.close())
+
+`stop()` is idempotent and safe to call from a signal-handling main thread.
+"""
+from __future__ import annotations
+
+from .bus import ModuleBus, RealTimeRunner
+
+
+class Server:
+    def __init__(self, modules, *, tick: float = 0.01) -> None:
+        self.bus = ModuleBus(modules)
+        self.runner = RealTimeRunner(self.bus, tick=tick)
+        self.endpoints: list = []
+        self._started = False
+        self._stopped = False
+
+    @property
+    def modules(self) -> list:
+        return self.bus.modules
+
+    def add(self, endpoint):
+        """Register an endpoint (anything with start() and stop()); returns it."""
+        self.endpoints.append(endpoint)
+        if self._started:
+            endpoint.start()
+        return endpoint
+
+    def start(self) -> None:
+        """Start the endpoints and the clock; on failure, stop what was started and re-raise."""
+        self._started = True
+        started = []
+        try:
+            for endpoint in self.endpoints:
+                endpoint.start()
+                started.append(endpoint)
+        except BaseException:
+            for endpoint in reversed(started):
+                endpoint.stop()
+            self._started = False
+            raise
+        self.runner.start()
+
+    def stop(self) -> None:
+        if self._stopped:
+            return
+        self._stopped = True
+        for endpoint in reversed(self.endpoints):
+            try:
+                endpoint.stop()
+            except OSError:
+                pass
+        self.runner.stop()
+        with self.bus.lock:
+            for vm in self.bus.modules:
+                close = getattr(vm, "close", None)
+                if callable(close):
+                    close()
+
+    def __enter__(self):
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()

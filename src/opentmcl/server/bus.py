@@ -1,0 +1,195 @@
+"""Virtual modules on one bus, in real time (DESIGN.md "Time": real time).
+
+`ModuleBus` owns one or more virtual modules that share a bus, as several
+modules share one RS-485 line or CAN bus (TMCM-6212 manual 3: "any collision
+on the bus will be avoided when there are more than two nodes connected to a
+single bus"). Every access goes through one lock, and before each access the
+modules' virtual time is advanced to the wall clock, so virtual time is paced
+to real time however many endpoints talk to the modules at once.
+
+The modules filter addresses themselves (a module returns b"" for a frame
+addressed to another module), so a serial frame is offered to every module
+and the replies of those that answer are returned.
+
+`RealTimeRunner` is the background thread that keeps time moving while no
+request arrives, and hands unsolicited replies (the command-138 "target
+position reached" reply, manual 3.6.35) to the endpoint through which the
+module was last addressed.
+"""
+from __future__ import annotations
+
+import inspect
+import threading
+import time
+from collections.abc import Callable, Iterable
+from typing import Protocol
+
+from ..protocol.frame import Request
+from . import canmap, vmapi
+
+
+class Channel(Protocol):
+    """An endpoint that can carry unsolicited replies back to its host."""
+
+    interface: str
+    """"serial" (RS-232/RS-485/USB framing) or "can"."""
+
+    def deliver(self, vm, reply: bytes) -> None:
+        """Send an unsolicited 9-byte reply of `vm` to the host."""
+
+
+def _takes_interface(vm) -> bool:
+    try:
+        return "interface" in inspect.signature(vm.handle).parameters
+    except (TypeError, ValueError):
+        return False
+
+
+class ModuleBus:
+    """Virtual modules sharing one bus; thread-safe; time paced to `clock`."""
+
+    def __init__(self, modules: Iterable, *, clock: Callable[[], float] = time.monotonic) -> None:
+        self.modules = list(modules)
+        if not self.modules:
+            raise ValueError("a bus needs at least one module")
+        self.lock = threading.RLock()
+        self._clock = clock
+        self._last = clock()
+        self._route: dict[int, Channel] = {}
+        self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
+
+    # -- time -----------------------------------------------------------
+    def sync(self) -> None:
+        """Advance every module's virtual time to the wall clock."""
+        with self.lock:
+            now = self._clock()
+            dt = now - self._last
+            if dt > 0:
+                for vm in self.modules:
+                    vm.advance(dt)
+                self._last = now
+
+    # -- requests -------------------------------------------------------
+    def _handle(self, vm, frame: bytes, interface: str) -> bytes:
+        if self._interface_kw.get(id(vm)):
+            return vm.handle(frame, interface=interface)
+        return vm.handle(frame)
+
+    def request(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes]]:
+        """Offer a 9-byte frame to every module; return (module, reply) for each reply."""
+        replies = []
+        with self.lock:
+            self.sync()
+            for vm in self.modules:
+                reply = self._handle(vm, frame, "serial")
+                if reply:
+                    replies.append((vm, reply))
+                    if channel is not None:
+                        self._route[id(vm)] = channel
+            # A module that was addressed but stayed silent (reply suppressed)
+            # still becomes reachable for its events through this channel.
+            if channel is not None and frame:
+                for vm in self.modules:
+                    if frame[0] in self._serial_addresses(vm):
+                        self._route[id(vm)] = channel
+        return replies
+
+    def _serial_addresses(self, vm) -> tuple[int, ...]:
+        primary = vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS)
+        secondary = vmapi.global_param(vm, vmapi.GP_SERIAL_SECONDARY)
+        return (primary, secondary) if secondary else (primary,)
+
+    def can_request(self, can_id: int, data: bytes,
+                    channel: Channel | None = None) -> list[tuple[object, int, bytes]]:
+        """Offer a CAN request to the modules whose CAN ID (GP 71) or secondary
+        CAN ID (GP 83) is `can_id`; return (module, reply ID (GP 70), payload).
+
+        Manual 3.1/3.2: on CAN the address byte and the checksum are left out;
+        the CAN ID is the module address. Frames that are not 7 or 8 bytes
+        long are ignored.
+        """
+        if len(data) not in (7, 8):
+            return []
+        replies = []
+        with self.lock:
+            self.sync()
+            for vm in self.modules:
+                ids = {vmapi.global_param(vm, vmapi.GP_CAN_ID)}
+                secondary = vmapi.global_param(vm, vmapi.GP_CAN_SECONDARY)
+                if secondary:
+                    ids.add(secondary)
+                if can_id not in ids:
+                    continue
+                if channel is not None:
+                    self._route[id(vm)] = channel
+                address = vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS)
+                frame = canmap.request_to_frame(data, address)
+                reply = self._handle(vm, frame, "can")
+                if reply:
+                    payload = canmap.reply_to_payload(reply, data)
+                    replies.append((vm, vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID), payload))
+        return replies
+
+    # -- unsolicited replies ---------------------------------------------
+    def poll(self) -> list[tuple[Channel, object, bytes]]:
+        """Advance time and collect (channel, module, reply) for pending events."""
+        out = []
+        with self.lock:
+            self.sync()
+            for vm in self.modules:
+                drain = getattr(vm, "drain_events", None)
+                events = drain() if callable(drain) else []
+                channel = self._route.get(id(vm))
+                for event in events:
+                    if channel is not None:
+                        out.append((channel, vm, event))
+        return out
+
+    def forget(self, channel: Channel) -> None:
+        """Stop routing events to a channel that went away."""
+        with self.lock:
+            for key in [k for k, c in self._route.items() if c is channel]:
+                del self._route[key]
+
+    def module_at(self, address: int):
+        """The module whose serial address (GP 66) is `address`, or None."""
+        with self.lock:
+            for vm in self.modules:
+                if vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS) == address:
+                    return vm
+        return None
+
+
+def make_ggp(address: int, number: int, bank: int = 0) -> bytes:
+    """A GGP request frame (manual 3.6.8)."""
+    return Request(address, vmapi.GGP, number, bank, 0).encode()
+
+
+class RealTimeRunner:
+    """Background thread: keeps virtual time moving and delivers events."""
+
+    def __init__(self, bus: ModuleBus, tick: float = 0.01) -> None:
+        self.bus = bus
+        self.tick = tick
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.errors: list[BaseException] = []
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._run, name="opentmcl-clock", daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.tick):
+            try:
+                for channel, vm, event in self.bus.poll():
+                    channel.deliver(vm, event)
+            except Exception as exc:  # keep time running; record for diagnostics
+                self.errors.append(exc)
+                del self.errors[:-10]
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+            self._thread = None

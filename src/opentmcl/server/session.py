@@ -1,0 +1,84 @@
+"""One serial-framed link to the bus: a pty, a TCP client (TMCM-6212 manual 3.1, 3.2).
+
+A `SerialSession` turns received bytes into 9-byte frames (`SerialFramer`),
+offers them to the bus and writes the replies back, as a module on an RS-485
+line does:
+
+- it waits the telegram pause time (global parameter 75) before a reply
+  ("Pause time before the reply via RS485 is sent", manual 5.1); the manual
+  gives no unit, we use milliseconds (docs/notes/endpoints.md);
+- with `pace_bytes`, it sends the reply one byte at a time at the module's
+  RS485 baud rate (global parameter 65), ten bit times per byte (8N1);
+- unsolicited replies (command 138) arrive through `deliver` and are written
+  the same way.
+
+The session owns no thread; the endpoint that reads the link calls `receive`.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+
+from . import vmapi
+from .framer import DEFAULT_GAP, SerialFramer
+
+BITS_PER_BYTE = 10
+"""Start bit, eight data bits, stop bit (8N1)."""
+
+
+def byte_time(baud: int) -> float:
+    """Seconds one byte occupies on the line at `baud`."""
+    return BITS_PER_BYTE / baud
+
+
+class SerialSession:
+    """Frames a byte stream, talks to the bus, writes replies with pause and pacing."""
+
+    interface = "serial"
+
+    def __init__(self, bus, write: Callable[[bytes], None], *, gap: float = DEFAULT_GAP,
+                 pace_bytes: bool = False, clock: Callable[[], float] = time.monotonic,
+                 sleep: Callable[[float], None] = time.sleep) -> None:
+        self.bus = bus
+        self._write = write
+        self.framer = SerialFramer(gap)
+        self.pace_bytes = pace_bytes
+        self._clock = clock
+        self._sleep = sleep
+        self._write_lock = threading.Lock()
+        self.closed = False
+
+    def receive(self, data: bytes, now: float | None = None) -> int:
+        """Handle bytes read from the link; return the number of frames processed."""
+        frames = self.framer.feed(data, self._clock() if now is None else now)
+        for frame in frames:
+            for vm, reply in self.bus.request(frame, self):
+                self.send_reply(vm, reply)
+        return len(frames)
+
+    def deliver(self, vm, reply: bytes) -> None:
+        """An unsolicited reply (command 138 event) for the host on this link."""
+        if not self.closed:
+            self.send_reply(vm, reply)
+
+    def send_reply(self, vm, reply: bytes) -> None:
+        with self.bus.lock:
+            pause = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0
+            per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
+        with self._write_lock:
+            if pause > 0:
+                self._sleep(pause)
+            if per_byte <= 0:
+                self._write(reply)
+                return
+            start = self._clock()
+            for i in range(len(reply)):
+                self._write(reply[i:i + 1])
+                wait = start + (i + 1) * per_byte - self._clock()
+                if wait > 0:
+                    self._sleep(wait)
+
+    def close(self) -> None:
+        self.closed = True
+        self.bus.forget(self)

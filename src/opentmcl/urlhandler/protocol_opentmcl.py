@@ -1,0 +1,268 @@
+"""pyserial port class for ``opentmcl://`` URLs: virtual modules in this process.
+
+    opentmcl://TMCM-6212                       one module at address 1
+    opentmcl://TMCM-6212@1,TMCM-1180@2         two modules on one bus
+    opentmcl://TMCM-6212?eeprom=/tmp/ee.json&gap=0.1&pace=1
+
+Bytes written to the port are framed into 9-byte TMCL frames (TMCM-6212
+manual 3.1) and offered to every module on the bus; the modules' replies
+become readable after the telegram pause (global parameter 75, manual 5.1),
+and with ``pace=1`` at the RS485 baud rate (parameter 65). The modules run in
+real time: their virtual time follows the wall clock, advanced whenever the
+port is used, so a move started by a write has progressed by the next read.
+Unsolicited replies (command 138, manual 3.6.35) are readable like any other.
+No thread is started; closing the port flushes the EEPROM files.
+
+The baud rate, parity etc. set on the port are accepted and ignored.
+
+The class derives from pyserial's platform `serial.Serial` (overriding every
+method that would touch a file descriptor), so code that checks
+``isinstance(port, serial.Serial)`` - PyTrinamic's `SerialTmclInterface`
+does - accepts it.
+"""
+from __future__ import annotations
+
+import threading
+import time
+import urllib.parse
+
+import serial
+from serial.serialutil import PortNotOpenError, SerialException, Timeout
+
+from ..server import vmapi
+from ..server.bus import ModuleBus
+from ..server.framer import DEFAULT_GAP, SerialFramer
+from ..server.session import byte_time
+
+SCHEME = "opentmcl"
+POLL = 0.002
+
+
+def parse_url(url: str) -> dict:
+    """Split an ``opentmcl://`` URL into module specs and options; ValueError when malformed."""
+    parts = urllib.parse.urlsplit(url)
+    if parts.scheme.lower() != SCHEME:
+        raise ValueError(f"expected an {SCHEME}:// URL, got {url!r}")
+    spec = urllib.parse.unquote(parts.netloc + parts.path).strip("/")
+    modules = []
+    names = [p.strip() for p in spec.split(",") if p.strip()]
+    if not names:
+        raise ValueError(f"{SCHEME}:// URL names no module, e.g. {SCHEME}://TMCM-6212")
+    for i, item in enumerate(names):
+        name, sep, addr = item.partition("@")
+        if sep:
+            try:
+                address = int(addr, 0)
+            except ValueError:
+                raise ValueError(f"bad module address {addr!r} in {url!r}") from None
+        else:
+            address = 1 + i
+        if not 1 <= address <= 255:
+            raise ValueError(f"module address {address} out of range 1..255")
+        modules.append((name.strip(), address))
+    addresses = [a for _, a in modules]
+    if len(set(addresses)) != len(addresses):
+        raise ValueError(f"module addresses must be distinct on one bus: {addresses}")
+    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False}
+    for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
+        if key == "eeprom":
+            options["eeprom"] = [v for v in value.split(",")]
+        elif key == "gap":
+            try:
+                options["gap"] = float(value)
+            except ValueError:
+                raise ValueError(f"bad gap {value!r}") from None
+            if not options["gap"] > 0:
+                raise ValueError("gap must be positive")
+        elif key == "pace":
+            options["pace"] = value.lower() in ("1", "true", "yes", "on")
+        else:
+            raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace)")
+    if len(options["eeprom"]) > len(modules):
+        raise ValueError("more eeprom files than modules")
+    return options
+
+
+class Serial(serial.Serial):
+    """A pyserial port whose other end is a bus of virtual modules."""
+
+    interface = "serial"
+
+    def open(self) -> None:
+        if self._port is None:
+            raise SerialException("port must be configured before it can be used")
+        if self.is_open:
+            raise SerialException("port is already open")
+        try:
+            options = parse_url(self._port)
+        except ValueError as exc:
+            raise SerialException(str(exc)) from None
+        from ..firmware.vm import VirtualModule
+
+        modules = []
+        for i, (name, address) in enumerate(options["modules"]):
+            eeprom = options["eeprom"][i] if i < len(options["eeprom"]) else None
+            try:
+                modules.append(VirtualModule(name, address=address, eeprom=eeprom or None))
+            except KeyError as exc:
+                raise SerialException(f"unknown module {name!r}: {exc}") from None
+            except Exception as exc:  # e.g. an EEPROM file that is not ours
+                raise SerialException(f"cannot create {name}: {exc}") from None
+        self._lock = threading.RLock()
+        self._bus = ModuleBus(modules)
+        self._framer = SerialFramer(options["gap"])
+        self._pace = options["pace"]
+        self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
+        self.is_open = True
+
+    def close(self) -> None:
+        if not self.is_open:
+            return
+        self.is_open = False
+        with self._lock:
+            for vm in self._bus.modules:
+                close = getattr(vm, "close", None)
+                if callable(close):
+                    close()
+
+    def from_url(self, url: str) -> str:
+        parse_url(url)
+        return url
+
+    def _reconfigure_port(self, force_update: bool = False) -> None:
+        """Baud rate and framing settings are accepted and ignored."""
+
+    # -- data --------------------------------------------------------------
+    def _queue(self, vm, reply: bytes) -> None:
+        """Make `reply` readable after the telegram pause, paced at GP65 if asked."""
+        now = time.monotonic()
+        start = now + vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0
+        if self._rx:
+            start = max(start, self._rx[-1][0])
+        per_byte = byte_time(vmapi.baud_rate(vm)) if self._pace else 0.0
+        for i, b in enumerate(reply):
+            self._rx.append((start + (i + 1) * per_byte, b))
+
+    def deliver(self, vm, reply: bytes) -> None:
+        """Unsolicited reply from the bus (command 138 event)."""
+        self._queue(vm, reply)
+
+    def _update(self) -> int:
+        """Advance the modules to now, collect events; return readable byte count."""
+        for channel, vm, event in self._bus.poll():
+            channel.deliver(vm, event)
+        now = time.monotonic()
+        n = 0
+        for ready, _ in self._rx:
+            if ready > now:
+                break
+            n += 1
+        return n
+
+    @property
+    def in_waiting(self) -> int:
+        if not self.is_open:
+            raise PortNotOpenError()
+        with self._lock:
+            return self._update()
+
+    def read(self, size: int = 1) -> bytes:
+        if not self.is_open:
+            raise PortNotOpenError()
+        timeout = Timeout(self._timeout)
+        out = bytearray()
+        while len(out) < size:
+            with self._lock:
+                n = min(self._update(), size - len(out))
+                if n:
+                    out += bytes(b for _, b in self._rx[:n])
+                    del self._rx[:n]
+                    continue
+            if timeout.expired():
+                break
+            left = timeout.time_left()
+            time.sleep(POLL if left is None else max(0.0, min(POLL, left)))
+        return bytes(out)
+
+    def write(self, data) -> int:
+        if not self.is_open:
+            raise PortNotOpenError()
+        data = bytes(data)
+        with self._lock:
+            for frame in self._framer.feed(data, time.monotonic()):
+                for vm, reply in self._bus.request(frame, self):
+                    self._queue(vm, reply)
+        return len(data)
+
+    def reset_input_buffer(self) -> None:
+        if not self.is_open:
+            raise PortNotOpenError()
+        with self._lock:
+            self._update()
+            self._rx.clear()
+
+    def reset_output_buffer(self) -> None:
+        if not self.is_open:
+            raise PortNotOpenError()
+
+    @property
+    def out_waiting(self) -> int:
+        return 0
+
+    def flush(self) -> None:
+        """Writes are handled at once; nothing to wait for."""
+        if not self.is_open:
+            raise PortNotOpenError()
+
+    def fileno(self) -> int:
+        raise SerialException("an opentmcl:// port has no file descriptor")
+
+    def nonblocking(self) -> None:
+        pass
+
+    def cancel_read(self) -> None:
+        pass
+
+    def cancel_write(self) -> None:
+        pass
+
+    def send_break(self, duration: float = 0.25) -> None:
+        if not self.is_open:
+            raise PortNotOpenError()
+
+    def set_input_flow_control(self, enable: bool = True) -> None:
+        pass
+
+    def set_output_flow_control(self, enable: bool = True) -> None:
+        pass
+
+    # -- modem lines: a virtual port has none worth simulating --------------
+    def _update_break_state(self) -> None:
+        pass
+
+    def _update_rts_state(self) -> None:
+        pass
+
+    def _update_dtr_state(self) -> None:
+        pass
+
+    @property
+    def cts(self) -> bool:
+        return True
+
+    @property
+    def dsr(self) -> bool:
+        return True
+
+    @property
+    def ri(self) -> bool:
+        return False
+
+    @property
+    def cd(self) -> bool:
+        return True
+
+    @property
+    def modules(self) -> list:
+        """The virtual modules on this port's bus (for tests and tools)."""
+        return self._bus.modules

@@ -1,0 +1,1 @@
+"""Tests of the register-level chip models."""

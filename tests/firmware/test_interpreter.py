@@ -1,0 +1,327 @@
+"""The TMCL interpreter: accumulator, X register, flags, calculation, branches, subroutines, WAIT
+(TMCM-6212 manual 3.5.5, 3.6.14-3.6.29; PD86-1180 manual 4.6.16-4.6.31)."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl.firmware import flags
+from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
+
+from .test_program_support import T, module, run_program
+
+INT_MIN, INT_MAX = -(2**31), 2**31 - 1
+
+
+def accu_after(source: str, name: str = "TMCM-6212", seconds: float = 0.05) -> int:
+    return run_program(source, seconds, name).a
+
+
+def test_reading_commands_load_the_accumulator_only_in_a_program():
+    """3.5.5: "When executed in a TMCL program ... all TMCL commands that read a value store the
+    result in the accumulator ... When a command that reads a value is executed in direct mode the
+    accumulator will not be affected."""
+    w = module()
+    w.ok(5, 4, 0, 12345)
+    assert w.ok(6, 4, 0) == 12345 and w.a == 0    # direct GAP: A untouched
+    w.load("GAP 4, 0\nSTOP")
+    w.run()
+    w.vm.advance(5 * T)
+    assert w.a == 12345
+    w.ok(9, 7, 2, -99)
+    w.load("GGP 7, 2\nCALCX LOAD\nGIO 1, 2\nSTOP")   # GGP, then GIO of OUT1 (0)
+    w.run(0)
+    w.vm.advance(5 * T)
+    assert (w.x, w.a) == (-99, 0)
+
+
+@pytest.mark.parametrize(("op", "a", "operand", "result"), [
+    ("ADD", 5, 7, 12), ("ADD", INT_MAX, 1, INT_MIN),          # 32-bit wrap
+    ("SUB", 5, 7, -2), ("SUB", INT_MIN, 1, INT_MAX),
+    ("MUL", 3, -5000, -15000), ("MUL", 65536, 65536, 0),
+    ("DIV", 7, 2, 3), ("DIV", -7, 2, -3), ("DIV", 7, 0, 0), ("DIV", INT_MIN, -1, INT_MIN),
+    ("MOD", 7, 3, 1), ("MOD", -7, 3, -1), ("MOD", 7, 0, 7),
+    ("AND", 0b1100, 0b1010, 0b1000), ("OR", 0b1100, 0b1010, 0b1110), ("XOR", 0b1100, 0b1010, 0b0110),
+    ("NOT", 0, 123, -1), ("LOAD", 99, -42, -42),
+])
+def test_calc_operations(op, a, operand, result):
+    """3.6.14 CALC: ADD, SUB, MUL, DIV, MOD, AND, OR, XOR, NOT ("logical invert accumulator"),
+    LOAD, on 32-bit two's complement; division by zero: DIV gives 0, MOD leaves A
+    (docs/notes/interpreter.md)."""
+    assert accu_after(f"CALC LOAD, {a}\nCALC {op}, {operand}\nSTOP") == result
+
+
+def test_calc_mul_manual_example():
+    """3.6.14 example: "Multiply accumulator by -5000. Mnemonic: CALC MUL, -5000"."""
+    assert accu_after("CALC LOAD, 3\nCALC MUL, -5000\nSTOP") == -15000
+
+
+@pytest.mark.parametrize(("op", "a", "x", "new_a", "new_x"), [
+    ("ADD", 5, 3, 8, 3), ("SUB", 5, 3, 2, 3), ("MUL", 5, 3, 15, 3), ("DIV", 7, 2, 3, 2),
+    ("MOD", 7, 2, 1, 2), ("AND", 6, 3, 2, 3), ("OR", 6, 3, 7, 3), ("XOR", 6, 3, 5, 3),
+    ("NOT", 6, 3, 6, -4),      # "logical invert X register"
+    ("LOAD", 6, 3, 6, 6),      # "copy accumulator to X register"
+    ("SWAP", 6, 3, 3, 6),      # "swap accumulator and X register"
+    ("DIV", 7, 0, 0, 0),
+])
+def test_calcx_operations(op, a, x, new_a, new_x):
+    """3.6.26 CALCX: the second operand is the X register; types 8-10 act on X."""
+    w = run_program(f"CALC LOAD, {x}\nCALCX LOAD\nCALC LOAD, {a}\nCALCX {op}\nSTOP", 0.01)
+    assert (w.a, w.x) == (new_a, new_x)
+
+
+@pytest.mark.parametrize(("a", "b", "taken"), [
+    (5, 5, {"ZE", "EQ", "GE", "LE"}),
+    (6, 5, {"NZ", "NE", "GT", "GE"}),
+    (-6, 5, {"NZ", "NE", "LT", "LE"}),
+])
+def test_comp_and_jc_conditions(a, b, taken):
+    """3.6.15 COMP sets the arithmetic flags (signed compare); 3.6.16 JC ZE..LE jump on them."""
+    for cond in ("ZE", "NZ", "EQ", "NE", "GT", "GE", "LT", "LE"):
+        src = f"CALC LOAD, {a}\nCOMP {b}\nJC {cond}, Yes\nCALC LOAD, 0\nSTOP\nYes: CALC LOAD, 1\nSTOP"
+        assert accu_after(src) == (1 if cond in taken else 0), cond
+
+
+def test_comp_manual_example_jump_if_position_ge_1000():
+    """3.6.15 / 3.6.16 example: "GAP 1, 0; COMP 1000; JC GE, Label" jumps when the actual
+    position of motor 0 is greater than or equal to 1000."""
+    src = "GAP 1, 0\nCOMP 1000\nJC GE, Label\nCALC LOAD, 0\nSTOP\nLabel: CALC LOAD, 1\nSTOP"
+    for position, expected in ((999, 0), (1000, 1), (51200, 1), (-2000, 0)):
+        w = module()
+        w.ok(5, 1, 0, position)
+        w.load(src)
+        w.run()
+        w.vm.advance(0.01)
+        assert w.a == expected, position
+
+
+def test_zero_flag_follows_loaded_value():
+    """3.5.6.4 example: "GIO 0, 2 //check if OUT0 is high; JC NZ, Out0Off" - a value loaded into the
+    accumulator sets the flags JC ZE / NZ test, without a COMP."""
+    for out0, expected in ((0, 0), (1, 1)):
+        w = module()
+        w.ok(14, 0, 2, out0)
+        w.load("GIO 0, 2\nJC NZ, High\nCALC LOAD, 0\nSTOP\nHigh: CALC LOAD, 1\nSTOP")
+        w.run()
+        w.vm.advance(0.01)
+        assert w.a == expected
+
+
+@pytest.mark.parametrize(("flag", "cle", "cond"), [
+    (flags.ETO, "ETO", "ETO"), (flags.EAL, "EAL", "EAL"), (flags.EDV, "EDV", "EDV"),
+    (flags.EPO, "EPO", "EPO"), (flags.ESD, "ESD", "ESD"),
+])
+def test_error_flag_conditions_and_cle(flag, cle, cond):
+    """3.6.16 JC 8-11 ETO, EAL, EDV, EPO; PD86-1180 4.6.18 JC 12 ESD; 3.6.29 CLE clears one flag
+    (or ALL) and leaves the others."""
+    w = module()
+    w.load(f"JC {cond}, Set\nCALC LOAD, 0\nSTOP\nSet: CALC LOAD, 1\nCLE {cle}\nJC {cond}, Set\nSTOP")
+    other = flags.EAL if flag != flags.EAL else flags.ETO
+    w.vm.interpreter.set_error_flag(flag | other)
+    w.run()
+    w.vm.advance(0.01)
+    assert w.a == 1
+    assert not w.vm.flags & flag
+    assert w.vm.flags & flags.ERROR_MASK      # the other flag survived
+    w.load("CLE ALL\nSTOP")
+    w.run(0)
+    w.vm.advance(0.01)
+    assert not w.vm.flags & flags.ERROR_MASK
+
+
+def test_cle_all_keeps_the_comparison_result():
+    """3.6.29 "CLE ALL - all [error] flags": the arithmetic flags of COMP are not error flags."""
+    w = run_program("CALC LOAD, 5\nCOMP 5\nCLE ALL\nJC EQ, Yes\nSTOP\nYes: CALC LOAD, 1\nSTOP", 0.01)
+    assert w.a == 1
+
+
+def test_ja_infinite_loop_and_csub_example_alternate_positions():
+    """3.6.17 JA and 3.6.18 CSUB example: "MVP ABS, 0, 10000; CSUB SubW; MVP ABS, 0, 0; CSUB SubW;
+    JA Loop / SubW: WAIT POS, 0, 0; WAIT TICKS, 0, 50; RSUB" alternates between the two positions."""
+    src = """Loop:
+    MVP ABS, 0, 10000
+    CSUB SubW
+    MVP ABS, 0, 0
+    CSUB SubW
+    JA Loop
+SubW:
+    WAIT POS, 0, 0
+    WAIT TICKS, 0, 50
+    RSUB"""
+    w = module()
+    w.load(src)
+    w.run()
+    seen = set()
+    for _ in range(200):
+        w.vm.advance(0.05)
+        if w.vm.axes[0].engine.position_reached:
+            seen.add(w.ok(6, 1, 0))
+    assert seen == {0, 10000}
+    assert len(w.vm.interpreter.stack) <= 1
+
+
+def test_subroutine_stack_is_eight_deep():
+    """3.6.18: "The number of entries in the internal stack is limited to 8 ... The command will be
+    ignored if there is no more stack space left." 3.6.19: RSUB "will be ignored if the stack is
+    empty"."""
+    nested = "\n".join(f"S{i}: CALC ADD, 1\nCSUB S{i + 1}\nCALCX LOAD\nRSUB" for i in range(10))
+    src = f"CSUB S0\nSTOP\n{nested}\nS10: RSUB"
+    w = run_program(src, 0.05)
+    # CSUB S0 .. CSUB S7 fill the 8 entries; the CSUB S8 in S7 is ignored, S7 returns.
+    assert w.a == 8
+    assert w.state == 0 and w.pc == 1 and w.vm.interpreter.stack == []
+    w = run_program("RSUB\nCALC LOAD, 5\nSTOP", 0.01)
+    assert w.a == 5
+
+
+def test_wait_ticks_are_10_ms():
+    """3.6.20 WAIT TICKS: "one tick is 10 milliseconds". Each instruction takes 100 µs of virtual
+    time (docs/notes/interpreter.md): SIO at T, WAIT at 2T, next SIO at 2T + 500 ms + T."""
+    assert INSTRUCTION_TICKS == 1600
+    w = module()
+    w.load("SIO 0, 2, 1\nWAIT TICKS, 0, 50\nSIO 0, 2, 0\nSTOP")
+    w.run()
+    w.vm.advance(3 * T + 0.5 - 1e-6)
+    assert w.out(0) == 1
+    w.vm.advance(2e-6)
+    assert w.out(0) == 0
+
+
+def test_wait_pos_timeout_sets_eto():
+    """3.6.20: "The timeout flag (ETO) will be set after a timeout limit has been reached. You can
+    then use a JC ETO command to check for such errors or clear the error using the CLE command."""
+    w = module()
+    w.ok(5, 4, 0, 1000)                      # slow: 1000 pps, so 100000 steps take 100 s
+    w.load("MVP ABS, 0, 100000\nWAIT POS, 0, 20\nJC ETO, Late\nCALC LOAD, 1\nSTOP\n"
+           "Late: CALC LOAD, 2\nCLE ETO\nSTOP")
+    w.run()
+    w.vm.advance(0.1)
+    assert w.pc == 1 and w.ok(135, 1) >> 16 & 0xFF == 1   # waiting
+    w.vm.advance(0.15)
+    assert w.a == 2 and w.state == 0 and not w.vm.flags & flags.ETO
+
+
+def test_wait_pos_ends_on_arrival():
+    """3.6.20 WAIT POS: "Wait until the target position of the motor ... has been reached"."""
+    w = module()
+    w.load("MVP ABS, 0, 5000\nWAIT POS, 0, 0\nGAP 1, 0\nSTOP")
+    w.run()
+    w.vm.advance(10.0)
+    assert w.a == 5000 and w.state == 0 and not w.vm.flags & flags.ETO
+
+
+def test_wait_rfs_and_refsw_limsw_time_out_without_switches():
+    """3.6.20 RFS waits for the end of the reference search; REFSW / LIMSW for a switch - with
+    no switch ever closing, each WAIT ends at its timeout with ETO."""
+    for cond in ("REFSW", "LIMSW"):
+        w = run_program(f"WAIT {cond}, 0, 10\nJC ETO, Late\nSTOP\nLate: CALC LOAD, 7\nSTOP", 0.2)
+        assert w.a == 7, cond
+    w = run_program("WAIT RFS, 0, 10\nJC ETO, Late\nCALC LOAD, 1\nSTOP\nLate: CALC LOAD, 7\nSTOP", 0.2)
+    assert w.a == 1                           # no search running: it has completed
+
+
+def test_stop_ends_the_program():
+    """3.6.21 STOP: "Execution of a TMCL program in standalone mode will be stopped"."""
+    w = run_program("CALC LOAD, 1\nSTOP\nCALC LOAD, 2", 0.5)
+    assert (w.a, w.state, w.pc) == (1, 0, 1)
+
+
+def test_aap_agp_aco():
+    """3.6.27 AAP, 3.6.28 AGP ("Copy accumulator to user variable #42: AGP 42, 2"), 3.6.25 ACO."""
+    w = run_program("CALC LOAD, 4321\nAAP 4, 1\nAGP 42, 2\nACO 3, 2\nSTOP", 0.01)
+    assert w.ok(6, 4, 1) == 4321
+    assert w.var(42) == 4321
+    assert w.ok(31, 3, 2) == 4321
+
+
+def test_failing_instruction_is_skipped():
+    """An instruction the module would answer with an error (here SAP on a motor the module lacks)
+    has no effect and the program goes on (docs/notes/interpreter.md)."""
+    w = run_program("SAP 4, 9, 100\nCALC LOAD, 3\nSTOP", 0.01)
+    assert w.a == 3
+    assert w.vm.interpreter.last_error == (0, 5, 4)
+
+
+def test_direct_mode_alongside_a_running_program():
+    """7.6: "When a TMCL program is being executed in standalone mode, direct mode commands are also
+    processed (and they do not disturb the flow of the program ...)"; user variables carry data
+    between host and program (7.4)."""
+    src = """Loop:
+    GGP 0, 2
+    COMP 0
+    JC EQ, Loop
+    CALC MUL, 2
+    AGP 1, 2
+    STOP"""
+    w = module()
+    w.load(src)
+    w.run()
+    for _ in range(5):
+        w.vm.advance(0.013)
+        assert w.ok(6, 1, 0) == 0             # direct GAP answered while the program runs
+        assert w.ok(19, 9, 0, 777) in (0, 777)  # direct CALC LOAD: no effect on A
+        w.ok(22, 0, 0, 5)                      # direct JA: no effect on the flow
+        assert w.state == 1 and w.pc in (0, 1, 2) and w.a == 0
+    w.ok(9, 0, 2, 21)
+    w.vm.advance(0.01)
+    assert w.var(1) == 42 and w.state == 0
+
+
+def test_runs_are_reproducible():
+    """DESIGN.md "Time": the same program and the same host commands give the same trace."""
+    def trace():
+        w = module()
+        w.load("Loop: GAP 1, 0\nCALC ADD, 100\nAAP 0, 0\nWAIT TICKS, 0, 3\nJA Loop")
+        w.run()
+        out = []
+        for _ in range(40):
+            w.vm.advance(0.0071)
+            out.append((w.ok(6, 1, 0), w.pc, w.a))
+        return out
+    assert trace() == trace()
+
+
+def test_running_pure_instructions_ahead_changes_nothing():
+    """DESIGN.md "Time": batching pure instructions between events (Interpreter.run_ahead) gives
+    exactly the trace of one event per instruction - motors, timer interrupt, host commands."""
+    src = """
+    VECT 0, Tick
+    SGP 0, 3, 7
+    EI 0
+    EI 255
+    SAP 4, 0, 20000
+Loop:
+    GGP 3, 2
+    CALC ADD, 1
+    AGP 3, 2
+    CALC MOD, 50
+    COMP 0
+    JC NE, Loop
+    GAP 1, 0
+    CALC ADD, 3000
+    AAP 0, 0
+    GIO 0, 0
+    JC ZE, Loop
+    JA Loop
+Tick:
+    CALCX LOAD
+    CALC LOAD, 1
+    AGP 4, 2
+    CALCX SWAP
+    RETI
+"""
+    def trace(run_ahead):
+        w = module()
+        w.vm.interpreter.run_ahead = run_ahead
+        w.load(src)
+        w.run()
+        out = []
+        for i in range(60):
+            w.vm.advance(0.0037)
+            if i == 20:
+                w.vm.io.drive_input(0, 0, 1)
+                w.ok(9, 3, 2, 1000)
+            out.append((w.ok(6, 1, 0), w.ok(6, 0, 0), w.pc, w.a, w.x, w.vm.flags, w.var(3), w.var(4)))
+        return out, w.vm.interpreter.executed
+    fast, slow = trace(True), trace(False)
+    assert fast == slow
+    assert fast[1] > 1000

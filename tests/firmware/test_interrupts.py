@@ -1,0 +1,171 @@
+"""TMCL interrupts: VECT/EI/DI/RETI, global enable 255, priority, no nesting, context save,
+timers and event sources (TMCM-6212 manual 3.5.6, 3.6.30-3.6.33, 5.4; PD86-1180 manual 4.4.2.6)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from .test_program_support import T, module
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+# An ISR per interrupt that appends its digit to user variable 10 (v10 = v10 * 10 + digit).
+def isr(label: str, digit: int) -> str:
+    return (f"{label}:\n GGP 10, 2\n CALC MUL, 10\n CALC ADD, {digit}\n AGP 10, 2\n"
+            f" WAIT TICKS, 0, 1\n RETI\n")
+
+
+MAIN_IDLE = "Idle: JA Idle\n"
+
+
+def test_timer_example_toggles_out0_every_second_and_out3_every_half_second():
+    """3.5.6.4 example: timer 0 with "SGP 0, 3, 1000 //... set its period to 1000ms"; its handler
+    toggles OUT0, while the main loop toggles OUT3 with WAIT TICKS, 0, 50 (500 ms)."""
+    src = (EXAMPLES / "tmcm6212_3.5.6.4_timer_interrupt.tmc").read_text()
+    w = module()
+    w.load(src)
+    w.run()
+    out0, out3 = [], []
+    for _ in range(400):                     # 4 s in 10 ms samples
+        w.vm.advance(0.01)
+        out0.append(w.out(0))
+        out3.append(w.out(3))
+
+    def edges(samples):
+        return [i + 1 for i in range(1, len(samples)) if samples[i] != samples[i - 1]]
+
+    e0, e3 = edges(out0), edges(out3)
+    assert out0[0] == 0 and out3[0] == 1
+    assert e0 == [101, 201, 301]              # first 10 ms sample after 1 s, 2 s, 3 s
+    gaps3 = [b - a for a, b in zip(e3, e3[1:], strict=False)]
+    assert len(e3) == 7 and all(g == 50 for g in gaps3)
+
+
+def test_priority_lower_number_first_and_no_nesting():
+    """5.4: "Interrupts with a lower number have a higher priority"; 3.5.6.2 "There is no interrupt
+    nesting": an interrupt that occurs during a handler runs after its RETI."""
+    src = ("VECT 15, Stall\nVECT 21, Dev\nVECT 39, In0\nEI 15\nEI 21\nEI 39\nSGP 39, 3, 3\nEI 255\n"
+           + MAIN_IDLE + isr("Stall", 1) + isr("Dev", 2) + isr("In0", 3))
+    w = module()
+    w.load(src)
+    w.run()
+    w.vm.advance(20 * T)
+    assert w.vm.interrupts.trigger(21) and w.vm.interrupts.trigger(15)
+    w.vm.advance(0.005)                       # inside the first handler (its WAIT)
+    assert w.vm.interrupts.active == 15
+    w.vm.io.drive_input(0, 0, 1)              # input change 0 while a handler runs
+    w.vm.advance(0.1)
+    assert w.var(10) == 123
+    assert w.vm.interrupts.active is None
+
+
+def test_context_is_saved_and_restored():
+    """3.5.6.2: "Before an interrupt handling routine gets called, the context of the normal program
+    (i.e. accumulator register, X register, flags) will be saved automatically ... On return ...
+    restored"."""
+    src = ("VECT 0, Tick\nSGP 0, 3, 20\nEI 0\nEI 255\n"
+           "CALC LOAD, 77\nCALCX LOAD\nCALC LOAD, 5\nCOMP 5\n"
+           "Loop: JC NE, Broken\nCOMP 5\nJA Loop\nBroken: STOP\n"
+           "Tick: CALC LOAD, 1\nCALCX LOAD\nCOMP 9\nGGP 11, 2\nCALC ADD, 1\nAGP 11, 2\nRETI")
+    w = module()
+    w.load(src)
+    w.run()
+    w.vm.advance(1.0)
+    assert w.state == 1                      # the main loop never saw the handler's flags
+    assert w.var(11) >= 45
+    w.ok(128)
+    assert (w.a, w.x) in ((5, 77),) or w.vm.interrupts.active is not None
+
+
+def test_global_enable_and_di():
+    """3.6.30 / 3.6.31: "Interrupt number 255 globally enables interrupt processing"; DI disables."""
+    base = "VECT 39, In0\nEI 39\nSGP 39, 3, 1\n"
+    for extra, expected in (("", 0), ("EI 255\n", 3), ("EI 255\nDI 39\n", 0), ("EI 255\nDI 255\n", 0)):
+        w = module()
+        w.load(base + extra + MAIN_IDLE + isr("In0", 3))
+        w.run()
+        w.vm.advance(0.01)
+        w.vm.io.drive_input(0, 0, 1)
+        w.vm.advance(0.05)
+        assert w.var(10) == expected, extra
+
+
+@pytest.mark.parametrize(("mode", "levels", "expected"), [
+    (0, [1, 0, 1], 0),       # off
+    (1, [1, 0, 1], 33),      # low-high
+    (2, [1, 0, 1], 3),       # high-low
+    (3, [1, 0, 1], 333),     # both
+])
+def test_input_change_trigger_transitions(mode, levels, expected):
+    """5.4 Table 20: "Input 0 trigger transition 0=off, 1=low-high, 2=high-low, 3=both"."""
+    w = module()
+    w.load(f"VECT 39, In0\nEI 39\nSGP 39, 3, {mode}\nEI 255\n" + MAIN_IDLE + isr("In0", 3))
+    w.run()
+    w.vm.advance(0.01)
+    for level in levels:
+        w.vm.io.drive_input(0, 0, level)
+        w.vm.advance(0.05)
+    assert w.var(10) == expected
+
+
+def test_stop_switch_interrupt_from_injected_level():
+    """Table 12: 27 "Left stop switch 0", 28 "Right stop switch 0"; Table 20 trigger transitions.
+    The switch level is injected directly (its source is the physical-world model)."""
+    w = module()
+    w.load("VECT 28, R0\nEI 28\nSGP 28, 3, 1\nEI 255\n" + MAIN_IDLE + isr("R0", 8))
+    w.run()
+    w.vm.advance(0.01)
+    w.vm.axes[0].ram[10] = 1
+    w.vm.advance(0.05)
+    assert w.var(10) == 8
+
+
+def test_target_reached_interrupt_per_axis():
+    """Table 12: 3 + n "Target position reached n": the handler runs when motor 1 arrives."""
+    w = module()
+    w.load("VECT 4, Arrived\nEI 4\nEI 255\nMVP ABS, 1, 2000\nMVP ABS, 0, 100\n" + MAIN_IDLE
+           + isr("Arrived", 4))
+    w.run()
+    w.vm.advance(0.002)
+    assert w.var(10) == 0
+    w.vm.advance(5.0)
+    assert w.var(10) == 4 and w.ok(6, 1, 1) == 2000
+
+
+def test_timer_interrupts_a_wait_which_keeps_its_deadline():
+    """3.6.20 WAIT holds the program; an interrupt taken meanwhile returns to the same WAIT, which
+    ends at its original time (docs/notes/interpreter.md)."""
+    src = ("VECT 1, T1\nSGP 1, 3, 100\nEI 1\nEI 255\nWAIT TICKS, 0, 50\nSIO 0, 2, 1\nSTOP\n"
+           "T1: GGP 12, 2\nCALC ADD, 1\nAGP 12, 2\nRETI")
+    w = module()
+    w.load(src)
+    w.run()
+    w.vm.advance(0.5)
+    assert w.out(0) == 0 and w.var(12) == 4
+    w.vm.advance(0.01)
+    assert w.out(0) == 1
+
+
+def test_no_interrupt_without_vector_or_when_stopped():
+    """3.5.6.2: an interrupt is handled only when it "is enabled and a valid interrupt vector has been
+    defined"; a stopped program handles none."""
+    w = module()
+    w.load("EI 40\nSGP 40, 3, 3\nEI 255\n" + MAIN_IDLE)
+    w.run()
+    w.vm.advance(0.01)
+    assert not w.vm.interrupts.trigger(40)
+    w.load("VECT 40, In1\nEI 40\nEI 255\n" + MAIN_IDLE + isr("In1", 1))
+    w.run(0)
+    w.vm.advance(0.01)
+    w.ok(128)
+    assert not w.vm.interrupts.trigger(40)
+
+
+def test_vector_table_of_each_module():
+    """Table 12 (TMCM-6212: 0-8, 15-42) and PD86-1180 4.4.2.6.3 (0-3, 15, 21, 27, 28, 39, 40):
+    EI of a number outside the module's table is refused (status 3, wrong type)."""
+    w6212, w1180 = module(), module("PD86-1180")
+    assert w6212(25, 8).status == 100 and w1180(25, 8).status == 3
+    assert w6212(25, 42).status == 100 and w1180(25, 41).status == 3
+    assert w1180(25, 40).status == 100 and w1180(25, 255).status == 100

@@ -1,0 +1,128 @@
+"""Motion commands in direct mode: ROR, ROL, MST, MVP ABS/REL/COORD (TMCM-6212 manual 3.6.1-3.6.4)."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl import VirtualModule
+
+from .conftest import Host
+
+
+def test_ror_rol_mst(m6212):
+    """3.6.1 ROR "rotate with a specified velocity in right direction (increasing the position counter)",
+    3.6.2 ROL decreasing it, 3.6.3 MST "stop with a soft stop"."""
+    m6212.ok(1, 0, 0, 51200)
+    m6212.vm.advance(1.0)
+    assert m6212.ok(6, 3, 0) == 51200 and m6212.ok(6, 2, 0) == 51200
+    p1 = m6212.ok(6, 1, 0)
+    assert p1 > 0
+    m6212.ok(2, 0, 1, 51200)
+    m6212.vm.advance(1.0)
+    assert m6212.ok(6, 3, 1) == -51200 and m6212.ok(6, 1, 1) < 0
+    m6212.ok(3, 0, 0)
+    assert m6212.ok(6, 2, 0) == 0
+    m6212.vm.advance(0.01)
+    assert 0 < m6212.ok(6, 3, 0) < 51200       # soft stop: still decelerating
+    m6212.vm.advance(2.0)
+    assert m6212.ok(6, 3, 0) == 0
+
+
+def test_mvp_abs_arrives_exactly(anymod):
+    """3.6.4 MVP ABS: the motor moves to the absolute position and AP8 "Position reached flag ... set when
+    target position and actual position are equal"."""
+    anymod.ok(4, 0, 0, 12345)
+    assert anymod.ok(6, 0, 0) == 12345
+    assert anymod.ok(6, 8, 0) == 0
+    anymod.vm.advance(120.0)
+    assert anymod.ok(6, 1, 0) == 12345
+    assert anymod.ok(6, 8, 0) == 1
+    assert anymod.ok(6, 3, 0) == 0
+
+
+def test_mvp_rel_from_last_target_default_6212(m6212):
+    """TMCM-6212 4.1 AP127 "Start position for MVP REL command: 0 last target position, 1 actual position";
+    3.6.4 example "MVP REL, 0, -10000"."""
+    m6212.ok(4, 0, 0, 100000)
+    m6212.vm.advance(0.05)                       # still on the way
+    m6212.ok(4, 1, 0, -10000)
+    assert m6212.ok(6, 0, 0) == 90000            # last target + offset
+    m6212.ok(5, 127, 0, 1)
+    actual = m6212.ok(6, 1, 0)
+    m6212.ok(4, 1, 0, 10)
+    assert m6212.ok(6, 0, 0) == actual + 10
+
+
+def test_mvp_rel_from_actual_position_1180(m1180):
+    """PD86-1180 4.6.4 MVP REL: "a relative movement by means of an offset to the actual position"."""
+    m1180.ok(5, 1, 0, 300)
+    m1180.ok(4, 1, 0, 200)
+    assert m1180.ok(6, 0, 0) == 500
+
+
+def test_mvp_wrap_takes_the_short_way(m6212):
+    """3.6.4 Note: "The distance between the actual position and the new position must not be more than
+    2147483647 microsteps. Otherwise the motor will run in the opposite direction in order to take the
+    shorter distance (caused by 32 bit overflow)." """
+    m6212.ok(5, 1, 0, 2**31 - 1000)
+    m6212.ok(4, 0, 0, -(2**31) + 1000)           # 2000 steps forward through the wrap
+    m6212.vm.advance(0.01)
+    assert m6212.ok(6, 3, 0) > 0
+    m6212.vm.advance(2.0)
+    assert m6212.ok(6, 1, 0) == -(2**31) + 1000
+
+
+def test_mvp_rel_wraps_32_bit(m6212):
+    """3.6.4: the range of MVP is 32 bit signed; a REL target beyond it wraps."""
+    m6212.ok(5, 127, 0, 1)
+    m6212.ok(5, 1, 0, 2**31 - 10)
+    m6212.ok(4, 1, 0, 20)
+    assert m6212.ok(6, 0, 0) == -(2**31) + 10
+
+
+def test_target_change_on_the_fly(m6212):
+    """TMCM-6212 1 "On the fly alteration of motion parameters (e.g. position, velocity, acceleration)"."""
+    m6212.ok(4, 0, 0, 200000)
+    m6212.vm.advance(0.3)
+    m6212.ok(4, 0, 0, -5000)
+    m6212.vm.advance(10.0)
+    assert m6212.ok(6, 1, 0) == -5000
+
+
+def test_mvp_invalid_motor(m6212):
+    """3.6.4 Binary representation: motor 0...5."""
+    assert m6212(4, 0, 6, 10).status == 4
+
+
+def test_heartbeat_stops_motors(m6212):
+    """TMCM-6212 5.1 GP68 "If this time limit is up and no further command is received by the module the
+    motor will be stopped."""
+    m6212.ok(9, 68, 0, 500)
+    m6212.ok(1, 0, 0, 1000)
+    m6212.vm.advance(0.4)
+    assert m6212.ok(6, 3, 0) == 1000             # the GAP itself is a command: heartbeat restarts
+    m6212.vm.advance(0.6)
+    assert m6212.vm.axes[0].engine.velocity == 0
+
+
+def test_advance_splits_do_not_matter():
+    """DESIGN.md "Time": advance jumps between events — one long advance equals many short ones."""
+    a, b = Host(VirtualModule("TMCM-6212")), Host(VirtualModule("TMCM-6212"))
+    for h in (a, b):
+        h.ok(4, 0, 0, 51200)
+        h.ok(1, 0, 1, 30000)
+    a.vm.advance(1.0)
+    for _ in range(100):
+        b.vm.advance(0.01)
+    for axis in (0, 1):
+        assert a.ok(6, 1, axis) == b.ok(6, 1, axis)
+
+
+@pytest.mark.parametrize("name", ["TMCM-1021", "TMCM-1180", "tmcm-6212", "PD28-1021"])
+def test_module_aliases(name):
+    """Issue: VirtualModule accepts "TMCM-1021" and "TMCM-1180" as well."""
+    VirtualModule(name)
+
+
+def test_unknown_module_is_a_clear_error():
+    with pytest.raises(KeyError, match="unknown module"):
+        VirtualModule("TMCM-9999")

@@ -1,0 +1,149 @@
+"""Program memory and the TMCL control commands 128-135 (TMCM-6212 manual 3.6.36 Table 13,
+PD86-1180 manual 4.6.39), global parameters 77, 81, 128-130 (TMCM-6212 manual 5.1)."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl import VirtualModule
+from opentmcl.protocol.frame import Request, checksum
+
+from .test_program_support import T, Wire, module
+
+STATUS_LOADED = 101
+
+
+@pytest.fixture(params=["TMCM-6212", "PD86-1180", "PD28-1021"])
+def w(request):
+    return module(request.param)
+
+
+def test_download_mode_stores_and_does_not_execute(w):
+    """3.6.36: 132 "All following commands (except control commands) are not executed but stored
+    in the TMCL memory"; they are answered with status 101 (3.2.1 "Command loaded into TMCL
+    program EEPROM"); GP129 reads 1 in download mode (a GGP sent then is stored too) and 0 after 133."""
+    before = w.ok(6, 4, 0)
+    w.ok(132, 0, 0, 0)
+    has_gp129 = (0, 129) in w.vm.profile.global_parameters   # not among the PD28-1021's numbers
+    assert not has_gp129 or w.vm.globals.get(0, 129) == 1
+    assert w(10, 129, 0).status == STATUS_LOADED
+    r = w(5, 4, 0, before + 7)
+    assert r.status == STATUS_LOADED
+    assert w(1, 0, 0, 1000).status == STATUS_LOADED  # ROR is stored, the motor stays still
+    w.ok(133)
+    assert not has_gp129 or w.ok(10, 129, 0) == 0
+    assert w.ok(6, 4, 0) == before
+    assert w.ok(6, 3, 0) == 0
+    assert w.vm.program.code[:3] == [(10, 129, 0, 0), (5, 4, 0, before + 7), (1, 0, 0, 1000)]
+
+
+def test_read_program_memory_special_reply(w):
+    """3.6.36: 134 "Return contents of the specified program memory location (special reply
+    format)": host address, then the stored command, type, motor/bank and value (MSB first) in
+    place of module address, status, command and value, and a checksum (docs/notes/interpreter.md)."""
+    w.download([(4, 0, 0, -5000), (27, 1, 0, 0)], start=3)
+    raw = w.vm.handle(Request(1, 134, 0, 0, 3).encode())
+    assert raw[:8] == bytes([2, 4, 0, 0]) + (-5000).to_bytes(4, "big", signed=True)
+    assert raw[8] == checksum(raw[:8])
+    raw = w.vm.handle(Request(1, 134, 0, 0, 4).encode())
+    assert raw[1:4] == bytes([27, 1, 0])
+
+
+def test_program_size_limit(w):
+    """1 Features / profile: the program memory holds a fixed number of commands (6144 on the
+    TMCM-6212, 2048 on the PD86-1180 and PD28-1021); 132 beyond it and a command stored past the
+    end are answered with status 4 (invalid value)."""
+    size = w.vm.profile.program_memory
+    assert size == {"TMCM-6212": 6144, "PD86-1180": 2048, "PD28-1021": 2048}[w.vm.profile.name]
+    assert w(132, 0, 0, size).status == 4
+    w.ok(132, 0, 0, size - 1)
+    assert w(28).status == STATUS_LOADED
+    assert w(28).status == 4
+    w.ok(133)
+    assert w(134, 0, 0, size).status == 4
+
+
+def test_code_protection(w):
+    """5.1 GP81: "1 - protection against disassembling, 2 - protection against overwriting ...
+    When switching off the protection against disassembling (changing this parameter from 1 or 3
+    to 0 or 2, the program will be erased first!"."""
+    w.download([(22, 0, 0, 0)])
+    w.ok(9, 81, 0, 1)
+    assert w(134, 0, 0, 0).status != 100
+    w.ok(132, 0, 0, 0)  # overwriting still allowed
+    w.ok(133)
+    w.ok(9, 81, 0, 3)
+    assert w(132, 0, 0, 0).status != 100
+    w.ok(9, 81, 0, 2)   # 3 -> 2 switches off the read protection: the program is erased
+    assert w(132, 0, 0, 0).status != 100
+    assert w.vm.program.code[0] == (0, 0, 0, 0)
+    w.ok(9, 81, 0, 0)
+    w.download([(22, 0, 0, 0)])
+    raw = w.vm.handle(Request(1, 134, 0, 0, 0).encode())
+    assert raw[1] == 22
+
+
+def test_application_status_and_gp128_130_mirror_the_state(w):
+    """3.6.36 135 types 0-3 and 5.1 GP128 (0 stop, 1 run, 2 step, 3 reset), GP130 (program counter).
+    Types 0/1 pack mode << 24 | wait flag << 16 | address (layout: docs/notes/interpreter.md)."""
+    w.load("CALC LOAD, 42\nCALCX LOAD\nCALC LOAD, 7\nWAIT TICKS, 0, 100\nSTOP")
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.state == 1 and w.pc == 3
+    assert w.ok(135, 1) == (1 << 24) | (1 << 16) | 3
+    assert w.ok(135, 2) == 7 and w.ok(135, 3) == 42
+    w.ok(132, 0, 0, 17)
+    assert w.ok(135, 0) & 0xFFFF == 17   # memory pointer = download address
+    w.ok(133)
+    assert w.state == 0
+    assert w(135, 9).status == 3
+
+
+def test_stop_run_from_address_step_reset(w):
+    """3.6.36: 128 stops, 129 type 0 continues from the current address, type 1 starts at the
+    given one, 130 executes only the next command, 131 resets PC, stack, A, X and flags."""
+    w.load("Start: CALC ADD, 1\nJA Start\nOther: CALC LOAD, 1000\nSTOP")
+    w.run()
+    w.vm.advance(100 * T)
+    w.ok(128)
+    assert w.state == 0
+    a = w.a
+    assert a == 50
+    w.vm.advance(1.0)
+    assert w.a == a                     # stopped: nothing executes
+    w.ok(130)
+    assert w.state == 2 and w.pc in (0, 1)
+    pc_before = w.pc
+    w.ok(130)
+    assert w.pc != pc_before
+    w.run(2)
+    w.vm.advance(5 * T)
+    assert w.a == 1000 and w.state == 0 and w.pc == 3
+    w.ok(131)
+    assert (w.state, w.pc, w.a, w.x, w.ok(135, 4)) == (3, 0, 0, 0, 0)
+    w.run()                             # after a reset the program starts at 0
+    w.vm.advance(2 * T)                 # CALC ADD at T, JA at 2T
+    assert w.a == 1
+
+
+def test_program_survives_restart_with_file_eeprom(tmp_path):
+    """DESIGN.md: the TMCL program lives in the (file-backed) EEPROM; 5.1 GP77 "1 - Start TMCL
+    application automatically after power up"."""
+    path = tmp_path / "eeprom.json"
+    w = Wire(VirtualModule("TMCM-6212", address=1, eeprom=path))
+    w.load("Loop: CALC ADD, 1\nAGP 0, 2\nJA Loop")
+    w.ok(9, 77, 0, 1)
+    w.vm.close()
+    again = Wire(VirtualModule("TMCM-6212", address=1, eeprom=path))
+    raw = again.vm.handle(Request(1, 134, 0, 0, 1).encode())
+    assert raw[1:4] == bytes([35, 0, 2])
+    assert again.state == 1             # auto start
+    again.vm.advance(30 * T)
+    assert again.var(0) == 10
+
+
+def test_no_auto_start_by_default():
+    """5.1 GP77: "0 - Do not start TMCL application after power up (default)"."""
+    w = module()
+    w.load("Loop: CALC ADD, 1\nJA Loop")
+    w.vm.power_up()
+    assert w.state == 0

@@ -1,0 +1,184 @@
+"""The wire behaviour of VirtualModule.handle: replies, status codes, addressing, special replies."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl import VirtualModule
+from opentmcl.protocol.frame import Reply, Request, checksum
+from tests.protocol.test_manual_vectors import TMCM6212, hexbytes
+
+from .conftest import Host
+
+# Commands of the 6212's "Binary Form" examples that act in direct mode (program-flow ones included:
+# they are answered too).
+VECTORS = [v for v in TMCM6212 if v[1] != "RFS START"]
+
+
+@pytest.mark.parametrize(("section", "mnemonic", "labels", "printed"), VECTORS, ids=[v[1] for v in VECTORS])
+def test_every_6212_binary_example_is_answered_ok(section, mnemonic, labels, printed):
+    """TMCM-6212 3.2 "Every time a command has been sent to a module, the module sends a reply": each
+    printed "Binary Form of ..." frame gets a 9-byte reply with reply address 2, module address 1,
+    status 100 and the same command number, with a correct checksum (3.2 Table 3)."""
+    vm = VirtualModule("TMCM-6212")
+    frame = hexbytes(printed)
+    raw = vm.handle(frame)
+    assert len(raw) == 9
+    assert checksum(raw[:8]) == raw[8]
+    reply = Reply.decode(raw)
+    assert (reply.reply_address, reply.module_address, reply.status, reply.command) == (2, 1, 100, frame[1])
+
+
+def test_gio_reply_example_bytes(m6212):
+    """TMCM-6212 3.6.13 GIO example: with ADC channel 0 at 302, GIO 0, 1 is answered with
+    02 01 64 0F 00 00 01 2E A5 ("Reply (Status=no error, Value=302)")."""
+    m6212.vm.io.drive_input(1, 0, 302)
+    assert m6212.vm.handle(hexbytes("01 0F 00 01 00 00 00 00 11")) == hexbytes("02 01 64 0F 00 00 01 2E A5")
+
+
+def test_gap_reply_example_1180():
+    """PD86-1180 4.6.6 GAP example reply "$02 $01 $64 $06 $00 $00 $02 $c7 ... position=711": after the
+    actual position is set to 711, GAP 1, 0 answers exactly these eight bytes plus their checksum."""
+    host = Host(VirtualModule("PD86-1180"))
+    host.ok(5, 1, 0, 711)
+    raw = host.raw(6, 1, 0)
+    assert raw[:8] == hexbytes("02 01 64 06 00 00 02 C7")
+    assert raw[8] == checksum(raw[:8])
+
+
+def test_wrong_checksum_status_1(m6212):
+    """TMCM-6212 3.2.1 status code 1 "Wrong checksum"."""
+    frame = bytearray(Request(1, 6, 1, 0, 0).encode())
+    frame[8] ^= 0x55
+    reply = Reply.decode(m6212.vm.handle(bytes(frame)))
+    assert reply.status == 1 and reply.command == 6
+
+
+@pytest.mark.parametrize("opcode", [0, 58, 63, 72, 127, 140, 200, 255])
+def test_unknown_opcode_status_2(anymod, opcode):
+    """TMCM-6212 3.2.1 status code 2 "Invalid command": opcodes no manual defines."""
+    assert anymod(opcode).status == 2
+
+
+def test_opcode_the_module_lacks_status_6(m6212):
+    """TMCM-6212 3.4.1 lists no STAP (7) / RSAP (8), and no 139: status 6 "Command not available"."""
+    assert m6212(7, 4, 0).status == 6
+    assert m6212(8, 4, 0).status == 6
+    assert m6212(139).status == 6
+
+
+def test_wrong_type_status_3(anymod):
+    """TMCM-6212 3.2.1 status 3 "Wrong type": an axis parameter number the module does not have."""
+    assert anymod(5, 250, 0, 1).status == 3
+    assert anymod(6, 250, 0).status == 3
+    assert anymod(4, 7, 0, 0).status == 3  # MVP type 7
+
+
+def test_invalid_value_status_4(m6212):
+    """TMCM-6212 4.1: AP4 range 0...7999774 pps; a larger value gets status 4 "Invalid value" and the
+    parameter keeps its value."""
+    before = m6212.ok(6, 4, 0)
+    assert m6212(5, 4, 0, 7999775).status == 4
+    assert m6212.ok(6, 4, 0) == before
+    assert m6212(5, 4, 6, 100).status == 4  # motor 6 does not exist on a six-axis module
+
+
+def test_read_only_parameter_cannot_be_written(m6212):
+    """TMCM-6212 4.1: AP3 "Actual speed" has access R only."""
+    assert m6212(5, 3, 0, 100).status == 3
+
+
+def test_frames_for_other_addresses_are_ignored(m6212):
+    """TMCM-6212 3 (master/slave): a module only answers commands sent to its own address."""
+    assert m6212.raw(6, 1, 0, address=2) == b""
+    assert m6212.raw(6, 1, 0, address=1) != b""
+
+
+def test_serial_address_change_and_secondary_address(m6212):
+    """TMCM-6212 5.1: GP66 serial address (3.6.7 example SGP 66, 0, 3) and GP87 secondary address."""
+    assert len(m6212.raw(9, 66, 0, 3)) == 9  # the reply still comes from address 1 ...
+    m6212.address = 3
+    assert m6212.ok(10, 66, 0) == 3
+    assert m6212.raw(6, 1, 0, address=1) == b""
+    m6212.ok(9, 87, 0, 9)
+    assert Reply.decode(m6212.raw(6, 1, 0, address=9)).module_address == 3
+
+
+def test_host_address_in_replies(m6212):
+    """TMCM-6212 5.1: GP76 "Host address used in the reply telegrams"."""
+    m6212.ok(9, 76, 0, 7)
+    assert m6212(6, 1, 0).reply_address == 7
+
+
+def test_suppress_reply_gp255(m6212):
+    """TMCM-6212 5.1 GP255: "The reply in direct mode will be suppressed when this parameter is set to 1
+    ... The reply will not be suppressed for GAP, GGP and GIO commands." """
+    assert m6212.raw(9, 255, 0, 1) == b""
+    assert m6212.raw(5, 4, 0, 1000) == b""
+    assert m6212.raw(1, 0, 0, 100) == b""
+    assert m6212.ok(6, 4, 0) == 1000
+    assert m6212.ok(10, 255, 0) == 1
+    assert m6212.ok(15, 0, 0) == 0
+    assert m6212(5, 4, 0, -1).status == 4  # errors are still reported
+    m6212.raw(9, 255, 0, 0)
+    assert m6212(5, 4, 0, 2000).status == 100
+
+
+def test_version_string_reply_136(anymod):
+    """PD86-1180 4.6.39 "Special reply format of command 136": type 0 -> host address + 8-character
+    version string, no checksum; type 1 -> normal reply with the binary version in the value."""
+    raw = anymod.raw(136, 0)
+    assert len(raw) == 9 and raw[0] == 2
+    assert raw[1:].decode("ascii") == anymod.vm.profile.firmware_version
+    assert anymod.ok(136, 1) == anymod.vm.profile.firmware_binary
+
+
+def test_factory_defaults_137(tmp_path):
+    """TMCM-6212 3.6.36 Table 13: 137 "Reset all settings in the EEPROM to their factory defaults. This
+    command does not send a reply." Value must be 1234."""
+    host = Host(VirtualModule("TMCM-6212", eeprom=tmp_path / "ee.json"))
+    host.ok(9, 77, 0, 1)
+    host.ok(9, 42, 2, 99)
+    host.ok(11, 42, 2)
+    assert host(137, 0, 0, 1).status == 4
+    assert host.raw(137, 0, 0, 1234) == b""
+    assert host.ok(10, 77, 0) == 0
+    assert host.ok(10, 42, 2) == 0
+    again = Host(VirtualModule("TMCM-6212", eeprom=tmp_path / "ee.json"))
+    assert again.ok(10, 77, 0) == 0
+
+
+def test_position_reached_event_138(m6212):
+    """TMCM-6212 3.6.35: command 138 (example frame 01 8A 01 00 00 00 00 05 91) is answered at once with
+    the motor bit mask, and an additional reply with status 128 follows when a motor in the mask reaches
+    its target. (The manual's example text says "motors #2 and #3", but mask 5 selects motors 0 and 2.)"""
+    vm = m6212.vm
+    raw = vm.handle(hexbytes("01 8A 01 00 00 00 00 05 91"))
+    assert raw[:8] == hexbytes("02 01 64 8A 00 00 00 05")
+    m6212.ok(4, 0, 0, 1000)
+    m6212.ok(4, 0, 1, 1000)   # motor 1 is not in the mask
+    assert vm.drain_events() == []
+    vm.advance(2.0)
+    events = [Reply.decode(e) for e in vm.drain_events()]
+    assert [(e.status, e.command, e.value) for e in events] == [(128, 138, 1)]
+    m6212.ok(4, 0, 0, 0)      # type 1: permanent, so the next MVP reports too
+    vm.advance(2.0)
+    assert [Reply.decode(e).status for e in vm.drain_events()] == [128]
+
+
+def test_position_reached_event_single_shot(m6212):
+    """TMCM-6212 3.6.35: "With the type field set to 0, only for the next MVP command ... a position reached
+    message will be generated." """
+    m6212.ok(138, 0, 0, 1)
+    m6212.ok(4, 0, 0, 500)
+    m6212.vm.advance(2.0)
+    assert len(m6212.vm.drain_events()) == 1
+    m6212.ok(4, 0, 0, 0)
+    m6212.vm.advance(2.0)
+    assert m6212.vm.drain_events() == []
+
+
+def test_garbage_lengths_are_ignored(m6212):
+    """A frame that is not nine bytes long is no TMCL request (3.1): no reply, no state change."""
+    for junk in (b"", b"\x01", b"\x01" * 8, b"\x01" * 10):
+        assert m6212.vm.handle(junk) == b""
+    assert m6212.ok(6, 1, 0) == 0

@@ -1,0 +1,213 @@
+"""Assembler syntax and error reporting."""
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from opentmcl.lang.assembler import AsmError, assemble, assemble_file
+
+STOP = (28, 0, 0, 0)
+
+
+def ins(src: str, **kw) -> list[tuple[int, int, int, int]]:
+    return [tuple(i) for i in assemble(src, **kw).instructions]
+
+
+def err(src: str, **kw) -> AsmError:
+    with pytest.raises(AsmError) as exc:
+        assemble(src, filename="t.tmc", **kw)
+    return exc.value
+
+
+def test_trailing_stop_is_appended():
+    """FACTS.md (TMCL-IDE .bin): a STOP follows the last source instruction - even an explicit one."""
+    assert ins("ROL 0, 1") == [(2, 0, 0, 1), STOP]
+    assert ins("STOP") == [STOP, STOP]
+    assert ins("") == [STOP]
+    assert ins("#nostop\nROL 0, 1") == [(2, 0, 0, 1)]
+    assert ins("ROL 0, 1", append_stop=False) == [(2, 0, 0, 1)]
+
+
+def test_case_insensitive_mnemonics_and_symbols():
+    """Mnemonics and symbolic operands in any case (manual 3.6: "MVP ABS, 0, 90000")."""
+    assert ins("mvp abs, 0, 90000\nMvP Rel, 0, -5\nwait ticks, 0, 5")[:3] == [
+        (4, 0, 0, 90000), (4, 1, 0, -5), (27, 0, 0, 5)]
+
+
+def test_literals():
+    """Decimal, negative, 0x and $ hex, 0b binary; values wrap to signed 32 bit."""
+    assert ins("SAP 4, 0, 0x10\nSAP 4, 0, $FF\nSAP 4, 0, 0b101\nSAP 4, 0, -2147483648\nSAP 4, 0, 0xFFFFFFFF")[:5] == [
+        (5, 4, 0, 16), (5, 4, 0, 255), (5, 4, 0, 5), (5, 4, 0, -2147483648), (5, 4, 0, -1)]
+
+
+def test_constants_and_expressions():
+    """Constants (manual 7.3), forward references, C-like integer arithmetic."""
+    src = "Speed = Base * 2 + 1\nBase = 100\nSAP 4, 0, Speed\nSAP 5, 0, (Base - 7) / 2\nSAP 6, 0, -7 / 2\n" \
+          "SAP 7, 0, -7 % 2\nSAP 8, 0, 1 << 4 | 3\nSAP 9, 0, ~0"
+    assert ins(src)[:6] == [(5, 4, 0, 201), (5, 5, 0, 46), (5, 6, 0, -3), (5, 7, 0, -1), (5, 8, 0, 19),
+                            (5, 9, 0, -1)]
+
+
+def test_labels_forms():
+    """Labels alone, before an instruction, with space before ':', several on one line, at the end."""
+    p = assemble("A:\nB : C: ROL 0, 1\nJA A\nJA End\nEnd:")
+    assert p.labels == {"A": 0, "B": 0, "C": 0, "End": 3}
+    assert [tuple(i) for i in p.instructions][1:3] == [(22, 0, 0, 0), (22, 0, 0, 3)]
+
+
+def test_labels_usable_in_any_value():
+    """A label is a number: e.g. the start address given to a user variable."""
+    assert ins("SGP 0, 2, Here\nHere: STOP")[0] == (9, 0, 2, 1)
+
+
+def test_optional_forms():
+    """GAP with a third (don't care) operand (PD86-1180 4.6.18), RFS START without motor
+    (TMCM-6212 3.6.11 caption), CALC NOT without operand."""
+    assert ins("GAP 1, 0, 0\nRFS START\nCALC NOT")[:3] == [(6, 1, 0, 0), (13, 0, 0, 0), (19, 8, 0, 0)]
+
+
+def test_extended_commands():
+    """PD28-1021 3.5 Table 5: the extended commands and their operand forms."""
+    src = ("CALCVV ADD, 1, 2\nCALCVA SUB, 3\nCALCAV MUL, 4\nCALCVX DIV, 5\nCALCXV SWAP, 6\nCALCV ADD, 7, 100\n"
+           "MVPA REL, 0\nRST 0\nDJNZ 9, Top\nTop: ROLA 0\nRORA 0\nSIV 42\nGIV\nAIV\nCALL EQ, Top\nUF3 1, 2, 3")
+    assert ins(src, module="PD28-1021")[:16] == [
+        (40, 0, 1, 2), (41, 1, 3, 0), (42, 2, 4, 0), (43, 3, 5, 0), (44, 10, 6, 0), (45, 0, 7, 100),
+        (46, 1, 0, 0), (48, 0, 0, 0), (49, 9, 0, 9), (50, 0, 0, 0), (51, 0, 0, 0), (55, 0, 0, 42),
+        (56, 0, 0, 0), (57, 0, 0, 0), (80, 2, 0, 9), (67, 1, 2, 3)]
+
+
+def test_raw_pseudo_instruction():
+    """Our RAW pseudo-instruction (docs/notes/lang.md) emits any record, e.g. control command 136."""
+    assert ins("RAW 136, 1, 0, -5") == [(136, 1, 0, -5), STOP]
+
+
+def test_error_names_file_line_column_and_expected_form():
+    e = err("ROL 0, 1\n  MVP ABS, 0\n")
+    assert (e.file, e.line, e.column) == ("t.tmc", 2, 12)
+    assert "expected MVP ABS|REL|COORD, <motor>, <value>" in e.message
+    assert str(e).startswith("t.tmc:2:12: ")
+
+
+@pytest.mark.parametrize(("src", "line", "column", "text"), [
+    ("FOO 1", 1, 1, "unknown mnemonic 'FOO'"),
+    ("WAIT POSS, 0, 0", 1, 6, "unknown WAIT type 'POSS'; expected TICKS|POS|REFSW|LIMSW|RFS"),
+    ("JA Nowhere", 1, 4, "undefined symbol 'Nowhere'"),
+    ("Loop: STOP\nJA loop", 2, 4, "did you mean 'Loop'"),
+    ("SAP 256, 0, 1", 1, 5, "type operand must be 0..255"),
+    ("SAP 4, -1, 1", 1, 8, "motor/bank operand must be 0..255"),
+    ("SAP 4, 0, 4294967296", 1, 11, "out of 32-bit range"),
+    ("SAP 4, 0, 1/0", 1, 12, "division by zero"),
+    ("SAP 4, 0, (1", 1, 13, "missing ')'"),
+    ("SAP 4, 0, 1 2", 1, 13, "unexpected '2'"),
+    ("SAP 4, , 1", 1, 8, "empty operand"),
+    ("SAP 4, 0, #", 1, 11, "unexpected character '#'"),
+    ("A: STOP\nA: STOP", 2, 1, "label 'A' already defined at t.tmc:1"),
+    ("X = 1\nX = 2\nSTOP", 2, 1, "redefined as 2"),
+    ("X = Y\nY = X\nSAP 4, 0, X", 2, 5, "constant defined in terms of itself"),
+    ("X = 1\nX: STOP", 2, 1, "already a constant"),
+    ("#include nothere.inc", 1, 1, "include file 'nothere.inc' not found"),
+    ("#pragma once", 1, 1, "unknown directive '#pragma'"),
+    ("RAW 1, 2", 1, 8, "expected RAW <command>, <type>, <motor>, <value>"),
+    ("  ,", 1, 3, "expected a label, a constant definition or an instruction"),
+])
+def test_errors(src, line, column, text):
+    """Every error names file, line and 1-based column of the offending token and what was expected."""
+    e = err(src)
+    assert (e.line, e.column) == (line, column), str(e)
+    assert text in e.message
+
+
+def test_duplicate_identical_constant_is_allowed():
+    """Include files may define the same name twice with the same value."""
+    assert assemble("X = 1\nX = 1\nSAP 4, 0, X").constants == {"X": 1}
+
+
+def test_module_checks_commands_and_memory():
+    """With a module: commands it lacks are errors (STAP is in the PD86-1180 set, the extended set
+    only in the PD28-1021's), and a program larger than its memory is an error."""
+    assert ins("STAP 4, 0", module="PD86-1180")[0] == (7, 4, 0, 0)
+    e = err("ROL 0, 1\nCALCVV ADD, 1, 2", module="PD86-1180")
+    assert (e.line, e.column) == (2, 1) and "not available on PD86-1180" in e.message
+    assert ins("CALCVV ADD, 1, 2")[0] == (40, 0, 1, 2)  # no module: no check
+    from opentmcl.modules.profile import load_profile
+    size = load_profile("PD86-1180").program_memory
+    with pytest.raises(AsmError, match="program memory holds"):
+        assemble("ROL 0, 1\n" * size, module="PD86-1180")
+
+
+def test_unknown_module():
+    """Module names are those of the profiles (TMCM-6212, PD86-1180, PD28-1021 and aliases)."""
+    with pytest.raises(AsmError, match="unknown module"):
+        assemble("STOP", module="TMCM-9999")
+
+
+def test_includes_search_path_and_once(tmp_path):
+    """#include searches the including file's directory, then the include path; a file is read once."""
+    (tmp_path / "lib").mkdir()
+    (tmp_path / "lib" / "speeds.inc").write_text("Fast = 1000 // from lib\n#include other.inc\n")
+    (tmp_path / "other.inc").write_text("Slow = 10\n")
+    (tmp_path / "main.tmc").write_text('#include "speeds.inc"\n#include speeds.inc\nROL 0, Fast\nROR 0, Slow\n')
+    p = assemble_file(tmp_path / "main.tmc", include_path=[tmp_path / "lib", tmp_path])
+    assert [tuple(i) for i in p.instructions] == [(2, 0, 0, 1000), (1, 0, 0, 10), STOP]
+    (tmp_path / "bad.inc").write_text("ROL 0,\n")
+    (tmp_path / "m2.tmc").write_text("STOP\n#include bad.inc\n")
+    with pytest.raises(AsmError) as exc:
+        assemble_file(tmp_path / "m2.tmc")
+    assert exc.value.file.endswith("bad.inc") and exc.value.line == 1
+
+
+def test_unreadable_source(tmp_path):
+    """A missing source file is an AsmError (line 0), not an OSError traceback."""
+    with pytest.raises(AsmError, match="cannot read file"):
+        assemble_file(tmp_path / "missing.tmc")
+
+
+def test_defines():
+    """Constants given from outside (CLI -D NAME=VALUE) behave like `Name = value` (manual 7.3)."""
+    assert ins("ROL 0, Speed", defines={"Speed": 7})[0] == (2, 0, 0, 7)
+
+
+def test_listing_and_symbol_file():
+    """Listing: address, the 8 record bytes, source line and text; symbol file: label and address
+    (what TMCM-6212 7.6 calls the symbol file, used to find run addresses)."""
+    p = assemble("Loop: ROL 0, 1 // go\nJA Loop", filename="x.tmc")
+    lines = p.listing().splitlines()
+    assert lines[0].strip() == "Loop:"
+    assert lines[1].startswith("0000  02 00 00 00 00 00 01 03") and lines[1].endswith("1  Loop: ROL 0, 1 // go")
+    assert lines[3].startswith("0002  1C 00 00 00 00 00 00 1C") and "appended" in lines[3]
+    assert p.symbol_file() == "Loop\t0\n"
+
+
+@pytest.mark.parametrize(("src", "text"), [
+    ("SAP 4, 0, " + "(" * 5000 + "1" + ")" * 5000, "nested deeper"),
+    ("SAP 4, 0, " + "-" * 5000 + "1", "nested deeper"),
+    ("C0 = 0xFFFFFFFF\n" + "".join(f"C{i} = C{i - 1} * C{i - 1}\n" for i in range(1, 40)) + "SAP 4, 0, C39",
+     "more than 64 bits"),
+    ("SAP 4, 0, 1 << 64", "out of range"),
+])
+def test_hostile_expressions_are_errors_not_crashes(src, text):
+    """Bad input gives a typed error, never a crash or a hang (house rules)."""
+    with pytest.raises(AsmError, match=text):
+        assemble(src)
+
+
+def test_bom_and_crlf():
+    """Files saved by Windows editors (BOM, CR LF line ends) assemble like plain ones."""
+    assert ins("\ufeffROL 0, 1\r\nMST 0\r\n") == [(2, 0, 0, 1), (3, 0, 0, 0), STOP]
+
+_SOURCE_ALPHABET = st.sampled_from(list("ABCDEFGHIJKLMNOPQRSTUVWXYZabcxyz0123456789_,:=+-*/%&|^~()<>$#\"' \t\n")
+                                   + ["MVP ", "ABS", "JA ", "WAIT ", "TICKS", "//", "#include ", "0x", "\x00",
+                                      "\u00e9", "\u0663", "RAW ", "#nostop", "Loop:", "\r\n"])
+
+
+@given(st.lists(_SOURCE_ALPHABET, max_size=60).map("".join))
+def test_any_text_assembles_or_raises_asm_error(src):
+    """Bad input: a typed AsmError with a position, never another exception (house rules)."""
+    try:
+        prog = assemble(src, filename="fuzz.tmc")
+    except AsmError as exc:
+        assert exc.file == "fuzz.tmc" or exc.file.startswith("<bundled>") or exc.line == 0
+        assert exc.line >= 0 and exc.column >= 0
+    else:
+        assert len(prog.image()) % 8 == 0

@@ -1,0 +1,41 @@
+"""TMCL-IDE binary file format (FACTS.md): 8-byte records, checksum of the first seven bytes."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl.lang import binfile
+from opentmcl.lang.binfile import BinFileError, Instruction
+from opentmcl.protocol.frame import Request
+
+
+def test_record_is_serial_frame_without_address():
+    """FACTS.md: opcode, type, motor/bank, value (signed 32-bit big-endian), checksum = sum of the
+    first seven bytes - the TMCM-6212 3.6.4 MVP REL, 0, -10000 example without its address byte
+    (and so with checksum CCh - 01h)."""
+    rec = Instruction(4, 1, 0, -10000).encode()
+    assert rec == bytes.fromhex("040100FFFFD8F0CB")
+    assert rec[:7] == Request(1, 4, 1, 0, -10000).encode()[1:8]
+
+
+def test_decode_checks_length_and_checksums():
+    good = binfile.encode([Instruction(2, 0, 0, 51200), Instruction(28)])
+    assert binfile.decode(good) == [Instruction(2, 0, 0, 51200), Instruction(28, 0, 0, 0)]
+    with pytest.raises(BinFileError, match="multiple of 8"):
+        binfile.decode(good[:-1])
+    bad = good[:15] + bytes([good[15] ^ 1])
+    with pytest.raises(BinFileError, match="record 1 .*wrong checksum"):
+        binfile.decode(bad)
+    assert binfile.decode(bad, verify=False)[1].command == 28
+
+
+def test_field_ranges():
+    with pytest.raises(BinFileError, match="type"):
+        Instruction(4, 256, 0, 0).encode()
+
+
+def test_write_read(tmp_path):
+    path = tmp_path / "p.bin"
+    binfile.write(path, [Instruction(22, 0, 0, 0)])
+    assert path.read_bytes() == bytes.fromhex("1600000000000016")
+    assert binfile.read(path) == [Instruction(22, 0, 0, 0)]
+    assert [p.name for p in tmp_path.iterdir()] == ["p.bin"]  # no temporary file left behind

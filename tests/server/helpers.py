@@ -1,0 +1,68 @@
+"""Frames and helpers shared by the endpoint tests (all vectors from the manuals)."""
+from __future__ import annotations
+
+import socket
+import time
+import uuid
+
+from opentmcl.protocol.frame import Reply, Request
+
+# TMCM-6212 manual 3.6.8 example: GGP 66, 0 -> 01 0A 42 00 00 00 00 00 4D
+GGP_66 = bytes.fromhex("010A4200000000004D")
+# TMCM-6212 manual 3.6.7 example: SGP 66, 0, 3 -> 01 09 42 00 00 00 00 03 4F
+SGP_66_3 = bytes.fromhex("01094200000000034F")
+# TMCM-6212 manual 3.6.35 example: command 138 type 1, motors #0 and #2 -> checksum 91
+REQ_EVENT_0_2 = bytes.fromhex("018A0100000000 0591".replace(" ", ""))
+
+
+def reply(host: int, module: int, status: int, command: int, value: int) -> bytes:
+    """A reply frame as manual 3.2 lays it out (checksum per 3.1.1)."""
+    return Reply(host, module, status, command, value).encode()
+
+
+def request(address: int, command: int, type_: int = 0, motor: int = 0, value: int = 0) -> bytes:
+    return Request(address, command, type_, motor, value).encode()
+
+
+def recv_exactly(sock: socket.socket, n: int, timeout: float = 5.0) -> bytes:
+    """Read n bytes from a socket; returns what came if the peer closed or time ran out."""
+    deadline = time.monotonic() + timeout
+    buf = bytearray()
+    while len(buf) < n:
+        left = deadline - time.monotonic()
+        if left <= 0:
+            break
+        sock.settimeout(left)
+        try:
+            chunk = sock.recv(n - len(buf))
+        except TimeoutError:
+            break
+        if not chunk:
+            break
+        buf += chunk
+    return bytes(buf)
+
+
+def drain_socket(sock: socket.socket, quiet: float = 0.15) -> bytes:
+    """Read whatever arrives until the socket has been quiet for `quiet` seconds."""
+    buf = bytearray()
+    sock.settimeout(quiet)
+    while True:
+        try:
+            chunk = sock.recv(4096)
+        except TimeoutError:
+            return bytes(buf)
+        if not chunk:
+            return bytes(buf)
+        buf += chunk
+
+
+def unique_channel() -> str:
+    """A python-can virtual channel no other test uses."""
+    return f"opentmcl-test-{uuid.uuid4().hex[:12]}"
+
+
+def is_ok(frame: bytes, host: int, module: int, command: int) -> bool:
+    """A well-formed status-100 reply (manual 3.2) whose value is "don't care" (e.g. SGP)."""
+    return (len(frame) == 9 and frame[8] == sum(frame[:8]) & 0xFF
+            and tuple(frame[:4]) == (host, module, 100, command))

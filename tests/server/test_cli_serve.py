@@ -1,0 +1,233 @@
+"""`opentmcl serve` as a user runs it: a real process, real sockets, real signals."""
+import json
+import os
+import re
+import select
+import signal
+import socket
+import subprocess
+import sys
+import time
+
+import pytest
+
+from opentmcl.cli import CliError, main
+from opentmcl.cli.serve import assign_addresses, parse_hostport
+
+from .helpers import GGP_66, is_ok, recv_exactly, reply, request, unique_channel
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and ptys")
+
+
+class ServeProcess:
+    """`python -m opentmcl serve ...` with its announced endpoints."""
+
+    def __init__(self, *args):
+        self.proc = subprocess.Popen([sys.executable, "-m", "opentmcl", "serve", *args],
+                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        self.lines = []
+        deadline = time.monotonic() + 30
+        while not any(line.startswith("Press Ctrl-C") for line in self.lines):
+            line = self._readline(deadline)
+            if line is None:
+                self.kill()
+                raise AssertionError(f"server did not start: {self.lines} {self.proc.stderr.read()!r}")
+            self.lines.append(line)
+
+    def _readline(self, deadline):
+        buf = b""
+        while not buf.endswith(b"\n"):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            ready, _, _ = select.select([self.proc.stdout], [], [], left)
+            if not ready:
+                return None
+            ch = os.read(self.proc.stdout.fileno(), 1)
+            if not ch:
+                return None
+            buf += ch
+        return buf.decode().strip()
+
+    def endpoint(self, kind):
+        for line in self.lines:
+            if line.startswith(kind + " "):
+                return line.split()[1]
+        raise KeyError(kind)
+
+    def tcp_address(self):
+        m = re.match(r"tcp://([\d.]+):(\d+)", self.endpoint("tcp"))
+        return m.group(1), int(m.group(2))
+
+    def stop(self, sig=signal.SIGTERM):
+        self.proc.send_signal(sig)
+        try:
+            out, err = self.proc.communicate(timeout=20)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            raise
+        return self.proc.returncode, out.decode(), err.decode()
+
+    def kill(self):
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.communicate(timeout=20)
+
+
+@pytest.fixture
+def serve():
+    started = []
+
+    def start(*args):
+        p = ServeProcess(*args)
+        started.append(p)
+        return p
+
+    yield start
+    for p in started:
+        if p.proc.poll() is None:
+            p.kill()
+        else:
+            p.proc.communicate(timeout=20)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_serve_tcp_and_pty_then_clean_shutdown(serve, sig):
+    """The issue's command line: two modules on one bus, TCP and pty endpoints, printed
+    connection info; manual 3.6.8 GGP 66 example answered; SIGTERM/Ctrl-C exit cleanly."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--address", "1", "--module", "TMCM-6212", "--address", "4",
+              "--tcp", "127.0.0.1:0", "--pty")
+    with socket.create_connection(p.tcp_address(), timeout=5) as s:
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        s.sendall(request(4, 10, 66, 0))
+        assert recv_exactly(s, 9) == reply(2, 4, 100, 10, 4)
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+    code, out, err = p.stop(sig)
+    assert code == 0, err
+    assert "stopped" in out and "Traceback" not in err
+
+
+def test_eeprom_is_flushed_on_sigterm(serve, tmp_path):
+    """Manual 5.1: SGP on bank-0 parameters 64..127 stores them; after SIGTERM the EEPROM
+    file holds the value and a new server starts with it."""
+    ee = tmp_path / "ee.json"
+    p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--eeprom", str(ee))
+    with socket.create_connection(p.tcp_address(), timeout=5) as s:
+        s.sendall(request(1, 9, 75, 0, 12))  # SGP 75, 0, 12
+        assert is_ok(recv_exactly(s, 9), 2, 1, 9)  # SGP reply value: "don't care" (3.6.7)
+    assert p.stop()[0] == 0
+    json.loads(ee.read_text())
+    p2 = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--eeprom", str(ee))
+    with socket.create_connection(p2.tcp_address(), timeout=5) as s:
+        s.sendall(request(1, 10, 75, 0))
+        assert recv_exactly(s, 9, timeout=5) == reply(2, 1, 100, 10, 12)
+    assert p2.stop()[0] == 0
+
+
+def test_sigkill_during_eeprom_writes_leaves_a_readable_file(serve, tmp_path):
+    """DESIGN.md "Errors and bad input": the EEPROM is written atomically, so SIGKILL in the
+    middle of a stream of auto-stored SGP writes (manual 5.1) never leaves a torn file."""
+    from opentmcl import VirtualModule
+
+    ee = tmp_path / "ee.json"
+    for round_ in range(3):
+        p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--eeprom", str(ee))
+        with socket.create_connection(p.tcp_address(), timeout=5) as s:
+            for i in range(40 + 17 * round_):
+                s.sendall(request(1, 9, 75, 0, i % 200))
+                if i < 30:
+                    assert len(recv_exactly(s, 9)) == 9
+            p.proc.send_signal(signal.SIGKILL)
+        p.proc.communicate(timeout=20)
+        vm = VirtualModule("TMCM-6212", eeprom=ee)  # must load without error
+        assert 0 <= vm.request(10, 75, 0).value < 200
+
+
+def test_non_loopback_needs_host_flag(capsys):
+    """Safety: TCP binds to loopback unless --host is given."""
+    code = main(["serve", "--module", "TMCM-6212", "--tcp", "0.0.0.0:0"])
+    assert code == 2
+    assert "--host" in capsys.readouterr().err
+
+
+def test_host_flag_warns(serve):
+    p = serve("--module", "TMCM-6212", "--tcp", "0", "--host", "0.0.0.0")
+    code, _, err = p.stop()
+    assert code == 0 and "warning" in err
+
+
+def test_unknown_module_is_a_one_line_error(capsys):
+    code = main(["serve", "--module", "TMCM-9999", "--tcp", "127.0.0.1:0"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "TMCM-9999" in err
+
+
+def test_bad_can_spec_and_busy_port(capsys):
+    assert main(["serve", "--module", "TMCM-6212", "--can", "virtual"]) == 2
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen(1)
+        port = busy.getsockname()[1]
+        assert main(["serve", "--module", "TMCM-6212", "--tcp", f"127.0.0.1:{port}"]) == 2
+    assert "cannot start" in capsys.readouterr().err
+
+
+def test_parse_hostport():
+    assert parse_hostport("2323") == (None, 2323)
+    assert parse_hostport("127.0.0.1:0") == ("127.0.0.1", 0)
+    assert parse_hostport("[::1]:5") == ("::1", 5)
+    for bad in ("x", "1:99999", "[::1]5"):
+        with pytest.raises(CliError):
+            parse_hostport(bad)
+
+
+def test_assign_addresses():
+    """Several modules on one bus need distinct addresses (manual 5.1 GP66 range 1..255)."""
+    assert assign_addresses(3, [1]) == [1, 2, 3]
+    assert assign_addresses(2, [2]) == [2, 1]
+    with pytest.raises(CliError):
+        assign_addresses(2, [3, 3])
+    with pytest.raises(CliError):
+        assign_addresses(1, [1, 2])
+
+
+def test_several_modules_get_distinct_can_ids(serve):
+    """Manual 5.1 GP71 "The module (target) address for CAN" (default 1): with two modules
+    on one CAN bus, the printed connection lines give each its own ID."""
+    p = serve("--module", "TMCM-6212", "--address", "1", "--module", "TMCM-6212", "--address", "5",
+              "--can", f"virtual:{unique_channel()}")
+    assert [line.rsplit("?", 1)[1] for line in p.lines if line.startswith("can ")] == [
+        "id=1&reply_id=2", "id=5&reply_id=2"]
+    assert p.stop()[0] == 0
+
+
+def test_build_server_assigns_can_ids_in_ram(tmp_path):
+    """The same rule in-process, exercised on python-can's virtual bus: ID 3 reaches the
+    module at address 3, ID 1 the other; the EEPROM file is not written."""
+    import can
+
+    from opentmcl.cli import build_parser
+    from opentmcl.cli.serve import build_server
+
+    channel = unique_channel()
+    args = build_parser().parse_args(["serve", "--module", "TMCM-6212", "--module", "TMCM-6212",
+                                      "--address", "3", "--eeprom", str(tmp_path / "a.json"),
+                                      "--can", f"virtual:{channel}"])
+    server = build_server(args)
+    server.start()
+    host = can.Bus(interface="virtual", channel=channel)
+    try:
+        for can_id, address in ((3, 3), (1, 1)):
+            host.send(can.Message(arbitration_id=can_id, data=GGP_66[1:8], is_extended_id=False))
+            msg = host.recv(5)
+            assert msg is not None and bytes(msg.data) == bytes([address, 100, 10, 0, 0, 0, address])
+    finally:
+        host.shutdown()
+        server.stop()
+    assert not (tmp_path / "a.json").exists()

@@ -1,0 +1,112 @@
+"""pty endpoint: the bus appears as a serial port that pyserial opens."""
+import os
+import sys
+import time
+
+import pytest
+import serial
+
+from opentmcl import VirtualModule
+from opentmcl.host.errors import TmclConnectionError, TmclTimeout
+from opentmcl.host.transports.serial import SerialTransport, open_serial
+from opentmcl.server import PtyServer, Server
+
+from .conftest import GAP
+from .helpers import GGP_66, reply, request
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals need POSIX")
+
+
+@pytest.fixture
+def pty_server(tmp_path):
+    server = Server([VirtualModule("TMCM-6212", address=1), VirtualModule("TMCM-6212", address=2)])
+    pty = server.add(PtyServer(server.bus, link=tmp_path / "tmcm", gap=GAP))
+    server.start()
+    try:
+        yield server, pty
+    finally:
+        server.stop()
+
+
+def test_pyserial_talks_to_the_pty(pty_server):
+    """Manual 3.6.8 GGP 66, 0 example through a real pseudo-terminal opened by pyserial."""
+    _, pty = pty_server
+    assert os.path.exists(pty.path)
+    with serial.Serial(pty.path, 9600, timeout=5) as port:
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+        port.write(request(2, 10, 66, 0))  # the second module on the same bus
+        assert port.read(9) == reply(2, 2, 100, 10, 2)
+
+
+def test_symlink_points_at_the_pty_and_goes_away(tmp_path):
+    """--link PATH: a stable name for the port, removed at shutdown."""
+    server = Server([VirtualModule("TMCM-6212", address=1)])
+    pty = server.add(PtyServer(server.bus, link=tmp_path / "port", gap=GAP))
+    server.start()
+    try:
+        assert os.readlink(tmp_path / "port") == pty.path
+        with serial.Serial(str(tmp_path / "port"), timeout=5) as port:
+            port.write(GGP_66)
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+    finally:
+        server.stop()
+    assert not os.path.lexists(tmp_path / "port")
+
+
+def test_link_never_replaces_a_regular_file(tmp_path):
+    target = tmp_path / "precious"
+    target.write_text("keep me")
+    server = Server([VirtualModule("TMCM-6212", address=1)])
+    server.add(PtyServer(server.bus, link=target))
+    with pytest.raises(FileExistsError):
+        server.start()
+    server.stop()
+    assert target.read_text() == "keep me"
+
+
+def test_reopening_the_port_works(pty_server):
+    """Clients may open and close the port repeatedly (the server holds the slave open)."""
+    _, pty = pty_server
+    for _ in range(3):
+        with serial.Serial(pty.path, timeout=5) as port:
+            port.write(GGP_66)
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+def test_truncated_frame_resynchronises_on_the_pty(pty_server):
+    """A truncated command followed by a pause never wedges the port."""
+    _, pty = pty_server
+    with serial.Serial(pty.path, timeout=5) as port:
+        port.write(GGP_66[:4])
+        port.flush()
+        time.sleep(GAP * 3)
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+def test_serial_transport_over_pty(pty_server):
+    """Host transport serial:///dev/pts/N?baud=9600 (9600 = GP65 default, manual 5.1)."""
+    import urllib.parse
+
+    _, pty = pty_server
+    t = open_serial(urllib.parse.urlsplit(f"serial://{pty.path}?baud=9600"))
+    try:
+        t.send(GGP_66)
+        assert t.recv(9, 5) == reply(2, 1, 100, 10, 1)
+        t.send(request(7, 10, 66, 0))
+        with pytest.raises(TmclTimeout):
+            t.recv(9, 0.2)
+    finally:
+        t.close()
+        t.close()
+
+
+def test_serial_transport_errors(tmp_path):
+    import urllib.parse
+
+    with pytest.raises(TmclConnectionError):
+        SerialTransport(str(tmp_path / "no-such-port"))
+    for url in ("serial://", "serial:///dev/x?baud=fast", "serial:///dev/x?baud=0"):
+        with pytest.raises(TmclConnectionError):
+            open_serial(urllib.parse.urlsplit(url))

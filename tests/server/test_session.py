@@ -1,0 +1,76 @@
+"""SerialSession: telegram pause (GP75) and byte pacing at the RS485 baud rate (GP65)."""
+import pytest
+
+from opentmcl import VirtualModule
+from opentmcl.server.bus import ModuleBus
+from opentmcl.server.session import SerialSession, byte_time
+
+from .helpers import GGP_66, reply, request
+
+
+class FakeTime:
+    """A clock whose sleep() just moves time forward, recording each sleep."""
+
+    def __init__(self):
+        self.t = 0.0
+        self.sleeps = []
+
+    def clock(self):
+        return self.t
+
+    def sleep(self, s):
+        self.sleeps.append(s)
+        self.t += s
+
+
+def make(pace=False):
+    ft = FakeTime()
+    writes = []
+    bus = ModuleBus([VirtualModule("TMCM-6212", address=1)], clock=ft.clock)
+    session = SerialSession(bus, lambda b: writes.append((ft.t, bytes(b))), gap=0.1,
+                            pace_bytes=pace, clock=ft.clock, sleep=ft.sleep)
+    return ft, writes, session
+
+
+def test_reply_is_written_without_pause_by_default():
+    """Manual 5.1 GP75 (default 0): no pause before the reply of GGP 66, 0 (3.6.8 example)."""
+    ft, writes, session = make()
+    assert session.receive(GGP_66) == 1
+    assert writes == [(0.0, reply(2, 1, 100, 10, 1))]
+    assert ft.sleeps == []
+
+
+def test_telegram_pause_gp75_delays_the_reply():
+    """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent" (units: ms,
+    docs/notes/endpoints.md); PD86-1180 manual 7.4 suggests SGP 75, 0, 15."""
+    ft, writes, session = make()
+    session.receive(request(1, 9, 75, 0, 15))  # SGP 75, 0, 15
+    writes.clear()
+    ft.sleeps.clear()
+    start = ft.t
+    session.receive(GGP_66)
+    assert ft.sleeps == [pytest.approx(0.015)]
+    assert writes == [(pytest.approx(start + 0.015), reply(2, 1, 100, 10, 1))]
+
+
+def test_byte_pacing_follows_gp65_baud_rate():
+    """Manual 5.1 GP65: 0 = 9600 baud (default), 7 = 115200. With pacing the nine reply
+    bytes leave one every 10 bit times (8N1)."""
+    ft, writes, session = make(pace=True)
+    session.receive(GGP_66)
+    assert b"".join(w for _, w in writes) == reply(2, 1, 100, 10, 1)
+    assert len(writes) == 9
+    assert ft.t == pytest.approx(9 * byte_time(9600))
+    assert byte_time(9600) == pytest.approx(10 / 9600)
+    session.receive(request(1, 9, 65, 0, 7))  # SGP 65, 0, 7 -> 115200 baud
+    writes.clear()
+    start = ft.t
+    session.receive(GGP_66)
+    assert ft.t - start == pytest.approx(9 * 10 / 115200)
+
+
+def test_frames_for_other_addresses_produce_no_bytes():
+    """Manual 5.1 GP66: a module answers only its own address; others are ignored."""
+    _, writes, session = make()
+    session.receive(request(4, 10, 66, 0))
+    assert writes == []

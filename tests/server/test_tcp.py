@@ -1,0 +1,154 @@
+"""TCP endpoint and TCP host transport: raw 9-byte frames over a socket."""
+import socket
+import time
+import urllib.parse
+
+import pytest
+
+from opentmcl.host.errors import TmclConnectionError, TmclTimeout
+from opentmcl.host.transports.tcp import TcpTransport, open_tcp
+from opentmcl.server.tcp import TcpServer, is_loopback
+
+from .conftest import GAP
+from .helpers import GGP_66, REQ_EVENT_0_2, SGP_66_3, drain_socket, is_ok, recv_exactly, reply, request
+
+
+def connect(tcp):
+    return socket.create_connection(tcp.address, timeout=5)
+
+
+def test_manual_example_over_tcp(tcp_server):
+    """Manual 3.6.8 GGP 66, 0 example sent as raw bytes, as an Ethernet-to-serial
+    converter carries them; the reply is the 9-byte frame of manual 3.2."""
+    _, tcp = tcp_server
+    with connect(tcp) as s:
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+
+
+def test_transport_roundtrip_and_url(tcp_server):
+    """Manual 3.6.7 SGP 66, 0, 3 example then GGP 66 at the new address 3."""
+    _, tcp = tcp_server
+    host, port = tcp.address
+    t = open_tcp(urllib.parse.urlsplit(f"tcp://{host}:{port}"))
+    try:
+        t.send(SGP_66_3)
+        got = t.recv(9, 5)
+        assert got[2:4] == bytes([100, 9])  # status 100 for SGP; the value is "don't care" (3.6.7)
+        t.send(request(3, 10, 66, 0))
+        assert t.recv(9, 5) == reply(2, 3, 100, 10, 3)
+    finally:
+        t.close()
+        t.close()  # idempotent
+
+
+def test_garbage_and_truncated_frame_resynchronise_after_gap(tcp_server):
+    """A truncated command and garbage never wedge the port: after an inter-byte gap the
+    next well-formed request (manual 3.6.8 example) gets its reply."""
+    _, tcp = tcp_server
+    with connect(tcp) as s:
+        s.sendall(GGP_66[:5])
+        time.sleep(GAP * 3)
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        s.sendall(b"\x00\x13\x37")
+        time.sleep(GAP * 3)
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+
+
+def test_wrong_checksum_answers_status_1(tcp_server):
+    """Manual 3.2.1 status 1 "Wrong checksum"."""
+    _, tcp = tcp_server
+    with connect(tcp) as s:
+        s.sendall(GGP_66[:8] + b"\x00")
+        got = recv_exactly(s, 9)
+        assert got[:3] == bytes([2, 1, 1])
+
+
+def test_other_address_is_ignored_silently(tcp_server):
+    """Manual 5.1 GP66: frames for other addresses get no reply at all."""
+    _, tcp = tcp_server
+    with connect(tcp) as s:
+        s.sendall(request(2, 10, 66, 0))
+        assert drain_socket(s, 0.3) == b""
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+
+
+def test_position_reached_event_reaches_the_tcp_client(tcp_server):
+    """Manual 3.6.35: command 138 then MVP; the additional reply (status 128, motor mask)
+    follows when the motor arrives, in real time."""
+    _, tcp = tcp_server
+    with connect(tcp) as s:
+        s.sendall(REQ_EVENT_0_2)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 138, 5)
+        s.sendall(request(1, 4, 0, 0, 100))  # MVP ABS, 0, 100: a short move
+        assert is_ok(recv_exactly(s, 9), 2, 1, 4)  # MVP reply value: "don't care" (3.6.4)
+        assert recv_exactly(s, 9, timeout=10) == reply(2, 1, 128, 138, 1)
+
+
+def test_bounded_number_of_clients(tcp_server):
+    """Safety (docs/endpoints.md): at most max_clients at once; a further client is closed."""
+    _, tcp = tcp_server
+    with connect(tcp) as a, connect(tcp) as b:
+        for s in (a, b):
+            s.sendall(GGP_66)
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        with connect(tcp) as c:
+            c.settimeout(5)
+            assert c.recv(9) == b""
+    # a slot frees when a client leaves
+    deadline = time.monotonic() + 5
+    while tcp.client_count and time.monotonic() < deadline:
+        time.sleep(0.01)
+    with connect(tcp) as d:
+        d.sendall(GGP_66)
+        assert recv_exactly(d, 9) == reply(2, 1, 100, 10, 1)
+
+
+def test_loopback_detection():
+    assert is_loopback("127.0.0.1") and is_loopback("::1") and is_loopback("localhost")
+    assert not is_loopback("0.0.0.0") and not is_loopback("192.168.1.2")
+
+
+def test_default_bind_is_loopback():
+    """Safety: a TcpServer binds 127.0.0.1 unless told otherwise."""
+    assert TcpServer(bus=None).host == "127.0.0.1"
+
+
+def test_transport_errors_are_typed(tcp_server):
+    """Host transport: connection refused -> TmclConnectionError; silence -> TmclTimeout."""
+    _, tcp = tcp_server
+    free = socket.socket()
+    free.bind(("127.0.0.1", 0))
+    port = free.getsockname()[1]
+    free.close()
+    with pytest.raises(TmclConnectionError):
+        TcpTransport("127.0.0.1", port, connect_timeout=2)
+    t = TcpTransport(*tcp.address)
+    try:
+        t.send(request(9, 10, 66, 0))  # nobody at address 9
+        with pytest.raises(TmclTimeout):
+            t.recv(9, 0.2)
+    finally:
+        t.close()
+    with pytest.raises(TmclConnectionError):
+        t.send(GGP_66)
+
+
+def test_transport_reports_server_going_away(tcp_server):
+    server, tcp = tcp_server
+    t = TcpTransport(*tcp.address)
+    try:
+        server.stop()
+        with pytest.raises(TmclConnectionError):
+            t.recv(9, 5)
+    finally:
+        t.close()
+
+
+@pytest.mark.parametrize("url", ["tcp://", "tcp://host", "tcp://127.0.0.1:99999", "tcp://h:1?connect_timeout=x"])
+def test_bad_tcp_urls(url):
+    with pytest.raises(TmclConnectionError):
+        open_tcp(urllib.parse.urlsplit(url))

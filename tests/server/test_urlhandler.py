@@ -1,0 +1,99 @@
+"""pyserial URL handler: serial.serial_for_url("opentmcl://TMCM-6212")."""
+import time
+
+import pytest
+import serial
+
+import opentmcl.urlhandler  # noqa: F401  (registers the opentmcl:// scheme)
+from opentmcl.urlhandler.protocol_opentmcl import parse_url
+
+from .helpers import GGP_66, REQ_EVENT_0_2, is_ok, reply, request
+
+
+def test_registration_is_idempotent():
+    opentmcl.urlhandler.register()
+    opentmcl.urlhandler.register()
+    assert serial.protocol_handler_packages.count("opentmcl.urlhandler") == 1
+
+
+def test_manual_example_through_serial_for_url():
+    """Manual 3.6.8 GGP 66, 0 through any pyserial-based code path."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+        assert port.in_waiting == 0
+
+
+def test_several_modules_on_one_port():
+    """Two modules on one bus, each answering its GP66 address (manual 5.1)."""
+    with serial.serial_for_url("opentmcl://TMCM-6212@1,TMCM-6212@5", timeout=2) as port:
+        port.write(request(5, 10, 66, 0))
+        assert port.read(9) == reply(2, 5, 100, 10, 5)
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+        assert len(port.modules) == 2
+
+
+def test_read_times_out_with_fewer_bytes():
+    """pyserial semantics: read() returns what arrived when the timeout expires."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=0.1) as port:
+        port.write(request(9, 10, 66, 0))  # nobody at address 9
+        assert port.read(9) == b""
+
+
+def test_modules_run_in_real_time_and_send_events():
+    """Manual 3.6.35: after 138 and MVP the "target position reached" reply arrives once
+    the motor is there; time passes with the wall clock."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=10) as port:
+        port.write(REQ_EVENT_0_2)
+        assert port.read(9) == reply(2, 1, 100, 138, 5)
+        port.write(request(1, 4, 0, 0, 100))  # MVP ABS, 0, 100
+        assert is_ok(port.read(9), 2, 1, 4)  # MVP reply value: "don't care" (3.6.4)
+        assert port.read(9) == reply(2, 1, 128, 138, 1)
+
+
+def test_telegram_pause_delays_readability():
+    """Manual 5.1 GP75: the reply is sent after the pause (ms, docs/notes/endpoints.md)."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
+        port.write(request(1, 9, 75, 0, 200))  # SGP 75, 0, 200
+        port.read(9)
+        port.write(GGP_66)
+        assert port.in_waiting == 0
+        t0 = time.monotonic()
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+        assert time.monotonic() - t0 >= 0.15
+
+
+def test_eeprom_file_is_flushed_on_close(tmp_path):
+    """Manual 5.1: bank-0 parameters 64..127 are stored automatically by SGP; the EEPROM
+    file keeps them for the next power-up."""
+    url = f"opentmcl://TMCM-6212?eeprom={tmp_path / 'ee.json'}"
+    with serial.serial_for_url(url, timeout=2) as port:
+        port.write(request(1, 9, 75, 0, 7))  # SGP 75, 0, 7
+        assert is_ok(port.read(9), 2, 1, 9)  # SGP reply value: "don't care" (3.6.7)
+    with serial.serial_for_url(url, timeout=2) as port:
+        port.write(request(1, 10, 75, 0))
+        assert port.read(9) == reply(2, 1, 100, 10, 7)
+
+
+@pytest.mark.parametrize("url", ["opentmcl://", "opentmcl://NO-SUCH-MODULE", "opentmcl://TMCM-6212@x",
+                                 "opentmcl://TMCM-6212@1,TMCM-6212@1", "opentmcl://TMCM-6212?color=red",
+                                 "opentmcl://TMCM-6212@300"])
+def test_bad_urls_raise_serial_exception(url):
+    with pytest.raises(serial.SerialException):
+        serial.serial_for_url(url)
+
+
+def test_parse_url():
+    opts = parse_url("opentmcl://TMCM-6212@3,TMCM-6212?gap=0.5&pace=1")
+    assert opts["modules"] == [("TMCM-6212", 3), ("TMCM-6212", 2)]
+    assert opts["gap"] == 0.5 and opts["pace"] is True
+
+
+def test_closed_port_raises():
+    port = serial.serial_for_url("opentmcl://TMCM-6212")
+    port.close()
+    with pytest.raises(serial.PortNotOpenError):
+        port.write(GGP_66)
+    with pytest.raises(serial.PortNotOpenError):
+        port.read(1)
