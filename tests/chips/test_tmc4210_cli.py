@@ -111,3 +111,14 @@ def test_homing_example_finds_the_switch_centre(capsys):
     assert "X_ACTUAL  -401: REF_L inactive" in out and "X_ACTUAL  -400: REF_L active" in out
     assert "X_ACTUAL     0: REF_L active" in out
     assert "X_ACTUAL   400: REF_L active" in out and "X_ACTUAL   401: REF_L inactive" in out
+
+
+def test_trace_until(tmp_path, capsys):
+    """Script `until`: advance until a register condition holds, an error when it never does."""
+    script = tmp_path / "u.txt"
+    script.write_text("write RAMP_MODE 3\nwrite V_ACTUAL 2047\nuntil X_ACTUAL >= 5000 1\n")
+    rc, out, _ = run(capsys, "trace", str(script))
+    assert rc == 0 and "# end at t = 0.011000 s" in out  # 499.75 steps per ms (6.1.12.1)
+    script.write_text("until X_ACTUAL == 5 0.5\n")
+    rc, _, err = run(capsys, "trace", str(script))
+    assert rc == 2 and "u.txt:1" in err and "not reached within 0.5 s" in err

@@ -182,3 +182,12 @@ def test_garbage_lengths_are_ignored(m6212):
     for junk in (b"", b"\x01", b"\x01" * 8, b"\x01" * 10):
         assert m6212.vm.handle(junk) == b""
     assert m6212.ok(6, 1, 0) == 0
+
+
+def test_position_reached_event_for_a_move_to_where_the_motor_is(m6212):
+    """TMCM-6212 3.6.35: the additional reply is sent "when the motor has reached its target position" —
+    also when the MVP asks for the position the motor already has."""
+    m6212.ok(138, 0, 0, 1)
+    m6212.ok(4, 0, 0, 0)
+    m6212.vm.advance(0.001)
+    assert [Reply.decode(e).value for e in m6212.vm.drain_events()] == [1]

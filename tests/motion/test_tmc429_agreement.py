@@ -193,3 +193,20 @@ def test_long_move_is_cheap_and_exact():
     assert events <= 8
     ref.advance(fast.now)
     assert state(fast) == state(ref)
+
+
+@pytest.mark.parametrize("pulse_div,ramp_div", [(0, 0), (3, 1), (1, 4)])
+def test_oracle_itself_follows_the_datasheet_formulas(pulse_div, ramp_div):
+    """TMC4210 datasheet 6.1.12.1: the oracle's step rate is f_CLK * v / (2^PULSE_DIV *
+    2048 * 32) and its velocity grows by A_MAX/256 per ramp-clock tick of
+    32 * 2^RAMP_DIV cycles (so that agreement with it means agreement with the datasheet)."""
+    r = ReferenceRamp()
+    r.set(mode=HOLD_MODE, pulse_div=pulse_div, ramp_div=ramp_div)
+    r.set(v_actual=700)
+    pulse_ticks = 3000
+    r.advance(pulse_ticks * 32 * 2**pulse_div)
+    assert r.x_actual == pulse_ticks * 700 // 2048
+    r = ReferenceRamp()
+    r.set(mode=VELOCITY_MODE, pulse_div=pulse_div, ramp_div=ramp_div, v_max=2047, a_max=77, v_target=-2047)
+    r.advance(50 * 32 * 2**ramp_div)
+    assert r.v == -50 * 77

@@ -5,8 +5,10 @@ import urllib.parse
 
 import pytest
 
+from opentmcl import VirtualModule
 from opentmcl.host.errors import TmclConnectionError, TmclTimeout
 from opentmcl.host.transports.tcp import TcpTransport, open_tcp
+from opentmcl.server import Server
 from opentmcl.server.tcp import TcpServer, is_loopback
 
 from .conftest import GAP
@@ -152,3 +154,28 @@ def test_transport_reports_server_going_away(tcp_server):
 def test_bad_tcp_urls(url):
     with pytest.raises(TmclConnectionError):
         open_tcp(urllib.parse.urlsplit(url))
+
+
+class FaultyModule(VirtualModule):
+    """A module with a bug: it raises on command 200 instead of answering status 2."""
+
+    def handle(self, frame):
+        if len(frame) == 9 and frame[1] == 200:
+            raise RuntimeError("simulated firmware bug")
+        return super().handle(frame)
+
+
+def test_a_module_bug_does_not_kill_the_endpoint():
+    """DESIGN.md "Errors and bad input": the server never dies; the link keeps answering
+    well-formed requests (manual 3.6.8 example) after a frame that made the module raise."""
+    server = Server([FaultyModule("TMCM-6212", address=1)])
+    tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0, gap=GAP))
+    server.start()
+    try:
+        with connect(tcp) as s:
+            s.sendall(request(1, 200))
+            assert drain_socket(s, 0.2) == b""
+            s.sendall(GGP_66)
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+    finally:
+        server.stop()

@@ -11,7 +11,7 @@ import argparse
 import importlib
 import sys
 
-COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug"]
+COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard"]
 
 
 class CliError(Exception):

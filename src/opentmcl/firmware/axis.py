@@ -39,6 +39,7 @@ class Axis:
         self.last_target = 0
         self.error_flags = 0
         self.reference_search_active = False
+        self.world = None  # set by VirtualModule (firmware/world.py)
         self._configure_all()
 
     # --- units --------------------------------------------------------------
@@ -86,6 +87,10 @@ class Axis:
         p = self.param(number)
         if not p.readable:
             raise TmclStatus(3)
+        if number in self.world.axis_numbers:
+            world = self.world.read_axis(self, number)
+            if world is not None:
+                return world
         e = self.engine
         if number == 0:
             return e.target_position
@@ -107,6 +112,8 @@ class Axis:
         if not p.writable:
             raise TmclStatus(3)
         self.check_value(p, value)
+        if self.world.write_axis(self, number, value):
+            return
         if number == 0:
             self.move_to(value)
         elif number == 1:

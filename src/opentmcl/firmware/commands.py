@@ -22,6 +22,7 @@ Handler = Callable[["VirtualModule", int, int, int, bool], Result]
 KNOWN_OPCODES = frozenset([*range(1, 58), *range(64, 72), *range(128, 140)])
 NO_SUPPRESS = frozenset({6, 10, 15})  # GP255 never suppresses GAP, GGP, GIO
 OK = int(Status.OK)
+_NOT_AVAILABLE, _INVALID_COMMAND = int(Status.NOT_AVAILABLE), int(Status.INVALID_COMMAND)
 
 
 def _axis(vm: VirtualModule, motor: int):

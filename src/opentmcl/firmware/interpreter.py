@@ -99,7 +99,7 @@ class Interpreter:
                 candidates.append(now + 1)
         elif status == RUNNING and self.next_time is not None:
             candidates.append(self.next_time)
-        timer = vm.interrupts.next_timer_event(now)
+        timer = vm.interrupts.next_timer_event(now, refresh=False)
         if timer is not None:
             candidates.append(timer)
         if not candidates:

@@ -27,6 +27,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
+from .program import RUNNING, STEPPING
 from .status import TmclStatus
 
 if TYPE_CHECKING:
@@ -47,7 +48,8 @@ class Interrupts:
         self.global_enable = False
         self.pending: set[int] = set()
         self.active: int | None = None          # number of the interrupt being handled
-        self._timers: dict[int, tuple[int, int | None]] = {}  # n -> (period ms, next tick)
+        self._periods: list[int | None] = [None] * len(TIMERS)  # period (ms) last seen per timer
+        self._due: list[int | None] = [None] * len(TIMERS)      # next expiry tick per timer
         self._levels: dict[int, int] = {}       # last sampled level of edge sources
 
     # --- EI / DI / VECT ---------------------------------------------------------------
@@ -82,7 +84,6 @@ class Interrupts:
     # --- occurrence ------------------------------------------------------------------
     def accepting(self, number: int) -> bool:
         """Would an occurrence of `number` be latched now?"""
-        from .program import RUNNING, STEPPING
         return (self.global_enable and number in self.enabled and number in self.vectors
                 and self.vm.application_status in (RUNNING, STEPPING))
 
@@ -102,31 +103,32 @@ class Interrupts:
         return min(ready) if ready else None
 
     # --- timers ----------------------------------------------------------------------
-    def _timer(self, n: int, now: int) -> int | None:
-        """Next expiry tick of timer n, re-phased when its period changed."""
-        period = self.vm.globals.ram.get((3, n), 0) & 0xFFFFFFFF
-        cached = self._timers.get(n)
-        if cached is None or cached[0] != period:
-            cached = (period, now + period * TICKS_PER_MS if period else None)
-            self._timers[n] = cached
-        return cached[1]
+    def _refresh_timers(self, now: int) -> None:
+        """Re-phase a timer whose period (bank 3, parameter n) was written since the last look."""
+        ram = self.vm.globals.ram
+        for n in TIMERS:
+            period = ram.get((3, n), 0) & 0xFFFFFFFF
+            if period != self._periods[n]:
+                self._periods[n] = period
+                self._due[n] = now + period * TICKS_PER_MS if period else None
 
     def _run_timers(self, now: int) -> None:
         for n in TIMERS:
-            due = self._timer(n, now)
+            due = self._due[n]
             if due is None or due > now:
                 continue
-            step = self._timers[n][0] * TICKS_PER_MS
-            periods = (now - due) // step + 1
-            self._timers[n] = (self._timers[n][0], due + periods * step)
+            step = self._periods[n] * TICKS_PER_MS
+            self._due[n] = due + ((now - due) // step + 1) * step
             self.trigger(n)
 
-    def next_timer_event(self, now: int) -> int | None:
+    def next_timer_event(self, now: int, refresh: bool = True) -> int | None:
         """Earliest expiry of a timer whose interrupt would be latched."""
+        if refresh:
+            self._refresh_timers(now)
         best = None
         for n in TIMERS:
-            due = self._timer(n, now)
-            if due is not None and self.accepting(n) and (best is None or due < best):
+            due = self._due[n]
+            if due is not None and (best is None or due < best) and self.accepting(n):
                 best = due
         return best
 
@@ -167,6 +169,7 @@ class Interrupts:
 
     def poll(self, now: int) -> None:
         """Latch what occurred up to tick `now` (timers, level transitions)."""
+        self._refresh_timers(now)
         self._run_timers(now)
         if self.enabled and self.global_enable:
             self._sample_levels()

@@ -11,10 +11,11 @@ never steps in small increments.
 from __future__ import annotations
 
 import os
+import struct
 
 from ..modules.profile import ModuleProfile, load_profile
 from ..motion import CLOCK_HZ
-from ..protocol.frame import FRAME_LEN, Reply, checksum, to_int32
+from ..protocol.frame import FRAME_LEN, Reply, Request, to_int32
 from ..protocol.status import Status
 from .axis import Axis
 from .commands import COMMANDS, NO_SUPPRESS, execute
@@ -25,8 +26,13 @@ from .interrupts import Interrupts
 from .io import IOBanks
 from .program import ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
+from .world import World
 
 TICKS_PER_MS = CLOCK_HZ // 1000
+_REQUEST = struct.Struct(">BBBBiB")
+_REPLY = struct.Struct(">BBBBi")
+_ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
+_OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 
 
 class VirtualModule:
@@ -35,11 +41,13 @@ class VirtualModule:
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
                  eeprom: str | os.PathLike | None = None, scenario=None) -> None:
         self.profile: ModuleProfile = load_profile(name)
+        self.opcodes = self.profile.opcodes
         self.eeprom = Eeprom(eeprom, module=self.profile.name)
         self._address_override = address
         self.scenario = scenario
         self.now = 0
         self._events: list[bytes] = []
+        self.world = World(self, scenario)
         self.power_up()
 
     # --- power-up / reset ---------------------------------------------------
@@ -88,52 +96,65 @@ class VirtualModule:
         self._heartbeat_fired = False
         self._engines_dirty = True
         self._engine_next: int | None = None
+        self._axis_next: list[int | None] = [None] * len(self.axes)
+        self._synced_at = -1
+        for ax in self.axes:
+            ax.world = self.world
+        self.world.power_up()
         self.interpreter.power_up()
 
     # --- addressing -------------------------------------------------------------
     @property
     def address(self) -> int:
-        return self.globals.get_raw(0, 66)
+        return self.globals.ram.get(_ADDRESS, 0)
 
     @property
     def host_address(self) -> int:
-        return self.globals.get_raw(0, 76)
+        return self.globals.ram.get(_HOST, 0)
 
     def accepts_address(self, address: int) -> bool:
         """RS485 module address GP66 or secondary address GP87 (0 = off)."""
-        secondary = self.globals.get_raw(0, 87)
-        return address == self.address or (secondary != 0 and address == secondary)
+        ram = self.globals.ram
+        if address == ram.get(_ADDRESS, 0):
+            return True
+        secondary = ram.get(_SECONDARY, 0)
+        return secondary != 0 and address == secondary
 
     # --- wire interface -------------------------------------------------------
     def handle(self, frame: bytes) -> bytes:
         """Process one 9-byte request; return the reply bytes (b"" when no reply is due)."""
-        if len(frame) != FRAME_LEN or not self.accepts_address(frame[0]):
+        if len(frame) != FRAME_LEN:
             return b""
-        command = frame[1]
-        if checksum(frame[:8]) != frame[8]:
-            return self._reply(Status.WRONG_CHECKSUM, command, 0)
-        self.touch()
-        address = self.address  # a reply comes from the address the request went to, even after SGP 66
-        value = int.from_bytes(frame[4:8], "big", signed=True)
-        out = execute(self, command, frame[2], frame[3], value, program=False)
+        target, command, type_, motor, value, check = _REQUEST.unpack(frame)
+        ram = self.globals.ram
+        address = ram.get(_ADDRESS, 0)  # replies come from the address the request went to, even after SGP 66
+        if target != address and (target != ram.get(_SECONDARY, 0) or not target):
+            return b""
+        if sum(frame[:8]) & 0xFF != check:
+            return self._reply(_WRONG_CHECKSUM, command, 0, address)
+        self._last_command = self.now  # heartbeat (GP68 / GP82) restarts
+        self._heartbeat_fired = False
+        out = execute(self, command, type_, motor, value, program=False)
         if out is None:  # no reply (command 137)
             return b""
-        if isinstance(out, bytes):  # special reply format (136 type 0, 134)
+        if out.__class__ is bytes:  # special reply format (136 type 0, 134)
             return out
         status, result = out
-        if status == Status.OK and self.globals.get_raw(0, 255) == 1 and command not in NO_SUPPRESS:
+        if status == _OK and command not in NO_SUPPRESS and self.globals.ram.get(_SUPPRESS) == 1:
             return b""
         return self._reply(status, command, result, address)
 
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0) -> Reply | None:
         """Convenience for tests and tools: encode, handle, decode."""
-        from ..protocol.frame import Request
         raw = self.handle(Request(self.address, command, type, motor, value).encode())
         return Reply.decode(raw, verify=False) if len(raw) == FRAME_LEN else None
 
     def _reply(self, status: int, command: int, value: int, address: int | None = None) -> bytes:
         module = self.address if address is None else address
-        return Reply(self.host_address, module, int(status), command, to_int32(value)).encode()
+        if not -0x8000_0000 <= value <= 0x7FFF_FFFF:
+            value = to_int32(value)
+        body = _REPLY.pack(self.host_address & 0xFF, module & 0xFF, status, command, value)
+        return body + bytes((sum(body) & 0xFF,))
 
     def touch(self) -> None:
         """A command arrived: restart the heartbeat (GP68 serial / GP82 CAN)."""
@@ -159,30 +180,57 @@ class VirtualModule:
     def advance_to(self, until: int) -> None:
         """Advance to absolute tick `until`, stopping at every event on the way.
 
-        Engines are advanced lazily: only at their own events, before a
-        command touches them (`sync`) and at the end."""
+        Engines are advanced lazily: each only at its own events, before a
+        command touches them (`sync`) and at the end. A lagging engine's flags
+        (position reached, mode) cannot change before its next event."""
         self.horizon = until  # the interpreter may run pure instructions ahead up to here
         while self.now < until:
             nxt = self._next_event(until)
             self.now = nxt
             if nxt == self._engine_next:
-                self.sync()
+                self._engine_step(nxt)
+            self.world.service()
             self._after_step()
             self.interpreter.service()
         self.sync()
 
+    def _engine_step(self, now: int) -> None:
+        """Advance the engines whose event is due now; report arrivals (command 138)."""
+        times = self._axis_next
+        for i, t in enumerate(times):
+            if t == now:
+                engine = self.axes[i].engine
+                engine.advance(now)
+                times[i] = engine.next_event()
+                if self._armed >> i & 1:
+                    self._report_arrival(i)
+        self._engine_next = min((t for t in times if t is not None), default=None)
+
+    def _report_arrival(self, i: int) -> None:
+        if self.axes[i].engine.position_reached:
+            self._armed &= ~(1 << i)
+            self._events.append(Reply(self.host_address, self.address, Status.POSITION_REACHED_EVENT,
+                                      138, 1 << i).encode())
+
     def sync(self) -> None:
-        """Bring every axis engine to `now` (before reading or commanding it)."""
+        """Bring every axis engine to `now` (before reading or commanding it); their next
+        events are looked up again afterwards, since a command may change them."""
         now = self.now
-        for ax in self.axes:
-            if ax.engine.now < now:
-                ax.engine.advance(now)
+        if self._synced_at != now:
+            for ax in self.axes:
+                if ax.engine.now < now:
+                    ax.engine.advance(now)
+            self._synced_at = now
         self._engines_dirty = True
 
     def _engine_event(self) -> int | None:
         if self._engines_dirty:
-            times = [t for ax in self.axes if (t := ax.engine.next_event()) is not None]
-            self._engine_next = min(times) if times else None
+            self._axis_next = [ax.engine.next_event() for ax in self.axes]
+            if self._armed:  # a command may have reached its target at once (MVP to where it is)
+                for i in range(len(self.axes)):
+                    if self._armed >> i & 1:
+                        self._report_arrival(i)
+            self._engine_next = min((t for t in self._axis_next if t is not None), default=None)
             self._engines_dirty = False
         return self._engine_next
 
@@ -194,10 +242,15 @@ class VirtualModule:
         hb = self._heartbeat_deadline()
         if hb is not None and self.now < hb < nxt:
             nxt = hb
-        t = self.interpreter.next_event()
-        if t is not None and self.now < t < nxt:
-            nxt = t
+        for t in (self.interpreter.next_event(), self.world.next_event()):
+            if t is not None and self.now < t < nxt:
+                nxt = t
         return nxt
+
+    def next_event_in(self) -> float | None:
+        """Seconds until the next internal event (engine, heartbeat, program, world), or None."""
+        nxt = self._next_event(self.now + 2**62)
+        return None if nxt == self.now + 2**62 else (nxt - self.now) / CLOCK_HZ
 
     def _heartbeat_deadline(self) -> int | None:
         ms = self.globals.get_raw(0, 68)
@@ -206,13 +259,6 @@ class VirtualModule:
         return self._last_command + ms * TICKS_PER_MS
 
     def _after_step(self) -> None:
-        if self._armed and self.now == self._engine_next:
-            for ax in self.axes:
-                bit = 1 << ax.index
-                if self._armed & bit and ax.engine.position_reached:
-                    self._armed &= ~bit
-                    self._events.append(Reply(self.host_address, self.address, Status.POSITION_REACHED_EVENT,
-                                              138, bit).encode())
         hb = self._heartbeat_deadline()
         if hb is not None and self.now >= hb:
             self._heartbeat_fired = True

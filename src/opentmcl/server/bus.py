@@ -19,6 +19,7 @@ module was last addressed.
 from __future__ import annotations
 
 import inspect
+import logging
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -174,6 +175,7 @@ class RealTimeRunner:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.errors: list[BaseException] = []
+        self.failures = 0
 
     def start(self) -> None:
         self._thread = threading.Thread(target=self._run, name="opentmcl-clock", daemon=True)
@@ -185,6 +187,9 @@ class RealTimeRunner:
                 for channel, vm, event in self.bus.poll():
                     channel.deliver(vm, event)
             except Exception as exc:  # keep time running; record for diagnostics
+                self.failures += 1
+                if self.failures <= 3:  # do not flood the log at the tick rate
+                    logging.getLogger("opentmcl.server").exception("clock thread")
                 self.errors.append(exc)
                 del self.errors[:-10]
 

@@ -12,9 +12,12 @@ Frames with extended identifiers, remote and error frames are ignored.
 """
 from __future__ import annotations
 
+import logging
 import threading
 
 from . import canmap, vmapi
+
+log = logging.getLogger("opentmcl.server")
 
 POLL = 0.2
 
@@ -63,7 +66,12 @@ class CanServer:
                 continue
             if msg is None or msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id:
                 continue
-            for _vm, reply_id, payload in self.bus.can_request(msg.arbitration_id, bytes(msg.data), self):
+            try:
+                replies = self.bus.can_request(msg.arbitration_id, bytes(msg.data), self)
+            except Exception:  # a module bug must not stop the endpoint
+                log.exception("module failed on CAN frame %03x %s", msg.arbitration_id, bytes(msg.data).hex(" "))
+                continue
+            for _vm, reply_id, payload in replies:
                 self._send(reply_id, payload)
 
     def _send(self, reply_id: int, payload: bytes) -> None:

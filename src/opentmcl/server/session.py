@@ -16,12 +16,15 @@ The session owns no thread; the endpoint that reads the link calls `receive`.
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable
 
 from . import vmapi
 from .framer import DEFAULT_GAP, SerialFramer
+
+log = logging.getLogger("opentmcl.server")
 
 BITS_PER_BYTE = 10
 """Start bit, eight data bits, stop bit (8N1)."""
@@ -50,10 +53,19 @@ class SerialSession:
         self.closed = False
 
     def receive(self, data: bytes, now: float | None = None) -> int:
-        """Handle bytes read from the link; return the number of frames processed."""
+        """Handle bytes read from the link; return the number of frames processed.
+
+        A module that raises on a frame (a bug: modules answer bad input with a
+        status code) is logged and the frame gets no reply; the link lives on.
+        """
         frames = self.framer.feed(data, self._clock() if now is None else now)
         for frame in frames:
-            for vm, reply in self.bus.request(frame, self):
+            try:
+                replies = self.bus.request(frame, self)
+            except Exception:
+                log.exception("module failed on frame %s", frame.hex(" "))
+                continue
+            for vm, reply in replies:
                 self.send_reply(vm, reply)
         return len(frames)
 

@@ -7,13 +7,15 @@ A script is plain text, one command per line, `#` starts a comment:
     read X_ACTUAL
     advance 0.25               seconds of virtual time (suffixes s, ms, us allowed)
     inputs ref_l=1 gp_in=0     drive the input pins
-    until X_ACTUAL == 1000 10  advance until a register equals a value (give up after 10 s)
+    until X_ACTUAL >= 1000 10  advance in 1 ms slices until the condition holds (==, !=, <, <=,
+                               >, >=); an error after 10 s (default 60 s)
 
 A `.py` file instead must define `main(chip)`; it is run against a traced chip.
 """
 from __future__ import annotations
 
 import importlib.util
+import operator
 import re
 import shlex
 from collections.abc import Callable
@@ -42,6 +44,8 @@ def parse_int(text: str) -> int:
         raise ScriptError(f"not a number: {text!r}") from None
 
 
+_OPS = {"==": operator.eq, "!=": operator.ne, ">=": operator.ge, "<=": operator.le,
+        ">": operator.gt, "<": operator.lt}
 _TIME = re.compile(r"^([0-9]*\.?[0-9]+(?:e-?[0-9]+)?)(s|ms|us)?$")
 
 
@@ -84,10 +88,12 @@ def run_line(chip: TMC4210, line: str) -> None:
                     raise ScriptError(f"inputs takes ref_l=, ref_r=, gp_in=, got {a!r}")
                 levels[name] = parse_int(value)
             chip.set_inputs(**levels)
-        elif cmd == "until" and len(args) in (3, 4) and args[1] == "==":
-            want = parse_int(args[2])
+        elif cmd == "until" and len(args) in (3, 4) and args[1] in _OPS:
+            want, test = parse_int(args[2]), _OPS[args[1]]
             limit = parse_seconds(args[3]) if len(args) == 4 else 60.0
-            run_until(chip, lambda: chip.peek(args[0]) == want, limit)
+            chip.peek(args[0])  # unknown names fail before any time passes
+            if not run_until(chip, lambda: test(chip.peek(args[0]), want), limit):
+                raise ScriptError(f"{args[0]} {args[1]} {want} not reached within {limit:g} s")
         else:
             raise ScriptError(f"cannot understand {line.strip()!r}")
     except ChipError as exc:

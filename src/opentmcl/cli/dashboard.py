@@ -1,0 +1,94 @@
+"""`opentmcl dashboard --to URL`: the browser dashboard for a module reached through the host library.
+
+    opentmcl dashboard --to serial:///dev/ttyUSB0?baud=9600 --web 127.0.0.1:8080
+    opentmcl dashboard --to tcp://127.0.0.1:2323
+    opentmcl dashboard --to sim://TMCM-6212          # a virtual module in this process, on the wall clock
+
+Open the printed URL in a browser. For modules served by `opentmcl serve`, `serve --web` gives the
+same page without a second process. Ctrl-C stops it. See docs/dashboard.md.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import signal
+import threading
+import urllib.parse
+
+from . import CliError
+
+DEFAULT_WEB = "127.0.0.1:8080"
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("dashboard", help="serve the browser dashboard for a module at URL",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--to", dest="url", default=os.environ.get("OPENTMCL_URL"),
+                   help="module URL (sim://, tcp://, serial://, can://; default $OPENTMCL_URL)")
+    p.add_argument("--address", type=int, default=None, help="module address (default 1)")
+    p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
+    p.add_argument("--web", default=DEFAULT_WEB, metavar="HOST:PORT",
+                   help=f"where to serve the page (default {DEFAULT_WEB}; loopback unless you say otherwise)")
+    p.set_defaults(func=run)
+
+
+def sim_url_real_time(url: str) -> str:
+    """A sim:// module has no clock of its own: run it on the wall clock unless the URL says otherwise."""
+    parts = urllib.parse.urlsplit(url)
+    if parts.scheme.lower() != "sim":
+        return url
+    query = dict(urllib.parse.parse_qsl(parts.query))
+    query.setdefault("clock", "real")
+    return urllib.parse.urlunsplit(parts._replace(query=urllib.parse.urlencode(query)))
+
+
+def parse_web(text: str) -> tuple[str, int]:
+    from .serve import parse_hostport
+
+    host, port = parse_hostport(text)
+    return host or "127.0.0.1", port
+
+
+def wait_for_signal() -> None:
+    stop = threading.Event()
+    previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        while not stop.wait(0.5):
+            pass
+    finally:
+        for s, h in previous.items():
+            signal.signal(s, h)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..host import TmclError, connect
+    from ..host.transports.inprocess import InProcessTransport
+
+    if not args.url:
+        raise CliError("give the module URL with --to (or set $OPENTMCL_URL)")
+    host, port = parse_web(args.web)
+    try:
+        from ..web.server import DashboardStartError, start_dashboard
+    except ImportError as exc:
+        raise CliError(f"the dashboard needs the web extra (pip install 'opentmcl[web]'): {exc}") from None
+    url = sim_url_real_time(args.url)
+    try:
+        module = connect(url, address=args.address, timeout=args.timeout)
+        _ = module.profile
+    except TmclError as exc:
+        raise CliError(str(exc)) from None
+    transport = module.client.transport
+    vm = transport.module if isinstance(transport, InProcessTransport) else None
+    lock = transport.lock if vm is not None else None
+    try:
+        handle = start_dashboard(module, host, port, vm=vm, vm_lock=lock, url=args.url, on_stop=module.close)
+    except DashboardStartError as exc:
+        module.close()
+        raise CliError(str(exc)) from None
+    print(f"OpenTMCL dashboard for {module.profile.name} at {args.url}: {handle.url}", flush=True)
+    print("Press Ctrl-C to stop.", flush=True)
+    try:
+        wait_for_signal()
+    finally:
+        handle.stop()
+    return 0

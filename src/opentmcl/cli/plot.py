@@ -1,0 +1,130 @@
+"""`opentmcl plot FILE -o out.png`: plot position, velocity, acceleration, load, current and switches.
+
+FILE is a TMCL program (.tmc source or .bin), run on an in-process virtual module in virtual
+time (or, with --to URL, on that module in real time); a trace recorded earlier (.csv); or a
+scenario file for the virtual module (any other name). The output format follows the name
+(.png or .svg); --csv also saves the trace. Examples:
+
+    opentmcl plot examples/tmcm6212_2.4_first_program.tmc -o first.png --seconds 15
+    opentmcl plot move.tmc --axes 0,1 --rpm -o move.svg --csv move.csv
+    opentmcl plot move.csv -o move.png --channels position,velocity
+"""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from . import CliError
+
+PROGRAM_SUFFIXES = (".tmc", ".bin")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("plot", help="plot axis motion over time from a virtual run or a CSV trace",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("file", metavar="PROGRAM_OR_SCENARIO", help=".tmc/.bin program, .csv trace or scenario file")
+    p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
+    p.add_argument("--axes", default="0", help="comma-separated axis numbers (default 0)")
+    p.add_argument("--channels", help="comma-separated panels: position, velocity, acceleration, load, "
+                   "current, switches (default all the module has)")
+    p.add_argument("-t", "--seconds", type=float, default=10.0, help="record at most this long (default 10)")
+    p.add_argument("--interval", type=float, default=0.01, help="seconds between samples (default 0.01)")
+    p.add_argument("-m", "--module", default=None, help="virtual module type (default TMCM-6212)")
+    p.add_argument("--scenario", help="scenario file for the virtual module (with a program)")
+    p.add_argument("--to", dest="url", help="record on this module instead of a virtual one (real time)")
+    p.add_argument("--address", type=int, default=1, help="module address (default 1)")
+    p.add_argument("--rpm", action="store_true", help="velocity in rpm instead of pps")
+    p.add_argument("--csv", help="also save the recorded trace to this CSV file")
+    p.add_argument("--title", help="figure title")
+    p.add_argument("--keep-going", action="store_true",
+                   help="record the full --seconds even after the program stopped and the axes are idle")
+    p.set_defaults(func=run)
+
+
+def _axes(text: str) -> list[int]:
+    try:
+        axes = [int(a) for a in text.split(",") if a.strip()]
+    except ValueError:
+        raise CliError(f"--axes must be numbers separated by commas, got {text!r}") from None
+    if not axes or any(a < 0 for a in axes):
+        raise CliError("--axes needs at least one axis number >= 0")
+    return sorted(set(axes))
+
+
+def _record(args, axes):
+    from ..host import TmclError, UnknownParameterError
+    from ..plot import run_virtual
+    from .load import read_program
+    from .run import _scenario
+
+    path = Path(args.file)
+    is_program = path.suffix.lower() in PROGRAM_SUFFIXES
+    scenario_path = args.scenario if is_program else args.file
+    if args.url:
+        if not is_program:
+            raise CliError("with --to, FILE must be a .tmc or .bin program")
+        return _record_remote(args, axes)
+    module = args.module or "TMCM-6212"
+    scenario = _scenario(scenario_path)
+    program = read_program(args.file, module).instructions if is_program else None
+    try:
+        return run_virtual(program, module=module, axes=axes, seconds=args.seconds, interval=args.interval,
+                           scenario=scenario, address=args.address, stop_when_idle=not args.keep_going)
+    except KeyError as exc:
+        raise CliError(str(exc.args[0] if exc.args else exc)) from None
+    except (UnknownParameterError, TmclError) as exc:
+        raise CliError(str(exc)) from None
+
+
+def _record_remote(args, axes):
+    from ..host import TmclError, connect
+    from ..host.loader import Loader
+    from ..plot import record
+    from ..plot.virtual import _stopped
+    from .load import module_name, read_program
+
+    try:
+        m = connect(args.url, address=args.address)
+    except TmclError as exc:
+        raise CliError(str(exc)) from None
+    try:
+        program = read_program(args.file, module_name(m, args.module))
+        loader = Loader(m)
+        loader.download(program.instructions)
+        loader.run(0)
+        until = None if args.keep_going else _stopped(m, loader, axes)
+        return record(m, axes, args.seconds, args.interval, until=until)
+    except TmclError as exc:
+        raise CliError(str(exc)) from None
+    finally:
+        m.close()
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..plot import DEFAULT_CHANNELS, Trace, TraceError, render
+
+    if not args.interval > 0 or not args.seconds >= 0:
+        raise CliError("--interval must be > 0 and --seconds >= 0")
+    if Path(args.output).suffix.lower() not in (".png", ".svg"):
+        raise CliError(f"cannot write {args.output}: use a .png or .svg file name")
+    axes = _axes(args.axes)
+    channels = [c.strip() for c in args.channels.split(",") if c.strip()] if args.channels else DEFAULT_CHANNELS
+    try:
+        if Path(args.file).suffix.lower() == ".csv":
+            trace = Trace.from_csv(args.file)
+            if args.axes != "0" and not set(axes) <= set(trace.axes):
+                raise CliError(f"axes {axes} not all in the trace (it has {trace.axes})")
+            if args.axes != "0":
+                trace.axes = axes
+        else:
+            trace = _record(args, axes)
+        if args.csv:
+            trace.to_csv(args.csv)
+        render(trace, args.output, channels=channels, rpm=args.rpm, title=args.title)
+    except TraceError as exc:
+        raise CliError(str(exc)) from None
+    except ImportError as exc:
+        raise CliError(f"plotting needs matplotlib (pip install 'opentmcl[plot]'): {exc}") from None
+    print(f"wrote {args.output} ({len(trace)} samples, {trace.time[-1] if len(trace) else 0:.2f} s, "
+          f"axes {', '.join(map(str, trace.axes))})")
+    return 0

@@ -1,0 +1,246 @@
+"""Scenario files: the physical world of a virtual module as data (docs/scenarios.md).
+
+    load_scenario("stage.toml")         # TOML (or YAML with PyYAML installed)
+    load_scenario({"axis": {"0": {...}}})
+
+returns a `Scenario`. Malformed input raises `ScenarioError` with the key at fault.
+"""
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .stage import Load, Profile, Stage, Switch, home_switch, left_switch, right_switch
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+SWITCH_NAMES = ("left", "right", "home")
+
+
+class ScenarioError(ValueError):
+    """A scenario file or dict does not follow docs/scenarios.md."""
+
+
+@dataclass
+class AxisSpec:
+    stage: Stage = field(default_factory=Stage)
+    load: Load = field(default_factory=Load)
+    encoder_counts: int | None = None        # physical encoder counts per motor round
+    fullsteps_per_round: int = 200
+    force: dict[str, int] = field(default_factory=dict)
+    torque_falloff_speed: float | None = None  # pps at which the available torque reaches 0
+    driver_flags: Profile | None = None       # AP208 bits over time (seconds)
+
+
+@dataclass
+class InputSpec:
+    bank: int
+    port: int
+    signal: Profile
+
+
+@dataclass
+class Scenario:
+    module: str | None = None
+    axes: dict[int, AxisSpec] = field(default_factory=dict)
+    inputs: list[InputSpec] = field(default_factory=list)
+    shutdown: Profile | None = None
+
+    def axis(self, index: int) -> AxisSpec:
+        return self.axes.get(index) or AxisSpec()
+
+
+# --- parsing ---------------------------------------------------------------------------------
+def _int(value, where: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise ScenarioError(f"{where}: expected an integer, got {value!r}")
+    return value
+
+
+def _num(value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ScenarioError(f"{where}: expected a number, got {value!r}")
+    return float(value)
+
+
+def _table(value, where: str) -> dict:
+    if not isinstance(value, dict):
+        raise ScenarioError(f"{where}: expected a table, got {value!r}")
+    return value
+
+
+def _known(d: dict, keys: set[str], where: str) -> None:
+    extra = set(d) - keys
+    if extra:
+        raise ScenarioError(f"{where}: unknown key(s) {', '.join(sorted(map(str, extra)))}")
+
+
+def parse_profile(value, where: str) -> Profile:
+    """A number, or {steps = [[x, v], ...]} / {ramp = [[x, v], ...]} (optionally `before`)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return Profile.constant(float(value))
+    d = _table(value, where)
+    _known(d, {"steps", "ramp", "before", "by", "value"}, where)
+    if "value" in d:
+        return Profile.constant(_num(d["value"], f"{where}.value"))
+    kinds = [k for k in ("steps", "ramp") if k in d]
+    if len(kinds) != 1:
+        raise ScenarioError(f"{where}: give exactly one of 'value', 'steps' or 'ramp'")
+    kind = kinds[0]
+    pts = d[kind]
+    if not isinstance(pts, list) or not pts:
+        raise ScenarioError(f"{where}.{kind}: expected a list of [x, value] pairs")
+    out = []
+    for i, pt in enumerate(pts):
+        if not isinstance(pt, (list, tuple)) or len(pt) != 2:
+            raise ScenarioError(f"{where}.{kind}[{i}]: expected [x, value]")
+        out.append((_num(pt[0], f"{where}.{kind}[{i}]"), _num(pt[1], f"{where}.{kind}[{i}]")))
+    return Profile(out, kind, _num(d.get("before", 0), f"{where}.before"))
+
+
+def _switch(name: str, d, where: str) -> Switch:
+    d = _table(d, where)
+    _known(d, {"position", "width", "hysteresis"}, where)
+    if "position" not in d:
+        raise ScenarioError(f"{where}: 'position' is required")
+    pos = _int(d["position"], f"{where}.position")
+    width = d.get("width")
+    width = None if width is None else _int(width, f"{where}.width")
+    hyst = _int(d.get("hysteresis", 0), f"{where}.hysteresis")
+    if (width is not None and width < 0) or hyst < 0:
+        raise ScenarioError(f"{where}: width and hysteresis must not be negative")
+    if name == "left":
+        return left_switch(pos, width, hyst)
+    if name == "right":
+        return right_switch(pos, width, hyst)
+    if width is None:
+        raise ScenarioError(f"{where}: the home switch needs a 'width'")
+    return home_switch(pos, width, hyst)
+
+
+AXIS_KEYS = {"type", "start", "steps_per_turn", "ends", "load", "encoder", "fullsteps_per_round", "force",
+             "torque_falloff_speed", "driver_flags", "index", *SWITCH_NAMES}
+
+
+def parse_axis(d, where: str) -> AxisSpec:
+    d = _table(d, where)
+    _known(d, AXIS_KEYS, where)
+    kind = d.get("type", "linear")
+    if kind not in ("linear", "circular"):
+        raise ScenarioError(f"{where}.type: 'linear' or 'circular', got {kind!r}")
+    spec = AxisSpec()
+    st = spec.stage
+    st.start = _int(d.get("start", 0), f"{where}.start")
+    if kind == "circular":
+        if "steps_per_turn" not in d:
+            raise ScenarioError(f"{where}: a circular axis needs 'steps_per_turn'")
+        st.steps_per_turn = _int(d["steps_per_turn"], f"{where}.steps_per_turn")
+        if st.steps_per_turn <= 0:
+            raise ScenarioError(f"{where}.steps_per_turn must be positive")
+        if "left" in d or "right" in d or "ends" in d:
+            raise ScenarioError(f"{where}: a circular axis has a home switch only")
+    for name in SWITCH_NAMES:
+        if name in d:
+            setattr(st, name, _switch(name, d[name], f"{where}.{name}"))
+    if "ends" in d:
+        ends = d["ends"]
+        if not isinstance(ends, list) or len(ends) != 2:
+            raise ScenarioError(f"{where}.ends: expected [left end, right end]")
+        st.ends = tuple(None if e is None else _int(e, f"{where}.ends") for e in ends)  # type: ignore[assignment]
+    if "load" in d:
+        by = d["load"].get("by", "position") if isinstance(d["load"], dict) else "position"
+        if by not in ("position", "time"):
+            raise ScenarioError(f"{where}.load.by: 'position' or 'time', got {by!r}")
+        spec.load = Load(parse_profile(d["load"], f"{where}.load"), by)
+    if "encoder" in d:
+        enc = _table(d["encoder"], f"{where}.encoder")
+        _known(enc, {"counts_per_round"}, f"{where}.encoder")
+        if "counts_per_round" in enc:
+            spec.encoder_counts = _int(enc["counts_per_round"], f"{where}.encoder.counts_per_round")
+            if spec.encoder_counts <= 0:
+                raise ScenarioError(f"{where}.encoder.counts_per_round must be positive")
+    spec.fullsteps_per_round = _int(d.get("fullsteps_per_round", 200), f"{where}.fullsteps_per_round")
+    if spec.fullsteps_per_round <= 0:
+        raise ScenarioError(f"{where}.fullsteps_per_round must be positive")
+    if "force" in d:
+        force = _table(d["force"], f"{where}.force")
+        _known(force, set(SWITCH_NAMES), f"{where}.force")
+        spec.force = {k: _int(v, f"{where}.force.{k}") for k, v in force.items()}
+    if "torque_falloff_speed" in d:
+        spec.torque_falloff_speed = _num(d["torque_falloff_speed"], f"{where}.torque_falloff_speed")
+        if spec.torque_falloff_speed <= 0:
+            raise ScenarioError(f"{where}.torque_falloff_speed must be positive")
+    if "driver_flags" in d:
+        spec.driver_flags = parse_profile(d["driver_flags"], f"{where}.driver_flags")
+    return spec
+
+
+def parse_scenario(data: dict) -> Scenario:
+    d = _table(data, "scenario")
+    _known(d, {"module", "axis", "input", "shutdown", "description"}, "scenario")
+    sc = Scenario(module=d.get("module"))
+    axes = d.get("axis", {})
+    if isinstance(axes, list):
+        items = [(a.get("index", i) if isinstance(a, dict) else i, a) for i, a in enumerate(axes)]
+    else:
+        items = list(_table(axes, "axis").items())
+    for key, spec in items:
+        try:
+            index = int(key)
+        except (TypeError, ValueError):
+            raise ScenarioError(f"axis.{key}: axis keys are axis numbers") from None
+        if index < 0:
+            raise ScenarioError(f"axis.{key}: negative axis number")
+        sc.axes[index] = parse_axis(spec, f"axis.{key}")
+    inputs = d.get("input", [])
+    if not isinstance(inputs, list):
+        raise ScenarioError("input: expected a list of tables ([[input]])")
+    for i, item in enumerate(inputs):
+        where = f"input[{i}]"
+        item = _table(item, where)
+        _known(item, {"bank", "port", "value", "steps", "ramp", "before"}, where)
+        if "bank" not in item or "port" not in item:
+            raise ScenarioError(f"{where}: 'bank' and 'port' are required")
+        sig = {k: v for k, v in item.items() if k not in ("bank", "port")}
+        sc.inputs.append(InputSpec(_int(item["bank"], f"{where}.bank"), _int(item["port"], f"{where}.port"),
+                                   parse_profile(sig, where)))
+    if "shutdown" in d:
+        sc.shutdown = parse_profile(d["shutdown"], "shutdown")
+    return sc
+
+
+def load_scenario(source) -> Scenario:
+    """A Scenario from a path (.toml, .yaml/.yml), a dict, a Scenario, or None (empty world)."""
+    if source is None:
+        return Scenario()
+    if isinstance(source, Scenario):
+        return source
+    if isinstance(source, dict):
+        return parse_scenario(source)
+    if not isinstance(source, (str, os.PathLike)):
+        raise ScenarioError(f"a scenario is a file path or a dict, not {type(source).__name__}")
+    path = Path(source)
+    try:
+        text = path.read_bytes()
+    except OSError as exc:
+        raise ScenarioError(f"cannot read scenario {path}: {exc.strerror or exc}") from None
+    if path.suffix.lower() in (".yaml", ".yml"):
+        try:
+            import yaml  # type: ignore[import-untyped]
+        except ImportError:
+            raise ScenarioError("YAML scenarios need PyYAML (pip install pyyaml); TOML works without") from None
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise ScenarioError(f"{path}: {exc}") from None
+    else:
+        try:
+            data = tomllib.loads(text.decode("utf-8"))
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise ScenarioError(f"{path}: {exc}") from None
+    return parse_scenario(data if data is not None else {})

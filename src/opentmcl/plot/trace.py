@@ -1,0 +1,236 @@
+"""Traces: axis quantities sampled over time from any module, saved as CSV.
+
+    trace = record(module, axes=[0], seconds=5, interval=0.01)
+    trace.to_csv("run.csv"); Trace.from_csv("run.csv").column(0, "velocity")
+
+Every sample reads, per axis, through the host library (so the same code works on a
+real module): actual position (axis parameter 1, µsteps), actual speed (3), position
+reached (8), home / right / left switch (9, 10, 11), actual load value (206) and the
+actual motor current (180, "smartEnergy actual current"); the names are those of the
+TMCM-6212 manual 4.1 / PD86-1180 manual 5. Velocities are stored in pps: on TMC429
+modules (PD86-1180) the internal velocity is converted with the pulse divisor
+(axis parameter 154, PD86-1180 manual 5). Acceleration is derived from velocity.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass, field
+
+# channel -> (axis parameter number, unit). position/velocity are always recorded.
+CHANNELS: dict[str, tuple[int | None, str]] = {
+    "position": (1, "µsteps"),
+    "velocity": (3, "pps"),
+    "acceleration": (None, "pps²"),
+    "target_reached": (8, ""),
+    "home_switch": (9, ""),
+    "right_switch": (10, ""),
+    "left_switch": (11, ""),
+    "load": (206, ""),
+    "current": (180, ""),
+}
+RECORDED = tuple(c for c, (num, _) in CHANNELS.items() if num is not None)
+SWITCHES = ("target_reached", "home_switch", "right_switch", "left_switch")
+
+
+class TraceError(ValueError):
+    """A trace file that cannot be read, or a channel/axis that is not in the trace."""
+
+
+@dataclass
+class Trace:
+    """Samples over time: ``time`` (seconds) and, per (axis, channel), one value per sample.
+    A channel the module does not have holds None."""
+
+    axes: list[int]
+    time: list[float] = field(default_factory=list)
+    data: dict[tuple[int, str], list[float | None]] = field(default_factory=dict)
+    module: str = ""
+    microsteps: dict[int, tuple[int, int]] = field(default_factory=dict)  # axis -> (usteps/fullstep, fullsteps/rev)
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    def add(self, t: float, values: dict[tuple[int, str], float | None]) -> None:
+        self.time.append(float(t))
+        for ax in self.axes:
+            for ch in RECORDED:
+                self.data.setdefault((ax, ch), []).append(values.get((ax, ch)))
+
+    def column(self, axis: int, channel: str) -> list[float | None]:
+        """The values of one channel; acceleration is the difference quotient of velocity."""
+        if axis not in self.axes:
+            raise TraceError(f"axis {axis} is not in this trace (axes {self.axes})")
+        if channel == "acceleration":
+            return derivative(self.time, self.column(axis, "velocity"))
+        if channel not in CHANNELS:
+            raise TraceError(f"unknown channel {channel!r}; channels: {', '.join(CHANNELS)}")
+        return list(self.data.get((axis, channel), [None] * len(self.time)))
+
+    def has(self, axis: int, channel: str) -> bool:
+        if channel == "acceleration":
+            channel = "velocity"
+        return any(v is not None for v in self.data.get((axis, channel), ()))
+
+    def rpm(self, axis: int) -> list[float | None]:
+        """Velocity in revolutions per minute: pps / (microsteps per full step * full steps per turn) * 60."""
+        usteps, fullsteps = self.microsteps.get(axis, (256, 200))
+        return [None if v is None else v * 60.0 / (usteps * fullsteps) for v in self.column(axis, "velocity")]
+
+    # --- CSV -------------------------------------------------------------------------
+    def to_csv(self, target: str | os.PathLike | io.TextIOBase) -> None:
+        """Columns ``time_s`` then ``<channel>_<axis>`` for every recorded channel."""
+        header = ["time_s"] + [f"{ch}_{ax}" for ax in self.axes for ch in RECORDED]
+        rows = []
+        for i, t in enumerate(self.time):
+            row = [f"{t:.6f}"]
+            for ax in self.axes:
+                for ch in RECORDED:
+                    v = self.data[(ax, ch)][i]
+                    row.append("" if v is None else _fmt(v))
+            rows.append(row)
+        meta = [f"# module={self.module}"] + [f"# microsteps_{ax}={u},{f}" for ax, (u, f) in self.microsteps.items()]
+        if isinstance(target, io.TextIOBase):
+            _write(target, meta, header, rows)
+            return
+        with open(target, "w", newline="", encoding="utf-8") as fh:
+            _write(fh, meta, header, rows)
+
+    @classmethod
+    def from_csv(cls, source: str | os.PathLike | io.TextIOBase) -> Trace:
+        """Read a trace written by `to_csv` (or any CSV with ``time_s`` and ``position_N`` columns)."""
+        if isinstance(source, io.TextIOBase):
+            text = source.read()
+        else:
+            try:
+                with open(source, encoding="utf-8") as fh:
+                    text = fh.read()
+            except OSError as exc:
+                raise TraceError(f"cannot read {source}: {exc.strerror or exc}") from None
+        return _parse_csv(text)
+
+
+def _fmt(v: float) -> str:
+    return str(int(v)) if float(v).is_integer() else f"{v:.6g}"
+
+
+def _write(fh, meta, header, rows) -> None:
+    for line in meta:
+        fh.write(line + "\n")
+    w = csv.writer(fh, lineterminator="\n")
+    w.writerow(header)
+    w.writerows(rows)
+
+
+def _parse_csv(text: str) -> Trace:
+    module, micro = "", {}
+    lines = []
+    for line in text.splitlines():
+        if line.startswith("#"):
+            key, _, value = line[1:].strip().partition("=")
+            if key == "module":
+                module = value
+            elif key.startswith("microsteps_"):
+                try:
+                    u, f = (int(x) for x in value.split(","))
+                    micro[int(key.split("_")[1])] = (u, f)
+                except ValueError:
+                    raise TraceError(f"bad trace metadata line {line!r}") from None
+        elif line.strip():
+            lines.append(line)
+    rows = list(csv.reader(lines))
+    if not rows or not rows[0] or rows[0][0] != "time_s":
+        raise TraceError("not a trace: the first column must be time_s")
+    header = rows[0]
+    columns: dict[tuple[int, str], int] = {}
+    for i, name in enumerate(header[1:], start=1):
+        ch, _, ax = name.rpartition("_")
+        if ch not in RECORDED or not ax.isdigit():
+            raise TraceError(f"unknown trace column {name!r}")
+        columns[(int(ax), ch)] = i
+    axes = sorted({ax for ax, _ in columns})
+    if not axes:
+        raise TraceError("the trace has no axis columns")
+    trace = Trace(axes, module=module, microsteps=micro)
+    for n, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise TraceError(f"trace row {n} has {len(row)} fields, expected {len(header)}")
+        try:
+            t = float(row[0])
+            values = {key: (float(row[i]) if row[i] != "" else None) for key, i in columns.items()}
+        except ValueError:
+            raise TraceError(f"trace row {n}: not a number") from None
+        trace.add(t, values)
+    return trace
+
+
+def derivative(t: list[float], v: list[float | None]) -> list[float | None]:
+    """Backward difference quotient; None at the first sample and across gaps."""
+    out: list[float | None] = [None] * len(v)
+    for i in range(1, len(v)):
+        a, b, dt = v[i - 1], v[i], t[i] - t[i - 1]
+        if a is not None and b is not None and dt > 0:
+            out[i] = (b - a) / dt
+    return out
+
+
+# --- recording through the host library -------------------------------------------------
+
+class Sampler:
+    """Reads one sample of the chosen axes of a host `Module`; channels the profile lacks give None."""
+
+    def __init__(self, module, axes: list[int]):
+        self.module = module
+        self.axes = list(axes)
+        prof = module.profile
+        for ax in self.axes:
+            module.axis(ax)  # UnknownParameterError for an axis the module does not have
+        self.params = {ch: num for ch, (num, _) in CHANNELS.items()
+                       if num is not None and num in prof.axis_parameters}
+        self.tmc429 = prof.engine == "tmc429"
+        self.pulse_div: dict[int, int] = {}
+        self.microsteps: dict[int, tuple[int, int]] = {}
+        for ax in self.axes:
+            axis = module.axis(ax)
+            if self.tmc429 and 154 in prof.axis_parameters:
+                self.pulse_div[ax] = axis.get(154)
+            usteps = 1 << axis.microstep_resolution() if 140 in prof.axis_parameters else 256
+            self.microsteps[ax] = (usteps, axis.fullstep_resolution())
+
+    def sample(self) -> dict[tuple[int, str], float | None]:
+        from ..host import TmclStatusError
+        from ..host.units import tmc429_velocity_to_pps
+
+        out: dict[tuple[int, str], float | None] = {}
+        for ax in self.axes:
+            axis = self.module.axis(ax)
+            for ch, num in self.params.items():
+                try:
+                    value: float | None = axis.get(num)
+                except TmclStatusError:
+                    value = None
+                if ch == "velocity" and value is not None and ax in self.pulse_div:
+                    value = tmc429_velocity_to_pps(value, self.pulse_div[ax])
+                out[(ax, ch)] = value
+        return out
+
+
+def record(module, axes=(0,), seconds: float = 10.0, interval: float = 0.01, *, until=None) -> Trace:
+    """Sample `axes` of a host `Module` every `interval` seconds for `seconds` (module time: virtual
+    for sim:// modules, the wall clock for real ones). `until(trace) -> bool` may end it early."""
+    if not interval > 0 or not seconds >= 0 or math.isinf(seconds):
+        raise ValueError("interval must be > 0 and seconds a finite number >= 0")
+    sampler = Sampler(module, list(axes))
+    trace = Trace(sampler.axes, module=module.profile.name, microsteps=dict(sampler.microsteps))
+    clock = module.client.transport.monotonic
+    start = clock()
+    steps = round(seconds / interval)
+    for i in range(steps + 1):
+        trace.add(clock() - start, sampler.sample())
+        if until is not None and until(trace):
+            break
+        if i < steps:
+            module.sleep(interval)
+    return trace

@@ -1,0 +1,203 @@
+"""The dashboard web app (Starlette): a single page, a JSON API and one WebSocket.
+
+    GET  /                         the page (static files, no build step, no CDN)
+    GET  /api/overview             module type, firmware version, address, connection, I/O map
+    GET  /api/state                axis cards, I/O and program status (5 per second)
+    GET  /api/params/axis/{n}      axis parameter table with values; POST /api/params/axis sets one
+    GET  /api/params/global        global parameter table;              POST /api/params/global
+    POST /api/params/store         STAP/RSAP/STGP/RSGP
+    POST /api/console              one direct-mode instruction -> reply with status text
+    POST /api/io/output, /api/io/force
+    POST /api/program/{assemble,download,run,stop,step,reset,breakpoints}; GET /api/program
+    WS   /ws                       {"type": "samples"} 25 times a second, {"type": "state"} on change
+"""
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+from importlib import resources
+
+from starlette.applications import Starlette
+from starlette.concurrency import run_in_threadpool
+from starlette.requests import Request
+from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.routing import Mount, Route, WebSocketRoute
+from starlette.staticfiles import StaticFiles
+from starlette.websockets import WebSocket, WebSocketDisconnect
+
+from .service import FAST_HZ, Dashboard, DashboardError
+
+log = logging.getLogger("opentmcl.web")
+
+
+def static_dir() -> str:
+    return str(resources.files("opentmcl.web").joinpath("static"))
+
+
+class BadRequest(ValueError):
+    pass
+
+
+async def _body(request: Request) -> dict:
+    try:
+        data = await request.json()
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        raise BadRequest("request body is not JSON") from None
+    if not isinstance(data, dict):
+        raise BadRequest("request body must be a JSON object")
+    return data
+
+
+def _int(data: dict, key: str, *, optional: bool = False) -> int | None:
+    value = data.get(key)
+    if value is None and optional:
+        return None
+    if isinstance(value, str):
+        try:
+            value = int(value.strip(), 0)
+        except ValueError:
+            raise BadRequest(f"{key} must be an integer, got {value!r}") from None
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise BadRequest(f"{key} must be an integer, got {value!r}")
+    return value
+
+
+def _str(data: dict, key: str) -> str:
+    value = data.get(key)
+    if not isinstance(value, str):
+        raise BadRequest(f"{key} must be a string")
+    return value
+
+
+def create_app(dashboard: Dashboard) -> Starlette:
+    """The Starlette app for one `Dashboard`."""
+    d = dashboard
+
+    def api(handler):
+        async def endpoint(request: Request) -> Response:
+            try:
+                result = await handler(request)
+            except (BadRequest, DashboardError) as exc:
+                return JSONResponse({"error": str(exc)}, status_code=400)
+            return JSONResponse(result if result is not None else {"ok": True})
+        return endpoint
+
+    async def index(_request: Request) -> Response:
+        return FileResponse(f"{static_dir()}/index.html", headers={"Cache-Control": "no-store"})
+
+    async def overview(_r):
+        return await run_in_threadpool(d.overview)
+
+    async def state(_r):
+        return d.state or await run_in_threadpool(d.sample_slow)
+
+    async def axis_params(r: Request):
+        try:
+            n = int(r.path_params["axis"])
+        except ValueError:
+            raise BadRequest("axis must be a number") from None
+        return {"axis": n, "params": await run_in_threadpool(d.axis_parameters, n)}
+
+    async def global_params(_r):
+        return {"params": await run_in_threadpool(d.global_parameters)}
+
+    async def set_axis_param(r):
+        b = await _body(r)
+        value = await run_in_threadpool(d.set_axis_parameter, _int(b, "axis"), _int(b, "number"), _int(b, "value"))
+        return {"value": value}
+
+    async def set_global_param(r):
+        b = await _body(r)
+        value = await run_in_threadpool(d.set_global_parameter, _int(b, "bank"), _int(b, "number"), _int(b, "value"))
+        return {"value": value}
+
+    async def store(r):
+        b = await _body(r)
+        await run_in_threadpool(d.store, _str(b, "kind"), _int(b, "number"), _int(b, "index"),
+                                bool(b.get("restore", False)))
+
+    async def console(r):
+        b = await _body(r)
+        return await run_in_threadpool(d.console, _str(b, "line"))
+
+    async def output(r):
+        b = await _body(r)
+        return {"value": await run_in_threadpool(d.set_output, _int(b, "bank"), _int(b, "port"), _int(b, "value"))}
+
+    async def force(r):
+        b = await _body(r)
+        await run_in_threadpool(d.force_input, _int(b, "bank"), _int(b, "port"), _int(b, "value", optional=True))
+
+    async def assemble(r):
+        b = await _body(r)
+        result = await run_in_threadpool(d.assemble, _str(b, "source"))
+        result.pop("_program", None)
+        return result
+
+    async def download(r):
+        b = await _body(r)
+        return await run_in_threadpool(d.download, _str(b, "source"))
+
+    async def breakpoints(r):
+        b = await _body(r)
+        lines = b.get("lines")
+        if not isinstance(lines, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in lines):
+            raise BadRequest("lines must be a list of line numbers")
+        return {"addresses": await run_in_threadpool(d.set_breakpoints, lines)}
+
+    def action(fn):
+        async def handler(_r):
+            out = await run_in_threadpool(fn)
+            return out if isinstance(out, dict) else await run_in_threadpool(d.program_state)
+        return handler
+
+    async def program(_r):
+        st = await run_in_threadpool(d.program_state)
+        return {"source": d.source, "state": st,
+                "lines": None if d.program is None else
+                [s.line if s is not None and s.file == "<editor>" else None for s in d.program.source]}
+
+    async def ws(websocket: WebSocket) -> None:
+        await websocket.accept()
+        last_seq = d.samples[-1].seq - 1 if d.samples else 0
+        last_state = None
+        try:
+            await websocket.send_json({"type": "hello", "overview": await run_in_threadpool(d.overview)})
+            while True:
+                new = d.samples_since(last_seq)
+                if new:
+                    last_seq = new[-1].seq
+                    await websocket.send_json({"type": "samples", "samples": [
+                        {"seq": s.seq, "t": s.t, "p": s.position, "v": s.velocity} for s in new]})
+                if d.state and d.state is not last_state:
+                    last_state = d.state
+                    await websocket.send_json({"type": "state", "state": last_state})
+                await asyncio.sleep(1.0 / (FAST_HZ * 2))
+        except (WebSocketDisconnect, RuntimeError, ConnectionError):
+            return
+
+    routes = [
+        Route("/", index),
+        Route("/api/overview", api(overview)),
+        Route("/api/state", api(state)),
+        Route("/api/params/axis/{axis}", api(axis_params)),
+        Route("/api/params/global", api(global_params)),
+        Route("/api/params/axis", api(set_axis_param), methods=["POST"]),
+        Route("/api/params/global", api(set_global_param), methods=["POST"]),
+        Route("/api/params/store", api(store), methods=["POST"]),
+        Route("/api/console", api(console), methods=["POST"]),
+        Route("/api/io/output", api(output), methods=["POST"]),
+        Route("/api/io/force", api(force), methods=["POST"]),
+        Route("/api/program", api(program)),
+        Route("/api/program/assemble", api(assemble), methods=["POST"]),
+        Route("/api/program/download", api(download), methods=["POST"]),
+        Route("/api/program/breakpoints", api(breakpoints), methods=["POST"]),
+        Route("/api/program/run", api(action(d.run)), methods=["POST"]),
+        Route("/api/program/stop", api(action(d.stop)), methods=["POST"]),
+        Route("/api/program/step", api(action(d.step)), methods=["POST"]),
+        Route("/api/program/reset", api(action(d.reset)), methods=["POST"]),
+        WebSocketRoute("/ws", ws),
+        Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
+    ]
+    return Starlette(routes=routes)

@@ -1,0 +1,52 @@
+"""A host `Transport` onto a running server's `ModuleBus`, so the dashboard of
+`opentmcl serve --web` talks to the served modules through the host library like any client.
+
+Requests are offered to the bus without a channel, so the bus keeps routing the modules'
+unsolicited replies (command 138, TMCM-6212 manual 3.6.35) to the TCP/pty/CAN client that
+asked for them: the dashboard never steals another host's events (docs/notes/web.md).
+"""
+from __future__ import annotations
+
+import threading
+import time
+
+from ..host.errors import TmclConnectionError, TmclTimeout
+from ..host.transport import Transport
+
+
+class BusTransport(Transport):
+    frame_format = "serial"
+
+    def __init__(self, bus) -> None:
+        self.bus = bus
+        self._rx = bytearray()
+        self._cond = threading.Condition()
+        self._closed = False
+
+    def send(self, data: bytes) -> None:
+        if self._closed:
+            raise TmclConnectionError("dashboard bus link is closed")
+        replies = self.bus.request(bytes(data), None)
+        with self._cond:
+            for _vm, reply in replies:
+                self._rx += reply
+            self._cond.notify_all()
+
+    def recv(self, n: int, timeout: float) -> bytes:
+        deadline = time.monotonic() + max(0.0, timeout)
+        with self._cond:
+            while len(self._rx) < n:
+                left = deadline - time.monotonic()
+                if left <= 0 or self._closed:
+                    raise TmclTimeout(f"no reply within {timeout:g} s ({len(self._rx)} of {n} bytes received)")
+                self._cond.wait(min(left, 0.05))
+            out = bytes(self._rx[:n])
+            del self._rx[:n]
+            return out
+
+    def reset_input(self) -> None:
+        with self._cond:
+            self._rx.clear()
+
+    def close(self) -> None:
+        self._closed = True

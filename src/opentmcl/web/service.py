@@ -1,0 +1,446 @@
+"""What the dashboard does on a module, through the host library's `Module` API.
+
+Everything goes over the wire (GAP/SAP, GGP/SGP, SIO/GIO, 128-135 for the program; TMCM-6212
+manual 3.6), so the same service drives a real module (`opentmcl dashboard --to URL`) and a
+virtual one (`opentmcl serve --web`). Only forcing inputs needs the in-process virtual module
+(`vm`), because a real module's inputs are driven by wires, not by commands.
+
+A `Poller` thread samples position and velocity of every axis (the fast set) and, less often,
+the rest of the axis state and the program status; the web layer reads the samples.
+"""
+from __future__ import annotations
+
+import contextlib
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+
+from ..host import Module, TmclError, TmclStatusError, VersionReply
+from ..protocol.status import message
+
+FAST_HZ = 25            # position/velocity samples per second (issue 7: at least 20)
+HISTORY_SECONDS = 60.0  # samples kept for the live charts
+SLOW_EVERY = 5          # full axis state and program status every 5th sample (5 per second)
+USER_VARIABLES_SHOWN = 8  # variables 0..7 are always shown, plus those the program uses
+
+# Axis parameters of the axis cards (TMCM-6212 manual 4.1, PD86-1180 manual 5).
+CARD_PARAMS = {"target_position": 0, "position": 1, "velocity": 3, "target_reached": 8, "home": 9,
+               "right": 10, "left": 11, "load": 206, "current": 180}
+STAP, RSAP, STGP, RSGP = 7, 8, 11, 12
+USER_BANK = 2
+VARIABLE_COMMANDS = {9, 10, 11, 12, 35}  # SGP, GGP, STGP, RSGP, AGP with bank 2 name a user variable
+
+
+class DashboardError(ValueError):
+    """A request from the page the module or the profile does not allow (shown to the user)."""
+
+
+@dataclass
+class Sample:
+    seq: int
+    t: float
+    position: list[int | None]
+    velocity: list[int | None]
+
+
+def _param_info(p, axis_or_bank) -> dict:
+    return {"number": p.number, "name": p.name, "title": p.title, "unit": p.unit, "min": p.min, "max": p.max,
+            "access": p.access, "description": p.description, "values": list(p.values),
+            "bank": p.bank if p.bank is not None else axis_or_bank, "writable": p.writable,
+            "readable": p.readable, "storable": p.storable}
+
+
+class Dashboard:
+    """The dashboard's view of one module. Thread-safe: one request at a time (`lock`)."""
+
+    def __init__(self, module: Module, *, vm=None, vm_lock=None, url: str = "",
+                 clock=time.monotonic) -> None:
+        self.module = module
+        self.vm = vm
+        self.vm_lock = vm_lock if vm_lock is not None else threading.RLock()
+        self.url = url
+        self.lock = threading.RLock()
+        self.clock = clock
+        self.start = clock()
+        self.connected = True
+        self.last_error = ""
+        self.samples: deque[Sample] = deque(maxlen=int(HISTORY_SECONDS * FAST_HZ) + FAST_HZ)
+        self.seq = 0
+        self.state: dict = {}
+        self.program = None          # lang Program last assembled/downloaded
+        self.source = ""
+        self.breakpoints: set[int] = set()
+        self._runner: threading.Thread | None = None
+        self._cancel = threading.Event()
+        with self.lock:
+            self.profile = module.profile
+            self.version = self._try(module.firmware_version, "?")
+
+    # --- plumbing --------------------------------------------------------------------
+    def _try(self, fn, default=None):
+        """Call fn(); a failing link marks the module disconnected and gives `default`."""
+        try:
+            with self.lock:
+                out = fn()
+            self.connected = True
+            return out
+        except TmclStatusError:
+            return default
+        except TmclError as exc:
+            self.connected = False
+            self.last_error = str(exc)
+            return default
+
+    def _do(self, fn):
+        """Call fn() for a user action: a status error becomes DashboardError with the manual's text."""
+        try:
+            with self.lock:
+                out = fn()
+            self.connected = True
+            return out
+        except TmclStatusError as exc:
+            raise DashboardError(str(exc)) from None
+        except TmclError as exc:
+            self.connected = False
+            self.last_error = str(exc)
+            raise DashboardError(str(exc)) from None
+
+    def _axis(self, number) -> int:
+        if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number < self.profile.axes:
+            raise DashboardError(f"{self.profile.name} has axes 0..{self.profile.axes - 1}, not {number!r}")
+        return number
+
+    # --- overview ------------------------------------------------------------------------
+    def overview(self) -> dict:
+        p = self.profile
+        ports = [{"bank": io.bank, "port": io.port, "name": io.name, "kind": io.kind, "access": io.access,
+                  "min": io.min, "max": io.max} for io in sorted(p.io.values(), key=lambda i: (i.bank, i.port))]
+        return {"module": p.name, "version": self.version, "address": self.module.address, "url": self.url,
+                "axes": p.axes, "connected": self.connected, "last_error": self.last_error,
+                "virtual": self.vm is not None, "io": ports, "fast_hz": FAST_HZ,
+                "history_seconds": HISTORY_SECONDS,
+                "has_stap": STAP in p.opcodes, "has_rsap": RSAP in p.opcodes,
+                "program_memory": p.program_memory}
+
+    # --- sampling --------------------------------------------------------------------------
+    def sample_fast(self) -> Sample:
+        """Position (axis parameter 1) and actual speed (3) of every axis."""
+        pos, vel = [], []
+        for ax in range(self.profile.axes):
+            pos.append(self._try(lambda a=ax: self.module.request(6, 1, a).value))
+            vel.append(self._try(lambda a=ax: self.module.request(6, 3, a).value))
+        self.seq += 1
+        s = Sample(self.seq, round(self.clock() - self.start, 4), pos, vel)
+        self.samples.append(s)
+        return s
+
+    def sample_slow(self) -> dict:
+        """Axis cards, outputs/inputs and program status."""
+        have = self.profile.axis_parameters
+        axes = []
+        for ax in range(self.profile.axes):
+            card = {}
+            for key, num in CARD_PARAMS.items():
+                card[key] = self._try(lambda n=num, a=ax: self.module.request(6, n, a).value) if num in have else None
+            axes.append(card)
+        state = {"axes": axes, "io": self.read_io(), "program": self.program_state(),
+                 "connected": self.connected, "last_error": self.last_error}
+        self.state = state
+        return state
+
+    def samples_since(self, seq: int) -> list[Sample]:
+        return [s for s in list(self.samples) if s.seq > seq]
+
+    # --- parameters -------------------------------------------------------------------------
+    def axis_parameters(self, axis: int) -> list[dict]:
+        axis = self._axis(axis)
+        out = []
+        for p in sorted(self.profile.axis_parameters.values(), key=lambda p: p.number):
+            row = _param_info(p, axis)
+            row["value"] = self._try(lambda n=p.number: self.module.request(6, n, axis).value) if p.readable else None
+            row["can_store"] = p.storable and STAP in self.profile.opcodes
+            row["can_restore"] = p.storable and RSAP in self.profile.opcodes
+            out.append(row)
+        return out
+
+    def global_parameters(self) -> list[dict]:
+        out = []
+        for (bank, num), p in sorted(self.profile.global_parameters.items()):
+            row = _param_info(p, bank)
+            row["value"] = self._try(lambda n=num, b=bank: self.module.request(10, n, b).value) if p.readable else None
+            row["can_store"] = p.storable and STGP in self.profile.opcodes
+            row["can_restore"] = p.storable and RSGP in self.profile.opcodes
+            out.append(row)
+        return out
+
+    def set_axis_parameter(self, axis: int, number: int, value: int) -> int:
+        """SAP, then GAP to show what the module took (manual 3.6.5/3.6.6)."""
+        axis = self._axis(axis)
+        p = self.profile.axis_parameters.get(number)
+        if p is None or not p.writable:
+            raise DashboardError(f"axis parameter {number} is not writable on {self.profile.name}")
+        self._do(lambda: self.module.request(5, number, axis, int(value)))
+        return self._do(lambda: self.module.request(6, number, axis).value) if p.readable else int(value)
+
+    def set_global_parameter(self, bank: int, number: int, value: int) -> int:
+        p = self.profile.global_parameters.get((bank, number))
+        if p is None or not p.writable:
+            raise DashboardError(f"global parameter {number} of bank {bank} is not writable on {self.profile.name}")
+        self._do(lambda: self.module.request(9, number, bank, int(value)))
+        return self._do(lambda: self.module.request(10, number, bank).value) if p.readable else int(value)
+
+    def store(self, kind: str, number: int, axis_or_bank: int, restore: bool = False) -> None:
+        """STAP/RSAP (axis) or STGP/RSGP (global), manual 3.6.7-3.6.10 / PD86-1180 4.6.7-4.6.8."""
+        if kind == "axis":
+            command = RSAP if restore else STAP
+            axis_or_bank = self._axis(axis_or_bank)
+        elif kind == "global":
+            command = RSGP if restore else STGP
+        else:
+            raise DashboardError(f"unknown parameter kind {kind!r}")
+        if command not in self.profile.opcodes:
+            raise DashboardError(f"{self.profile.name} has no command {command} (store/restore)")
+        self._do(lambda: self.module.request(command, number, axis_or_bank))
+
+    # --- direct mode console ---------------------------------------------------------------
+    def console(self, line: str) -> dict:
+        """One instruction as in `opentmcl send` (mnemonic or numbers); the reply with its status text."""
+        from ..cli import CliError
+        from ..cli.send import parse
+        from ..protocol.opcodes import format_instruction
+        from ..protocol.replies import MemoryReply
+
+        text = line.strip()
+        if not text:
+            raise DashboardError("empty command")
+        try:
+            command, type_, motor, value = parse(text)
+        except CliError as exc:
+            raise DashboardError(str(exc)) from None
+        out = {"line": text, "request": [command, type_, motor, value]}
+        try:
+            with self.lock:
+                reply = self.module.request(command, type_, motor, value)
+        except TmclStatusError as exc:
+            out.update(ok=False, status=exc.status, text=f"status {exc.status}: {message(exc.status)}")
+            return out
+        except TmclError as exc:
+            out.update(ok=False, status=None, text=str(exc))
+            return out
+        if reply is None:
+            out.update(ok=True, status=None, text="(no reply)")
+        elif isinstance(reply, VersionReply):
+            out.update(ok=True, status=100, value=reply.text, text=f"status 100: {message(100)}; {reply.text}")
+        elif isinstance(reply, MemoryReply):
+            ins = (reply.command, reply.type, reply.motor, reply.value)
+            shown = format_instruction(*ins) or ", ".join(map(str, ins))
+            out.update(ok=True, status=100, value=list(ins), text=f"{shown}")
+        else:
+            out.update(ok=True, status=reply.status, value=reply.value,
+                       text=f"status {reply.status}: {message(reply.status)}; value {reply.value}")
+        return out
+
+    # --- inputs and outputs -----------------------------------------------------------------
+    def read_io(self) -> list[dict]:
+        out = []
+        forced = self._forced()
+        for io in sorted(self.profile.io.values(), key=lambda i: (i.bank, i.port)):
+            value = self._try(lambda i=io: self.module.request(15, i.port, i.bank).value) if "R" in io.access else None
+            out.append({"bank": io.bank, "port": io.port, "name": io.name, "kind": io.kind, "value": value,
+                        "forced": forced.get((io.bank, io.port))})
+        return out
+
+    def _forced(self) -> dict:
+        if self.vm is None:
+            return {}
+        with self.vm_lock:
+            return dict(getattr(self.vm.io, "forced", {}))
+
+    def set_output(self, bank: int, port: int, value: int) -> int:
+        io = self.profile.io.get((bank, port))
+        if io is None or io.kind != "output":
+            raise DashboardError(f"no output port {port} in bank {bank}")
+        self._do(lambda: self.module.request(14, port, bank, int(value)))
+        return self._do(lambda: self.module.request(15, port, bank).value)
+
+    def force_input(self, bank: int, port: int, value: int | None) -> None:
+        """Virtual modules only: hold an input at `value` (None releases it). No TMCL command
+        sets an input, so this reaches into the in-process module (docs/notes/web.md)."""
+        if self.vm is None:
+            raise DashboardError("inputs can only be forced on a virtual module")
+        io = self.profile.io.get((bank, port))
+        if io is None or io.kind == "output":
+            raise DashboardError(f"no input port {port} in bank {bank}")
+        if value is not None and not io.min <= int(value) <= io.max:
+            raise DashboardError(f"{io.name} takes {io.min}..{io.max}, not {value}")
+        with self.vm_lock:
+            if value is None:
+                self.vm.io.forced.pop((bank, port), None)
+            else:
+                self.vm.io.forced[(bank, port)] = int(value)
+
+    # --- TMCL program -----------------------------------------------------------------------
+    def assemble(self, source: str) -> dict:
+        """Assemble for this module; errors come back with line and column for inline display."""
+        from ..lang import AsmError, assemble
+
+        try:
+            prog = assemble(source, filename="<editor>", module=self.profile.name)
+        except AsmError as exc:
+            return {"ok": False, "errors": [{"line": exc.line, "column": exc.column, "message": exc.message}]}
+        lines = [src.line if src is not None and src.file == "<editor>" else None for src in prog.source]
+        return {"ok": True, "errors": [], "count": len(prog.instructions), "lines": lines,
+                "labels": prog.labels, "listing": prog.listing(), "_program": prog}
+
+    def download(self, source: str) -> dict:
+        """Assemble, stop the program, download with verify (132, ..., 133, 134)."""
+        from ..host.loader import Loader, LoaderError
+
+        result = self.assemble(source)
+        if not result["ok"]:
+            return result
+        prog = result.pop("_program")
+        self.cancel_run()
+        try:
+            with self.lock:
+                Loader(self.module).download(prog.instructions)
+        except LoaderError as exc:
+            raise DashboardError(str(exc)) from None
+        except TmclError as exc:
+            raise DashboardError(str(exc)) from None
+        self.program, self.source = prog, source
+        self.breakpoints = {b for b in self.breakpoints if b < len(prog.instructions)}
+        return result
+
+    def _loader(self):
+        from ..host.loader import Loader
+
+        return Loader(self.module)
+
+    def set_breakpoints(self, lines: list[int]) -> list[int]:
+        """Breakpoints by editor line: the first instruction assembled from each line."""
+        if self.program is None:
+            raise DashboardError("download a program first")
+        lines = set(lines)
+        addrs = set()
+        for addr, src in enumerate(self.program.source):
+            if src is not None and src.file == "<editor>" and src.line in lines:
+                if not any(a < addr and self.program.source[a] is not None
+                           and self.program.source[a].line == src.line for a in addrs):
+                    addrs.add(addr)
+        self.breakpoints = addrs
+        return sorted(addrs)
+
+    def run(self) -> None:
+        """129 from the current address; with breakpoints, single-step (130) in a thread until the
+        program counter reaches one (host-side breakpoints, as `opentmcl debug` does)."""
+        self.cancel_run()
+        if not self.breakpoints:
+            self._do(lambda: self._loader().run())
+            return
+        self._cancel.clear()
+        self._runner = threading.Thread(target=self._run_to_breakpoint, name="dashboard-run", daemon=True)
+        self._runner.start()
+
+    def _run_to_breakpoint(self) -> None:
+        from ..host.debugger import Debugger
+
+        dbg = Debugger(self._loader())
+        while not self._cancel.is_set():
+            try:
+                with self.lock:
+                    st = dbg.step()
+            except TmclError as exc:
+                self.last_error = str(exc)
+                return
+            if st.mode in (0, 3) or st.pc in self.breakpoints:
+                return
+
+    def cancel_run(self) -> None:
+        self._cancel.set()
+        runner = self._runner
+        if runner is not None and runner is not threading.current_thread():
+            runner.join(timeout=5.0)
+        self._runner = None
+
+    def stop(self) -> None:
+        self.cancel_run()
+        self._do(lambda: self._loader().stop())
+
+    def step(self) -> dict:
+        from ..host.debugger import Debugger
+
+        self.cancel_run()
+        with self.lock:
+            self._do(lambda: Debugger(self._loader()).step())
+        return self.program_state()
+
+    def reset(self) -> None:
+        self.cancel_run()
+        self._do(lambda: self._loader().reset())
+
+    def program_state(self) -> dict:
+        """Mode, PC (135 type 1), A (type 2), X (type 3), flags (type 4) and the user variables."""
+        from ..host.debugger import describe_flags
+
+        st = self._try(lambda: self._loader().status())
+        if st is None:
+            return {"mode": None}
+        line = None
+        prog = self.program
+        if prog is not None and 0 <= st.pc < len(prog.source):
+            src = prog.source[st.pc]
+            if src is not None and src.file == "<editor>":
+                line = src.line
+        variables = {}
+        for n in self._variables_shown():
+            variables[n] = self._try(lambda i=n: self.module.request(10, i, USER_BANK).value)
+        return {"mode": st.mode, "mode_name": st.mode_name, "waiting": st.waiting, "pc": st.pc, "line": line,
+                "a": st.accumulator, "x": st.x_register, "flags": describe_flags(st.flags),
+                "variables": variables, "breakpoints": sorted(self.breakpoints),
+                "stepping_to_breakpoint": self._runner is not None and self._runner.is_alive()}
+
+    def _variables_shown(self) -> list[int]:
+        shown = set(range(min(USER_VARIABLES_SHOWN, self.profile.user_variables)))
+        if self.program is not None:
+            for ins in self.program.instructions:
+                if ins.command in VARIABLE_COMMANDS and ins.motor == USER_BANK:
+                    if 0 <= ins.type < self.profile.user_variables:
+                        shown.add(ins.type)
+        return sorted(shown)
+
+
+class Poller:
+    """Background sampling: `FAST_HZ` fast samples per second, a slow one every `SLOW_EVERY`."""
+
+    def __init__(self, dashboard: Dashboard, hz: float = FAST_HZ) -> None:
+        self.dashboard = dashboard
+        self.period = 1.0 / hz
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._loop, name="dashboard-poller", daemon=True)
+
+    def start(self) -> Poller:
+        self._thread.start()
+        return self
+
+    def _loop(self) -> None:
+        n = 0
+        next_t = time.monotonic()
+        while not self._stop.is_set():
+            with contextlib.suppress(Exception):  # a broken link shows as "disconnected", never kills the loop
+                self.dashboard.sample_fast()
+                if n % SLOW_EVERY == 0:
+                    self.dashboard.sample_slow()
+            n += 1
+            next_t += self.period
+            delay = next_t - time.monotonic()
+            if delay < 0:  # fell behind (slow link): do not try to catch up
+                next_t = time.monotonic()
+                delay = 0
+            self._stop.wait(delay)
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout=2.0)

@@ -1,0 +1,66 @@
+"""`opentmcl asm ... && opentmcl run ...`, `opentmcl load` (the issue's definition of done) and their
+error handling."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from opentmcl.cli import main
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+TIMER = "tmcm6212_3.5.6.4_timer_interrupt.tmc"
+
+
+def test_asm_then_run_the_timer_example(tmp_path, capsys):
+    """TMCM-6212 3.5.6.4 example: OUT3 toggles every 500 ms (main loop), OUT0 every 1000 ms (timer
+    0 interrupt) - printed deterministically in virtual time."""
+    src = tmp_path / TIMER
+    shutil.copy(EXAMPLES / TIMER, src)
+    assert main(["asm", str(src), "-m", "TMCM-6212"]) == 0
+    capsys.readouterr()
+    assert main(["run", str(src.with_suffix(".bin")), "-t", "2.2", "-w", "out0,out3"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].split() == ["time", "[s]", "changes"]
+    assert [ln.split() for ln in lines[1:-1]] == [
+        ["0.000", "out0=0", "out3=0"], ["0.010", "out3=1"], ["0.510", "out3=0"],
+        ["1.010", "out0=1", "out3=1"], ["1.510", "out3=0"], ["2.010", "out0=0", "out3=1"]]
+    assert lines[-1].startswith("2.200 s elapsed, program still running")
+
+
+def test_run_source_until_stop_with_default_watches(capsys):
+    """7.6 example, Func2 (run command with address 1): ROL 0, 500 for 100 ticks, MST, STOP."""
+    assert main(["run", str(EXAMPLES / "tmcm6212_7.6_host_routines.tmc"), "--from", "1", "--sample", "0.5"]) == 0
+    out = capsys.readouterr().out
+    assert "state=run out0=0 out1=0 out2=0 out3=0 pos0=0" in out
+    assert "state=stop" in out and "program stopped at address 11" in out
+
+
+def test_run_on_the_pd86_1180(capsys):
+    """PD86-1180 4.6.29 potentiometer example: target = 4 * analog input 0 (0 with nothing attached)."""
+    assert main(["run", str(EXAMPLES / "pd86_1180_4.6.29_potentiometer.tmc"), "-m", "PD86-1180",
+                 "-t", "0.02", "-w", "a,target0,state"]) == 0
+    out = capsys.readouterr().out
+    assert "a=0 target0=0 state=run" in out
+
+
+def test_load_over_a_url(capsys):
+    assert main(["load", str(EXAMPLES / "tmcm6212_7.2_main_loop.tmc"), "--to", "sim://TMCM-6212",
+                 "--start", "5", "--run"]) == 0
+    assert capsys.readouterr().out.splitlines() == ["loaded 8 instructions at 5..12, verified", "running from 5"]
+
+
+def test_errors_are_one_line_messages(tmp_path, capsys):
+    assert main(["load", str(EXAMPLES / TIMER)]) == 2
+    assert "no module URL" in capsys.readouterr().err
+    assert main(["run", str(tmp_path / "missing.tmc")]) == 2
+    assert "cannot read file" in capsys.readouterr().err
+    assert main(["run", str(EXAMPLES / TIMER), "-w", "bogus"]) == 2
+    assert "cannot watch 'bogus'" in capsys.readouterr().err
+    bad = tmp_path / "bad.bin"
+    bad.write_bytes(b"\x01\x02\x03")
+    assert main(["run", str(bad)]) == 2
+    assert "not a multiple of 8" in capsys.readouterr().err
+    assert main(["run", str(EXAMPLES / TIMER), "--scenario", str(tmp_path / "none.toml")]) == 2
+    assert "scenario" in capsys.readouterr().err
+    assert main(["run", str(EXAMPLES / TIMER), "-m", "TMCM-9999"]) == 2
+    capsys.readouterr()
