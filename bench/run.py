@@ -21,7 +21,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_sixpoint  # noqa: E402
 import bench_tmc429  # noqa: E402
-
 from opentmcl import VirtualModule  # noqa: E402
 from opentmcl.motion import CLOCK_HZ  # noqa: E402
 from opentmcl.protocol.frame import Request  # noqa: E402

@@ -9,6 +9,7 @@ from opentmcl.chips.tmc4210 import registers as R
 
 config = st.fixed_dictionaries({
     "mode": st.sampled_from([0, 0, 1, 2, 3]),
+    "divs": st.sampled_from([(0, 0), (0, 0), (1, 0), (0, 2), (2, 1)]),
     "target": st.integers(-600, 600),
     "v": st.integers(-2047, 2047),
     "v_max": st.integers(100, 2047),
@@ -26,7 +27,8 @@ config = st.fixed_dictionaries({
 
 def build(cfg) -> TMC4210:
     chip = TMC4210()
-    chip.spi(R.write_datagram(0x0C, 0))  # PULSE_DIV = RAMP_DIV = 0
+    pulse_div, ramp_div = cfg["divs"]
+    chip.spi(R.write_datagram(0x0C, pulse_div << 12 | ramp_div << 8))
     chip.write("V_MIN", 3)
     chip.write("V_MAX", cfg["v_max"])
     chip.write("A_MAX", cfg["a_max"])

@@ -64,3 +64,15 @@ def test_errors_are_one_line_messages(tmp_path, capsys):
     assert "scenario" in capsys.readouterr().err
     assert main(["run", str(EXAMPLES / TIMER), "-m", "TMCM-9999"]) == 2
     capsys.readouterr()
+
+
+def test_run_with_a_scenario_drives_the_potentiometer(tmp_path, capsys):
+    """3.6.27 AAP example with a scenario: analog input 0 at 302, then 1000 from 0.5 s on; the target
+    position follows as 4 x the input."""
+    scenario = tmp_path / "pot.toml"
+    scenario.write_text("[[input]]\nbank = 1\nport = 0\nsteps = [[0, 302], [0.5, 1000]]\n")
+    assert main(["run", str(EXAMPLES / "tmcm6212_3.6.27_potentiometer.tmc"), "--scenario", str(scenario),
+                 "-t", "1", "--sample", "0.25", "-w", "adc0,target0"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [ln.split() for ln in lines[1:4]] == [["0.000", "adc0=302", "target0=0"], ["0.250", "target0=1208"],
+                                                 ["0.500", "adc0=1000", "target0=4000"]]

@@ -111,14 +111,33 @@ def test_input_change_trigger_transitions(mode, levels, expected):
 
 def test_stop_switch_interrupt_from_injected_level():
     """Table 12: 27 "Left stop switch 0", 28 "Right stop switch 0"; Table 20 trigger transitions.
-    The switch level is injected directly (its source is the physical-world model)."""
+    The switch level is injected directly (forced through the world model)."""
     w = module()
     w.load("VECT 28, R0\nEI 28\nSGP 28, 3, 1\nEI 255\n" + MAIN_IDLE + isr("R0", 8))
     w.run()
     w.vm.advance(0.01)
-    w.vm.axes[0].ram[10] = 1
+    w.vm.world.axis(0).force_switch("right", 1)
     w.vm.advance(0.05)
     assert w.var(10) == 8
+    w.vm.world.axis(0).force_switch("right", 0)   # high-low: not selected (mode 1)
+    w.vm.advance(0.05)
+    assert w.var(10) == 8
+
+
+def test_stop_switch_interrupt_when_the_stage_reaches_the_switch():
+    """The right limit switch of a scenario stage at 5000 is reached by ROR: interrupt 28 runs its
+    handler, which reads the position (GAP 1, 0) near the switch."""
+    from opentmcl import VirtualModule
+
+    from .test_program_support import Wire
+    w = Wire(VirtualModule("TMCM-6212", address=1, scenario={"axis": {"0": {"right": {"position": 5000}}}}))
+    w.load("VECT 28, R0\nEI 28\nSGP 28, 3, 1\nEI 255\nROR 0, 20000\n" + MAIN_IDLE
+           + "R0: GAP 1, 0\nAGP 20, 2\nRETI")
+    w.run()
+    w.vm.advance(0.1)
+    assert w.var(20) == 0
+    w.vm.advance(2.0)
+    assert 5000 <= w.var(20) <= 5100
 
 
 def test_target_reached_interrupt_per_axis():

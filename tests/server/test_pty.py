@@ -110,3 +110,33 @@ def test_serial_transport_errors(tmp_path):
     for url in ("serial://", "serial:///dev/x?baud=fast", "serial:///dev/x?baud=0"):
         with pytest.raises(TmclConnectionError):
             open_serial(urllib.parse.urlsplit(url))
+
+
+def test_a_client_that_never_reads_cannot_wedge_the_server(pty_server):
+    """Replies nobody reads fill the terminal buffer and are then dropped; the server keeps
+    answering (safety, docs/endpoints.md). Manual 3.6.8 GGP 66 example as the probe."""
+    import termios
+
+    _, pty = pty_server
+    fd = os.open(pty.path, os.O_RDWR | os.O_NOCTTY)
+    try:
+        import tty
+
+        tty.setraw(fd)
+        burst = GGP_66 * 100
+        deadline = time.monotonic() + 60
+        while pty.dropped == 0 and time.monotonic() < deadline:  # replies are never read
+            os.write(fd, burst)
+            time.sleep(0.01)
+        assert pty.dropped > 0
+        last = -1
+        while pty.dropped != last and time.monotonic() < deadline:  # until the backlog is done
+            last = pty.dropped
+            time.sleep(0.3)
+        termios.tcflush(fd, termios.TCIFLUSH)
+    finally:
+        os.close(fd)
+    with serial.Serial(pty.path, timeout=5) as port:
+        port.reset_input_buffer()
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 
 COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard"]
@@ -46,6 +47,12 @@ def main(argv: list[str] | None = None) -> int:
     except (OSError, ValueError, KeyError) as exc:
         print(f"opentmcl {args.command}: error: {exc}", file=sys.stderr)
         return 1
+    except Exception as exc:  # a bug of ours: still one line, unless asked for the traceback
+        if os.environ.get("OPENTMCL_DEBUG"):
+            raise
+        print(f"opentmcl {args.command}: internal error: {type(exc).__name__}: {exc} "
+              "(set OPENTMCL_DEBUG=1 for a traceback)", file=sys.stderr)
+        return 3
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -26,7 +26,7 @@ def _plan(vm) -> list[tuple[int, int, int, int]]:
             reqs.append((1, 0, axis, speed // 2))       # ROR: velocity mode
         else:
             sign = 1 if axis % 2 == 0 else -1
-            reqs.append((4, 0, axis, sign * (12000 + 8000 * axis) * (1 if fast else 1)))  # MVP ABS
+            reqs.append((4, 0, axis, sign * (12000 + 8000 * axis)))  # MVP ABS
     return reqs
 
 
@@ -46,19 +46,16 @@ def run(args: argparse.Namespace) -> int:
     unit = "pps" if vm.profile.engine != "tmc429" else "internal"
     print(f"Virtual {vm.profile.name} (firmware {vm.profile.firmware_version}), virtual time; "
           f"position in microsteps, velocity in {unit}")
-    head = "  time/s " + "".join(f"| axis {a}: position  velocity " for a in range(vm.profile.axes))
+    head = "  time/s" + "".join(f"  {f'axis{a} pos':>11} {'vel':>7}" for a in range(vm.profile.axes))
     print(head)
     print("-" * len(head))
     steps = round(args.duration / args.interval)
     for i in range(steps + 1):
         if i:
             vm.advance(args.interval)
-        cells = []
-        for a in range(vm.profile.axes):
-            pos = vm.request(6, 1, a).value
-            vel = vm.request(6, 3, a).value
-            cells.append(f"| {pos:>16} {vel:>9} ")
-        print(f"{vm.time:8.3f} " + "".join(cells))
+        cells = "".join(f"  {vm.request(6, 1, a).value:>11} {vm.request(6, 3, a).value:>7}"
+                        for a in range(vm.profile.axes))
+        print(f"{vm.time:8.3f}{cells}")
     reached = [a for a in range(vm.profile.axes) if vm.request(6, 8, a).value]
     print(f"position reached (AP8) on axes: {reached or 'none'}")
     return 0

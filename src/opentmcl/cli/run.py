@@ -43,13 +43,11 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _scenario(path: str | None):
-    """Hook for the physical-world scenarios: loaded by opentmcl.motion.scenario when present."""
+    """The --scenario file, read here so that a bad file is a one-line error (docs/scenarios.md)."""
     if path is None:
         return None
-    try:
-        from ..motion.scenario import load_scenario  # type: ignore[attr-defined]
-    except ImportError:
-        raise CliError("scenario files are not supported by this version") from None
+    from ..motion.scenario import load_scenario
+
     try:
         return load_scenario(path)
     except (OSError, ValueError, KeyError) as exc:
@@ -73,11 +71,12 @@ def open_target(args: argparse.Namespace):
     from ..firmware.vm import VirtualModule
 
     name = args.module or DEFAULT_MODULE
+    scenario = _scenario(args.scenario)
     try:
-        vm = VirtualModule(name, address=args.address, eeprom=args.eeprom, scenario=_scenario(args.scenario))
+        vm = VirtualModule(name, address=args.address, eeprom=args.eeprom, scenario=scenario)
     except KeyError as exc:
         raise CliError(str(exc.args[0] if exc.args else exc)) from None
-    except EepromError as exc:
+    except (EepromError, ValueError) as exc:   # a scenario that does not fit the module
         raise CliError(str(exc)) from None
     return Client(InProcessTransport(vm, clock="virtual"), address=args.address, timeout=args.timeout), name
 

@@ -44,6 +44,8 @@ def register(subparsers) -> None:
                    help="silence after which a partial serial frame is discarded (default 0.1)")
     p.add_argument("--pace", action="store_true",
                    help="send reply bytes at the module's RS485 baud rate (global parameter 65)")
+    p.add_argument("--web", metavar="HOST:PORT",
+                   help="also serve the browser dashboard of the first module, e.g. 127.0.0.1:8080")
     p.set_defaults(func=run)
 
 
@@ -222,16 +224,36 @@ def run(args) -> int:
     previous = {}
     for signum in (signal.SIGINT, signal.SIGTERM):
         previous[signum] = signal.signal(signum, on_signal)
+    web = None
     try:
+        if getattr(args, "web", None):
+            web = _start_web(server, args.web)
         print("OpenTMCL serving in real time:", flush=True)
         for line in describe(server):
             print(f"  {line}", flush=True)
+        if web is not None:
+            print(f"  dashboard {web.url}", flush=True)
         print("Press Ctrl-C to stop.", flush=True)
         while not stop.wait(0.5):
             pass
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+        if web is not None:
+            web.stop()
         server.stop()
     print("stopped; EEPROM flushed", flush=True)
     return 0
+
+
+def _start_web(server, spec: str):
+    """The dashboard (opentmcl.web) for the first served module on HOST:PORT."""
+    host, port = parse_hostport(spec)
+    try:
+        from ..web.server import DashboardStartError, start_dashboard_for_bus
+    except ImportError as exc:
+        raise CliError(f"--web needs the web extra (pip install 'opentmcl[web]'): {exc}") from None
+    try:
+        return start_dashboard_for_bus(server.bus, host or "127.0.0.1", port)
+    except DashboardStartError as exc:
+        raise CliError(str(exc)) from None

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 Result = tuple[int, int] | bytes | None
 Handler = Callable[["VirtualModule", int, int, int, bool], Result]
 
-KNOWN_OPCODES = frozenset([*range(1, 58), *range(64, 72), *range(128, 140)])
+KNOWN_OPCODES = frozenset([*range(1, 58), *range(64, 72), 80, *range(128, 140)])  # 80: CALL (PD28-1021)
 NO_SUPPRESS = frozenset({6, 10, 15})  # GP255 never suppresses GAP, GGP, GIO
 OK = int(Status.OK)
 _NOT_AVAILABLE, _INVALID_COMMAND = int(Status.NOT_AVAILABLE), int(Status.INVALID_COMMAND)

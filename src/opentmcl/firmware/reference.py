@@ -1,32 +1,237 @@
-"""Reference search command state (RFS START/STOP/STATUS, TMCM-6212 manual 3.6.11).
+"""Reference search state machines (RFS START/STOP/STATUS, WAIT RFS).
 
-RFS START sets the axis searching: it drives towards the switch the mode
-searches first with the reference search speed (AP194) until the search
-completes or RFS STOP ends it. The switch-driven state machines of every mode
-belong to the axis-world model.
+TMCM-6212 manual 3.6.11 and 6.1 (modes 1-8, +64 right switch for 1-4, +128 inverted
+home switch for 5-8), PD86-1180 manual 4.6.13 and 7.1 (modes 1-3, mode 3 = three-switch
+mode, +128 inverted reference switch); the PD28-1021 uses the TMCM-6212 modes.
+
+Each mode is a generator that drives the axis and yields a condition; the world
+(firmware/world.py) re-checks the condition at every switch edge, arrival and stop,
+and resumes the generator when it holds. Search speed AP194, calibration speed AP195.
+
+Switching point calibration: after the switch is hit the motor leaves it at AP195
+(first switching point), re-enters it (second switching point) and the reference point
+is the centre of the two. The motor then drives to the reference point, AP197 takes the
+position counter there and the counter and the encoder (AP209) are set to 0. Details
+and choices: docs/world.md, docs/notes/world.md.
 """
 from __future__ import annotations
+
+from collections.abc import Callable, Generator
+from fractions import Fraction
+
+Cond = Callable[[], bool]
+Steps = Generator[Cond, None, 'int | Fraction']
+
+LEFT, RIGHT, HOME = "left", "right", "home"
 
 
 class ReferenceSearch:
     def __init__(self, axis) -> None:
         self.axis = axis
         self.active = False
+        self._gen: Steps | None = None
+        self._cond: Cond | None = None
+        self.mode = 0
+        self.log: list[tuple] = []
+        """Phases of the last search: (what, switch, direction or position), for tests and traces."""
 
+    # --- RFS ----------------------------------------------------------------------------------
     def start(self) -> None:
         ax = self.axis
-        mode = ax.ram.get(193, 1) & 0x3F
-        speed = ax.ram.get(194, 0)
-        direction = 1 if mode in (6, 7) else -1  # modes 6/7 search in positive direction first
-        if mode in (2, 3):
-            direction = 1  # "search right stop switch, then ..."
+        world = ax.world
+        world.vm.sync()
+        self.aw = world.axis(ax.index)
+        self.aw._follow()
+        self.aw._update_raw()
+        self.mode = ax.ram.get(193, 1)
+        ax.error_flags = 0              # PD86-1180 4.28: RFS start resets the deviation flags
         self.active = True
-        ax.engine.rotate(ax.to_engine(194, direction * speed))
+        self.log = []
+        ax.reference_search_active = True
+        self._gen = self._program()
+        self._cond = None
+        self._resume()
 
     def stop(self) -> None:
         if self.active:
-            self.active = False
+            self._finish()
             self.axis.engine.stop()
+
+    def abort(self) -> None:
+        """Stall or deviation stopped the motor: the search ends where it is."""
+        if self.active:
+            self._finish()
 
     def status(self) -> int:
         return int(self.active)
+
+    def _finish(self) -> None:
+        self.active = False
+        self.axis.reference_search_active = False
+        self._gen = None
+        self._cond = None
+        if getattr(self, "aw", None) is not None:
+            self.aw.watch = None
+
+    # --- driving the generator --------------------------------------------------------------
+    def poll(self) -> None:
+        """Called by the world at every event tick while the search is active."""
+        if self.active and self._cond is not None and self._cond():
+            self._resume()
+
+    def _resume(self) -> None:
+        while self.active and self._gen is not None:
+            try:
+                cond = next(self._gen)
+            except StopIteration:
+                self._finish()
+                return
+            if not cond():
+                self._cond = cond
+                return
+
+    # --- inputs and motions ---------------------------------------------------------------------
+    def state(self, name: str) -> bool:
+        """Logical switch state for the search (AP12/AP13 do not apply, manual 6.1)."""
+        left, right, home = self.aw.logical()
+        if self.mode & 128:
+            if self.aw.three_switch_wiring and name == LEFT:
+                left = not left
+            home = not home
+        return {LEFT: left, RIGHT: right, HOME: home}[name]
+
+    @property
+    def pos(self) -> int:
+        return self.axis.engine.position
+
+    def _speed(self, number: int) -> int | float:
+        ax = self.axis
+        return abs(ax.to_engine(number, ax.ram.get(number, 0)))
+
+    def _rotate(self, direction: int, number: int) -> None:
+        self.axis.engine.rotate(direction * self._speed(number))
+
+    def _stopped(self) -> bool:
+        return not self.axis.engine.moving
+
+    def _halt_after_hit(self) -> Steps:
+        """The switch was found at search speed: stop (soft if enabled) and wait for standstill."""
+        e = self.axis.engine
+        if self.aw.soft_stop_enabled():
+            e.stop()
+        else:
+            e.hard_stop()
+        yield self._stopped
+        return 0
+
+    def seek(self, name: str, direction: int, turn_at: str | None = None) -> Steps:
+        """Drive at AP194 until switch `name` is active; reverse once at switch `turn_at`.
+        Returns the direction the switch was found in."""
+        self.log.append(("seek", name, direction))
+        if self.state(name):
+            self.log.append(("found", name, self.pos))
+            return direction
+        self._rotate(direction, 194)
+        if turn_at is None:
+            yield lambda: self.state(name)
+        else:
+            yield lambda: self.state(name) or self.state(turn_at)
+            if not self.state(name):          # end switch first: turn round
+                self.log.append(("turn", turn_at, self.pos))
+                yield from self._halt_after_hit()
+                direction = -direction
+                self._rotate(direction, 194)
+                yield lambda: self.state(name)
+        self.log.append(("found", name, self.pos))
+        yield from self._halt_after_hit()
+        return direction
+
+    def _slow_until(self, name: str, direction: int, level: bool) -> Steps:
+        self._rotate(direction, 195)
+        yield lambda: self.state(name) == level
+        self.log.append(("enter" if level else "leave", name, self.pos))
+        self.axis.engine.hard_stop()
+        yield self._stopped
+        return self.pos
+
+    def edge(self, name: str, direction: int) -> Steps:
+        """Switching point calibration of the switch edge met while moving in `direction`:
+        the centre of leaving it (against `direction`) and re-entering it (along it)."""
+        if not self.state(name):             # stopped beyond a narrow switch: come back into it
+            yield from self._slow_until(name, -direction, True)
+        first = yield from self._slow_until(name, -direction, False)
+        second = yield from self._slow_until(name, direction, True)
+        return Fraction(first + second, 2)
+
+    def middle(self, name: str, direction: int) -> Steps:
+        """Both edges of switch `name` (the first met moving in `direction`); their centre."""
+        near = yield from self.edge(name, direction)
+        first = yield from self._slow_until(name, direction, False)
+        second = yield from self._slow_until(name, -direction, True)
+        far = Fraction(first + second, 2)
+        return (near + far) / 2
+
+    def goto(self, target) -> Steps:
+        """Drive at AP195 to the reference point (rounded to a whole microstep)."""
+        target = round(target)
+        here = self.pos
+        if here != target:
+            d = 1 if target > here else -1
+            self.aw.watch = target
+            self._rotate(d, 195)
+            yield lambda: (self.pos - target) * d >= 0
+            self.axis.engine.hard_stop()
+            self.aw.watch = None
+            yield self._stopped
+        return self.pos
+
+    def zero(self, reference: int) -> Steps:
+        yield from self.goto(reference)
+        ax = self.axis
+        self.log.append(("zero", None, self.pos))
+        if 197 in ax.params:
+            ax.ram[197] = self.pos
+        self.aw.relabel(0)
+        self.aw.set_encoder(0)
+        return 0
+
+    # --- the modes ------------------------------------------------------------------------------------
+    def _program(self) -> Steps:
+        mode = self.mode
+        base = mode & 0x3F
+        three_switch = self.aw.has(141)           # PD86-1180 numbering (mode 3 = three-switch mode)
+        left, right, d = LEFT, RIGHT, -1
+        if mode & 64:                              # +64: the right switch instead of the left one
+            left, right, d = RIGHT, LEFT, 1
+        ax = self.axis
+        if base == 1:
+            found = yield from self.seek(left, d)
+            ref = yield from self.edge(left, found)
+        elif base == 2 or (base == 3 and three_switch):
+            found = yield from self.seek(right, -d)
+            far = yield from self.edge(right, found)
+            found = yield from self.seek(left, d)
+            ref = yield from self.edge(left, found)
+            ax.ram[196] = round(abs(far - ref))
+        elif base == 3:
+            found = yield from self.seek(right, -d)
+            far = yield from self.edge(right, found)
+            found = yield from self.seek(left, d)
+            ref = yield from self.middle(left, found)
+            ax.ram[196] = round(abs(far - ref))
+        elif base == 4:
+            found = yield from self.seek(left, d)
+            ref = yield from self.middle(left, found)
+        elif base == 5:
+            found = yield from self.seek(HOME, -1, turn_at=LEFT)
+            ref = yield from self.edge(HOME, found)
+        elif base == 6:
+            found = yield from self.seek(HOME, 1, turn_at=RIGHT)
+            ref = yield from self.edge(HOME, found)
+        elif base in (7, 8):
+            found = yield from self.seek(HOME, 1 if base == 7 else -1)
+            ref = yield from self.middle(HOME, found)
+        else:
+            return 0
+        yield from self.zero(ref)
+        return 0

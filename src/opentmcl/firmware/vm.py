@@ -17,6 +17,7 @@ from ..modules.profile import ModuleProfile, load_profile
 from ..motion import CLOCK_HZ
 from ..protocol.frame import FRAME_LEN, Reply, Request, to_int32
 from ..protocol.status import Status
+from .ascii import AsciiInterface
 from .axis import Axis
 from .commands import COMMANDS, NO_SUPPRESS, execute
 from .eeprom import Eeprom
@@ -32,6 +33,7 @@ TICKS_PER_MS = CLOCK_HZ // 1000
 _REQUEST = struct.Struct(">BBBBiB")
 _REPLY = struct.Struct(">BBBBi")
 _ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
+_HEARTBEATS = (("serial", (0, 68)), ("can", (0, 82)))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 
 
@@ -84,7 +86,9 @@ class VirtualModule:
         self.accumulator = 0
         self.x_register = 0
         self.flags = 0
-        self.ascii_mode = False
+        self.ascii = AsciiInterface(self)
+        # GP67 bit 0: start up in ASCII mode (PD28-1021 manual 3.4.4)
+        self.ascii_mode = self.profile.ascii_mode and bool(self.globals.get_raw(0, 67) & 1)
         self.download_mode = False
         self.download_pointer = 0
         self.program_counter = 0
@@ -92,7 +96,7 @@ class VirtualModule:
         self.event_mask = 0          # command 138 motors armed for the next / every MVP
         self.event_permanent = 0
         self._armed = 0              # motors whose arrival will be reported
-        self._last_command = self.now
+        self._last_command = {"serial": self.now, "can": self.now}
         self._heartbeat_fired = False
         self._engines_dirty = True
         self._engine_next: int | None = None
@@ -121,8 +125,9 @@ class VirtualModule:
         return secondary != 0 and address == secondary
 
     # --- wire interface -------------------------------------------------------
-    def handle(self, frame: bytes) -> bytes:
-        """Process one 9-byte request; return the reply bytes (b"" when no reply is due)."""
+    def handle(self, frame: bytes, *, interface: str = "serial") -> bytes:
+        """Process one 9-byte request; return the reply bytes (b"" when no reply is due).
+        `interface` ("serial" or "can") selects the heartbeat the request restarts (GP68 / GP82)."""
         if len(frame) != FRAME_LEN:
             return b""
         target, command, type_, motor, value, check = _REQUEST.unpack(frame)
@@ -132,8 +137,7 @@ class VirtualModule:
             return b""
         if sum(frame[:8]) & 0xFF != check:
             return self._reply(_WRONG_CHECKSUM, command, 0, address)
-        self._last_command = self.now  # heartbeat (GP68 / GP82) restarts
-        self._heartbeat_fired = False
+        self.touch(interface)
         out = execute(self, command, type_, motor, value, program=False)
         if out is None:  # no reply (command 137)
             return b""
@@ -156,10 +160,14 @@ class VirtualModule:
         body = _REPLY.pack(self.host_address & 0xFF, module & 0xFF, status, command, value)
         return body + bytes((sum(body) & 0xFF,))
 
-    def touch(self) -> None:
-        """A command arrived: restart the heartbeat (GP68 serial / GP82 CAN)."""
-        self._last_command = self.now
+    def touch(self, interface: str = "serial") -> None:
+        """A command arrived: restart that interface's heartbeat (GP68 serial / GP82 CAN)."""
+        self._last_command[interface] = self.now
         self._heartbeat_fired = False
+
+    def feed_ascii(self, data: bytes) -> bytes:
+        """ASCII mode (command 139 or GP67 bit 0): received bytes in, echo and reply lines out."""
+        return self.ascii.feed(data)
 
     def drain_events(self) -> list[bytes]:
         """Unsolicited replies produced while time advanced (command 138, status 128)."""
@@ -253,10 +261,13 @@ class VirtualModule:
         return None if nxt == self.now + 2**62 else (nxt - self.now) / CLOCK_HZ
 
     def _heartbeat_deadline(self) -> int | None:
-        ms = self.globals.get_raw(0, 68)
-        if not ms or self._heartbeat_fired:
+        """Earliest expiry of the serial (GP68) and CAN (GP82) heartbeats, in ticks."""
+        if self._heartbeat_fired:
             return None
-        return self._last_command + ms * TICKS_PER_MS
+        ram = self.globals.ram
+        deadlines = [self._last_command[iface] + ms * TICKS_PER_MS
+                     for iface, key in _HEARTBEATS if (ms := ram.get(key, 0))]
+        return min(deadlines) if deadlines else None
 
     def _after_step(self) -> None:
         hb = self._heartbeat_deadline()

@@ -507,12 +507,6 @@ def _operand_value(stmt: _Stmt, op: _Operand, fld: str, st: _State) -> int:
     return to_int32(v) if fld == VALUE else v
 
 
-def _available(number: int, opcodes_: frozenset[int]) -> bool:
-    """CALL (80) is listed in the PD28-1021 manual's contents but not in its Table 5 nor in the
-    profile's opcodes: a module with the extended set (DJNZ, 49) has it, as the firmware assumes."""
-    return number in opcodes_ or (number == 80 and 49 in opcodes_)
-
-
 def _encode_stmt(stmt: _Stmt, st: _State, profile) -> Instruction:
     if stmt.command is None:  # RAW
         if len(stmt.operands) != 4:
@@ -528,7 +522,7 @@ def _encode_stmt(stmt: _Stmt, st: _State, profile) -> Instruction:
         n = len(stmt.operands)
         _fail(stmt.where, col, f"{cmd.mnemonic} does not take {n} operand{'s' if n != 1 else ''}; "
               f"expected {cmd.usage()}")
-    if profile is not None and not _available(cmd.number, profile.opcodes):
+    if profile is not None and cmd.number not in profile.opcodes:
         _fail(stmt.where, stmt.column, f"{cmd.mnemonic} (command {cmd.number}) is not available on {profile.name}")
     fields = {TYPE: 0, MOTOR: 0, VALUE: 0}
     for op, fld in zip(stmt.operands, form, strict=True):

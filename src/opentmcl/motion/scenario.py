@@ -105,7 +105,7 @@ def parse_profile(value, where: str) -> Profile:
 
 def _switch(name: str, d, where: str) -> Switch:
     d = _table(d, where)
-    _known(d, {"position", "width", "hysteresis"}, where)
+    _known(d, {"position", "width", "hysteresis", "inverted"}, where)
     if "position" not in d:
         raise ScenarioError(f"{where}: 'position' is required")
     pos = _int(d["position"], f"{where}.position")
@@ -114,13 +114,16 @@ def _switch(name: str, d, where: str) -> Switch:
     hyst = _int(d.get("hysteresis", 0), f"{where}.hysteresis")
     if (width is not None and width < 0) or hyst < 0:
         raise ScenarioError(f"{where}: width and hysteresis must not be negative")
+    inv = d.get("inverted", False)
+    if not isinstance(inv, bool):
+        raise ScenarioError(f"{where}.inverted: expected true or false")
     if name == "left":
-        return left_switch(pos, width, hyst)
+        return left_switch(pos, width, hyst, inv)
     if name == "right":
-        return right_switch(pos, width, hyst)
+        return right_switch(pos, width, hyst, inv)
     if width is None:
         raise ScenarioError(f"{where}: the home switch needs a 'width'")
-    return home_switch(pos, width, hyst)
+    return home_switch(pos, width, hyst, inv)
 
 
 AXIS_KEYS = {"type", "start", "steps_per_turn", "ends", "load", "encoder", "fullsteps_per_round", "force",

@@ -26,6 +26,7 @@ class Switch:
     lo: int
     hi: int
     hysteresis: int = 0
+    inverted: bool = False     # normally closed: the input reads 0 while the switch is actuated
 
     @property
     def centre(self) -> float:
@@ -45,19 +46,19 @@ class Switch:
         return tuple(x for x in out if -FAR < x < FAR)
 
 
-def left_switch(position: int, width: int | None = None, hysteresis: int = 0) -> Switch:
+def left_switch(position: int, width: int | None = None, hysteresis: int = 0, inverted: bool = False) -> Switch:
     """Left limit switch: switching point `position`, active from there leftwards (`width` microsteps)."""
-    return Switch(-FAR if width is None else position - width, position, hysteresis)
+    return Switch(-FAR if width is None else position - width, position, hysteresis, inverted)
 
 
-def right_switch(position: int, width: int | None = None, hysteresis: int = 0) -> Switch:
+def right_switch(position: int, width: int | None = None, hysteresis: int = 0, inverted: bool = False) -> Switch:
     """Right limit switch: switching point `position`, active from there rightwards."""
-    return Switch(position, FAR if width is None else position + width, hysteresis)
+    return Switch(position, FAR if width is None else position + width, hysteresis, inverted)
 
 
-def home_switch(position: int, width: int, hysteresis: int = 0) -> Switch:
+def home_switch(position: int, width: int, hysteresis: int = 0, inverted: bool = False) -> Switch:
     """Home switch centred on `position`: active on [position - width//2, position + width//2]."""
-    return Switch(position - width // 2, position + width // 2, hysteresis)
+    return Switch(position - width // 2, position + width // 2, hysteresis, inverted)
 
 
 @dataclass
@@ -74,6 +75,14 @@ class Stage:
     @property
     def circular(self) -> bool:
         return self.steps_per_turn is not None
+
+    def active(self, sw: Switch, p: int, was: bool) -> bool:
+        """State of `sw` at position `p` (a circular axis repeats every turn)."""
+        if not self.circular:
+            return sw.active(p, was)
+        n = self.steps_per_turn
+        q = p % n
+        return sw.active(q, was) or sw.active(q - n, was) or sw.active(q + n, was)
 
     def switches(self) -> dict[str, Switch]:
         return {n: s for n, s in (("left", self.left), ("right", self.right), ("home", self.home)) if s}

@@ -14,6 +14,7 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 from importlib import resources
@@ -160,11 +161,23 @@ def create_app(dashboard: Dashboard) -> Starlette:
 
     async def ws(websocket: WebSocket) -> None:
         await websocket.accept()
+        gone = asyncio.Event()
+
+        async def reader() -> None:
+            # The page sends nothing; reading notices the browser going away.
+            try:
+                while (await websocket.receive())["type"] != "websocket.disconnect":
+                    pass
+            except (WebSocketDisconnect, RuntimeError, ConnectionError):
+                pass
+            gone.set()
+
+        reading = asyncio.create_task(reader())
         last_seq = d.samples[-1].seq - 1 if d.samples else 0
         last_state = None
         try:
             await websocket.send_json({"type": "hello", "overview": await run_in_threadpool(d.overview)})
-            while True:
+            while not gone.is_set() and not d.closed.is_set():
                 new = d.samples_since(last_seq)
                 if new:
                     last_seq = new[-1].seq
@@ -175,7 +188,12 @@ def create_app(dashboard: Dashboard) -> Starlette:
                     await websocket.send_json({"type": "state", "state": last_state})
                 await asyncio.sleep(1.0 / (FAST_HZ * 2))
         except (WebSocketDisconnect, RuntimeError, ConnectionError):
-            return
+            pass
+        finally:
+            reading.cancel()
+            if not gone.is_set():
+                with contextlib.suppress(RuntimeError, ConnectionError):
+                    await websocket.close(1001)
 
     routes = [
         Route("/", index),

@@ -37,6 +37,7 @@ class DashboardHandle:
         return f"http://{host}:{self.port}/"
 
     def stop(self) -> None:
+        self.dashboard.closed.set()
         self.dashboard.cancel_run()
         self._poller.stop()
         self._server.should_exit = True
@@ -50,6 +51,15 @@ class DashboardHandle:
 
     def __exit__(self, *exc) -> None:
         self.stop()
+
+
+def _ws_implementation() -> str:
+    """uvicorn's sans-I/O websockets protocol where it exists (newer uvicorn deprecates the other)."""
+    import importlib.util
+
+    if importlib.util.find_spec("uvicorn.protocols.websockets.websockets_sansio_impl") is not None:
+        return "websockets-sansio"
+    return "websockets"
 
 
 class DashboardStartError(OSError):
@@ -70,7 +80,7 @@ def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=Non
     dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
     app = create_app(dashboard)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
-                            ws="websockets", access_log=False)
+                            ws=_ws_implementation(), access_log=False)
     server = uvicorn.Server(config)
     server.install_signal_handlers = lambda: None  # older uvicorn; the caller owns the signals
     failure: list[BaseException] = []

@@ -10,7 +10,7 @@ the rest of the axis state and the program status; the web layer reads the sampl
 """
 from __future__ import annotations
 
-import contextlib
+import logging
 import threading
 import time
 from collections import deque
@@ -18,6 +18,8 @@ from dataclasses import dataclass
 
 from ..host import Module, TmclError, TmclStatusError, VersionReply
 from ..protocol.status import message
+
+log = logging.getLogger("opentmcl.web")
 
 FAST_HZ = 25            # position/velocity samples per second (issue 7: at least 20)
 HISTORY_SECONDS = 60.0  # samples kept for the live charts
@@ -73,6 +75,7 @@ class Dashboard:
         self.breakpoints: set[int] = set()
         self._runner: threading.Thread | None = None
         self._cancel = threading.Event()
+        self.closed = threading.Event()  # set by stop(): live connections end
         with self.lock:
             self.profile = module.profile
             self.version = self._try(module.firmware_version, "?")
@@ -428,10 +431,12 @@ class Poller:
         n = 0
         next_t = time.monotonic()
         while not self._stop.is_set():
-            with contextlib.suppress(Exception):  # a broken link shows as "disconnected", never kills the loop
+            try:
                 self.dashboard.sample_fast()
                 if n % SLOW_EVERY == 0:
                     self.dashboard.sample_slow()
+            except Exception:  # a bug must not stop the charts; link errors are handled in Dashboard
+                log.exception("dashboard sampling failed")
             n += 1
             next_t += self.period
             delay = next_t - time.monotonic()

@@ -115,7 +115,7 @@ class TMC4210(ChipEvents):
             if d.address in (0x00, 0x01, 0x35):
                 # a write is no arrival: pos_end, ref_miss and POS_COMP need a step (notes)
                 fresh = self._observe()
-                self._seen.update({k: fresh[k] for k in ("x", "xeq", "comp", "zero")})
+                self._seen.update({k: fresh[k] for k in ("x", "xt", "xeq", "comp", "zero")})
             self._evaluate()
         if sdo_disabled:
             # SDO_INT=1: nINT drives the pin for the whole datagram (5.2.2.2 "disables the SPI output")

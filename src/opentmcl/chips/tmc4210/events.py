@@ -40,6 +40,7 @@ class ChipEvents:
             "x": x,
             "ref_active": ref_active,
             "ref_out": ref_active and not self._in_tolerance(x),
+            "xt": self.x_target,
             "xeq": x == self.x_target,
             "comp": x == self.pos_comp,
             "zero": x == 0,
@@ -66,8 +67,8 @@ class ChipEvents:
 
     def _wanted_direction(self) -> int:
         r = self._ramp
-        if r.v_actual:
-            return 1 if r.v_actual > 0 else -1
+        if r.v_internal:  # moving, or a velocity below one (6.1.6) still ramping
+            return 1 if r.v_internal > 0 else -1
         if r.mode in (0, 1):
             dx = _s24(r.x_target - r.x_actual)
             return (dx > 0) - (dx < 0)
@@ -77,14 +78,14 @@ class ChipEvents:
 
     def _frozen(self) -> bool:
         """Held at a stop switch: velocity 0 and the ramp would move into the switch."""
-        return self._ramp.v_actual == 0 and self._wanted_direction() in self._blocked()
+        return self._ramp.v_internal == 0 and self._wanted_direction() in self._blocked()
 
     def _evaluate(self) -> None:
         """Compare the present state with the last one seen and raise the chip's events."""
         old, new = self._seen, self._observe()
         moving = self._ramp.v_actual != 0
-        if new["xeq"] and not old["xeq"] and new["x"] != old["x"]:
-            self._flag("pos_end")
+        if new["xeq"] and not old["xeq"] and new["x"] != old["x"] and new["xt"] == old["xt"]:
+            self._flag("pos_end")  # motion reached X_TARGET (not a switch stop moving X_TARGET)
         if new["comp"] and not old["comp"] and new["x"] != old["x"] and self.pos_comp_m:
             self.pos_comp_i = 1
         ref_active = new["ref_active"]
@@ -153,7 +154,7 @@ class ChipEvents:
         """
         r = self._ramp
         best = limit
-        if r.v_actual == 0 and self._wanted_direction() == 0 and not self._stopping:
+        if r.v_internal == 0 and self._wanted_direction() == 0 and not self._stopping:
             return max(best, r.now)
         points = self._position_events()
         if points or self._stopping or self._blocked():

@@ -1,0 +1,148 @@
+"""Behavioural model of stallGuard2, coolStep and the drive currents (docs/world.md).
+
+Not the chip's physics: a linear model with the properties the manuals state
+(TMCM-6212 manual 6.3/6.4 and 4.1 AP168-AP183, PD86-1180 manual 5.1/7.3):
+
+    capacity  C = (CS + 1) / 32            CS = current scale 0..31 in use (= current >> 3)
+    load value SG = clamp(round(1023 * (1 - L / C)) + 16 * SGT, 0, 1023)
+
+L is the load torque as a fraction of the torque at 100 % current, SGT the
+threshold AP174. SG falls linearly with load, rises with current and reaches
+0 at L = C (SGT = 0); a lower SGT reaches 0 at a lower load (more sensitive).
+The objects here read the axis through an `AxisWorld`-like object `aw` (`aw.p(n)`,
+`aw.has(n)`, `aw.engine`, `aw.vm.now`, `aw.load_now()`).
+"""
+from __future__ import annotations
+
+from .base import CLOCK_HZ
+
+SEUP = (1, 2, 4, 8)        # AP171: current increment per measurement below the lower threshold
+SEDN = (32, 8, 2, 1)       # AP169: measurements above the upper threshold per decrement
+TICKS_PER_10MS = CLOCK_HZ // 100
+TICKS_PER_MS = CLOCK_HZ // 1000
+
+
+def load_value(load: float, capacity: float, sgt: int) -> int:
+    """AP206: 0..1023, linear in the load; 0 = maximum load (stall)."""
+    if capacity <= 0:
+        return 0
+    sg = round(1023 * (1 - load / capacity)) + 16 * sgt
+    return max(0, min(1023, sg))
+
+
+def accelerating(engine) -> bool:
+    """True while the ramp changes the velocity (for the boost current AP200)."""
+    acc = getattr(engine, "actual_acceleration", None)
+    if acc is not None:
+        return acc != 0
+    queue = getattr(engine, "_queue", None)
+    return bool(queue is not None and queue.at(engine.now).a != 0)
+
+
+class CurrentModel:
+    """Which current drives the motor now: run, boost, slow-run, coolStep-regulated, standby or none."""
+
+    def __init__(self) -> None:
+        self.cs_act: int | None = None       # coolStep current scale while regulating
+        self.still_since: int | None = 0
+        self._last_counter: int | None = None
+        self._microsteps = 0                 # travelled since the last stallGuard2 measurement
+        self._down = 0                       # measurements above the upper threshold so far
+        self.driver_flags = 0
+
+    # --- thresholds -------------------------------------------------------------------------
+    @staticmethod
+    def cs(aw) -> int:
+        return aw.p(6, 128) >> 3
+
+    @staticmethod
+    def coolstep_on(aw) -> bool:
+        e = aw.engine
+        if not aw.p(172) or not e.moving:
+            return False
+        return abs(e.velocity) >= abs(aw.axis.to_engine(182, aw.p(182)))
+
+    # --- update --------------------------------------------------------------------------------
+    def update(self, aw) -> None:
+        e, now = aw.engine, aw.vm.now
+        if e.moving:
+            self.still_since = None
+        elif self.still_since is None:
+            self.still_since = now
+        counter = e.position
+        moved = 0 if self._last_counter is None else abs(counter - self._last_counter)
+        self._last_counter = counter
+        if not self.coolstep_on(aw):
+            self.cs_act = None
+            self._microsteps = 0
+            return
+        cs = self.cs(aw)
+        if self.cs_act is None:
+            self.cs_act = cs
+        per = (1 << aw.p(140, 8)) * (4 if aw.p(173) else 1)   # AP173: one measurement per 4 fullsteps
+        self._microsteps += moved
+        n, self._microsteps = divmod(self._microsteps, per)
+        self._regulate(aw, n, cs)
+
+    def _regulate(self, aw, n: int, cs: int) -> None:
+        semin, semax = aw.p(172), aw.p(170)
+        lower, upper = semin * 32, (semin + semax + 1) * 32
+        up, down = SEUP[aw.p(171) & 3], SEDN[aw.p(169) & 3]
+        cs_min = max(0, (cs + 1) // (4 if aw.p(168) else 2) - 1)
+        load = aw.load_now()
+        while n > 0:
+            sg = load_value(load, (self.cs_act + 1) / 32 * aw.falloff(), aw.p(174))
+            if sg < lower and self.cs_act < cs:
+                self.cs_act = min(cs, self.cs_act + up)
+                self._down = 0
+                n -= 1
+            elif sg >= upper and self.cs_act > cs_min:
+                need = down - self._down
+                if n < need:
+                    self._down += n
+                    return
+                n -= need
+                self._down = 0
+                self.cs_act -= 1
+            else:
+                return
+
+    # --- readings ---------------------------------------------------------------------------------
+    def in_use(self, aw) -> int:
+        """Current in use on the 0..255 scale of AP6."""
+        e, now = aw.engine, aw.vm.now
+        if not e.moving:
+            still = 0 if self.still_since is None else now - self.still_since
+            if aw.vm.profile.engine != "sixpoint" and aw.p(204) and still >= aw.p(204) * TICKS_PER_MS:
+                return 0                         # PD86-1180 AP204: power cut after the freewheeling time
+            if still >= aw.p(214, 200) * TICKS_PER_10MS:
+                return aw.p(7, 8)                # standby current after the power-down delay
+            return aw.p(6, 128)
+        if aw.p(200) and accelerating(e):
+            return aw.p(200)                     # boost current during acceleration / deceleration
+        if aw.has(183) and aw.p(182) and abs(e.velocity) < abs(aw.axis.to_engine(182, aw.p(182))):
+            return aw.p(183)                     # slow-run current below the coolStep threshold speed
+        if self.cs_act is not None:
+            return (self.cs_act + 1) * 8 - 1
+        return aw.p(6, 128)
+
+    def actual_scale(self, aw) -> int:
+        """AP180: current scale 0..31 in use."""
+        return self.in_use(aw) >> 3
+
+    def fraction(self, aw) -> float:
+        i = self.in_use(aw)
+        return 0.0 if i == 0 else ((i >> 3) + 1) / 32
+
+    def driver_status(self, aw) -> int:
+        """AP208 (PD86-1180 manual 5, TMC262 flags): bit 0 stallGuard2 threshold reached,
+        bit 7 standstill; bits 1-6 from the scenario's `driver_flags`."""
+        bits = 0
+        if aw.engine.moving and aw.load_value() == 0:
+            bits |= 0x01
+        if not aw.engine.moving:
+            bits |= 0x80
+        prof = aw.spec.driver_flags
+        if prof is not None:
+            bits |= int(round(prof.at(aw.vm.now / CLOCK_HZ))) & 0x7E
+        return bits

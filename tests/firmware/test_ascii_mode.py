@@ -1,0 +1,108 @@
+"""The ASCII interface (PD28-1021 manual 3.4, PD86-1180 manual 4.5): command 139, GP67, echo modes,
+backspace, BIN, RUN/STOP, `BA 100 -5000` replies."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl import VirtualModule
+
+from .conftest import Host
+
+
+@pytest.fixture(params=["PD28-1021", "PD86-1180"])
+def ascii_host(request):
+    host = Host(VirtualModule(request.param))
+    host.ok(139)
+    assert host.vm.ascii_mode
+    return host
+
+
+def test_manual_reply_example(ascii_host):
+    """3.4.3: "after sending AGAP 0, 1 the reply would be BA 100 -5000 if the actual position ... is -5000,
+    the host address is set to 2 and the module address is 1" (our modules have one axis: motor 0)."""
+    vm = ascii_host.vm
+    vm.axes[0].engine.set_position(-5000)
+    out = vm.feed_ascii(b"AGAP 1, 0\r")
+    assert out == b"AGAP 1, 0\r" + b"BA 100 -5000\r"
+
+
+def test_command_line_forms(ascii_host):
+    """3.4.2: "After the address character there may be spaces"; examples AMVP ABS, ..., A MST."""
+    vm = ascii_host.vm
+    vm.globals.set(0, 67, 0x20)                      # bit 5: no echo, only the reply
+    assert vm.feed_ascii(b"A MVP ABS, 0, 5000\r") == b"BA 100 0\r"
+    assert vm.feed_ascii(b"AMST 0\r") == b"BA 100 0\r"
+    assert vm.feed_ascii(b"ASAP 4, 0, 123\r") == b"BA 100 0\r"
+    assert vm.feed_ascii(b"AGAP 4, 0\r") == b"BA 100 123\r"
+
+
+def test_echo_whole_line_mode(ascii_host):
+    """3.4.4: "When bit 4 is set ... the entire line will be echoed back after the <CR>"."""
+    vm = ascii_host.vm
+    vm.globals.set(0, 67, 0x10)
+    assert vm.feed_ascii(b"AGGP 66, 0") == b""
+    assert vm.feed_ascii(b"\r") == b"AGGP 66, 0\rBA 100 1\r"
+
+
+def test_backspace_editing(ascii_host):
+    """3.4.4: "Characters can also be erased using the backspace character"."""
+    vm = ascii_host.vm
+    vm.globals.set(0, 67, 0x20)
+    assert vm.feed_ascii(b"AGAP 9\x084, 0\r") == b"BA 100 " + str(vm.axes[0].get(4)).encode() + b"\r"
+
+
+def test_other_addresses_and_errors(ascii_host):
+    """3.4.2: the address character selects the module — B is module 2, so module 1 stays silent;
+    a command ASCII mode does not know is answered with status 2; only direct-mode commands are allowed."""
+    vm = ascii_host.vm
+    assert vm.feed_ascii(b"BGAP 1, 0\r") == b""
+    vm.globals.set(0, 67, 0x20)
+    assert vm.feed_ascii(b"AFOO 1\r") == b"BA 2 0\r"
+    assert vm.feed_ascii(b"ACALC ADD, 1\r") == b"BA 2 0\r"
+
+
+def test_bin_returns_to_binary_mode(ascii_host):
+    """3.4.1: "For leaving the ASCII mode and re-entering the binary mode enter the command BIN"; the bytes
+    after it are binary frames again."""
+    vm = ascii_host.vm
+    vm.globals.set(0, 67, 0x20)
+    frame = bytes.fromhex("01 06 01 00 00 00 00 00 08")
+    assert vm.feed_ascii(b"ABIN\r" + frame) == b"BA 100 0\r"
+    assert not vm.ascii_mode and vm.ascii.leftover == frame
+    assert ascii_host.ok(6, 1, 0) == 0
+
+
+def test_run_and_stop(ascii_host):
+    """3.4: "RUN: ... start a TMCL program stored in memory. STOP: Stops a TMCL program"."""
+    vm = ascii_host.vm
+    vm.globals.set(0, 67, 0x20)
+    assert vm.feed_ascii(b"ARUN\r") == b"BA 100 0\r"
+    assert vm.application_status == 1
+    assert vm.feed_ascii(b"ASTOP\r") == b"BA 100 0\r"
+    assert vm.application_status == 0
+
+
+def test_gp67_bit0_starts_in_ascii_mode(tmp_path):
+    """3.4.4: "Bit 0 determines the startup mode: if this bit is set, the module will start up in ASCII
+    mode"."""
+    path = tmp_path / "ee.json"
+    host = Host(VirtualModule("PD28-1021", eeprom=path))
+    host.ok(9, 67, 0, 1)
+    assert not host.vm.ascii_mode
+    assert VirtualModule("PD28-1021", eeprom=path).ascii_mode
+
+
+def test_can_heartbeat_gp82_watches_can_traffic_only(m6212):
+    """TMCM-6212 5.1 GP82 "Heartbeat for CAN interface. If this time limit is up and no further command is
+    received the motor will be stopped." Serial traffic does not feed the CAN heartbeat."""
+    vm = m6212.vm
+    m6212.ok(9, 82, 0, 300)
+    m6212.ok(1, 0, 0, 1000)
+    vm.advance(0.2)
+    m6212.ok(6, 1, 0)                          # a serial command: CAN stays silent
+    vm.advance(0.2)
+    assert vm.axes[0].engine.velocity == 0
+    m6212.ok(1, 0, 0, 1000)                    # serial again; the CAN heartbeat fired already
+    vm.handle(bytes.fromhex("01 06 01 00 00 00 00 00 08"), interface="can")
+    vm.advance(0.2)
+    assert vm.axes[0].engine.velocity != 0

@@ -1,0 +1,66 @@
+"""Fixtures for the dashboard tests: a virtual module on the wall clock behind a running dashboard,
+and headless Chromium from Debian's `chromium` package driven by Playwright."""
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+
+CHROMIUM = os.environ.get("OPENTMCL_CHROMIUM", "/usr/bin/chromium")
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                 "--disable-dev-shm-usage"]
+
+
+@pytest.fixture
+def served():
+    """A running dashboard for sim://TMCM-6212 (real clock); yields the handle."""
+    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    import opentmcl
+    from opentmcl.web import start_dashboard
+
+    module = opentmcl.connect("sim://TMCM-6212?clock=real")
+    transport = module.client.transport
+    handle = start_dashboard(module, "127.0.0.1", 0, vm=transport.module, vm_lock=transport.lock,
+                             url="sim://TMCM-6212", on_stop=module.close)
+    try:
+        yield handle
+    finally:
+        handle.stop()
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Chromium (Debian package) through Playwright, with a fresh profile directory;
+    skipped when either is missing. Yields a browser context."""
+    if not (os.path.exists(CHROMIUM) and os.access(CHROMIUM, os.X_OK)):
+        pytest.skip(f"browser tests need Chromium at {CHROMIUM} (Debian: apt-get install chromium)")
+    sync_api = pytest.importorskip("playwright.sync_api", reason="browser tests need the playwright package")
+    profile = tempfile.mkdtemp(prefix="opentmcl-chromium-")
+    with sync_api.sync_playwright() as pw:
+        context = pw.chromium.launch_persistent_context(
+            profile, executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS,
+            viewport={"width": 1400, "height": 1000})
+        try:
+            yield context
+        finally:
+            context.close()
+            shutil.rmtree(profile, ignore_errors=True)
+
+
+@pytest.fixture
+def page(browser, served):
+    ARTIFACTS.mkdir(exist_ok=True)
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    page.goto(served.url)
+    page.wait_for_selector("#axis-0")
+    yield page
+    page.close()
+    assert not errors, f"JavaScript errors on the page: {errors}"

@@ -1,0 +1,82 @@
+"""End-to-end: the dashboard page in headless Chromium against a virtual TMCM-6212.
+
+Screenshots go to test-artifacts/ (CI keeps them). Skipped without /usr/bin/chromium or playwright.
+"""
+from __future__ import annotations
+
+from .conftest import ARTIFACTS
+
+TIMEOUT_MS = 15000  # generous upper bound for a page update; the tests wait for a state, not for time
+
+
+def test_page_shows_module_overview(page, served):
+    """TMCM-6212 manual 3.6.36 command 136: the overview shows the version string "6212V105" and the
+    module's six axes (manual 1 "Features": six axes)."""
+    page.wait_for_function("document.getElementById('ov-version').textContent === '6212V105'", timeout=TIMEOUT_MS)
+    assert page.inner_text("#ov-module") == "TMCM-6212"
+    assert page.locator(".axis-card").count() == 6
+    page.wait_for_function("document.getElementById('ov-connection').textContent === 'connected'",
+                           timeout=TIMEOUT_MS)
+    page.screenshot(path=str(ARTIFACTS / "dashboard-overview.png"), full_page=True)
+
+
+def test_console_move_changes_the_position(page, served):
+    """Manual 3.6.4 MVP ABS: "MVP ABS, 0, 51200" moves motor 0 to 51200; the axis card and the live
+    chart follow the actual position (axis parameter 1) until it equals the target."""
+    page.fill("#console-input", "MVP ABS, 0, 51200")
+    page.press("#console-input", "Enter")
+    page.wait_for_function("document.getElementById('console-log').textContent.includes('status 100')",
+                           timeout=TIMEOUT_MS)
+    page.wait_for_function("document.getElementById('axis-0-position').textContent === '51200'",
+                           timeout=TIMEOUT_MS)
+    points = page.evaluate("window.dashboard.charts.position.series[0].y")
+    assert points[-1] == 51200 and min(points) < 51200  # the chart saw the motor on its way
+    assert served.dashboard.module.axes[0].position == 51200
+    page.screenshot(path=str(ARTIFACTS / "dashboard-after-move.png"), full_page=True)
+
+
+def test_console_shows_status_text_of_an_error(page):
+    """Manual 3.2 status 4 "Invalid value": SAP 4 beyond 7999774 (manual 4.1, parameter 4 range)."""
+    page.fill("#console-input", "SAP 4, 0, 9999999")
+    page.press("#console-input", "Enter")
+    page.wait_for_function("document.getElementById('console-log').textContent.includes('Invalid value')",
+                           timeout=TIMEOUT_MS)
+
+
+def test_edit_axis_parameter(page, served):
+    """Manual 3.6.5 SAP: editing "Maximum positioning speed" (axis parameter 4) writes it to the module."""
+    page.wait_for_selector("#param-axis-4")
+    page.fill("#param-axis-4", "20000")
+    page.press("#param-axis-4", "Enter")
+    page.wait_for_selector("#param-axis-4.saved", timeout=TIMEOUT_MS)
+    assert served.dashboard.module.axes[0].get(4) == 20000
+    title = page.locator("#param-axis-table td[title]").first.get_attribute("title")
+    assert title  # the manual's description on hover
+
+
+def test_assemble_error_is_shown_inline(page):
+    """An unknown mnemonic is an assembler error on its line (docs/tmcl-assembler.md)."""
+    page.fill("#editor", "    MVP ABS, 0, 100\n    FOO 1\n")
+    page.click("#btn-assemble")
+    page.wait_for_selector("#line-2.error", timeout=TIMEOUT_MS)
+    assert "line 2" in page.inner_text("#asm-errors")
+
+
+def test_download_and_step_program(page, served):
+    """Manual 3.6.36: 132/133 download, 130 executes one instruction, 135 reports the program counter.
+    Stepping highlights the next line and shows A (manual 3.6.26 CALC LOAD puts the value into A)."""
+    source = "    CALC LOAD, 5\n    CALC ADD, 2\n    AGP 3, 2\n    STOP\n"
+    page.fill("#editor", source)
+    page.click("#btn-download")
+    page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",
+                           timeout=TIMEOUT_MS)
+    page.click("#btn-step")
+    page.wait_for_function("document.getElementById('prog-pc').textContent === '1'", timeout=TIMEOUT_MS)
+    page.wait_for_selector("#line-2.current", timeout=TIMEOUT_MS)
+    assert page.inner_text("#prog-a") == "5"
+    page.click("#btn-step")
+    page.click("#btn-step")
+    page.wait_for_function("document.getElementById('prog-pc').textContent === '3'", timeout=TIMEOUT_MS)
+    page.wait_for_function("document.getElementById('prog-var-3') && "
+                           "document.getElementById('prog-var-3').textContent === '7'", timeout=TIMEOUT_MS)
+    page.screenshot(path=str(ARTIFACTS / "dashboard-program.png"), full_page=True)
