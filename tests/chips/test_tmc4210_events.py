@@ -1,6 +1,7 @@
 """Event-driven time must not miss what a clock-by-clock walk sees: flags, latch and stops come
 out the same whether the model jumps over a whole move or is advanced one pulse tick at a time
 (DESIGN.md "Time"; datasheet 6.1.10.2, 6.1.11, 6.1.14, 6.2.1.2)."""
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -64,3 +65,12 @@ def test_one_jump_equals_pulse_tick_steps(cfg, cycles):
     assert jump.registers() == walk.registers()
     assert (jump.lp, jump.x_latched, jump.int_flags, jump.pos_comp_i) == \
         (walk.lp, walk.x_latched, walk.int_flags, walk.pos_comp_i)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(3600)
+@settings(max_examples=1500, deadline=None)
+@given(config, st.integers(2000, 30000))
+def test_one_jump_equals_pulse_tick_steps_long(cfg, cycles):
+    """The same jump-versus-walk check with many more examples."""
+    test_one_jump_equals_pulse_tick_steps.hypothesis.inner_test(cfg, cycles)

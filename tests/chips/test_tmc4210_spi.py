@@ -272,3 +272,13 @@ def test_any_datagram_sequence_is_accepted(steps):
         chip.advance_cycles(cycles)
     regs = chip.registers()
     assert regs["TYPE_VERSION"] == 0x429101 and -(1 << 23) <= regs["X_ACTUAL"] < 1 << 23
+
+
+def test_the_issue_contract_calls(chip):
+    """The contract of issue 6: spi() returns the 32-bit answer ($0D000123 is a read of A_MAX:
+    RRS=0, ADDRESS=%000110, RW=1, data bits don't care), advance() and set_inputs() work."""
+    chip.write("A_MAX", 77)
+    assert chip.spi(0x0D000123) == 0x15 << 24 | 77
+    chip.advance(0.01)
+    chip.set_inputs(ref_l=1)
+    assert chip.spi(0x0D000123) >> 24 & R.STATUS_R_L

@@ -74,5 +74,5 @@ def test_run_with_a_scenario_drives_the_potentiometer(tmp_path, capsys):
     assert main(["run", str(EXAMPLES / "tmcm6212_3.6.27_potentiometer.tmc"), "--scenario", str(scenario),
                  "-t", "1", "--sample", "0.25", "-w", "adc0,target0"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [ln.split() for ln in lines[1:4]] == [["0.000", "adc0=302", "target0=0"], ["0.250", "target0=1208"],
-                                                 ["0.500", "adc0=1000", "target0=4000"]]
+    assert [ln.split() for ln in lines[1:5]] == [["0.000", "adc0=302", "target0=0"], ["0.250", "target0=1208"],
+                                                 ["0.500", "adc0=1000"], ["0.750", "target0=4000"]]

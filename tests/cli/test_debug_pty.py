@@ -115,3 +115,20 @@ def test_variables_program_runs_to_stop():
     out = t.command("set var 42 5")
     assert t.command("info").count("var42 = 5") == 1
     assert t.close() == 0
+
+
+def test_ctrl_c_stops_a_free_run(tmp_path):
+    """A program that never stops: `cont` runs it freely until the user presses Ctrl-C (SIGINT),
+    which stops it (128) and returns to the prompt."""
+    import signal
+
+    src = tmp_path / "forever.tmc"
+    src.write_text("Loop: CALC ADD, 1\n  JA Loop\n")
+    t = Terminal("debug", str(src))
+    t.read_until(PROMPT)
+    os.write(t.master, b"cont\n")
+    t.read_until(b"(Ctrl-C stops)")
+    t.proc.send_signal(signal.SIGINT)
+    out = t.read_until(PROMPT)
+    assert "interrupted; program stopped" in out and "[stopped]" in out
+    assert t.close() == 0

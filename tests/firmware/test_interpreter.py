@@ -301,6 +301,10 @@ Loop:
     AAP 0, 0
     GIO 0, 0
     JC ZE, Loop
+    SIO 1, 2, 1
+    GIO 1, 2
+    AGP 6, 2
+    SIO 1, 2, 0
     JA Loop
 Tick:
     CALCX LOAD
@@ -320,8 +324,26 @@ Tick:
             if i == 20:
                 w.vm.io.drive_input(0, 0, 1)
                 w.ok(9, 3, 2, 1000)
-            out.append((w.ok(6, 1, 0), w.ok(6, 0, 0), w.pc, w.a, w.x, w.vm.flags, w.var(3), w.var(4)))
+            out.append((w.ok(6, 1, 0), w.ok(6, 0, 0), w.pc, w.a, w.x, w.vm.flags, w.var(3), w.var(4),
+                        w.var(6), w.out(1)))
         return out, w.vm.interpreter.executed
     fast, slow = trace(True), trace(False)
     assert fast == slow
     assert fast[1] > 1000
+
+
+def test_wait_rfs_and_limsw_with_a_switch_on_the_stage():
+    """3.6.20 "RFS: Wait until the reference search of the motor ... has been reached [completed]";
+    "LIMSW: Wait until a limit switch of the motor ... has been triggered". Stage: left switch at
+    -30000 (a scenario); reference search mode 1 (left switch, TMCM-6212 6.1.1)."""
+    from opentmcl import VirtualModule
+
+    from .test_program_support import Wire
+    w = Wire(VirtualModule("TMCM-6212", address=1, scenario={"axis": {"0": {"left": {"position": -30000}}}}))
+    w.load("SAP 193, 0, 1\nRFS START, 0\nWAIT RFS, 0, 0\nGAP 1, 0\nWAIT LIMSW, 0, 5\nSTOP")
+    w.run()
+    w.vm.advance(0.5)
+    assert (w.state, w.pc) == (1, 2) and w.ok(13, 2, 0) == 1     # still searching, PC held at WAIT
+    w.vm.advance(10.0)
+    assert (w.state, w.pc, w.a) == (0, 5, 0)                       # searched, A = position 0
+    assert not w.vm.flags & flags.ETO                              # the switch satisfied LIMSW

@@ -126,3 +126,22 @@ def test_module_aliases(name):
 def test_unknown_module_is_a_clear_error():
     with pytest.raises(KeyError, match="unknown module"):
         VirtualModule("TMCM-9999")
+
+
+def test_1180_actual_speed_write_holds_velocity(m1180):
+    """PD86-1180 5: AP3 "Actual speed" is RW (±2047); a write sets the TMC429 velocity at once (hold mode)."""
+    m1180.ok(5, 3, 0, 300)
+    assert m1180.ok(6, 3, 0) == 300
+    m1180.vm.advance(0.1)
+    assert m1180.ok(6, 3, 0) == 300 and m1180.ok(6, 1, 0) > 0
+    assert m1180(5, 3, 0, 3000).status == 4
+
+
+def test_1180_actual_acceleration_ap135(m1180):
+    """PD86-1180 5: AP135 "Actual acceleration" reads the ramp generator's current acceleration."""
+    m1180.ok(4, 0, 0, 100000)
+    m1180.vm.advance(0.01)
+    assert m1180.ok(6, 135, 0) == m1180.ok(6, 5, 0)
+    m1180.ok(3, 0, 0)
+    m1180.vm.advance(60)
+    assert m1180.ok(6, 135, 0) == 0

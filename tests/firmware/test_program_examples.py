@@ -26,7 +26,7 @@ def start(name: str, run_from: int | None = None):
     return w, prog
 
 
-def positions_visited(w, seconds: float, step: float = 0.005) -> set[int]:
+def positions_visited(w, seconds: float, step: float = 0.01) -> set[int]:
     """The targets (AP0) the program moved to whose position the motor then reached. Sampled
     finely from the first change of target on (the loop is running then), the motor's extreme
     positions equal those targets (the ramp turns there with velocity 0, so a sample near the
@@ -78,7 +78,7 @@ def test_first_program(name, v1, v2, targets):
     w.vm.advance(5.0)
     assert w.ok(6, 2, 0) == v2
     w.vm.advance(2.6)
-    seen = positions_visited(w, 120.0)
+    seen = positions_visited(w, 60.0)
     assert targets <= seen
 
 
@@ -95,7 +95,7 @@ def test_loops_alternate_between_two_positions(name, targets):
     """3.6.17 JA "An infinite loop", 3.6.18 CSUB example, 7.2 / 8.2 main loop, 7.3 / 8.3 symbolic
     constants: the motor keeps moving between the two positions and stops at each."""
     w, _ = start(name)
-    seen = positions_visited(w, 90.0)
+    seen = positions_visited(w, 45.0)
     assert seen == targets
     assert w.state == 1
 

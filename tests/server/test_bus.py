@@ -164,21 +164,17 @@ def test_serial_heartbeat_gp68_stops_motors_when_host_falls_silent():
 
 def test_can_heartbeat_gp82_applies_to_can_traffic():
     """Manual 5.1 GP82 "Heartbeat for CAN interface. If this time limit is up and no further
-    command is received the motor will be stopped". Needs the module to know the interface
-    a command came from (`handle(frame, interface=...)`); skipped until it does."""
-    import inspect
-
-    vm = VirtualModule("TMCM-6212", address=1)
-    if "interface" not in inspect.signature(vm.handle).parameters:
-        pytest.skip("VirtualModule.handle does not take interface= yet (GP82 needs it)")
+    command is received the motor will be stopped". The CAN endpoint passes interface="can",
+    so CAN requests feed the CAN heartbeat and serial traffic does not."""
     clock = FakeClock()
-    bus = ModuleBus([vm], clock=clock)
+    bus = ModuleBus([VirtualModule("TMCM-6212", address=1)], clock=clock)
     bus.can_request(1, bytes([9, 82, 0, 0, 0, 0, 200]))  # SGP 82, 0, 200
     bus.can_request(1, bytes([1, 0, 0, 0, 0, 0x03, 0xE8]))  # ROR 0, 1000
     clock.t += 0.15
-    [(_, _, p1)] = bus.can_request(1, bytes([6, 3, 0, 0, 0, 0, 0]))  # GAP 3
+    [(_, _, p1)] = bus.can_request(1, bytes([6, 3, 0, 0, 0, 0, 0]))  # GAP 3: CAN host still talking
     assert p1[3:7] != bytes(4)
-    clock.t += 0.5
-    bus.sync()
+    for _ in range(5):  # only serial traffic for 0.5 s: the CAN host has fallen silent
+        clock.t += 0.1
+        bus.request(request(1, 6, 3, 0))
     [(_, _, p2)] = bus.can_request(1, bytes([6, 3, 0, 0, 0, 0, 0]))
     assert p2[3:7] == bytes(4)

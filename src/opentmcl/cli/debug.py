@@ -111,6 +111,8 @@ class DebugShell(cmd.Cmd):
 
     def do_cont(self, arg):
         """cont: continue to the next breakpoint, or until the program stops"""
+        if not self.dbg.breakpoints:
+            self.say("running (Ctrl-C stops)")
         self.show_stop(self.dbg.cont())
 
     do_c = do_cont

@@ -8,6 +8,7 @@ scenario file for the virtual module (any other name). The output format follows
     opentmcl plot examples/tmcm6212_2.4_first_program.tmc -o first.png --seconds 15
     opentmcl plot move.tmc --axes 0,1 --rpm -o move.svg --csv move.csv
     opentmcl plot move.csv -o move.png --channels position,velocity
+    opentmcl plot - --to tcp://127.0.0.1:2323 --seconds 5 -o live.png --csv live.csv   # record only
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ PROGRAM_SUFFIXES = (".tmc", ".bin")
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("plot", help="plot axis motion over time from a virtual run or a CSV trace",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("file", metavar="PROGRAM_OR_SCENARIO", help=".tmc/.bin program, .csv trace or scenario file")
+    p.add_argument("file", metavar="PROGRAM_OR_SCENARIO", help=".tmc/.bin program, .csv trace, scenario file, or - (with --to: record only)")
     p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
     p.add_argument("--axes", default="0", help="comma-separated axis numbers (default 0)")
     p.add_argument("--channels", help="comma-separated panels: position, velocity, acceleration, load, "
@@ -59,24 +60,28 @@ def _record(args, axes):
 
     path = Path(args.file)
     is_program = path.suffix.lower() in PROGRAM_SUFFIXES
-    scenario_path = args.scenario if is_program else args.file
     if args.url:
-        if not is_program:
-            raise CliError("with --to, FILE must be a .tmc or .bin program")
-        return _record_remote(args, axes)
-    module = args.module or "TMCM-6212"
+        if not is_program and args.file != "-":
+            raise CliError("with --to, FILE must be a .tmc or .bin program, or - to record only")
+        return _record_remote(args, axes, is_program)
+    if args.file == "-":
+        raise CliError("FILE - (record only) needs --to URL")
+    scenario_path = args.scenario if is_program else args.file
     scenario = _scenario(scenario_path)
+    module = args.module or getattr(scenario, "module", None) or "TMCM-6212"
     program = read_program(args.file, module).instructions if is_program else None
+    # A scenario alone runs for the full --seconds: its world may move things at any time.
+    idle_stop = is_program and not args.keep_going
     try:
         return run_virtual(program, module=module, axes=axes, seconds=args.seconds, interval=args.interval,
-                           scenario=scenario, address=args.address, stop_when_idle=not args.keep_going)
+                           scenario=scenario, address=args.address, stop_when_idle=idle_stop)
     except KeyError as exc:
         raise CliError(str(exc.args[0] if exc.args else exc)) from None
     except (UnknownParameterError, TmclError) as exc:
         raise CliError(str(exc)) from None
 
 
-def _record_remote(args, axes):
+def _record_remote(args, axes, is_program: bool):
     from ..host import TmclError, connect
     from ..host.loader import Loader
     from ..plot import record
@@ -88,6 +93,8 @@ def _record_remote(args, axes):
     except TmclError as exc:
         raise CliError(str(exc)) from None
     try:
+        if not is_program:  # FILE "-": record what the module does for --seconds
+            return record(m, axes, args.seconds, args.interval)
         program = read_program(args.file, module_name(m, args.module))
         loader = Loader(m)
         loader.download(program.instructions)

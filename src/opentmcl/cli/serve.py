@@ -190,7 +190,8 @@ def describe(server) -> list[str]:
         name = getattr(getattr(vm, "profile", None), "name", type(vm).__name__)
         can_id = vmapi.global_param(vm, vmapi.GP_CAN_ID)
         lines.append(f"module {name} at address {vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS)}"
-                     f" (CAN ID {can_id}, reply ID {vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)})")
+                     f" (CAN ID {can_id}, reply ID {vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)})"
+                     + (", in ASCII mode (GP67 bit 0)" if getattr(vm, "ascii_mode", False) is True else ""))
     for ep in server.endpoints:
         if isinstance(ep, TcpServer):
             lines.append(f"tcp {ep.url}")

@@ -36,6 +36,7 @@ class Axis:
         self.ram = ram
         self.engine: RampEngine = make_engine(profile.engine)
         self.engine_keys = ENGINE_PARAMS[profile.engine]
+        self.readable = frozenset(n for n, p in self.params.items() if p.readable)
         self.last_target = 0
         self.error_flags = 0
         self.reference_search_active = False
@@ -84,8 +85,7 @@ class Axis:
             raise TmclStatus(4)
 
     def get(self, number: int) -> int:
-        p = self.param(number)
-        if not p.readable:
+        if number not in self.readable:
             raise TmclStatus(3)
         if number in self.world.axis_numbers:
             world = self.world.read_axis(self, number)
@@ -102,10 +102,12 @@ class Axis:
             return self.from_engine(3, e.velocity)
         if number == 8:
             return int(e.position_reached)
+        if number == 135 and hasattr(e, "actual_acceleration"):
+            return e.actual_acceleration
         if number == 207:
             flags, self.error_flags = self.error_flags, 0
             return flags
-        return self.ram.get(number, p.default)
+        return self.ram.get(number, self.params[number].default)
 
     def set(self, number: int, value: int) -> None:
         p = self.param(number)

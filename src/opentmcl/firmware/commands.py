@@ -293,19 +293,15 @@ PROGRAM_CONTROL = frozenset(range(128, 136))
 
 def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
     """Run one command. In download mode (132) non-control commands are stored instead (status 101)."""
-    # 3.6.36: in download mode "All following commands (except control commands) are ... stored".
-    stored = vm.download_mode and not program and command < 128
-    if command not in KNOWN_OPCODES and not stored:
-        return int(Status.INVALID_COMMAND), 0
-    if command not in vm.profile.opcodes and not stored:
-        return int(Status.NOT_AVAILABLE), 0
-    vm.sync()
     try:
-        if command in PROGRAM_CONTROL:
-            return vm.program_control(command, type, value)
+        # 3.6.36: in download mode "All following commands (except control commands) are ... stored".
         if vm.download_mode and not program and command < 128:
             return vm.store_instruction(command, type, motor, value)
-        handler = HANDLERS.get(command, cmd_no_effect)
-        return handler(vm, type, motor, value, program)
+        if command not in vm.opcodes:
+            return (_NOT_AVAILABLE if command in KNOWN_OPCODES else _INVALID_COMMAND), 0
+        vm.sync()
+        if command in PROGRAM_CONTROL:
+            return vm.program_control(command, type, value)
+        return HANDLERS.get(command, cmd_no_effect)(vm, type, motor, value, program)
     except TmclStatus as exc:
         return exc.status, 0

@@ -40,8 +40,9 @@ READS_VALUE = frozenset({6, 10, 15, 31})  # GAP, GGP, GIO, GCO (and RFS STATUS) 
 CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number from public TMCL headers)
 EXTENDED_MARKER = 49          # a module with DJNZ has the PD28-1021 extended set, CALL included
 # Instructions that neither read nor change anything outside the program's registers, flags,
-# stack and user variables (SGP/GGP/AGP on bank 2): they may run ahead of the motors (below).
-PURE = frozenset({19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
+# stack and user variables (SGP/GGP/AGP on bank 2), or only the I/O ports (SIO, GIO: inputs change
+# only at world events or host commands): they may run ahead of the motors (_run_ahead).
+PURE = frozenset({14, 15, 19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
 PURE_ON_BANK_2 = frozenset({9, 10, 35})
 
 

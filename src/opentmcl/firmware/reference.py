@@ -95,9 +95,10 @@ class ReferenceSearch:
         """Logical switch state for the search (AP12/AP13 do not apply, manual 6.1)."""
         left, right, home = self.aw.logical()
         if self.mode & 128:
-            if self.aw.three_switch_wiring and name == LEFT:
+            if self.aw.has(141):      # PD86-1180: the reference input is REFL
                 left = not left
-            home = not home
+            else:
+                home = not home
         return {LEFT: left, RIGHT: right, HOME: home}[name]
 
     @property

@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
 STALL, DEVIATION = 15, 21            # interrupt numbers + axis (firmware/interrupts.py)
 SG_EXTENDED, DEV_EXTENDED = 1, 2     # AP207 bits
+END_LOAD = 100.0                     # a mechanical end: far more than any current can hold
 
 
 def _sign(x) -> int:
@@ -55,6 +56,7 @@ class AxisWorld:
         self.axis: Axis | None = None
         self._due_at = -2
         self._due_streak = 0
+        self._cache: tuple | None = None
 
     # --- binding ----------------------------------------------------------------------------
     def bind(self, axis: Axis) -> None:
@@ -201,7 +203,12 @@ class AxisWorld:
 
     # --- load and currents ----------------------------------------------------------------------
     def load_now(self) -> float:
-        return self.load.at(self.phys, self.vm.now / CLOCK_HZ)
+        """Load torque now; pushing into a mechanical end adds END_LOAD."""
+        load = self.load.at(self.phys, self.vm.now / CLOCK_HZ)
+        d = self.slipping or (self.heading() if self.engine.moving else 0)
+        if d and self._blocked(d):
+            load += END_LOAD
+        return load
 
     def _pps(self, v) -> float:
         e = self.engine
@@ -371,6 +378,25 @@ class AxisWorld:
                     or st.ends != (None, None) or self.p(181) or self.p(212) or self.watch is not None
                     or self.spec.torque_falloff_speed or (self.p(210) & 4 and self.vm.profile.engine != "sixpoint"))
 
+    SIGNATURE_PARAMS = (6, 7, 12, 13, 14, 24, 25, 26, 140, 141, 149, 172, 174, 181, 182, 200, 202, 210, 212)
+
+    def _signature(self) -> tuple:
+        """Everything the next world event depends on besides time (for the cache)."""
+        e = self.engine
+        queue = getattr(e, "_queue", None)
+        if queue is not None:   # six-point / linear engines: a command makes a new segment queue
+            eng = (queue, e._mode, e._target_abs, e._vt_pps)
+        else:
+            r = getattr(e, "ramp", None)
+            eng = (e.mode, e.target_position, e.target_velocity, e.velocity, e.position) if r is None else \
+                (r.mode, r.x_target, r.v_target, r.v_internal, r.v_max, r.a_max, r.pulse_div, r.ramp_div)
+        ram = self.axis.ram
+        search = self.vm.reference_search(self.axis)
+        gp79 = self.vm.globals.ram.get((0, 79), 0)
+        return (eng, self.offset, self.slipping, tuple(self.raw.values()), tuple(sorted(self.forced.items())),
+                self.watch, self.load, tuple(ram.get(n, 0) for n in self.SIGNATURE_PARAMS), gp79,
+                search.active, search._cond)
+
     def next_event(self) -> int | None:
         if self.axis is None or not self.interesting():
             return None
@@ -378,6 +404,17 @@ class AxisWorld:
         e = self.engine
         if e.now < now:
             self.vm.sync()
+        sig = self._signature()
+        cached = self._cache
+        if cached is not None and cached[0] == sig and (cached[1] is None or cached[1] > now) \
+                and self.load.by != "time":
+            return cached[1]
+        t = self._next_event(now)
+        self._cache = (sig, t)
+        return t
+
+    def _next_event(self, now: int) -> int | None:
+        e = self.engine
         self._follow()
         if self.due_now():
             self._due_streak = self._due_streak + 1 if self._due_at == now - 1 else 0
@@ -442,6 +479,15 @@ class World:
     def __init__(self, vm: VirtualModule, scenario=None) -> None:
         self.vm = vm
         self.scenario: Scenario = load_scenario(scenario)
+        if self.scenario.module is not None:
+            from ..modules.profile import load_profile
+            from ..motion.scenario import ScenarioError
+            try:
+                same = load_profile(self.scenario.module).name == vm.profile.name
+            except KeyError:
+                same = False
+            if not same:
+                raise ScenarioError(f"the scenario is for {self.scenario.module}, not {vm.profile.name}")
         self.axes_world: list[AxisWorld] = []
         self.inputs: dict[tuple[int, int], Profile] = {(i.bank, i.port): i.signal for i in self.scenario.inputs}
         self.shutdown = self.scenario.shutdown
@@ -471,7 +517,7 @@ class World:
         while len(self.axes_world) < len(vm.axes):
             i = len(self.axes_world)
             self.axes_world.append(AxisWorld(self, i, self.scenario.axis(i)))
-        for aw, ax in zip(self.axes_world, vm.axes):
+        for aw, ax in zip(self.axes_world, vm.axes, strict=False):
             aw.bind(ax)
         self._drive_inputs()
 

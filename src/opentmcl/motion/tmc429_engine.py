@@ -167,6 +167,17 @@ class Tmc429Engine(RampEngine):
         self.ramp.set(v_max=V_LIMIT, v_target=v)
         self._params["ramp_mode"] = 2
 
+    def hold(self, velocity: int) -> None:
+        """AP3 write: hold_mode, V_ACTUAL := velocity at once (TMC4210 datasheet: hold_mode
+        takes V_ACTUAL as written, without ramp or limits)."""
+        v = int(velocity)
+        if not -V_LIMIT <= v <= V_LIMIT:
+            raise Tmc429ConfigError(f"velocity {velocity} out of range -2047..2047")
+        if self.ramp.mode != HOLD_MODE:
+            self.ramp.set(mode=HOLD_MODE)
+        self.ramp.set(v_actual=v)
+        self._params["ramp_mode"] = 2
+
     def hard_stop(self) -> None:
         """Velocity 0 at once; the target becomes the actual position."""
         self.ramp.stop(soft=False)

@@ -65,7 +65,8 @@ def render(trace: Trace, path: str | os.PathLike, *, channels=DEFAULT_CHANNELS, 
         if len(trace.axes) > 1:
             panel.legend(loc="upper right", fontsize="small")
     axs[-1].set_xlabel("time [s]")
-    fig.suptitle(title or f"{trace.module or 'module'}: axes {', '.join(map(str, trace.axes))}")
+    which = f"axis {trace.axes[0]}" if len(trace.axes) == 1 else f"axes {', '.join(map(str, trace.axes))}"
+    fig.suptitle(title or f"{trace.module or 'module'}: {which}")
     fig.savefig(path, format=fmt, dpi=110)
     return fmt
 

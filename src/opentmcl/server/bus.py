@@ -23,10 +23,17 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Iterable
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 from ..protocol.frame import Request
 from . import canmap, vmapi
+
+
+class AsciiOutput(NamedTuple):
+    """What a module in ASCII mode sends back, and the received bytes it left to binary framing."""
+
+    data: bytes
+    leftover: bytes
 
 
 class Channel(Protocol):
@@ -39,6 +46,12 @@ class Channel(Protocol):
         """Send an unsolicited 9-byte reply of `vm` to the host."""
 
 
+MIN_STEP = 0.002
+"""Seconds of wall time below which a request does not advance the modules' clocks: advancing
+costs the same however short the step, so a burst of requests shares one advance. The modules
+lag the wall clock by at most this much (docs/notes/endpoints.md)."""
+
+
 def _takes_interface(vm) -> bool:
     try:
         return "interface" in inspect.signature(vm.handle).parameters
@@ -49,23 +62,28 @@ def _takes_interface(vm) -> bool:
 class ModuleBus:
     """Virtual modules sharing one bus; thread-safe; time paced to `clock`."""
 
-    def __init__(self, modules: Iterable, *, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(self, modules: Iterable, *, clock: Callable[[], float] = time.monotonic,
+                 min_step: float = MIN_STEP) -> None:
         self.modules = list(modules)
         if not self.modules:
             raise ValueError("a bus needs at least one module")
+        if min_step < 0:
+            raise ValueError("min_step must not be negative")
         self.lock = threading.RLock()
         self._clock = clock
         self._last = clock()
+        self.min_step = min_step
         self._route: dict[int, Channel] = {}
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:
-        """Advance every module's virtual time to the wall clock."""
+        """Advance every module's virtual time to the wall clock, unless less than `min_step`
+        has passed since the last advance (then the modules stay at most that far behind)."""
         with self.lock:
             now = self._clock()
             dt = now - self._last
-            if dt > 0:
+            if dt > 0 and dt >= self.min_step:
                 for vm in self.modules:
                     vm.advance(dt)
                 self._last = now
@@ -77,23 +95,41 @@ class ModuleBus:
         return vm.handle(frame)
 
     def request(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes]]:
-        """Offer a 9-byte frame to every module; return (module, reply) for each reply."""
+        """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
         replies = []
         with self.lock:
             self.sync()
             for vm in self.modules:
-                reply = self._handle(vm, frame, "serial")
+                if getattr(vm, "ascii_mode", False) is True:
+                    continue  # reads the line as text (server/stream.py)
+                reply = self.serial_frame(vm, frame, channel)
                 if reply:
                     replies.append((vm, reply))
-                    if channel is not None:
-                        self._route[id(vm)] = channel
+        return replies
+
+    def serial_frame(self, vm, frame: bytes, channel: Channel | None = None) -> bytes:
+        """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced."""
+        reply = self._handle(vm, frame, "serial")
+        if channel is not None and (reply or (frame and self._addressed(vm, frame[0]))):
             # A module that was addressed but stayed silent (reply suppressed)
             # still becomes reachable for its events through this channel.
-            if channel is not None and frame:
-                for vm in self.modules:
-                    if frame[0] in self._serial_addresses(vm):
-                        self._route[id(vm)] = channel
-        return replies
+            self._route[id(vm)] = channel
+        return reply
+
+    def serial_text(self, vm, data: bytes, channel: Channel | None = None) -> AsciiOutput:
+        """Bytes for a module in ASCII mode (PD28-1021 manual 3.4): its echo and reply text, and the
+        bytes after a BIN line that are binary again. The caller holds `lock` and has synced."""
+        out = vm.feed_ascii(data)
+        leftover = b"" if getattr(vm, "ascii_mode", False) is True else bytes(vm.ascii.leftover)
+        if out and channel is not None:
+            self._route[id(vm)] = channel
+        return AsciiOutput(out, leftover)
+
+    def _addressed(self, vm, address: int) -> bool:
+        accepts = getattr(vm, "accepts_address", None)
+        if callable(accepts):
+            return bool(accepts(address))
+        return address in self._serial_addresses(vm)
 
     def _serial_addresses(self, vm) -> tuple[int, ...]:
         primary = vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS)

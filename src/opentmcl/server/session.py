@@ -1,8 +1,8 @@
 """One serial-framed link to the bus: a pty, a TCP client (TMCM-6212 manual 3.1, 3.2).
 
-A `SerialSession` turns received bytes into 9-byte frames (`SerialFramer`),
-offers them to the bus and writes the replies back, as a module on an RS-485
-line does:
+A `SerialSession` turns received bytes into 9-byte frames and, for modules in
+ASCII mode, text lines (`SerialStream`), hands them to the modules of the bus
+and writes the replies back, as a module on an RS-485 line does:
 
 - it waits the telegram pause time (global parameter 75) before a reply
   ("Pause time before the reply via RS485 is sent", manual 5.1); the manual
@@ -10,21 +10,23 @@ line does:
 - with `pace_bytes`, it sends the reply one byte at a time at the module's
   RS485 baud rate (global parameter 65), ten bit times per byte (8N1);
 - unsolicited replies (command 138) arrive through `deliver` and are written
-  the same way.
+  the same way;
+- ASCII echo and reply text (PD28-1021 manual 3.4) is written at once, with
+  pacing but without the telegram pause: a terminal user expects the echo of
+  a key at once, and the manual ties GP75 to replies "via RS485" only
+  (docs/notes/endpoints.md).
 
 The session owns no thread; the endpoint that reads the link calls `receive`.
 """
 from __future__ import annotations
 
-import logging
 import threading
 import time
 from collections.abc import Callable
 
 from . import vmapi
-from .framer import DEFAULT_GAP, SerialFramer
-
-log = logging.getLogger("opentmcl.server")
+from .framer import DEFAULT_GAP
+from .stream import BINARY, SerialStream
 
 BITS_PER_BYTE = 10
 """Start bit, eight data bits, stop bit (8N1)."""
@@ -45,42 +47,43 @@ class SerialSession:
                  sleep: Callable[[float], None] = time.sleep) -> None:
         self.bus = bus
         self._write = write
-        self.framer = SerialFramer(gap)
+        self.stream = SerialStream(bus, gap)
         self.pace_bytes = pace_bytes
         self._clock = clock
         self._sleep = sleep
         self._write_lock = threading.Lock()
         self.closed = False
 
+    @property
+    def framer(self):
+        """The (first module's) framer, for diagnostics."""
+        return self.stream.framer
+
     def receive(self, data: bytes, now: float | None = None) -> int:
-        """Handle bytes read from the link; return the number of frames processed.
+        """Handle bytes read from the link; return the number of binary frames completed.
 
         A module that raises on a frame (a bug: modules answer bad input with a
         status code) is logged and the frame gets no reply; the link lives on.
         """
-        frames = self.framer.feed(data, self._clock() if now is None else now)
-        for frame in frames:
-            try:
-                replies = self.bus.request(frame, self)
-            except Exception:
-                log.exception("module failed on frame %s", frame.hex(" "))
-                continue
-            for vm, reply in replies:
-                self.send_reply(vm, reply)
-        return len(frames)
+        before = self.stream.frames
+        outputs = self.stream.feed(data, self._clock() if now is None else now, self)
+        for vm, out, kind in outputs:
+            self.send_reply(vm, out, pause=kind == BINARY)
+        return self.stream.frames - before
 
     def deliver(self, vm, reply: bytes) -> None:
         """An unsolicited reply (command 138 event) for the host on this link."""
         if not self.closed:
             self.send_reply(vm, reply)
 
-    def send_reply(self, vm, reply: bytes) -> None:
+    def send_reply(self, vm, reply: bytes, *, pause: bool = True) -> None:
+        """Write `reply` after the telegram pause (if `pause`), paced at GP65 if asked."""
         with self.bus.lock:
-            pause = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0
+            wait = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
             per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
         with self._write_lock:
-            if pause > 0:
-                self._sleep(pause)
+            if wait > 0:
+                self._sleep(wait)
             if per_byte <= 0:
                 self._write(reply)
                 return

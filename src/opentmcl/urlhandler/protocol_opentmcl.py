@@ -11,6 +11,8 @@ and with ``pace=1`` at the RS485 baud rate (parameter 65). The modules run in
 real time: their virtual time follows the wall clock, advanced whenever the
 port is used, so a move started by a write has progressed by the next read.
 Unsolicited replies (command 138, manual 3.6.35) are readable like any other.
+Modules that have ASCII mode (command 139, PD28-1021 manual 3.4) read the
+written bytes as text lines while in it, as on the other serial endpoints.
 No thread is started; closing the port flushes the EEPROM files.
 
 The baud rate, parity etc. set on the port are accepted and ignored.
@@ -31,8 +33,9 @@ from serial.serialutil import PortNotOpenError, SerialException, Timeout
 
 from ..server import vmapi
 from ..server.bus import ModuleBus
-from ..server.framer import DEFAULT_GAP, SerialFramer
+from ..server.framer import DEFAULT_GAP
 from ..server.session import byte_time
+from ..server.stream import BINARY, SerialStream
 
 SCHEME = "opentmcl"
 POLL = 0.002
@@ -110,7 +113,7 @@ class Serial(serial.Serial):
                 raise SerialException(f"cannot create {name}: {exc}") from None
         self._lock = threading.RLock()
         self._bus = ModuleBus(modules)
-        self._framer = SerialFramer(options["gap"])
+        self._stream = SerialStream(self._bus, options["gap"])
         self._pace = options["pace"]
         self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
         self.is_open = True
@@ -133,10 +136,10 @@ class Serial(serial.Serial):
         """Baud rate and framing settings are accepted and ignored."""
 
     # -- data --------------------------------------------------------------
-    def _queue(self, vm, reply: bytes) -> None:
-        """Make `reply` readable after the telegram pause, paced at GP65 if asked."""
+    def _queue(self, vm, reply: bytes, pause: bool = True) -> None:
+        """Make `reply` readable after the telegram pause (binary replies only), paced at GP65 if asked."""
         now = time.monotonic()
-        start = now + vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0
+        start = now + (vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0)
         if self._rx:
             start = max(start, self._rx[-1][0])
         per_byte = byte_time(vmapi.baud_rate(vm)) if self._pace else 0.0
@@ -189,9 +192,8 @@ class Serial(serial.Serial):
             raise PortNotOpenError()
         data = bytes(data)
         with self._lock:
-            for frame in self._framer.feed(data, time.monotonic()):
-                for vm, reply in self._bus.request(frame, self):
-                    self._queue(vm, reply)
+            for vm, out, kind in self._stream.feed(data, time.monotonic(), self):
+                self._queue(vm, out, pause=kind == BINARY)
         return len(data)
 
     def reset_input_buffer(self) -> None:

@@ -123,6 +123,7 @@ class Dashboard:
                 "axes": p.axes, "connected": self.connected, "last_error": self.last_error,
                 "virtual": self.vm is not None, "io": ports, "fast_hz": FAST_HZ,
                 "history_seconds": HISTORY_SECONDS,
+                "velocity_unit": getattr(p.axis_parameters.get(3), "unit", "") or "pps",
                 "has_stap": STAP in p.opcodes, "has_rsap": RSAP in p.opcodes,
                 "program_memory": p.program_memory}
 
@@ -352,8 +353,9 @@ class Dashboard:
         dbg = Debugger(self._loader())
         while not self._cancel.is_set():
             try:
-                with self.lock:
-                    st = dbg.step()
+                # Not under self.lock: a stepped WAIT takes a while and the charts go on meanwhile
+                # (the Client serialises the requests themselves).
+                st = dbg.step()
             except TmclError as exc:
                 self.last_error = str(exc)
                 return
@@ -375,8 +377,14 @@ class Dashboard:
         from ..host.debugger import Debugger
 
         self.cancel_run()
-        with self.lock:
-            self._do(lambda: Debugger(self._loader()).step())
+        try:
+            Debugger(self._loader()).step()  # not under self.lock, see _run_to_breakpoint
+        except TmclStatusError as exc:
+            raise DashboardError(str(exc)) from None
+        except TmclError as exc:
+            self.connected = False
+            self.last_error = str(exc)
+            raise DashboardError(str(exc)) from None
         return self.program_state()
 
     def reset(self) -> None:

@@ -44,7 +44,7 @@ function showOverview(ov) {
     const row = (label, key) => el("div", {class: "row"}, el("span", {}, label), el("span", {id: `axis-${i}-${key}`}, "-"));
     cards.append(el("div", {class: "axis-card", id: `axis-${i}`},
       el("h3", {}, `Axis ${i}`),
-      row("position", "position"), row("target", "target"), row("velocity [pps]", "velocity"),
+      row("position", "position"), row("target", "target"), row(`velocity [${ov.velocity_unit}]`, "velocity"),
       row("load value", "load"), row("current", "current"),
       el("div", {class: "row"}, el("span", {}, "status"), el("span", {},
         el("span", {class: "lamp reached", id: `axis-${i}-reached`, title: "target position reached (AP 8)"}, "TR"),
@@ -58,6 +58,7 @@ function showOverview(ov) {
     sel.append(el("option", {value: i}, `${i}`));
   }
   if (keep && Number(keep) < ov.axes) sel.value = keep;
+  $("vel-unit").textContent = ov.velocity_unit;
   for (const name of ["position", "velocity"]) {
     D.charts[name] = new LiveChart($(`chart-${name}`), ov.history_seconds || 60);
     D.charts[name].setAxes(ov.axes);
@@ -367,6 +368,13 @@ function setupEditor() {
     if (editorLines() !== $("editor-gutter").childElementCount) renderGutter();
   });
   t.addEventListener("scroll", syncScroll);
+  t.addEventListener("keydown", ev => {  // Tab indents instead of leaving the editor
+    if (ev.key !== "Tab" || ev.shiftKey) return;
+    ev.preventDefault();
+    const a = t.selectionStart;
+    t.setRangeText("    ", a, t.selectionEnd, "end");
+    t.dispatchEvent(new Event("input"));
+  });
   $("btn-assemble").addEventListener("click", () => assembleOnly(false));
   $("btn-download").addEventListener("click", () => assembleOnly(true));
   $("btn-run").addEventListener("click", () => programAction("run"));
@@ -385,6 +393,16 @@ async function main() {
   $("param-filter").addEventListener("input", renderParams);
   $("param-filter-writable").addEventListener("change", renderParams);
   try { showOverview(await api("/api/overview")); } catch (e) { log(e.message, "err"); }
+  try {  // the program the dashboard downloaded before (e.g. from another tab) is what runs
+    const prog = await api("/api/program");
+    if (prog.source) {
+      $("editor").value = prog.source;
+      D.downloaded = true;
+      D.breakpoints = new Set((prog.state.breakpoints || []).map(a => prog.lines[a]).filter(l => l));
+      renderGutter();
+      showProgramState(prog.state);
+    }
+  } catch (e) { log(e.message, "err"); }
   connect();
   loadParams();
   requestAnimationFrame(animate);

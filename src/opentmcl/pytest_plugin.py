@@ -1,0 +1,130 @@
+"""pytest plugin: a virtual TMCL module for your own test suite (docs/pytest-plugin.md).
+
+Installed with opentmcl it is found through the ``pytest11`` entry point; without it, enable
+it with ``-p opentmcl.pytest_plugin`` or ``pytest_plugins = ["opentmcl.pytest_plugin"]``.
+
+    @pytest.mark.tmcl_module("PD86-1180", address=3)
+    def test_move(tmcl_module):
+        tmcl_module[0].move_to(1000, wait=True)     # waiting lets virtual time pass
+        tmcl_module.advance(0.5)                    # half a virtual second more
+        assert tmcl_module.vm.axes[0].engine.position == 1000
+
+The fixture is a host `Module` (the same API as ``opentmcl.connect("sim://...")``) talking to a
+`VirtualModule` in this process, plus:
+
+- ``.vm``: the virtual module itself (its parameters, axes, I/O and world);
+- ``.advance(seconds)``: let virtual time pass (motion, timers, command-138 events);
+- ``.time``: virtual seconds since power-up;
+- ``.transport``: the in-process transport.
+
+Which module: the ``tmcl_module`` marker of the test (or its class/module), else the
+``--tmcl-module NAME`` option, else the ``tmcl_module`` ini value, else TMCM-6212.
+"""
+from __future__ import annotations
+
+import pytest
+
+from .host.client import Client
+from .host.module import Module
+from .host.transports.inprocess import InProcessTransport
+
+DEFAULT_MODULE = "TMCM-6212"
+MARKER = "tmcl_module"
+_OPTIONS = ("address", "eeprom", "clock", "timeout", "host_address")
+
+
+class TmclModule(Module):
+    """A host `Module` on an in-process `VirtualModule`, with control over its virtual time."""
+
+    def __init__(self, vm, *, address: int, clock: str = "virtual", timeout: float = 5.0,
+                 host_address: int = 2) -> None:
+        self.vm = vm
+        self.transport = InProcessTransport([vm], clock=clock)
+        super().__init__(Client(self.transport, address=address, host_address=host_address,
+                                timeout=timeout), address, vm.profile)
+
+    def __repr__(self) -> str:
+        return f"<TmclModule {self.vm.profile.name} at address {self.address}, t={self.time:g} s>"
+
+    def advance(self, seconds: float) -> None:
+        """Let `seconds` of virtual time pass (events such as command 138 replies are collected)."""
+        if seconds < 0:
+            raise ValueError("time cannot run backwards")
+        self.transport.advance(seconds)
+
+    @property
+    def time(self) -> float:
+        """Virtual seconds since the module powered up."""
+        return self.vm.time
+
+    def close(self) -> None:
+        """Close the transport and flush the module's EEPROM file (if it has one)."""
+        self.client.close()
+        self.vm.close()
+
+
+def make_tmcl_module(name: str = DEFAULT_MODULE, *, address: int = 1, eeprom=None, clock: str = "virtual",
+                     timeout: float = 5.0, host_address: int = 2) -> TmclModule:
+    """What the fixture builds; usable without pytest. KeyError for an unknown module name,
+    ValueError for a bad address or clock policy."""
+    from .firmware.vm import VirtualModule
+
+    if isinstance(address, bool) or not isinstance(address, int) or not 1 <= address <= 255:
+        raise ValueError(f"module address must be 1..255, got {address!r}")
+    vm = VirtualModule(name, address=address, eeprom=eeprom)
+    try:
+        return TmclModule(vm, address=address, clock=clock, timeout=timeout, host_address=host_address)
+    except BaseException:
+        vm.close()
+        raise
+
+
+def pytest_addoption(parser) -> None:
+    group = parser.getgroup("opentmcl", "OpenTMCL virtual modules")
+    group.addoption("--tmcl-module", dest="tmcl_module", default=None, metavar="NAME",
+                    help="module of the tmcl_module fixture when a test has no tmcl_module marker "
+                         f"(default {DEFAULT_MODULE}; e.g. PD86-1180, PD28-1021)")
+    parser.addini("tmcl_module", help="default module of the tmcl_module fixture", default=None)
+
+
+def pytest_configure(config) -> None:
+    config.addinivalue_line(
+        "markers",
+        "tmcl_module(name, *, address=1, eeprom=None, clock='virtual', timeout=5.0, host_address=2): "
+        "the virtual module that the tmcl_module fixture gives this test (opentmcl)")
+
+
+def _spec(request) -> tuple[str, dict]:
+    marker = request.node.get_closest_marker(MARKER)
+    config = request.config
+    name = config.getoption("tmcl_module", None) or config.getini("tmcl_module") or DEFAULT_MODULE
+    kwargs: dict = {}
+    if marker is not None:
+        if len(marker.args) > 1:
+            pytest.fail(f"@pytest.mark.{MARKER} takes one module name, got {marker.args!r}", pytrace=False)
+        if marker.args:
+            name = marker.args[0]
+        unknown = sorted(set(marker.kwargs) - set(_OPTIONS))
+        if unknown:
+            pytest.fail(f"@pytest.mark.{MARKER}: unknown option(s) {', '.join(unknown)}; "
+                        f"known: {', '.join(_OPTIONS)}", pytrace=False)
+        kwargs = dict(marker.kwargs)
+    if not isinstance(name, str):
+        pytest.fail(f"@pytest.mark.{MARKER}: the module name must be a string, got {name!r}", pytrace=False)
+    return name, kwargs
+
+
+@pytest.fixture
+def tmcl_module(request):
+    """A virtual TMCL module behind the host `Module` API, in virtual time (opentmcl)."""
+    from .firmware.eeprom import EepromError
+
+    name, kwargs = _spec(request)
+    try:
+        module = make_tmcl_module(name, **kwargs)
+    except (KeyError, ValueError, EepromError) as exc:
+        pytest.fail(f"tmcl_module: {exc.args[0] if exc.args else exc}", pytrace=False)
+    try:
+        yield module
+    finally:
+        module.close()

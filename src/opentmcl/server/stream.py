@@ -1,0 +1,118 @@
+"""One serial byte stream, read by every module on the bus in its own mode.
+
+On an RS-232/RS-485 line every module's UART sees every byte, and each module
+reads them in its own mode:
+
+- binary mode: 9-byte frames found by counting (TMCM-6212 manual 3.1), with a
+  partial frame dropped after an inter-byte gap (`SerialFramer`);
+- ASCII mode (PD28-1021 manual 3.4, PD86-1180 manual 4.5): entered with
+  binary command 139 or at start-up with GP67 bit 0; text lines such as
+  ``AGAP 1, 0<CR>``, echoed per GP67 bits 4/5 and answered ``BA 100 -5000``
+  by the module whose address character starts the line; left with ``BIN``,
+  after which the following bytes are binary frames again.
+
+`SerialStream` therefore keeps one framer per module and walks the received
+bytes for each module separately: a 139 frame switches that module to ASCII
+for the rest of the chunk, a ``BIN`` line switches it back (the framer starts
+afresh at the byte after the line). The outputs of all modules are returned in
+stream order (by the byte position that produced them). With every module in
+binary mode this is the same as one framer whose frames are offered to all.
+
+The class is pure apart from the bus: the caller passes the arrival time.
+"""
+from __future__ import annotations
+
+import logging
+from typing import NamedTuple
+
+from .framer import DEFAULT_GAP, SerialFramer
+
+log = logging.getLogger("opentmcl.server")
+
+BINARY = "binary"
+ASCII = "ascii"
+
+
+def in_ascii_mode(vm) -> bool:
+    """Is `vm` reading its serial line as ASCII text (command 139 / GP67 bit 0)?"""
+    return getattr(vm, "ascii_mode", False) is True
+
+
+class Output(NamedTuple):
+    """Bytes a module sends back: a binary reply frame, or ASCII echo and reply text."""
+
+    vm: object
+    data: bytes
+    kind: str  # BINARY or ASCII
+
+
+class SerialStream:
+    """Splits a serial byte stream into frames and ASCII lines for the modules of `bus`."""
+
+    def __init__(self, bus, gap: float = DEFAULT_GAP) -> None:
+        self.bus = bus
+        self.gap = gap
+        self._framers = [SerialFramer(gap) for _ in bus.modules]
+        self.frames = 0
+        """Binary frames completed so far (counted once, whatever the number of modules)."""
+
+    @property
+    def framer(self) -> SerialFramer:
+        """The first module's framer (for diagnostics: pending, dropped)."""
+        return self._framers[0]
+
+    def reset(self) -> None:
+        for framer in self._framers:
+            framer.reset()
+
+    def feed(self, data: bytes, now: float, channel=None) -> list[Output]:
+        """Bytes received at time `now` -> what the modules send back, in stream order.
+
+        A module that raises (a firmware bug: bad input is answered with a
+        status code) is logged; its frame or text gets no reply and the stream
+        lives on."""
+        data = bytes(data)
+        found: list[tuple[int, int, Output]] = []
+        frames = 0
+        bus = self.bus
+        with bus.lock:
+            bus.sync()
+            for index, vm in enumerate(bus.modules):
+                count = self._feed_module(index, vm, data, now, channel, found)
+                frames = max(frames, count)
+        self.frames += frames
+        if len(found) > 1:
+            found.sort(key=lambda item: (item[0], item[1]))
+        return [item[2] for item in found]
+
+    def _feed_module(self, index: int, vm, data: bytes, now: float, channel, found: list) -> int:
+        framer = self._framers[index]
+        framer.expire(now)
+        pos, frames, size = 0, 0, len(data)
+        while pos < size:
+            if in_ascii_mode(vm):
+                try:
+                    text = self.bus.serial_text(vm, data[pos:] if pos else data, channel)
+                except Exception:
+                    log.exception("module failed on ASCII input %r", data[pos:])
+                    return frames
+                if text.data:
+                    found.append((size - len(text.leftover), index, Output(vm, text.data, ASCII)))
+                if in_ascii_mode(vm):
+                    return frames
+                framer.reset()  # BIN: binary framing starts afresh after the line
+                pos = size - len(text.leftover)
+                continue
+            need = framer.frame_len - framer.pending
+            piece = data[pos:pos + need] if pos or need < size else data
+            pos += len(piece)
+            for frame in framer.feed(piece, now):
+                frames += 1
+                try:
+                    reply = self.bus.serial_frame(vm, frame, channel)
+                except Exception:
+                    log.exception("module failed on frame %s", frame.hex(" "))
+                    continue
+                if reply:
+                    found.append((pos, index, Output(vm, reply, BINARY)))
+        return frames

@@ -1,0 +1,82 @@
+"""The dashboard's HTTP API and WebSocket (Starlette test client, virtual module in virtual time)."""
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("starlette", reason="the dashboard needs the web extra")
+pytest.importorskip("httpx", reason="starlette's test client needs httpx")
+
+from starlette.testclient import TestClient  # noqa: E402
+
+import opentmcl  # noqa: E402
+from opentmcl.web.app import create_app  # noqa: E402
+from opentmcl.web.service import Dashboard  # noqa: E402
+
+
+@pytest.fixture
+def client():
+    module = opentmcl.connect("sim://TMCM-6212")
+    transport = module.client.transport
+    dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
+    with TestClient(create_app(dash)) as c:
+        c.dash = dash
+        yield c
+    module.close()
+
+
+def test_page_and_static_files_are_served_without_cdn(client):
+    page = client.get("/")
+    assert page.status_code == 200 and "OpenTMCL" in page.text
+    assert "http://" not in page.text and "https://" not in page.text  # works offline
+    for name in ("app.js", "chart.js", "style.css"):
+        r = client.get(f"/static/{name}")
+        assert r.status_code == 200
+        assert "https://" not in r.text
+
+
+def test_console_endpoint(client):
+    """TMCM-6212 manual 3.6.4 MVP ABS; the reply carries status 100 and its text."""
+    r = client.post("/api/console", json={"line": "MVP ABS, 1, 1000"})
+    assert r.status_code == 200 and r.json()["status"] == 100
+    assert client.dash.module.axes[1].target_position == 1000
+
+
+def test_bad_requests_are_400_with_a_message(client):
+    assert client.post("/api/console", content=b"not json").status_code == 400
+    r = client.post("/api/params/axis", json={"axis": 0, "number": 4, "value": "fast"})
+    assert r.status_code == 400 and "integer" in r.json()["error"]
+    r = client.post("/api/params/axis", json={"axis": 0, "number": 4, "value": 8000000})
+    assert r.status_code == 400 and "Invalid value" in r.json()["error"]  # manual 3.2 status 4
+    assert client.post("/api/program/breakpoints", json={"lines": "3"}).status_code == 400
+    assert client.get("/api/params/axis/x").status_code == 400
+
+
+def test_parameter_endpoints(client):
+    """Manual 3.6.5 SAP: a value written is read back (GAP)."""
+    r = client.post("/api/params/axis", json={"axis": 0, "number": 5, "value": "0x1000"})
+    assert r.json() == {"value": 4096}
+    table = client.get("/api/params/axis/0").json()["params"]
+    assert next(p for p in table if p["number"] == 5)["value"] == 4096
+    glob = client.get("/api/params/global").json()["params"]
+    assert any(p["number"] == 66 and p["bank"] == 0 for p in glob)
+
+
+def test_program_endpoints(client):
+    """Manual 3.6.36: download (132/133), step (130), status (135)."""
+    r = client.post("/api/program/assemble", json={"source": "  JA Nowhere\n"})
+    assert r.json()["ok"] is False and r.json()["errors"][0]["line"] == 1
+    r = client.post("/api/program/download", json={"source": "  CALC LOAD, 9\n  STOP\n"})
+    assert r.json()["ok"] and "_program" not in r.json()
+    st = client.post("/api/program/step", json={}).json()
+    assert st["pc"] == 1 and st["a"] == 9
+    assert client.get("/api/program").json()["state"]["line"] == 2
+
+
+def test_websocket_streams_samples_and_state(client):
+    client.dash.sample_fast()
+    client.dash.sample_slow()
+    with client.websocket_connect("/ws") as ws:
+        hello = ws.receive_json()
+        assert hello["type"] == "hello" and hello["overview"]["module"] == "TMCM-6212"
+        kinds = {ws.receive_json()["type"] for _ in range(2)}
+        assert kinds == {"samples", "state"}

@@ -1,0 +1,89 @@
+"""`opentmcl serve --web` and `opentmcl dashboard --to URL` start the dashboard (subprocesses)."""
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import urllib.request
+
+import pytest
+
+from opentmcl.cli import CliError, main
+from opentmcl.cli.dashboard import parse_web, sim_url_real_time
+
+pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+
+
+def _start(args: list[str], marker: str):
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen([sys.executable, "-m", "opentmcl", *args], stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True, env=env)
+    lines = []
+    for line in proc.stdout:
+        lines.append(line)
+        if marker in line:
+            url = "http" + line.split("http", 1)[1].strip()
+            return proc, url, lines
+    proc.wait()
+    pytest.fail(f"no dashboard URL printed: {''.join(lines)}")
+
+
+def _stop(proc) -> str:
+    proc.send_signal(signal.SIGTERM)
+    out, _ = proc.communicate()
+    return out
+
+
+def _get(url: str) -> dict:
+    with urllib.request.urlopen(url) as r:
+        return json.load(r)
+
+
+def test_serve_with_web_serves_the_dashboard_of_the_served_module():
+    """TMCM-6212 manual 3.6.36: the overview's version string is the module's command-136 answer."""
+    proc, url, _ = _start(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0"],
+                          "dashboard http")
+    try:
+        ov = _get(url + "api/overview")
+        assert ov["module"] == "TMCM-6212" and ov["version"] == "6212V105" and ov["virtual"]
+    finally:
+        out = _stop(proc)
+    assert proc.returncode == 0, out
+    assert "stopped" in out
+
+
+def test_dashboard_command_for_a_sim_url():
+    proc, url, _ = _start(["dashboard", "--to", "sim://PD86-1180", "--web", "127.0.0.1:0"], "dashboard for")
+    try:
+        ov = _get(url + "api/overview")
+        assert ov["module"] == "PD86-1180" and ov["axes"] == 1
+    finally:
+        _stop(proc)
+    assert proc.returncode == 0
+
+
+def test_sim_urls_run_on_the_wall_clock_unless_told():
+    assert "clock=real" in sim_url_real_time("sim://TMCM-6212")
+    assert sim_url_real_time("sim://TMCM-6212?clock=virtual").endswith("clock=virtual")
+    assert sim_url_real_time("tcp://127.0.0.1:2323") == "tcp://127.0.0.1:2323"
+
+
+def test_web_address_parsing():
+    assert parse_web("127.0.0.1:8080") == ("127.0.0.1", 8080)
+    assert parse_web("8080") == ("127.0.0.1", 8080)
+    with pytest.raises(CliError):
+        parse_web("localhost:http")
+
+
+def test_dashboard_without_url_is_a_one_line_error(capsys, monkeypatch):
+    monkeypatch.delenv("OPENTMCL_URL", raising=False)
+    assert main(["dashboard"]) == 2
+    assert "--to" in capsys.readouterr().err
+
+
+def test_dashboard_with_unknown_module_is_a_one_line_error(capsys):
+    assert main(["dashboard", "--to", "sim://TMCM-9999", "--web", "127.0.0.1:0"]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "TMCM-9999" in err

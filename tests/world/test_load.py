@@ -1,0 +1,241 @@
+"""stallGuard2, coolStep, drive currents, encoder and step loss (items 3 and 4), on the
+behavioural model of docs/world.md: capacity C = (CS + 1) / 32 with CS = current >> 3,
+load value SG = clamp(round(1023 (1 - L / C)) + 16 SGT, 0, 1023)."""
+import pytest
+
+from opentmcl.firmware import flags
+from opentmcl.motion.stage import Profile
+from opentmcl.motion.stallguard import load_value
+from tests.firmware.test_program_support import Wire
+
+
+def test_load_value_falls_linearly_with_load(rig):
+    """TMCM-6212 manual 6.3: "The measured value changes linear with the load on the motor ...
+    At maximum motor load the stallGuard value goes to zero"; AP206 reads it while moving."""
+    values = []
+    for load in (0.0, 0.1, 0.2, 0.3):
+        r = rig("TMCM-6212", {"axis": {"0": {"load": load}}})
+        r.sap(6, 255)                  # CS 31: C = 1
+        r.cmd(1, 0, 0, 20000)
+        r.vm.advance(1)
+        values.append(r.gap(206))
+    assert values == [1023, 921, 818, 716]
+    steps = [a - b for a, b in zip(values, values[1:])]
+    assert max(steps) - min(steps) <= 1
+
+
+def test_load_value_depends_on_current_and_threshold():
+    """TMCM-6212 manual 4.1 AP174: "A lower value gives a higher sensitivity ... A higher value
+    makes stallGuard2 less sensitive and requires more torque to indicate a stall"."""
+    assert load_value(0.25, 0.5, 0) == 512 and load_value(0.25, 1.0, 0) == 767
+    assert load_value(0.45, 0.5, -10) == 0
+    assert load_value(0.5, 0.5, 10) == 160
+    assert load_value(0.1, 0.0, 0) == 0
+
+
+def _stall_rig(rig, sgt=0, limit=1000):
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[10000, 0.6]], "before": 0.1}}}})
+    r.sap(181, limit)
+    r.sap(174, sgt)
+    return r
+
+
+def test_stop_on_stall(rig):
+    """TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load
+    value reaches zero", AP207 bit 0 "stallGuard error" (cleared when read), the stall
+    interrupt (5.4) and the JC EPO condition (our choice, docs/notes/world.md)."""
+    r = _stall_rig(rig)
+    r.cmd(1, 0, 0, 20000)
+    r.vm.advance(2)
+    assert r.gap(3) == 0
+    assert r.gap(1) == 10000          # the load steps up at 10000: C = 17/32 < 0.6
+    assert r.phys() == 10000          # stopped before losing a step
+    assert r.gap(207) == 1
+    assert r.gap(207) == 0            # cleared by the read
+    assert r.vm.flags & flags.EPO
+
+
+def test_no_stall_stop_below_the_stall_speed(rig):
+    """TMCM-6212 manual 4.1 AP181: "Below this speed motor will not be stopped" - the motor
+    then loses steps instead (the counter runs on, the stage does not)."""
+    r = _stall_rig(rig, limit=30000)
+    r.cmd(1, 0, 0, 20000)
+    r.vm.advance(2)
+    assert r.gap(3) == 20000
+    assert r.gap(1) > 20000
+    assert r.phys() == 10000
+
+
+def test_stall_interrupt_is_raised(rig):
+    """TMCM-6212 manual 5.4 interrupt 15 "stallGuard axis 0": the handler runs on a stall."""
+    r = _stall_rig(rig)
+    w = Wire(r.vm)
+    w.load("VECT 15, Stall\nEI 15\nEI 255\nROR 0, 20000\nLoop: JA Loop\n"
+           "Stall: CALC LOAD, 77\nAGP 0, 2\nRETI")
+    w.run()
+    r.vm.advance(2)
+    assert r.cmd(10, 0, 2) == 77      # user variable 0, written by the handler
+
+
+def test_step_loss_and_deviation_stop(rig):
+    """TMCM-6212 manual 4.1 AP212 "When the actual position (parameter 1) and the encoder
+    position (parameter 209) differ more than set here the motor will be stopped"; AP207 bit 1
+    deviation error, JC EDV, deviation interrupt. The load exceeds what the current holds: the
+    position counter runs on, the encoder does not."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[5000, 0.9]]}}}})
+    r.sap(212, 2000)
+    r.cmd(1, 0, 0, 20000)
+    r.vm.advance(2)
+    assert r.gap(3) == 0
+    assert r.gap(209) == 5000
+    assert r.gap(1) == 5000 + 2001
+    assert r.gap(207) == 2
+    assert r.vm.flags & flags.EDV
+
+
+def test_encoder_follows_the_stage_and_is_writable(rig):
+    """TMCM-6212 manual 6.2: with AP202 and AP210 set "the encoder position is the same as the
+    motor position"; AP209 "is also writable, e.g. for setting a new origin"."""
+    r = rig("TMCM-6212", {})
+    r.cmd(4, 0, 0, 12345)
+    r.vm.advance(2)
+    assert r.gap(209) == 12345
+    r.sap(209, 100)
+    assert r.gap(209) == 100
+    r.sap(210, 4000)                   # a 1000-line encoder: 4000 counts per round
+    r.cmd(4, 0, 0, 12345 + 1000)
+    r.vm.advance(1)
+    assert abs(r.gap(209) - (100 + 1000)) < 13   # resolution 51200 / 4000 = 12.8 microsteps
+
+
+def test_1180_encoder_prescaler(rig):
+    """PD86-1180 manual 7.2: prescaler = p / 512 on the 256-count sensOstep encoder; p = 6400
+    (12.5) with 16 microsteps makes the encoder read microsteps; p = 3200 reads half of it."""
+    r = rig("TMCM-1180", {})
+    r.cmd(4, 0, 0, 3200)               # one round at 16 microsteps
+    r.vm.advance(20)
+    assert r.gap(1) == 3200
+    assert r.gap(209) == 3200
+    r.sap(210, 3200)
+    assert r.gap(209) == 1600
+
+
+def test_1180_clear_encoder_on_null_channel(rig):
+    """PD86-1180 manual 7.2: adding 4 to p "Clear encoder with next null channel event" (the
+    null channel comes once per round)."""
+    r = rig("TMCM-1180", {"axis": {"0": {"start": 100}}})
+    r.sap(210, 6400 + 4)
+    r.cmd(4, 0, 0, 5000)
+    r.vm.advance(30)
+    assert r.gap(1) == 5000
+    assert r.gap(209) == 5000 + 100 - 3200   # cleared where the stage passed 3200
+
+
+def test_coolstep_lowers_the_current_at_light_load(rig):
+    """TMCM-6212 manual 4.1 AP168 minimum 1/2 CS, AP169 32 readings per decrement, AP172
+    lower threshold, AP180 actual current: at light load the current falls to the minimum."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.05}}})
+    r.sap(172, 1)
+    r.cmd(1, 0, 0, 51200)
+    r.vm.advance(0.1)
+    assert r.gap(180) == 16           # AP6 = 128: CS = 128 >> 3
+    r.vm.advance(3)
+    assert r.gap(180) == 7            # (16 + 1) // 2 - 1
+
+
+def test_coolstep_settles_in_the_hysteresis_band(rig):
+    """TMCM-6212 manual 4.1 AP170/AP172: above the upper threshold (AP172 + AP170 + 1) * 32 the
+    current is decreased, below AP172 * 32 increased; a heavy load keeps it near CS."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.45}}})
+    r.sap(6, 127)                      # CS 15: C = 0.5
+    r.sap(172, 1)
+    r.cmd(1, 0, 0, 51200)
+    r.vm.advance(3)
+    cs = r.gap(180)
+    sg = r.gap(206)
+    assert cs == 14 and 32 <= sg < 64
+
+
+def test_coolstep_off_below_the_threshold_speed(rig):
+    """TMCM-6212 manual 4.1 AP182 "Above this speed coolStep becomes enabled"."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.05}}})
+    r.sap(172, 1)
+    r.sap(182, 60000)
+    r.cmd(1, 0, 0, 51200)
+    r.vm.advance(3)
+    assert r.gap(180) == 16
+
+
+def test_standby_current_after_the_power_down_delay(rig):
+    """TMCM-6212 manual 4.1 AP7 standby current, AP214 "Standstill period before the current
+    will be ramped down to standby current" (10 ms units)."""
+    r = rig("TMCM-6212", {})
+    r.sap(7, 40)
+    r.sap(214, 50)
+    r.cmd(4, 0, 0, 1000)
+    r.vm.advance(0.3)
+    assert r.gap(180) == 128 >> 3
+    r.vm.advance(0.5)
+    assert r.gap(180) == 40 >> 3
+
+
+def test_boost_current_while_accelerating(rig):
+    """PD86-1180 manual 5 AP200 "Current used for acceleration and deceleration phases"."""
+    r = rig("TMCM-1021", {})
+    r.sap(200, 200)
+    r.sap(5, 10000)
+    r.cmd(1, 0, 0, 20000)
+    r.vm.advance(0.5)
+    assert r.gap(180) == 200 >> 3
+    r.vm.advance(2)
+    assert r.gap(180) == 128 >> 3
+
+
+def test_1180_freewheeling_cuts_the_current(rig):
+    """PD86-1180 manual 5 AP204 "Time after which the power to the motor will be cut when its
+    velocity has reached zero" (ms)."""
+    r = rig("TMCM-1180", {})
+    r.sap(204, 100)
+    r.vm.advance(0.2)
+    assert r.gap(180) == 0
+
+
+def test_time_dependent_load(rig):
+    """Issue 5 item 3: a time-dependent load from the scenario; the stall happens when the load
+    steps up at t = 1 s."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"by": "time", "steps": [[1.0, 0.9]]}}}})
+    r.sap(181, 1000)
+    r.cmd(1, 0, 0, 10000)
+    r.vm.advance(0.99)
+    assert r.gap(3) == 10000
+    r.vm.advance(0.02)
+    assert r.gap(3) == 0
+    assert r.gap(207) == 1
+
+
+def test_load_api(rig):
+    """Issue 5 item 3: the load can also be set through the Python API."""
+    r = rig("TMCM-6212", {})
+    aw = r.vm.world.axis(0)
+    aw.set_load(Profile([(2000, 0.95)]), by="position")
+    r.sap(181, 1000)
+    r.cmd(1, 0, 0, 10000)
+    r.vm.advance(1)
+    assert r.gap(1) == 2000
+    with pytest.raises(ValueError):
+        Profile([(0, 1)], kind="spline")
+
+
+def test_stallguard_homing_program(rig):
+    """TMCM-6212 manual 6.3: "Stall detection can for example be used for finding the reference
+    point without the need for reference switches. A short routine written in TMCL is needed"
+    - examples/scenarios/stallguard_homing.tmc drives into the hard stop and zeroes."""
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[2]
+    r = rig("TMCM-6212", str(root / "examples/scenarios/tmcm6212_stage.toml"))
+    w = Wire(r.vm)
+    w.load((root / "examples/scenarios/stallguard_homing.tmc").read_text())
+    w.run()
+    r.vm.advance(10)
+    assert r.gap(1) == 0
+    assert r.phys() == -60000         # the left hard stop of the example stage

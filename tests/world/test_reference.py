@@ -1,0 +1,206 @@
+"""Reference search state machines (item 2): every mode of TMCM-6212 manual 6.1 (table 21,
+figures 3-10), PD86-1180 manual 7.1 and the PD28-1021 (TMCM-6212 modes, sibling).
+
+The stage: left limit switch active on [-23000, -20000], right on [30000, 33000], home switch
+on [4500, 5500]; the slider starts at 0. A switch is met at its first active position; the
+switching points of an edge are the last inactive and the first active position, and the
+reference point is their centre (rounded half to even): -19999.5 -> -20000 for the left
+switch's inner edge, 29999.5 -> 30000 for the right one, 4499.5 -> 4500 for the home switch.
+"""
+import pytest
+
+from tests.firmware.test_program_support import Wire
+
+STAGE = {"axis": {"0": {"left": {"position": -20000, "width": 3000},
+                        "right": {"position": 30000, "width": 3000},
+                        "home": {"position": 5000, "width": 1000}}}}
+
+L_IN = [("leave", "left", -19999), ("enter", "left", -20000)]      # inner edge of the left switch
+R_IN = [("leave", "right", 29999), ("enter", "right", 30000)]
+L_OUT = [("leave", "left", -23001), ("enter", "left", -23000)]     # outer edge (from both sides)
+R_OUT = [("leave", "right", 33001), ("enter", "right", 33000)]
+H_LO = [("leave", "home", 4499), ("enter", "home", 4500)]
+
+MODES_6212 = {
+    # 6.1.1 "only searches the left end switch"; +64 the right one
+    1: ([("seek", "left", -1), ("found", "left", -20000), *L_IN], -20000, 0),
+    65: ([("seek", "right", 1), ("found", "right", 30000), *R_IN], 30000, 0),
+    # 6.1.2 "first searches the right end switch and then the left end switch"; AP196 distance
+    2: ([("seek", "right", 1), ("found", "right", 30000), *R_IN,
+         ("seek", "left", -1), ("found", "left", -20000), *L_IN], -20000, 49999),
+    66: ([("seek", "left", -1), ("found", "left", -20000), *L_IN,
+          ("seek", "right", 1), ("found", "right", 30000), *R_IN], 30000, 49999),
+    # 6.1.3 "The left end switch is then searched from both sides, to find the middle"
+    3: ([("seek", "right", 1), ("found", "right", 30000), *R_IN,
+         ("seek", "left", -1), ("found", "left", -20000), *L_IN, *L_OUT], -21500, 51500),
+    67: ([("seek", "left", -1), ("found", "left", -20000), *L_IN,
+          ("seek", "right", 1), ("found", "right", 30000), *R_IN, *R_OUT], 31500, 51500),
+    # 6.1.4 "searches the left end switch only, but from both sides"
+    4: ([("seek", "left", -1), ("found", "left", -20000), *L_IN, *L_OUT], -21500, 0),
+    68: ([("seek", "right", 1), ("found", "right", 30000), *R_IN, *R_OUT], 31500, 0),
+    # 6.1.5 home in negative direction, "reversed if the left limit switch is reached"
+    5: ([("seek", "home", -1), ("turn", "left", -20000), ("found", "home", 4500), *H_LO], 4500, 0),
+    # 6.1.6 home in positive direction (found before the right switch)
+    6: ([("seek", "home", 1), ("found", "home", 4500), *H_LO], 4500, 0),
+    # 6.1.7 home in positive direction, ignoring end switches, "exact middle of the switch"
+    7: ([("seek", "home", 1), ("found", "home", 4500), *H_LO,
+         ("leave", "home", 5501), ("enter", "home", 5500)], 5000, 0),
+}
+
+
+def _run(rig, module, mode, scenario=STAGE):
+    r = rig(module, scenario)
+    r.sap(193, mode)
+    r.search()
+    return r
+
+
+@pytest.mark.parametrize("module", ["TMCM-6212", "TMCM-1021"])
+@pytest.mark.parametrize("mode", sorted(MODES_6212))
+def test_reference_search_modes(rig, module, mode):
+    """TMCM-6212 manual 6.1, table 21 and figures 3-9: the sequence of switch events of each
+    mode, the reference point at the centre of the switching points, position counter and
+    encoder (6.2: "After a reference search this parameter is also automatically set to 0")
+    zero there, AP196 the distance between the end switches (modes 2 and 3), AP197 the last
+    position before zeroing. The PD28-1021 follows its sibling (no +64 variants)."""
+    if module == "TMCM-1021" and mode & 64:
+        pytest.skip("+64 is a TMCM-6212 option")
+    log, ref, distance = MODES_6212[mode]
+    r = _run(rig, module, mode)
+    search = r.vm.reference_search(r.vm.axes[0])
+    assert search.log == [*log, ("zero", None, ref)]
+    assert r.phys() == ref
+    assert r.gap(1) == 0 and r.gap(209) == 0
+    assert r.gap(196) == distance
+    assert r.gap(197) == ref
+    assert r.gap(3) == 0
+
+
+def test_mode_8_searches_the_home_switch_in_negative_direction(rig):
+    """TMCM-6212 manual table 21: mode 8 "Search home switch in negative direction, ignore end
+    switches" - on a circular axis it meets the home switch from above and finds its middle."""
+    sc = {"axis": {"0": {"type": "circular", "steps_per_turn": 51200, "start": 20000,
+                         "home": {"position": 100, "width": 800}}}}
+    r = _run(rig, "TMCM-6212", 8, sc)
+    log = r.vm.reference_search(r.vm.axes[0]).log
+    assert log[:2] == [("seek", "home", -1), ("found", "home", 500 - 20000)]  # counter started at 0
+    assert r.phys() % 51200 == 100
+    assert r.gap(1) == 0
+
+
+def test_mode_7_on_a_circular_axis_finds_the_middle(rig):
+    """TMCM-6212 manual 6.1.7: mode 7 "is recommended mainly for use with a circular axis. The
+    exact middle of the switch will be found and used as the zero point"."""
+    sc = {"axis": {"0": {"type": "circular", "steps_per_turn": 51200, "start": 20000,
+                         "home": {"position": 100, "width": 800}}}}
+    r = _run(rig, "TMCM-6212", 7, sc)
+    assert r.phys() == 51300          # one turn on, at the middle of the switch
+    assert r.gap(1) == 0
+
+
+def test_plus_128_inverts_the_home_switch(rig):
+    """TMCM-6212 manual 6.1.5: "Add 128 to the mode number (i.e. set axis parameter #193 to
+    129) to reverse the polarity of the home switch input" - a normally closed home switch."""
+    sc = {"axis": {"0": {"left": {"position": -20000}, "home": {"position": 5000, "width": 1000, "inverted": True}}}}
+    for mode, result in ((5 + 128, 4500), (6 + 128, 4500), (7 + 128, 5000)):
+        r = _run(rig, "TMCM-6212", mode, sc)
+        assert r.phys() == result, mode
+
+
+def test_search_and_calibration_speeds(rig):
+    """TMCM-6212 manual 6.1 notes: "Until the reference switch is found for the first time, the
+    searching speed set by axis parameter 194 is used"; the calibration moves use AP195."""
+    sc = {"axis": {"0": {"left": {"position": -20000, "hysteresis": 400}}}}
+    r = rig("TMCM-6212", sc)
+    r.sap(5, 200000)                   # AMAX: 40000 pps reached after 0.2 s
+    r.sap(194, 40000)
+    r.sap(195, 1000)
+    r.cmd(13, 0)
+    r.vm.advance(0.25)
+    assert r.gap(3) == -40000
+    r.vm.advance(0.5)                  # the switch was hit at t = 0.6 s; leaving it takes 0.4 s
+    assert r.gap(3) == 1000
+    r.search()
+    log = r.vm.reference_search(r.vm.axes[0]).log
+    assert log[2:4] == [("leave", "left", -19599), ("enter", "left", -20000)]
+    assert r.phys() == -19800          # centre of -19599 and -20000, rounded half to even
+
+
+def test_rfs_stop_and_status(rig):
+    """TMCM-6212 manual 3.6.11: RFS STOP stops the search; RFS STATUS is 0 when no search runs."""
+    r = rig("TMCM-6212", STAGE)
+    assert r.cmd(13, 2) == 0
+    r.cmd(13, 0)
+    r.vm.advance(0.1)
+    assert r.cmd(13, 2) != 0
+    r.cmd(13, 1)
+    r.vm.advance(1)
+    assert r.cmd(13, 2) == 0
+    assert r.gap(3) == 0
+    assert -20000 < r.gap(1) < 0
+
+
+def test_soft_stop_overshoot_is_calibrated_away(rig):
+    """TMCM-6212 manual 4.1 AP26 soft stop: the motor brakes past the switching point; the
+    calibration at AP195 still finds the switching points."""
+    r = rig("TMCM-6212", STAGE)
+    r.sap(26, 1)
+    r.sap(193, 7)
+    r.search()
+    assert r.phys() == 5000
+
+
+def test_wait_rfs_in_a_program(rig):
+    """TMCM-6212 manual 3.6.20 WAIT RFS: "Wait until the reference search of the motor ... has
+    been reached" - the program continues after the search, position 0."""
+    r = rig("TMCM-6212", STAGE)
+    w = Wire(r.vm)
+    w.load("SAP 193, 0, 1\nRFS START, 0\nWAIT RFS, 0, 0\nGAP 197, 0\nSTOP")
+    w.run()
+    r.vm.advance(5)
+    assert w.a == -20000
+    assert r.gap(1) == 0
+
+
+MODES_1180 = {
+    # PD86-1180 7.1: "in modes 1 and 2, the motor will start by moving left"
+    1: ([("seek", "left", -1), ("found", "left", -20000), *L_IN], -20000, 0),
+    2: ([("seek", "right", 1), ("found", "right", 30000), *R_IN,
+         ("seek", "left", -1), ("found", "left", -20000), *L_IN], -20000, 49999),
+}
+
+
+@pytest.mark.parametrize("mode", sorted(MODES_1180))
+def test_1180_modes(rig, mode):
+    """PD86-1180 manual 5 AP193 modes 1 and 2, 7.1: "After hitting the reference switch, the
+    motor slowly moves right until the switch is released. Finally the switch is re-entered in
+    left direction, setting the reference point to the center of the two switching points"."""
+    sc = {"axis": {"0": {"left": {"position": -20000}, "right": {"position": 30000}}}}
+    log, ref, distance = MODES_1180[mode]
+    r = _run(rig, "TMCM-1180", mode, sc)
+    assert r.vm.reference_search(r.vm.axes[0]).log == [*log, ("zero", None, ref)]
+    assert r.phys() == ref and r.gap(1) == 0 and r.gap(196) == distance
+    assert r.gap(209) == 0
+
+
+def test_1180_three_switch_mode(rig):
+    """PD86-1180 manual 7.1: "In mode 3 (three-switch mode), the right stop switch is searched
+    first to distinguish the left stop switch from the reference switch by the order of
+    activation when moving left (reference switch and left limit switch share the same
+    electrical function)" - the first REFL activation moving left is the reference switch."""
+    sc = {"axis": {"0": {"left": {"position": -20000}, "right": {"position": 30000},
+                         "home": {"position": 5000, "width": 1000}}}}
+    r = _run(rig, "TMCM-1180", 3, sc)
+    log = r.vm.reference_search(r.vm.axes[0]).log
+    assert log[:2] == [("seek", "right", 1), ("found", "right", 30000)]
+    assert ("found", "left", 5500) in log           # REFL = the home switch, met from the right
+    assert r.phys() == 5500
+    assert r.gap(196) == 24499       # 29999.5 - 5500.5
+
+
+def test_1180_plus_128_inverts_the_reference_input(rig):
+    """PD86-1180 manual 5 AP193: "Adding 128 to these values reverses the polarity of the home
+    switch input" (mode 129 with a normally closed left switch)."""
+    sc = {"axis": {"0": {"left": {"position": -20000, "inverted": True}}}}
+    r = _run(rig, "TMCM-1180", 129, sc)
+    assert r.phys() == -20000 and r.gap(1) == 0
