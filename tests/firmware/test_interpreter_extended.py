@@ -99,11 +99,10 @@ def test_rst_restarts_at_a_label_dropping_the_stack():
 
 def test_call_is_a_conditional_csub():
     """PD28-1021 3.7.44 CALL (Conditional Subroutine Call), command 80: CSUB when the JC condition
-    holds. The assembler's profile check does not know 80, so this program is assembled without a
-    module; download mode stores it (3.6.36)."""
+    holds."""
     src = ("CALC LOAD, 3\nCOMP 3\nCALL EQ, Sub\nCALL NE, Sub\nSTOP\n"
            "Sub: GGP 0, 2\nCALC ADD, 1\nAGP 0, 2\nRSUB")
-    w = run28(src)
+    w = run28(src, module="PD28-1021")
     assert w.var(0) == 1 and w.state == 0
 
 

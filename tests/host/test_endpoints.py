@@ -70,3 +70,16 @@ def test_cli_send_to_a_tcp_endpoint(capsys):
         server.stop()
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 2 and out[1] == "1000"  # MVP's reply value is "don't care"
+
+
+def test_download_and_verify_a_program_on_every_endpoint(url):
+    """TMCM-6212 manual 3.6.36: 132 download mode, the instructions (status 101), 133, then 134 reads
+    program memory back (special reply) — the loader's verify works whatever carries the bytes."""
+    from opentmcl.host.loader import Loader
+    from opentmcl.lang import assemble
+
+    program = assemble("SAP 4, 0, 1000\nLoop: MVP ABS, 0, -7\n  JA Loop\n", module="TMCM-6212")
+    with connect(url, timeout=2.0) as m:
+        loader = Loader(m)
+        loader.download(program)            # verifies through 134
+        assert [tuple(i) for i in loader.read(0, 4)] == [tuple(i) for i in program.instructions]

@@ -80,3 +80,19 @@ def test_websocket_streams_samples_and_state(client):
         assert hello["type"] == "hello" and hello["overview"]["module"] == "TMCM-6212"
         kinds = {ws.receive_json()["type"] for _ in range(2)}
         assert kinds == {"samples", "state"}
+
+
+def test_posts_must_be_json_so_other_sites_cannot_forge_them(client):
+    """A cross-site form or text/plain fetch cannot carry application/json without a preflight."""
+    r = client.post("/api/console", content=b'{"line": "MVP ABS, 0, 1000"}',
+                    headers={"Content-Type": "text/plain"})
+    assert r.status_code == 400
+    assert client.dash.module.axes[0].target_position == 0
+
+
+def test_websocket_refuses_other_origins(client):
+    from starlette.websockets import WebSocketDisconnect
+
+    with pytest.raises(WebSocketDisconnect), \
+            client.websocket_connect("/ws", headers={"Origin": "http://evil.example"}) as ws:
+        ws.receive_json()

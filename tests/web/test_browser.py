@@ -80,3 +80,39 @@ def test_download_and_step_program(page, served):
     page.wait_for_function("document.getElementById('prog-var-3') && "
                            "document.getElementById('prog-var-3').textContent === '7'", timeout=TIMEOUT_MS)
     page.screenshot(path=str(ARTIFACTS / "dashboard-program.png"), full_page=True)
+
+
+def test_switch_output_and_force_input(page, served):
+    """TMCM-6212 manual 3.6.12 SIO / 3.6.13 GIO: OUT2 (bank 2) is switched from the page; the
+    virtual module's IN1 (bank 0) is forced to 1 and read back by GIO."""
+    page.check("#io-out-2-2")
+    page.wait_for_function("document.getElementById('io-val-2-2').textContent === '1'", timeout=TIMEOUT_MS)
+    assert served.dashboard.module.output(2) == 1
+    page.fill("#io-force-0-1", "1")
+    page.locator("#io-force-0-1 + button").click()
+    page.wait_for_function("document.getElementById('io-val-0-1').textContent === '1 (forced)'",
+                           timeout=TIMEOUT_MS)
+    assert served.dashboard.module.digital_input(1) == 1
+
+
+def test_run_stops_at_breakpoint(page, served):
+    """Host-side breakpoints (docs/notes/web.md): Run single-steps (manual 3.6.36 command 130) until
+    the program counter reaches the line; the accumulator counts the passes of the loop (manual
+    3.6.26 CALC ADD)."""
+    page.fill("#editor", "    CALC LOAD, 0\nLoop:\n    CALC ADD, 1\n    JA Loop\n")
+    page.click("#btn-download")
+    page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",
+                           timeout=TIMEOUT_MS)
+    page.click("#gutter-3")
+    page.wait_for_selector("#gutter-3.bp")
+    page.wait_for_function("window.fetch('/api/program').then(r => r.json())"
+                           ".then(j => j.state.breakpoints.length === 1)", timeout=TIMEOUT_MS)
+    page.click("#btn-run")  # from address 0: CALC LOAD runs, then the PC is at the breakpoint
+    page.wait_for_function("document.getElementById('prog-line').textContent === '3' && "
+                           "document.getElementById('prog-a').textContent === '0'", timeout=TIMEOUT_MS)
+    page.wait_for_selector("#line-3.current", timeout=TIMEOUT_MS)
+    page.click("#btn-run")  # once round the loop: CALC ADD, JA, back at the breakpoint
+    page.wait_for_function("document.getElementById('prog-line').textContent === '3' && "
+                           "document.getElementById('prog-a').textContent === '1'", timeout=TIMEOUT_MS)
+    st = served.dashboard.program_state()
+    assert st["pc"] == 1 and st["a"] == 1 and st["mode"] != 1

@@ -55,16 +55,14 @@ def _run(rig, module, mode, scenario=STAGE):
     return r
 
 
-@pytest.mark.parametrize("module", ["TMCM-6212", "TMCM-1021"])
-@pytest.mark.parametrize("mode", sorted(MODES_6212))
+@pytest.mark.parametrize(("module", "mode"), [("TMCM-6212", m) for m in sorted(MODES_6212)]
+                         + [("TMCM-1021", m) for m in sorted(MODES_6212) if not m & 64])
 def test_reference_search_modes(rig, module, mode):
     """TMCM-6212 manual 6.1, table 21 and figures 3-9: the sequence of switch events of each
     mode, the reference point at the centre of the switching points, position counter and
     encoder (6.2: "After a reference search this parameter is also automatically set to 0")
     zero there, AP196 the distance between the end switches (modes 2 and 3), AP197 the last
     position before zeroing. The PD28-1021 follows its sibling (no +64 variants)."""
-    if module == "TMCM-1021" and mode & 64:
-        pytest.skip("+64 is a TMCM-6212 option")
     log, ref, distance = MODES_6212[mode]
     r = _run(rig, module, mode)
     search = r.vm.reference_search(r.vm.axes[0])

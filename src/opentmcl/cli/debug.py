@@ -111,9 +111,7 @@ class DebugShell(cmd.Cmd):
 
     def do_cont(self, arg):
         """cont: continue to the next breakpoint, or until the program stops"""
-        if not self.dbg.breakpoints:
-            self.say("running (Ctrl-C stops)")
-        self.show_stop(self.dbg.cont())
+        self.show_stop(self.dbg.cont(on_start=lambda: self.say("running (Ctrl-C stops)")))
 
     do_c = do_cont
 

@@ -8,9 +8,11 @@ from . import CliError
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="run a virtual module through a few moves and print a table")
-    p.add_argument("--module", default="TMCM-6212", help="module type (default TMCM-6212)")
+    p.add_argument("--module", default=None, help="module type (default: the scenario's, else TMCM-6212)")
     p.add_argument("--duration", type=float, default=2.0, help="virtual seconds to run (default 2)")
     p.add_argument("--interval", type=float, default=0.1, help="table row interval in seconds (default 0.1)")
+    p.add_argument("--scenario", metavar="FILE", help="run in a physical world (docs/scenarios.md) and print its trace")
+    p.add_argument("--csv", metavar="FILE", help="with --scenario: save the trace as CSV instead of printing it")
     p.set_defaults(func=run)
 
 
@@ -35,8 +37,11 @@ def run(args: argparse.Namespace) -> int:
 
     if args.interval <= 0 or args.duration <= 0:
         raise CliError("--duration and --interval must be positive")
+    if args.scenario or args.csv:
+        from ..trace import world_demo  # the world trace (position, switches, load value, current)
+        return world_demo(args, _plan, CliError)
     try:
-        vm = VirtualModule(args.module)
+        vm = VirtualModule(args.module or "TMCM-6212")
     except KeyError as exc:
         raise CliError(exc.args[0]) from None
     for cmd, type_, motor, value in _plan(vm):

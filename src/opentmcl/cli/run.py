@@ -39,6 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--eeprom", help="file-backed EEPROM of the in-process virtual module")
     p.add_argument("--scenario", metavar="FILE", help="physical-world scenario for the in-process "
                    "virtual module (switches, loads, inputs over time)")
+    p.add_argument("--csv", metavar="FILE", help="save the world trace (position, velocity, switches, load "
+                   "value, current of every axis, each --sample) of the in-process module as CSV")
     p.set_defaults(func=run)
 
 
@@ -108,7 +110,13 @@ def run(args: argparse.Namespace) -> int:
         try:
             loader.download(program.instructions)
             loader.run(args.start)
-            _trace(loader, watches, read_watch, args)
+            from ..trace import cli_recorder
+            args.recorder = cli_recorder(client, args, CliError)
+            try:
+                _trace(loader, watches, read_watch, args)
+            finally:
+                if args.recorder is not None:
+                    args.recorder.save()
         except TmclError as exc:
             raise CliError(str(exc)) from None
     finally:
@@ -125,6 +133,8 @@ def _trace(loader, watches, read_watch, args) -> None:
         values = [(w.name, read_watch(loader, w)) for w in watches]
         changed = [f"{n}={v}" for n, v in values if last.get(n, object()) != v]
         last.update(values)
+        if getattr(args, "recorder", None) is not None:
+            args.recorder.sample()
         if changed:
             print(f"{elapsed:9.3f}  {' '.join(changed)}", flush=True)
         st = loader.status()

@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
+
+from ..atomicfile import write_atomic
 
 FORMAT = "opentmcl-eeprom"
 VERSION = 1
@@ -107,19 +108,5 @@ class Eeprom:
             return
         payload = json.dumps({"format": FORMAT, "version": VERSION, "module": self.module, **self.data},
                              separators=(",", ":"), sort_keys=True)
-        directory = self.path.parent
-        directory.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=self.path.name + ".", suffix=".tmp", dir=directory)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(payload)
-                fh.flush()
-                os.fsync(fh.fileno())
-            os.replace(tmp, self.path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        write_atomic(self.path, payload.encode("utf-8"))
         self.dirty = False

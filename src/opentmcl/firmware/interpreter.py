@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 from ..protocol.frame import to_int32
 from ..protocol.status import Status
 from . import calc, flags, wait
-from .commands import execute
+from .commands import KNOWN_OPCODES, execute
 from .program import RESET, RUNNING, STEPPING, STOPPED
 from .status import TmclStatus
 
@@ -38,7 +38,6 @@ INSTRUCTION_TICKS = 1600      # 100 µs at 16 MHz per TMCL instruction
 STACK_DEPTH = 8               # "The number of entries in the internal stack is limited to 8."
 READS_VALUE = frozenset({6, 10, 15, 31})  # GAP, GGP, GIO, GCO (and RFS STATUS) load the accumulator
 CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number from public TMCL headers)
-EXTENDED_MARKER = 49          # a module with DJNZ has the PD28-1021 extended set, CALL included
 # Instructions that neither read nor change anything outside the program's registers, flags,
 # stack and user variables (SGP/GGP/AGP on bank 2), or only the I/O ports (SIO, GIO: inputs change
 # only at world events or host commands): they may run ahead of the motors (_run_ahead).
@@ -279,15 +278,14 @@ class Interpreter:
         command, type, motor, value = vm.program.code[pc]
         self.executed += 1
         handler = FLOW.get(command)
-        available = command in vm.profile.opcodes or (
-            command == CALL and EXTENDED_MARKER in vm.profile.opcodes)
+        available = command in vm.profile.opcodes
         try:
             if handler is not None and available:
                 if handler(self, type, motor, value):  # True: the handler set the PC itself
                     return
             elif command >= 128 or not available:
-                self._fail(command, int(Status.INVALID_COMMAND if command not in vm.profile.opcodes
-                                        else Status.NOT_AVAILABLE))
+                known = command in KNOWN_OPCODES or command == CALL
+                self._fail(command, int(Status.NOT_AVAILABLE if known else Status.INVALID_COMMAND))
             else:
                 self._generic(command, type, motor, value)
         except TmclStatus as exc:

@@ -35,6 +35,17 @@ def _sign(x) -> int:
     return (x > 0) - (x < 0)
 
 
+def _velocity_sign(e) -> int:
+    """Sign of the actual velocity, exact (cheaper than the engines' public properties)."""
+    queue = getattr(e, "_queue", None)
+    if queue is not None:
+        return _sign(queue.at(e.now).v_at(e.now))
+    ramp = getattr(e, "ramp", None)
+    if ramp is not None:
+        return _sign(ramp.v_internal)
+    return _sign(e.velocity)
+
+
 class AxisWorld:
     """Stage, load, encoder and drive currents of one axis."""
 
@@ -57,6 +68,7 @@ class AxisWorld:
         self._due_at = -2
         self._due_streak = 0
         self._cache: tuple | None = None
+        self._engine_wake: int | None = None
 
     # --- binding ----------------------------------------------------------------------------
     def bind(self, axis: Axis) -> None:
@@ -161,9 +173,9 @@ class AxisWorld:
     def heading(self) -> int:
         """Direction of motion, or of the motion about to start (0 when there is none)."""
         e = self.engine
-        v = e.velocity if not hasattr(e, "velocity_exact") else e.velocity_exact
+        v = _velocity_sign(e)
         if v:
-            return _sign(v)
+            return v
         if e.mode.value == "velocity":
             return _sign(e.target_velocity)
         return _sign(((e.target_position - e.position + 2**31) % 2**32) - 2**31)
@@ -368,15 +380,25 @@ class AxisWorld:
             return False
         if not self.slipping and (self._blocked(self.heading()) or self._overloaded()):
             return True
+        dev = self.p(212)
+        if dev and abs(e.position - self.encoder()) > dev:
+            return True
         limit = self.p(181)
         return bool(limit and abs(e.velocity) >= abs(self.axis.to_engine(181, limit)) and self.load_value() == 0)
 
     # --- events -------------------------------------------------------------------------------------
     def interesting(self) -> bool:
-        st = self.stage
-        return bool(st.switches() or self.forced or not self.load.profile.is_constant or self.load.profile.before
-                    or st.ends != (None, None) or self.p(181) or self.p(212) or self.watch is not None
-                    or self.spec.torque_falloff_speed or (self.p(210) & 4 and self.vm.profile.engine != "sixpoint"))
+        """Can anything happen on this axis that needs an event? (cheap; checked very often)"""
+        if self._static_interesting or self.forced or self.watch is not None:
+            return True
+        ram = self.axis.ram
+        return bool(ram.get(181) or ram.get(212) or (ram.get(210, 0) & 4 and self.vm.profile.engine != "sixpoint"))
+
+    @property
+    def _static_interesting(self) -> bool:
+        st, prof = self.stage, self.load.profile
+        return bool(st.left or st.right or st.home or not prof.is_constant or prof.before
+                    or st.ends != (None, None) or self.spec.torque_falloff_speed)
 
     SIGNATURE_PARAMS = (6, 7, 12, 13, 14, 24, 25, 26, 140, 141, 149, 172, 174, 181, 182, 200, 202, 210, 212)
 
@@ -411,7 +433,16 @@ class AxisWorld:
             return cached[1]
         t = self._next_event(now)
         self._cache = (sig, t)
+        self._engine_wake = e.next_event()
         return t
+
+    def needs_check(self, now: int) -> bool:
+        """At this event tick: is it one of this axis's own events or an engine phase change?"""
+        if self.axis is None or not self.interesting():
+            return False
+        if self._cache is None or self.load.by == "time":
+            return True
+        return now == self._cache[1] or now == self._engine_wake
 
     def _next_event(self, now: int) -> int | None:
         e = self.engine
@@ -492,6 +523,7 @@ class World:
         self.inputs: dict[tuple[int, int], Profile] = {(i.bank, i.port): i.signal for i in self.scenario.inputs}
         self.shutdown = self.scenario.shutdown
         self._shutdown_level = 0
+        self._input_cache: tuple | None = None
 
     # --- API ----------------------------------------------------------------------------------------
     def axis(self, index: int) -> AxisWorld:
@@ -500,11 +532,13 @@ class World:
     def set_input(self, bank: int, port: int, value: float | Profile) -> None:
         """Drive an input with a constant or a Profile over time (seconds since power-up of the world)."""
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
+        self._input_cache = None
         self._drive_inputs()
 
     def set_shutdown(self, level: int) -> None:
         """The SHUTDOWN pin (PD86-1180 GP80) at a constant level."""
         self.shutdown = Profile.constant(level)
+        self._input_cache = None
         self.service()
 
     # --- hooks --------------------------------------------------------------------------------------
@@ -533,7 +567,18 @@ class World:
             t = aw.next_event()
             if t is not None and (best is None or t < best):
                 best = t
+        t = self._next_input_change()
+        if t is not None and (best is None or t < best):
+            best = t
+        return best
+
+    def _next_input_change(self) -> int | None:
         now = self.vm.now
+        key = (id(self.inputs), len(self.inputs), self.shutdown)
+        cached = self._input_cache
+        if cached is not None and cached[0] == key and cached[1] is not None and cached[1] > now:
+            return cached[1]
+        best = None
         s = now / CLOCK_HZ
         for sig in [*self.inputs.values(), *([self.shutdown] if self.shutdown else [])]:
             x = sig.next_integer_change(s)
@@ -541,6 +586,7 @@ class World:
                 t = max(now + 1, ceil_ticks(x, CLOCK_HZ))
                 if best is None or t < best:
                     best = t
+        self._input_cache = (key, best)
         return best
 
     def service(self) -> None:
@@ -549,8 +595,10 @@ class World:
             vm.sync()
         self._drive_inputs()
         self._check_shutdown()
+        now = vm.now
         for aw in self.axes_world:
-            aw.check()
+            if aw.needs_check(now):
+                aw.check()
 
     def _check_shutdown(self) -> None:
         """PD86-1180 GP80: 1 high active, 2 low active; an active SHUTDOWN pin stops the motors

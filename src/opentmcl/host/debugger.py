@@ -203,11 +203,15 @@ class Debugger:
             if max_steps is not None and steps >= max_steps:
                 return st
 
-    def cont(self, *, max_seconds: float | None = None) -> AppStatus:
-        """Continue: to the next breakpoint by stepping, or freely (129) until the program stops."""
+    def cont(self, *, max_seconds: float | None = None,
+             on_start: Callable[[], None] | None = None) -> AppStatus:
+        """Continue: to the next breakpoint by stepping, or freely (129) until the program stops
+        (`on_start` is called once the program runs freely)."""
         if self.breakpoints:
             return self.run_to(self.breakpoints)
         self.loader.run()
+        if on_start is not None:
+            on_start()
         waited = 0.0
         while True:
             self.loader.client.sleep(POLL)

@@ -21,9 +21,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from ..lang.binfile import Instruction, decode
-from ..protocol.frame import FRAME_LEN, Reply, Request, checksum, to_int32
+from ..protocol.frame import Reply, to_int32
 from .client import Client
-from .errors import TmclError, TmclProtocolError, TmclStatusError, TmclTimeout
+from .errors import TmclError, TmclStatusError
 
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
@@ -127,29 +127,9 @@ class Loader:
 
     def read_one(self, address: int) -> Instruction:
         """One program memory location (command 134, special reply)."""
-        c = self.client
-        req = Request(self.address, READ_PROGRAM_MEMORY, 0, 0, to_int32(address))
-        can = c.transport.frame_format == "can"
-        with c._lock:
-            c._send(req)
-            deadline = c.transport.monotonic() + self.timeout
-            while True:
-                try:
-                    raw = c._recv(7 if can else FRAME_LEN, deadline)
-                except TmclTimeout:
-                    raise TmclTimeout(f"no reply from module {self.address} to read program memory "
-                                      f"{address} within {self.timeout:g} s") from None
-                if can:
-                    return Instruction(raw[0], raw[1], raw[2], int.from_bytes(raw[3:7], "big", signed=True))
-                if checksum(raw[:8]) != raw[8]:
-                    c._dirty = True
-                    raise TmclProtocolError(f"reply to command 134 with wrong checksum: {raw.hex(' ')}")
-                if raw[1] == self.address and raw[3] in (READ_PROGRAM_MEMORY, 138) and raw[2] != 100:
-                    reply = Reply.decode(raw)
-                    if c._take_event(reply):   # a "position reached" event came first
-                        continue
-                    raise TmclStatusError(reply.status, req, reply)
-                return Instruction(raw[1], raw[2], raw[3], int.from_bytes(raw[4:8], "big", signed=True))
+        reply = self.client.request(READ_PROGRAM_MEMORY, 0, 0, to_int32(address), address=self.address,
+                                    timeout=self.timeout)
+        return Instruction(reply.command, reply.type, reply.motor, reply.value)
 
     # --- application control (129-131, 135) ----------------------------------------------------
     def run(self, address: int | None = None) -> None:

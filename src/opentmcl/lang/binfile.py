@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import os
 import struct
-import tempfile
 from pathlib import Path
 from typing import NamedTuple
 
+from ..atomicfile import write_atomic
 from ..protocol.frame import checksum, to_int32
 
 RECORD_LEN = 8
@@ -66,18 +66,4 @@ def read(path: str | os.PathLike) -> list[Instruction]:
 
 def write(path: str | os.PathLike, program: list[Instruction] | tuple[Instruction, ...]) -> None:
     """Write atomically (temporary file, fsync, rename), so a killed process leaves no half file."""
-    target = Path(path)
-    data = encode(program)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent or ".")
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, target)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise
+    write_atomic(path, encode(program))

@@ -22,6 +22,7 @@ import inspect
 import logging
 import threading
 import time
+from functools import partial
 from collections.abc import Callable, Iterable
 from typing import NamedTuple, Protocol
 
@@ -46,7 +47,7 @@ class Channel(Protocol):
         """Send an unsolicited 9-byte reply of `vm` to the host."""
 
 
-MIN_STEP = 0.002
+MIN_STEP = 0.005
 """Seconds of wall time below which a request does not advance the modules' clocks: advancing
 costs the same however short the step, so a burst of requests shares one advance. The modules
 lag the wall clock by at most this much (docs/notes/endpoints.md)."""
@@ -75,6 +76,9 @@ class ModuleBus:
         self.min_step = min_step
         self._route: dict[int, Channel] = {}
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
+        # (module, its handle() for serial frames) looked up once: the per-frame path is hot.
+        self._serial_handlers = [(vm, partial(vm.handle, interface="serial") if self._interface_kw[id(vm)]
+                                  else vm.handle) for vm in self.modules]
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:
@@ -106,6 +110,21 @@ class ModuleBus:
                 if reply:
                     replies.append((vm, reply))
         return replies
+
+    def serial_frames(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes, str]]:
+        """One 9-byte frame to every module, all in binary mode: [(module, reply, "binary")] for
+        each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
+        out = []
+        route = self._route
+        for vm, handle in self._serial_handlers:
+            reply = handle(frame)
+            if reply:
+                out.append((vm, reply, "binary"))
+                if channel is not None:
+                    route[id(vm)] = channel
+            elif channel is not None and self._addressed(vm, frame[0]):
+                route[id(vm)] = channel
+        return out
 
     def serial_frame(self, vm, frame: bytes, channel: Channel | None = None) -> bytes:
         """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced."""

@@ -78,9 +78,13 @@ class SerialSession:
 
     def send_reply(self, vm, reply: bytes, *, pause: bool = True) -> None:
         """Write `reply` after the telegram pause (if `pause`), paced at GP65 if asked."""
-        with self.bus.lock:
-            wait = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
-            per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
+        # Reading two parameters needs no bus lock: a dictionary read is atomic.
+        wait = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
+        per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
+        if not wait and not per_byte:
+            with self._write_lock:
+                self._write(reply)
+            return
         with self._write_lock:
             if wait > 0:
                 self._sleep(wait)

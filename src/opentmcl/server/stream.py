@@ -25,6 +25,7 @@ from __future__ import annotations
 import logging
 from typing import NamedTuple
 
+from ..protocol.frame import FRAME_LEN
 from .framer import DEFAULT_GAP, SerialFramer
 
 log = logging.getLogger("opentmcl.server")
@@ -39,7 +40,8 @@ def in_ascii_mode(vm) -> bool:
 
 
 class Output(NamedTuple):
-    """Bytes a module sends back: a binary reply frame, or ASCII echo and reply text."""
+    """Bytes a module sends back: a binary reply frame, or ASCII echo and reply text.
+    (`SerialStream.feed` may return plain (vm, data, kind) tuples on its fast path.)"""
 
     vm: object
     data: bytes
@@ -72,18 +74,42 @@ class SerialStream:
         status code) is logged; its frame or text gets no reply and the stream
         lives on."""
         data = bytes(data)
-        found: list[tuple[int, int, Output]] = []
-        frames = 0
         bus = self.bus
         with bus.lock:
             bus.sync()
+            if len(data) == FRAME_LEN and self._aligned():
+                # The common case: one whole frame while every module is between frames.
+                self.frames += 1
+                try:
+                    return bus.serial_frames(data, channel)
+                except Exception:  # find the failing module the slow way, frame by frame
+                    return [Output(vm, reply, BINARY) for vm in bus.modules
+                            if (reply := self._frame(vm, data, channel))]
+            found: list[tuple[int, int, Output]] = []
+            frames = 0
             for index, vm in enumerate(bus.modules):
-                count = self._feed_module(index, vm, data, now, channel, found)
-                frames = max(frames, count)
+                frames = max(frames, self._feed_module(index, vm, data, now, channel, found))
         self.frames += frames
         if len(found) > 1:
             found.sort(key=lambda item: (item[0], item[1]))
         return [item[2] for item in found]
+
+    def _aligned(self) -> bool:
+        """No module is inside a frame or in ASCII mode."""
+        for framer in self._framers:
+            if framer.pending:
+                return False
+        for vm in self.bus.modules:
+            if in_ascii_mode(vm):
+                return False
+        return True
+
+    def _frame(self, vm, frame: bytes, channel) -> bytes:
+        try:
+            return self.bus.serial_frame(vm, frame, channel)
+        except Exception:
+            log.exception("module failed on frame %s", frame.hex(" "))
+            return b""
 
     def _feed_module(self, index: int, vm, data: bytes, now: float, channel, found: list) -> int:
         framer = self._framers[index]
@@ -108,11 +134,7 @@ class SerialStream:
             pos += len(piece)
             for frame in framer.feed(piece, now):
                 frames += 1
-                try:
-                    reply = self.bus.serial_frame(vm, frame, channel)
-                except Exception:
-                    log.exception("module failed on frame %s", frame.hex(" "))
-                    continue
+                reply = self._frame(vm, frame, channel)
                 if reply:
                     found.append((pos, index, Output(vm, reply, BINARY)))
         return frames

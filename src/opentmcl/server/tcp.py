@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import ipaddress
 import socket
+import struct
+import sys
 import threading
 
 from .framer import DEFAULT_GAP
@@ -30,6 +32,25 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False
+
+
+def bound_blocking(conn: socket.socket, seconds: float) -> None:
+    """Make `conn` blocking with kernel time-outs (SO_RCVTIMEO/SO_SNDTIMEO) of `seconds`.
+
+    Cheaper per call than Python's socket time-out (which polls before every recv and
+    send) and just as bounded: recv wakes up every `seconds` to check for shutdown, and a
+    send to a client that has not read for `seconds` fails (the client is dropped).
+    Falls back to the Python time-out where the options cannot be set."""
+    if sys.platform == "win32":  # the options take milliseconds there; keep it simple
+        conn.settimeout(seconds)
+        return
+    try:
+        timeval = struct.pack("ll", int(seconds), int((seconds % 1) * 1_000_000))
+        conn.settimeout(None)
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_RCVTIMEO, timeval)
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDTIMEO, timeval)
+    except (OSError, AttributeError, struct.error):
+        conn.settimeout(seconds)
 
 
 class TcpServer:
@@ -104,7 +125,7 @@ class TcpServer:
                 conn.close()
                 continue
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            conn.settimeout(POLL)
+            bound_blocking(conn, POLL)
             session = SerialSession(self.bus, lambda data, c=conn: self._send(c, data),
                                     gap=self.gap, pace_bytes=self.pace_bytes)
             with self._lock:
@@ -112,8 +133,8 @@ class TcpServer:
             self._spawn(self._client_loop, "opentmcl-tcp-client", conn, session)
 
     def _send(self, conn: socket.socket, data: bytes) -> None:
-        # The socket timeout (POLL) bounds sendall: a client whose receive
-        # buffer stays full that long is not reading and is dropped.
+        # The send time-out (POLL, bound_blocking) bounds sendall: a client whose
+        # receive buffer stays full that long is not reading and is dropped.
         try:
             conn.sendall(data)
         except OSError:
@@ -124,7 +145,7 @@ class TcpServer:
             while not self._stop.is_set() and not session.closed:
                 try:
                     data = conn.recv(4096)
-                except TimeoutError:
+                except (TimeoutError, BlockingIOError, InterruptedError):
                     continue
                 except OSError:
                     break

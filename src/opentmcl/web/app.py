@@ -41,6 +41,10 @@ class BadRequest(ValueError):
 
 
 async def _body(request: Request) -> dict:
+    # Only JSON: a cross-site page cannot send it without a CORS preflight, which is never granted,
+    # so another web site open in the same browser cannot drive the motors (CSRF).
+    if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":
+        raise BadRequest("requests must be JSON (Content-Type: application/json)")
     try:
         data = await request.json()
     except (json.JSONDecodeError, UnicodeDecodeError):
@@ -160,6 +164,11 @@ def create_app(dashboard: Dashboard) -> Starlette:
                 [s.line if s is not None and s.file == "<editor>" else None for s in d.program.source]}
 
     async def ws(websocket: WebSocket) -> None:
+        origin = websocket.headers.get("origin")
+        host = websocket.headers.get("host", "")
+        if origin is not None and origin.split("://", 1)[-1] != host:
+            await websocket.close(1008)  # another site's page: no live data for it
+            return
         await websocket.accept()
         gone = asyncio.Event()
 

@@ -66,6 +66,17 @@ class DashboardStartError(OSError):
     """The web server could not start (port in use, bad address)."""
 
 
+def warn_if_exposed(host: str, err=None) -> None:
+    """Anyone who can open the page can move the motors: say so when it is not loopback-only."""
+    import sys
+
+    from ..server.tcp import is_loopback
+
+    if not is_loopback(host):
+        print(f"opentmcl: warning: the dashboard on {host} is reachable from the network; "
+              "anyone who can open it can move the motors", file=err or sys.stderr)
+
+
 def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=None, vm_lock=None,
                     url: str = "", on_stop=None, poll: bool = True) -> DashboardHandle:
     """Serve the dashboard for a host `Module` on http://host:port/ from a daemon thread.
@@ -77,6 +88,7 @@ def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=Non
 
     from .app import create_app
 
+    warn_if_exposed(host)
     dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
     app = create_app(dashboard)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",

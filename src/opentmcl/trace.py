@@ -1,0 +1,159 @@
+"""Traces of a virtual module in its world: position, velocity, switches, load value, current.
+
+    trace = Trace()                 # all axes
+    trace.sample(vm)                # one row at vm.time (call as often as you like)
+    trace.to_csv("run.csv")         # or trace.to_csv() -> str
+    print(trace.table())
+
+A row is a dict: ``time`` (virtual seconds) and, per axis n, ``pos<n>`` (AP1), ``vel<n>`` (AP3),
+``left<n>``/``right<n>``/``home<n>`` (AP11/AP10/AP9, logical states), ``load<n>`` (AP206),
+``current<n>`` (AP180, 0..31), ``encoder<n>`` (AP209) and ``stage<n>`` (the physical position
+of the slider in the world). Values a module does not have are empty.
+"""
+from __future__ import annotations
+
+import csv
+import io
+import os
+from collections.abc import Iterable
+
+FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("load", 206),
+          ("current", 180), ("encoder", 209))
+
+
+class Trace:
+    def __init__(self, axes: Iterable[int] | None = None) -> None:
+        self.axes = None if axes is None else list(axes)
+        self.rows: list[dict[str, float | int | None]] = []
+
+    def _axes(self, vm) -> list[int]:
+        n = len(vm.axes)
+        if self.axes is None:
+            return list(range(n))
+        bad = [a for a in self.axes if not 0 <= a < n]
+        if bad:
+            raise ValueError(f"{vm.profile.name} has no axis {bad[0]}")
+        return self.axes
+
+    def columns(self, vm) -> list[str]:
+        cols = ["time"]
+        for a in self._axes(vm):
+            cols += [f"{name}{a}" for name, _ in FIELDS] + [f"stage{a}"]
+        return cols
+
+    def sample(self, vm) -> dict[str, float | int | None]:
+        """Read one row from the virtual module at its present time (no time passes)."""
+        from .firmware.status import TmclStatus
+
+        vm.sync()
+        row: dict[str, float | int | None] = {"time": round(vm.time, 9)}
+        for a in self._axes(vm):
+            axis = vm.axes[a]
+            for name, number in FIELDS:
+                try:
+                    row[f"{name}{a}"] = axis.get(number) if number in axis.params else None
+                except TmclStatus:
+                    row[f"{name}{a}"] = None
+            world = getattr(vm, "world", None)
+            row[f"stage{a}"] = world.axis(a).physical_position if world is not None else None
+        self.rows.append(row)
+        return row
+
+    def record(self, vm, seconds: float, interval: float) -> list[dict]:
+        """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
+        if interval <= 0 or seconds < 0:
+            raise ValueError("interval must be > 0 and seconds >= 0")
+        steps = round(seconds / interval)
+        self.sample(vm)
+        for _ in range(steps):
+            vm.advance(interval)
+            self.sample(vm)
+        return self.rows
+
+    def to_csv(self, target: str | os.PathLike | None = None) -> str:
+        """The rows as CSV text; written to `target` when given."""
+        cols = list(self.rows[0]) if self.rows else ["time"]
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+        w.writeheader()
+        for row in self.rows:
+            w.writerow({k: "" if v is None else v for k, v in row.items()})
+        text = buf.getvalue()
+        if target is not None:
+            with open(target, "w", encoding="utf-8", newline="") as f:
+                f.write(text)
+        return text
+
+    def table(self) -> str:
+        """The rows as an aligned text table."""
+        if not self.rows:
+            return ""
+        cols = list(self.rows[0])
+        cells = [[("" if r[c] is None else (f"{r[c]:.3f}" if c == "time" else str(r[c]))) for c in cols]
+                 for r in self.rows]
+        widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
+        lines = [" ".join(c.rjust(w) for c, w in zip(cols, widths, strict=True))]
+        lines += [" ".join(v.rjust(w) for v, w in zip(row, widths, strict=True)) for row in cells]
+        return "\n".join(lines)
+
+
+def world_demo(args, plan, error) -> int:
+    """`opentmcl demo --scenario FILE [--csv OUT]`: the demo moves (`plan(vm)`) in a world;
+    prints the trace table or writes it as CSV. Bad input raises `error` (the CLI's CliError)."""
+    from .firmware.vm import VirtualModule
+    from .motion.scenario import load_scenario
+
+    if not args.scenario:
+        raise error("--csv needs --scenario")
+    try:
+        scenario = load_scenario(args.scenario)
+        vm = VirtualModule(args.module or scenario.module or "TMCM-6212", scenario=scenario)
+    except KeyError as exc:
+        raise error(str(exc.args[0] if exc.args else exc)) from None
+    except ValueError as exc:
+        raise error(f"cannot use scenario {args.scenario}: {exc}") from None
+    for cmd, type_, motor, value in plan(vm):
+        reply = vm.request(cmd, type_, motor, value)
+        if reply is None or reply.status != 100:
+            raise error(f"module refused command {cmd} {type_} {motor} {value}")
+    trace = Trace()
+    trace.record(vm, args.duration, args.interval)
+    if args.csv:
+        try:
+            trace.to_csv(args.csv)
+        except OSError as exc:
+            raise error(f"cannot write {args.csv}: {exc.strerror or exc}") from None
+        print(f"{len(trace.rows)} rows written to {args.csv}")
+    else:
+        print(f"Virtual {vm.profile.name} in scenario {args.scenario}, virtual time")
+        print(trace.table())
+    return 0
+
+
+class _CliRecorder:
+    """`opentmcl run --csv FILE`: samples the in-process module at each look of the run."""
+
+    def __init__(self, vm, path: str, error) -> None:
+        self.vm, self.path, self.error = vm, path, error
+        self.trace = Trace()
+
+    def sample(self) -> None:
+        self.trace.sample(self.vm)
+
+    def save(self) -> None:
+        try:
+            self.trace.to_csv(self.path)
+        except OSError as exc:
+            raise self.error(f"cannot write {self.path}: {exc.strerror or exc}") from None
+        print(f"world trace: {len(self.trace.rows)} rows written to {self.path}")
+
+
+def cli_recorder(client, args, error) -> _CliRecorder | None:
+    """The recorder for `run --csv`, or None without --csv (needs the in-process module)."""
+    path = getattr(args, "csv", None)
+    if not path:
+        return None
+    modules = getattr(getattr(client, "transport", None), "modules", None)
+    if not modules:
+        raise error("--csv records the in-process virtual module only (no --to)")
+    return _CliRecorder(modules[0], path, error)

@@ -1,0 +1,114 @@
+"""Inputs, outputs and error flags driven by the world (item 5)."""
+from opentmcl.firmware import flags
+from opentmcl.motion.stage import Profile
+from tests.firmware.test_program_support import Wire
+
+
+def test_digital_input_steps_over_time(rig):
+    """TMCM-6212 manual 3.6.13 GIO bank 0: the digital inputs follow the scenario's steps."""
+    r = rig("TMCM-6212", {"input": [{"bank": 0, "port": 1, "steps": [[0.5, 1], [1.0, 0]]}]})
+    assert r.cmd(15, 1, 0) == 0
+    r.vm.advance(0.6)
+    assert r.cmd(15, 1, 0) == 1
+    r.vm.advance(0.5)
+    assert r.cmd(15, 1, 0) == 0
+
+
+def test_analog_input_ramp(rig):
+    """TMCM-6212 manual 3.6.13 GIO bank 1 (analog inputs): a ramp from 0 to 4000 in 2 s."""
+    r = rig("TMCM-6212", {"input": [{"bank": 1, "port": 0, "ramp": [[0, 0], [2, 4000]]}]})
+    r.vm.advance(0.5)
+    assert r.cmd(15, 0, 1) == 1000
+    r.vm.advance(1.0)
+    assert r.cmd(15, 0, 1) == 3000
+    r.vm.advance(5)
+    assert r.cmd(15, 0, 1) == 4000
+
+
+def test_input_api(rig):
+    """The world's Python API drives an input with a constant or a profile over time."""
+    r = rig("TMCM-6212", {})
+    r.vm.world.set_input(0, 2, 1)
+    assert r.cmd(15, 2, 0) == 1
+    r.vm.world.set_input(0, 2, Profile([(1.0, 0)], before=1))
+    r.vm.advance(1.1)
+    assert r.cmd(15, 2, 0) == 0
+
+
+def test_input_change_interrupt_on_the_selected_transition(rig):
+    """TMCM-6212 manual 5 bank 3 parameters 39-42 select the input-change transition (1 low-high,
+    2 high-low, 3 both); interrupt 39 + port runs its handler when the scenario's input changes."""
+    sc = {"input": [{"bank": 0, "port": 0, "steps": [[0.2, 1], [0.4, 0], [0.6, 1]]}]}
+    for mode, count in ((1, 2), (2, 1), (3, 3)):
+        r = rig("TMCM-6212", sc)
+        w = Wire(r.vm)
+        w.load(f"SGP 39, 3, {mode}\nVECT 39, Changed\nEI 39\nEI 255\nLoop: JA Loop\n"
+               "Changed: GGP 0, 2\nCALC ADD, 1\nAGP 0, 2\nRETI")
+        w.run()
+        r.vm.advance(1)
+        assert r.cmd(10, 0, 2) == count, mode
+
+
+def test_stop_switch_interrupt_from_the_stage(rig):
+    """TMCM-6212 manual 5.4 interrupt 28 "Right stop switch 0" on the transition selected by
+    bank-3 parameter 28: the slider reaches the right limit switch."""
+    r = rig("TMCM-6212", {"axis": {"0": {"right": {"position": 8000}}}})
+    w = Wire(r.vm)
+    w.load("SGP 28, 3, 1\nVECT 28, Right\nEI 28\nEI 255\nROR 0, 20000\nLoop: JA Loop\n"
+           "Right: GAP 1, 0\nAGP 0, 2\nRETI")
+    w.run()
+    r.vm.advance(1)
+    assert r.cmd(10, 0, 2) == 8000
+
+
+def test_driver_flags_ap208(rig):
+    """PD86-1180 manual 5 AP208 TMC262 flags: bit 7 stand still, bit 0 stallGuard2 threshold
+    reached, bits 1-6 (overtemperature, shorts, open load) from the scenario's driver_flags."""
+    r = rig("TMCM-1180", {"axis": {"0": {"driver_flags": {"steps": [[1.0, 4]]}}}})
+    assert r.gap(208) == 0x80
+    r.vm.advance(1.5)
+    assert r.gap(208) == 0x84
+    r.cmd(1, 0, 0, 300)
+    r.vm.advance(1)
+    assert r.gap(208) == 0x04
+
+
+def test_extended_error_flags_cleared_by_a_motion_command(rig):
+    """TMCM-6212 manual 4.1 AP207: "These error flags are cleared automatically when this
+    parameter has been read out or when a motion command has been executed"."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[1000, 0.9]]}}}})
+    r.sap(181, 100)
+    r.cmd(1, 0, 0, 5000)
+    r.vm.advance(1)
+    assert r.gap(1) == 1000
+    r.cmd(2, 0, 0, 5000)             # ROL: a motion command
+    assert r.gap(207) == 0
+
+
+def test_jc_error_conditions_follow_the_world(rig):
+    """TMCM-6212 manual 3.6.16 JC conditions EDV (deviation) and EPO (position error, set by a
+    stall here - docs/notes/world.md); CLE clears them (3.6.29)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[1000, 0.9]]}}}})
+    w = Wire(r.vm)
+    w.load("SAP 212, 0, 500\nROR 0, 5000\nWAIT TICKS, 0, 100\nJC EDV, Dev\nSTOP\n"
+           "Dev: CALC LOAD, 5\nAGP 0, 2\nCLE EDV\nJC EDV, Bad\nSTOP\nBad: CALC LOAD, 9\nAGP 0, 2\nSTOP")
+    w.run()
+    r.vm.advance(2)
+    assert r.cmd(10, 0, 2) == 5
+    assert not r.vm.flags & flags.EDV
+
+
+def test_1180_shutdown_pin(rig):
+    """PD86-1180 manual 6 GP80 "Shutdown pin functionality: 0 no function, 1 high active, 2 low
+    active": the active pin stops the motor and sets ESD (JC condition 12)."""
+    sc = {"shutdown": {"steps": [[0.5, 1]]}}
+    r = rig("TMCM-1180", sc)
+    r.cmd(1, 0, 0, 300)
+    r.vm.advance(1)
+    assert r.gap(3) != 0              # GP80 = 0: no function
+    r = rig("TMCM-1180", sc)
+    r.cmd(9, 80, 0, 1)
+    r.cmd(1, 0, 0, 300)
+    r.vm.advance(1)
+    assert r.gap(3) == 0
+    assert r.vm.flags & flags.ESD
