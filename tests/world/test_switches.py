@@ -206,3 +206,31 @@ def test_bad_scenarios_raise_scenario_error(rig, bad):
     """House rules: bad input gives a clear typed exception."""
     with pytest.raises(ScenarioError):
         rig("TMCM-6212", bad)
+
+
+def test_scenario_files_and_their_errors(rig, tmp_path):
+    """docs/scenarios.md: TOML files load; syntax errors, unknown ports and YAML without PyYAML
+    are ScenarioErrors naming the problem."""
+    good = tmp_path / "s.toml"
+    good.write_text("[axis.0]\nright = { position = 100 }\n")
+    r = rig("TMCM-6212", str(good))
+    r.cmd(1, 0, 0, 1000)
+    r.vm.advance(1)
+    assert r.gap(1) == 100
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[axis.0\n")
+    with pytest.raises(ScenarioError, match="bad.toml"):
+        rig("TMCM-6212", str(bad))
+    with pytest.raises(ScenarioError, match="port 7"):
+        rig("TMCM-6212", {"input": [{"bank": 0, "port": 7, "value": 1}]})
+    with pytest.raises(ScenarioError):
+        rig("TMCM-6212", 42)
+    y = tmp_path / "s.yaml"
+    y.write_text("axis:\n  0:\n    right: {position: 100}\n")
+    try:
+        import yaml  # noqa: F401
+    except ImportError:
+        with pytest.raises(ScenarioError, match="PyYAML"):
+            rig("TMCM-6212", str(y))
+    else:
+        assert rig("TMCM-6212", str(y)).gap(10) == 0

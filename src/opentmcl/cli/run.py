@@ -107,11 +107,11 @@ def run(args: argparse.Namespace) -> int:
         except DebugError as exc:
             raise CliError(str(exc)) from None
         loader = Loader(module)
+        from ..trace import cli_recorder
+        args.recorder = cli_recorder(client, args, CliError)   # --csv: the world trace (trace.py)
         try:
             loader.download(program.instructions)
             loader.run(args.start)
-            from ..trace import cli_recorder
-            args.recorder = cli_recorder(client, args, CliError)
             try:
                 _trace(loader, watches, read_watch, args)
             finally:

@@ -430,6 +430,7 @@ class AxisWorld:
         cached = self._cache
         if cached is not None and cached[0] == sig and (cached[1] is None or cached[1] > now) \
                 and self.load.by != "time":
+            self._engine_wake = e.next_event()
             return cached[1]
         t = self._next_event(now)
         self._cache = (sig, t)

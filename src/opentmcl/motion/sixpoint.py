@@ -297,6 +297,61 @@ def _stop_then(r: Ramp, run: _Run, target: int) -> None:
     _from_rest(r, run.t, snap(run.p, run.s), run.t, target, run.out)
 
 
+_REST = object()
+"""Stands for "the tick the move started resting at" inside a cached plan."""
+
+_new = tuple.__new__
+
+
+def _rest_template(r: Ramp, pm: int, dist: int) -> tuple:
+    """The run of `_from_rest` after the ramp wait, planned once at tick 0 from
+    position `pm` (< PSCALE) over `dist`: a tuple of (k0, k1, p0 - pm, v0, a,
+    own_rest, rest). The planner only ever uses differences of ticks and
+    positions (and `snap`, which commutes with whole-microstep shifts), so
+    the plan of any move of the same distance from a position congruent to
+    `pm` is this one moved in time and space (`RestPlans.plan`)."""
+    out: list[Segment] = []
+    _drive(r, _Run(0, pm, sign(dist), min(r.vstart, r.vmax), _REST, out), pm + dist)
+    return tuple((s.k0, s.k1, s.p0 - pm, s.v0, s.a, s.rest_since is _REST,
+                  None if s.rest_since is _REST else s.rest_since) for s in out)
+
+
+class RestPlans:
+    """Plans of moves from a standstill for one `Ramp`, cached by distance.
+
+    A TMCL program (or host) moving back and forth repeats the same few
+    distances; each repeat then costs a dictionary look-up and a handful of
+    tuple creations instead of a full plan. The result is identical to
+    `plan_position(r, t, p, 0, rest, target)`."""
+
+    __slots__ = ("ramp", "stuck", "plans")
+    LIMIT = 256
+
+    def __init__(self, r: Ramp):
+        self.ramp = r
+        self.stuck = min(r.vstart, r.vmax) == 0 and (r.vmax == 0 or r.accel_band(0)[0] == 0)
+        self.plans: dict[tuple[int, int], tuple] = {}
+
+    def plan(self, t: int, p: int, rest: int | None, target: int) -> list[Segment]:
+        dist = target - p
+        if dist == 0 or self.stuck:
+            return [_new(Segment, (t, None, p, 0, 0, rest))]  # arrived, or cannot move
+        pm = p % PSCALE
+        key = (dist, pm)
+        tpl = self.plans.get(key)
+        if tpl is None:
+            if len(self.plans) >= self.LIMIT:
+                self.plans.clear()
+            tpl = self.plans[key] = _rest_template(self.ramp, pm, dist)
+        start = t if rest is None else max(t, rest + self.ramp.wait)
+        out = [_new(Segment, (t, start, p, 0, 0, rest))] if start > t else []  # ramp wait (TZEROWAIT)
+        append = out.append
+        for k0, k1, dp, v0, a, own, rs in tpl:
+            append(_new(Segment, (k0 + start, None if k1 is None else k1 + start, p + dp, v0, a,
+                                  rest if own else (None if rs is None else rs + start))))
+        return out
+
+
 def plan_velocity(amax: int, t: int, p: int, v: int, rest: int | None, vt: int) -> list[Segment]:
     """Velocity-mode plan: ramp with AMAX from v to vt (through zero if the
     sign changes), then run at vt forever (engine units)."""
@@ -352,7 +407,7 @@ class SixPointRampEngine(RampEngine):
         self.now = 0
         self._params: dict[str, Fraction] = {k: Fraction(v) for k, v in self.PARAMS.items()}
         self._params.update(self._checked(params))
-        self._ramp = self._make_ramp(self._params)
+        self._set_ramp(self._make_ramp(self._params))
         self._mode = Mode.POSITION
         self._target = 0          # AP0, wrapped
         self._target_abs = 0      # the same, unwrapped (microsteps)
@@ -380,6 +435,10 @@ class SixPointRampEngine(RampEngine):
             vstart=p["velocity_vstart"], vstop=p["velocity_vstop"],
             wait_ticks=int(p["ramp_wait_time"]) * TZEROWAIT_CLOCKS)
 
+    def _set_ramp(self, r: Ramp) -> None:
+        self._ramp = r
+        self._rest_plans = RestPlans(r)
+
     @property
     def params(self) -> dict[str, Fraction]:
         """Current ramp parameters (pps, pps^2, AP21 units)."""
@@ -402,17 +461,31 @@ class SixPointRampEngine(RampEngine):
             if dist > 0:
                 tol = max(Fraction(0), Fraction(*self._ramp.braking(abs(v))) - dist)
         self._params.update(new)
-        self._ramp = self._make_ramp(self._params)
+        self._set_ramp(self._make_ramp(self._params))
         self._replan(tol)
 
     # --- state at now ---------------------------------------------------
+    def _seg(self) -> Segment:
+        """The piece holding now: the first one, since advance() drops the
+        past and every new queue starts at now (`at` covers the rest)."""
+        seg = self._queue.pieces[0]
+        k1 = seg.k1
+        if k1 is not None and k1 <= self.now:
+            return self._queue.at(self.now)
+        return seg
+
     def _state(self) -> tuple[Segment, int, int]:
         """(piece, position, velocity) at now, in engine units."""
-        seg = self._queue.at(self.now)
+        seg = self._seg()
+        if seg.v0 == 0 and seg.a == 0:
+            return seg, seg.p0, 0
         return seg, seg.p_at(self.now), seg.v_at(self.now)
 
     def _step(self) -> int:
-        return self._queue.at(self.now).step(self.now)
+        seg = self._seg()
+        if seg.v0 == 0 and seg.a == 0:
+            return seg.p0 // PSCALE
+        return seg.step(self.now)
 
     @property
     def position(self) -> int:
@@ -421,16 +494,17 @@ class SixPointRampEngine(RampEngine):
     @property
     def velocity_exact(self) -> Fraction:
         """Actual signed velocity in pps, exact."""
-        return Fraction(self._queue.at(self.now).v_at(self.now) * CLOCK_HZ, DEN)
+        return Fraction(self._seg().v_at(self.now) * CLOCK_HZ, DEN)
 
     @property
     def velocity(self) -> int:
         """Actual signed velocity (AP3) in pps, truncated towards zero."""
-        return int(self.velocity_exact)
+        n = self._seg().v_at(self.now) * CLOCK_HZ
+        return n // DEN if n >= 0 else -((-n) // DEN)
 
     @property
     def moving(self) -> bool:
-        return self._queue.at(self.now).v_at(self.now) != 0
+        return self._seg().v_at(self.now) != 0
 
     @property
     def target_position(self) -> int:
@@ -448,8 +522,8 @@ class SixPointRampEngine(RampEngine):
     @property
     def position_reached(self) -> bool:
         """AP8: actual position equals target position and the motor stands."""
-        seg = self._queue.at(self.now)
-        if seg.standing:
+        seg = self._seg()
+        if seg.v0 == 0 and seg.a == 0:
             return seg.p0 == self._target_abs * PSCALE or wrap32(seg.p0 // PSCALE) == self._target
         return seg.v_at(self.now) == 0 and wrap32(seg.step(self.now)) == self._target
 
@@ -463,7 +537,10 @@ class SixPointRampEngine(RampEngine):
         seg, p, v = self._state()
         rest = seg.rest_since if v == 0 else None
         if self._mode is Mode.POSITION:
-            pieces = plan_position(self._ramp, self.now, p, v, rest, self._target_abs * PSCALE, tol)
+            if v == 0:  # from a standstill: cached per distance (identical to plan_position)
+                pieces = self._rest_plans.plan(self.now, p, rest, self._target_abs * PSCALE)
+            else:
+                pieces = plan_position(self._ramp, self.now, p, v, rest, self._target_abs * PSCALE, tol)
         else:
             pieces = plan_velocity(self._ramp.amax, self.now, p, v, rest, velocity_units(self._vt_pps))
         self._queue = SegmentQueue(pieces)
@@ -471,9 +548,11 @@ class SixPointRampEngine(RampEngine):
     def move_to(self, target: int) -> None:
         """MVP (manual 3.6.4): positioning mode towards `target`; a distance
         beyond 2^31-1 microsteps goes the shorter way through the 32-bit wrap."""
-        if isinstance(target, bool) or not isinstance(target, Integral):
-            raise TypeError(f"target position must be an integer, got {target!r}")
-        target = wrap32(int(target))
+        if type(target) is not int:
+            if isinstance(target, bool) or not isinstance(target, Integral):
+                raise TypeError(f"target position must be an integer, got {target!r}")
+            target = int(target)
+        target = ((target + (1 << 31)) & 0xFFFF_FFFF) - (1 << 31)  # wrap32
         here = self._step()
         target_abs = here + wrap32(target - here)
         if self._mode is Mode.POSITION and target_abs == self._target_abs and target == self._target:
@@ -529,9 +608,14 @@ class SixPointRampEngine(RampEngine):
         if until < self.now:
             raise ValueError(f"cannot go back in time: {until} < now {self.now}")
         self.now = until
-        self._queue.drop_before(until)
+        k1 = self._queue.pieces[0].k1
+        if k1 is not None and k1 <= until:
+            self._queue.drop_before(until)
 
     def next_event(self) -> int | None:
+        k1 = self._queue.pieces[0].k1
+        if k1 is not None and k1 > self.now:
+            return k1
         return self._queue.next_boundary(self.now)
 
     def time_at_position(self, position: int) -> int | None:

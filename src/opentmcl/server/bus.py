@@ -47,7 +47,7 @@ class Channel(Protocol):
         """Send an unsolicited 9-byte reply of `vm` to the host."""
 
 
-MIN_STEP = 0.005
+MIN_STEP = 0.002
 """Seconds of wall time below which a request does not advance the modules' clocks: advancing
 costs the same however short the step, so a burst of requests shares one advance. The modules
 lag the wall clock by at most this much (docs/notes/endpoints.md)."""
@@ -77,13 +77,15 @@ class ModuleBus:
         self._route: dict[int, Channel] = {}
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
         # (module, its handle() for serial frames) looked up once: the per-frame path is hot.
-        self._serial_handlers = [(vm, partial(vm.handle, interface="serial") if self._interface_kw[id(vm)]
-                                  else vm.handle) for vm in self.modules]
+        self._serial_handlers = [(vm, id(vm), partial(vm.handle, interface="serial")
+                                  if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:
         """Advance every module's virtual time to the wall clock, unless less than `min_step`
         has passed since the last advance (then the modules stay at most that far behind)."""
+        if self._clock() - self._last < self.min_step:
+            return  # the common case on a busy link: no lock needed to find it out
         with self.lock:
             now = self._clock()
             dt = now - self._last
@@ -116,14 +118,18 @@ class ModuleBus:
         each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
         out = []
         route = self._route
-        for vm, handle in self._serial_handlers:
-            reply = handle(frame)
+        for vm, key, handle in self._serial_handlers:
+            try:
+                reply = handle(frame)
+            except Exception:  # a module bug: bad input is answered with a status code
+                logging.getLogger("opentmcl.server").exception("module failed on frame %s", frame.hex(" "))
+                continue
             if reply:
                 out.append((vm, reply, "binary"))
                 if channel is not None:
-                    route[id(vm)] = channel
+                    route[key] = channel
             elif channel is not None and self._addressed(vm, frame[0]):
-                route[id(vm)] = channel
+                route[key] = channel
         return out
 
     def serial_frame(self, vm, frame: bytes, channel: Channel | None = None) -> bytes:

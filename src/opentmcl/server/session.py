@@ -52,6 +52,7 @@ class SerialSession:
         self._clock = clock
         self._sleep = sleep
         self._write_lock = threading.Lock()
+        self._readers: dict[int, object] = {}  # id(vm) -> vmapi.raw_reader(vm)
         self.closed = False
 
     @property
@@ -78,9 +79,16 @@ class SerialSession:
 
     def send_reply(self, vm, reply: bytes, *, pause: bool = True) -> None:
         """Write `reply` after the telegram pause (if `pause`), paced at GP65 if asked."""
-        # Reading two parameters needs no bus lock: a dictionary read is atomic.
-        wait = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
-        per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
+        reader = self._readers.get(id(vm), False)
+        if reader is False:
+            reader = self._readers[id(vm)] = vmapi.raw_reader(vm)
+        if reader is not None:  # a RAM read: no bus lock needed
+            wait = reader(vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
+            per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
+        else:
+            with self.bus.lock:
+                wait = vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
+                per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0
         if not wait and not per_byte:
             with self._write_lock:
                 self._write(reply)

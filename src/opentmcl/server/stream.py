@@ -55,6 +55,7 @@ class SerialStream:
         self.bus = bus
         self.gap = gap
         self._framers = [SerialFramer(gap) for _ in bus.modules]
+        self._partial = False  # does any framer hold part of a frame?
         self.frames = 0
         """Binary frames completed so far (counted once, whatever the number of modules)."""
 
@@ -66,43 +67,45 @@ class SerialStream:
     def reset(self) -> None:
         for framer in self._framers:
             framer.reset()
+        self._partial = False
 
-    def feed(self, data: bytes, now: float, channel=None) -> list[Output]:
-        """Bytes received at time `now` -> what the modules send back, in stream order.
+    def feed(self, data: bytes, now: float, channel=None) -> list:
+        """Bytes received at time `now` -> what the modules send back, in stream order:
+        a list of `Output` (or plain (vm, data, kind) tuples).
 
         A module that raises (a firmware bug: bad input is answered with a
         status code) is logged; its frame or text gets no reply and the stream
         lives on."""
-        data = bytes(data)
         bus = self.bus
+        if data.__class__ is not bytes:
+            data = bytes(data)
+        if len(data) == FRAME_LEN and not self._partial:
+            # The common case, kept lean: one whole frame while every module is between
+            # frames and in binary mode.
+            with bus.lock:
+                for vm in bus.modules:
+                    if getattr(vm, "ascii_mode", False) is True:
+                        break
+                else:
+                    bus.sync()
+                    self.frames += 1
+                    return bus.serial_frames(data, channel)
+        return self._feed_each(data, now, channel)
+
+    def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
+        """The general case: every module reads the bytes in its own mode."""
+        bus = self.bus
+        found: list[tuple[int, int, Output]] = []
+        frames = 0
         with bus.lock:
             bus.sync()
-            if len(data) == FRAME_LEN and self._aligned():
-                # The common case: one whole frame while every module is between frames.
-                self.frames += 1
-                try:
-                    return bus.serial_frames(data, channel)
-                except Exception:  # find the failing module the slow way, frame by frame
-                    return [Output(vm, reply, BINARY) for vm in bus.modules
-                            if (reply := self._frame(vm, data, channel))]
-            found: list[tuple[int, int, Output]] = []
-            frames = 0
             for index, vm in enumerate(bus.modules):
                 frames = max(frames, self._feed_module(index, vm, data, now, channel, found))
+            self._partial = any(framer.pending for framer in self._framers)
         self.frames += frames
         if len(found) > 1:
             found.sort(key=lambda item: (item[0], item[1]))
         return [item[2] for item in found]
-
-    def _aligned(self) -> bool:
-        """No module is inside a frame or in ASCII mode."""
-        for framer in self._framers:
-            if framer.pending:
-                return False
-        for vm in self.bus.modules:
-            if in_ascii_mode(vm):
-                return False
-        return True
 
     def _frame(self, vm, frame: bytes, channel) -> bytes:
         try:

@@ -9,6 +9,9 @@ for other module-like objects through a GGP request (manual 3.6.8).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
+
 from ..protocol.frame import FRAME_LEN, Reply, Request
 
 GP_BAUD_RATE = 65
@@ -47,6 +50,15 @@ def global_param(vm, number: int) -> int:
     if decoded.status != 100:
         return DEFAULTS.get(number, 0)
     return decoded.value
+
+
+def raw_reader(vm) -> Callable[[int], int] | None:
+    """A fast `number -> value` reader of bank-0 parameters of `vm`, or None when `vm` does not
+    expose `globals.get_raw` (then use `global_param`, which asks with GGP)."""
+    getter = getattr(getattr(vm, "globals", None), "get_raw", None)
+    if not callable(getter):
+        return None
+    return partial(getter, 0)
 
 
 def baud_rate(vm) -> int:
