@@ -210,8 +210,8 @@ def measure(quick: bool = False) -> dict:
     results: dict[str, float] = {}
     ours, echo = best_of(
         rounds,
-        (our_server, "tcp", lambda eps: "%s:%d" % eps[0].address, seconds),
-        (tcp_echo_server, "tcp", lambda address: "%s:%d" % address, seconds))
+        (our_server, "tcp", lambda eps: "{}:{}".format(*eps[0].address), seconds),
+        (tcp_echo_server, "tcp", lambda address: "{}:{}".format(*address), seconds))
     results["TCP round trips/s: ours"] = ours
     results["TCP bare echo round trips/s"] = echo
     results["TCP ours/echo ratio (target >= 0.5)"] = ours / echo

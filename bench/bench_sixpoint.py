@@ -4,7 +4,9 @@
 
 `measure()` returns virtual seconds per wall second for six six-point
 engines (a TMCM-6212) and for one linear engine doing back-and-forth MVP
-moves, driven purely by next_event() (DESIGN.md "Time").
+moves, driven purely by next_event() (DESIGN.md "Time"), and the wall cost
+of one move_to() in microseconds: for a distance moved before (the planner's
+per-distance cache, the back-and-forth case) and for a new distance each time.
 """
 from __future__ import annotations
 
@@ -38,6 +40,24 @@ def _back_and_forth(engines, moves: int, distance: int) -> float:
     return (now / CLOCK_HZ) / wall
 
 
+def _us_per_move(moves: int, repeated: bool) -> float:
+    """Microseconds per MVP from a standstill (the move is planned, then run to
+    its end through next_event()/advance()/position_reached, as a VM does)."""
+    e = SixPointRampEngine(max_positioning_speed=200000, max_acceleration=200000)
+    start = time.perf_counter()
+    target = 0
+    for i in range(moves):
+        if repeated:
+            target = 0 if target else 51200
+        else:
+            target = 0 if target else 1000 + (i * 7919) % 200000
+        e.move_to(target)
+        while (n := e.next_event()) is not None:
+            e.advance(n)
+            e.position_reached  # noqa: B018 -- polled after every event, as the VM does
+    return (time.perf_counter() - start) / moves * 1e6
+
+
 def measure(quick: bool = False) -> dict:
     """Virtual seconds per wall second (higher is better)."""
     moves = 20 if quick else 200
@@ -50,6 +70,8 @@ def measure(quick: bool = False) -> dict:
     return {
         "sixpoint_6axes_virtual_s_per_wall_s": _back_and_forth(six, moves, 51200 * 4),
         "linear_1axis_virtual_s_per_wall_s": _back_and_forth(lin, moves, 51200 * 4),
+        "sixpoint_us_per_move_same_distance": _us_per_move(moves * 10, repeated=True),
+        "sixpoint_us_per_move_new_distance": _us_per_move(moves * 10, repeated=False),
     }
 
 
@@ -57,7 +79,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
     for k, v in measure(ap.parse_args().quick).items():
-        print(f"{k:40s} {v:12.0f}")
+        print(f"{k:40s} {v:12.1f}")
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # for tests.motion (the per-tick oracle)
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import bench_endpoints  # noqa: E402
 import bench_sixpoint  # noqa: E402
 import bench_tmc429  # noqa: E402
 from opentmcl import VirtualModule  # noqa: E402
@@ -92,7 +93,8 @@ def main(argv: list[str] | None = None) -> dict:
     results["6212 six axes, 10-revolution moves, virtual s per wall s (target >= 3600)"] = bench_6212(3600 * scale)
     results["6212 six axes, short fast moves, virtual s per wall s"] = bench_6212_short(300 * scale)
     results["PD86-1180 pulse_div=ramp_div=0, virtual s per wall s (target >= 100)"] = bench_1180(20 * scale)
-    for label, measure in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure)):
+    for label, measure in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure),
+                           ("endpoints", bench_endpoints.measure)):
         for key, value in measure(quick=args.quick).items():
             results[f"{label} {key}"] = value
     results["in-process round trips per s (target >= 50000)"] = bench_round_trips(int(200000 * scale))

@@ -118,7 +118,9 @@ def world_demo(args, plan, error) -> int:
             raise error(f"module refused command {cmd} {type_} {motor} {value}")
     trace = Trace()
     trace.record(vm, args.duration, args.interval)
-    if args.csv:
+    if args.csv == "-":
+        print(trace.to_csv(), end="")
+    elif args.csv:
         try:
             trace.to_csv(args.csv)
         except OSError as exc:
@@ -141,6 +143,9 @@ class _CliRecorder:
         self.trace.sample(self.vm)
 
     def save(self) -> None:
+        if self.path == "-":
+            print(self.trace.to_csv(), end="")
+            return
         try:
             self.trace.to_csv(self.path)
         except OSError as exc:

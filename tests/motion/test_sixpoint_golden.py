@@ -5,16 +5,30 @@ Every number below was computed by the engine as it was before its planner was o
 (bench/run.py bench_6212), so these tests prove that the optimised engine is bit-identical to it:
 the same event ticks, the same positions, the same analytic segments. They pin the planner's exact
 output, not the manual; the manual's behaviour is tested in test_sixpoint.py and test_linear.py.
+The last tests check each fast path against the definition it replaces (braking distance band by
+band, planning from scratch instead of the per-distance cache, unit conversion with Fractions).
 """
 from __future__ import annotations
 
 import hashlib
+import math
 import random
+from fractions import Fraction
 
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from opentmcl.motion.linear import LinearRampEngine
-from opentmcl.motion.sixpoint import SixPointRampEngine
+from opentmcl.motion.segments import A_PER_PPS2, PSCALE, V_PER_PPS
+from opentmcl.motion.sixpoint import (
+    Ramp,
+    RestPlans,
+    SixPointRampEngine,
+    acceleration_units,
+    plan_position,
+    velocity_units,
+)
 
 F = 16_000_000
 ENGINES = {"six": SixPointRampEngine, "lin": LinearRampEngine}
@@ -210,3 +224,108 @@ def test_random_command_sequences_are_unchanged(kind, seed, count, expected):
     """Random MVP/ROR/MST/AP3/hard stop/AP1/ramp-parameter sequences (manual 3.6.1-3.6.4, 4.1): the
     traces hash to the value computed before the optimisation."""
     assert digest(kind, seed, count) == expected
+
+
+# --- the fast paths against their definitions ------------------------------------------------------
+speeds = st.integers(0, 10**18)
+small = st.one_of(st.just(0), st.integers(1, 10**6), st.integers(0, 10**18))
+
+
+@given(vmax=small, dmax=small, v1=small, d1=small, vstop=small, u=speeds)
+def test_braking_closed_form_is_the_band_loop(vmax, dmax, v1, d1, vstop, u):
+    """Braking distance from speed u to VSTOP with DMAX above V1 and D1 below (manual 4.1 AP16-AP18,
+    AP20): the closed form gives the same (num, den) pair as summing band by band."""
+    r = Ramp(vmax=vmax, amax=1, dmax=dmax, v1=v1, a1=1, d1=d1, vstop=vstop)
+    for speed in (u, v1, v1 + 1, vstop + 1):
+        assert r.braking(speed) == r.braking_loop(speed)
+
+
+@given(params=st.fixed_dictionaries({
+    "max_positioning_speed": st.integers(0, 7999774), "max_acceleration": st.integers(0, 7629278),
+    "acceleration_a1": st.integers(0, 7629278), "velocity_v1": st.integers(0, 1_000_000),
+    "max_deceleration": st.integers(0, 7629278), "deceleration_d1": st.integers(0, 7629278),
+    "velocity_vstart": st.integers(0, 249999), "velocity_vstop": st.integers(0, 249999),
+    "ramp_wait_time": st.integers(0, 65535)}),
+    t=st.integers(0, 2**40), p=st.integers(-2**31, 2**31), frac=st.integers(0, PSCALE - 1),
+    rest=st.one_of(st.none(), st.integers(0, 2**40)), dist=st.integers(-2**32, 2**32))
+def test_cached_rest_plans_are_the_direct_plans(params, t, p, frac, rest, dist):
+    """MVP from a standstill (manual 3.6.4, ramp wait AP21): the per-distance plan cache returns
+    exactly what planning from scratch returns, on first sight, when cached, and from the cache."""
+    r = SixPointRampEngine(**params).ramp
+    plans = RestPlans(r)
+    pos = p * PSCALE + frac
+    rest = None if rest is None else min(rest, t)
+    target = pos + dist * PSCALE
+    direct = plan_position(r, t, pos, 0, rest, target)
+    for shift in (0, 0, 12345):  # planned, cached, then reused at another time and place
+        moved = plan_position(r, t + shift, pos + shift * PSCALE, 0, None if rest is None else rest + shift,
+                              target + shift * PSCALE)
+        assert plans.plan(t + shift, pos + shift * PSCALE, None if rest is None else rest + shift,
+                          target + shift * PSCALE) == moved
+    assert plans.plan(t, pos, rest, target) == direct
+
+
+@given(x=st.one_of(st.integers(-10**12, 10**12), st.fractions(), st.floats(0, 1e9)))
+def test_unit_conversion_is_nearest_engine_unit(x):
+    """pps and pps^2 (manual 4.1 AP4/AP5) to engine units: the integer form rounds like the Fraction
+    definition floor(x * units + 1/2)."""
+    f = Fraction(x)
+    assert velocity_units(x) == math.floor(f * V_PER_PPS + Fraction(1, 2))
+    assert acceleration_units(x) == math.floor(f * A_PER_PPS2 + Fraction(1, 2))
+
+
+def back_and_forth(engine_cls, params: dict, base: int, dist: int, idles: list[int]) -> list:
+    """MVP base+dist, base, base+dist, ... each once the last one has arrived (after an idle time):
+    the repeated distances of a back-and-forth program. Returns the trace."""
+    e = engine_cls(**params)
+    e.set_position(base)
+    trace: list = []
+    target = base
+    for idle in idles:
+        target = base + dist if target == base else base
+        e.move_to(((target + 2**31) & 0xFFFF_FFFF) - 2**31)
+        trace.append(tuple(seg_tuple(s) for s in e.segments))
+        for _ in range(40):
+            n = e.next_event()
+            if n is None:
+                break
+            e.advance(n)
+            trace.append((n, e.position, e.position_reached, e.velocity))
+        e.advance(e.now + idle)
+        trace.append((e.now, e.position, e.position_reached))
+    return trace
+
+
+def back_and_forth_digest(kind: str, seed: int, count: int) -> str:
+    names = SIX_NAMES if kind == "six" else LIN_NAMES
+    h = hashlib.sha256()
+    rng = random.Random(seed)
+    for _ in range(count):
+        params, _ = random_scenario(rng, names)
+        dist = rng.choice([rng.randint(-300000, 300000), rng.randint(-50, 50), 51200])
+        base = rng.randint(-2**31, 2**31 - 1)
+        idles = [rng.choice([0, 0, rng.randint(0, 100000)]) for _ in range(6)]
+        h.update(repr(back_and_forth(ENGINES[kind], params, base, dist, idles)).encode())
+    return h.hexdigest()
+
+
+@pytest.mark.parametrize(("kind", "params", "expected"), [
+    ("six", {}, "99ee787e0d443e3017de35043a85665ddd9142ce788f5ee53c818d7799c68ccc"),
+    ("six", B6, "d475848643e64c36bdac81661e5663df3a4584ab63b8da4476fbb902930c145c"),
+    ("lin", {}, "b88c92ba949861c0b15c23c52021fc9eacc3f366a39d9a8694be81a83acadf2c"),
+])
+def test_repeated_moves_are_unchanged(kind, params, expected):
+    """MVP back and forth over the same distance (manual 3.6.4), the ramp wait time (AP21) between
+    moves: the same trace as before the optimisation, also once plans are reused."""
+    trace = back_and_forth(ENGINES[kind], params, 0, 51200, [0, 0, 1000, 0, 7, 0])
+    assert hashlib.sha256(repr(trace).encode()).hexdigest() == expected
+
+
+@pytest.mark.parametrize(("kind", "seed", "count", "expected"), [
+    ("six", 3, 150, "17769e5f0a4d348fdf72a630c0994987cc57e1af85244801bec05961d8b0808a"),
+    ("lin", 4, 50, "58d727cd2819cffae09fb5cb8e56e33c3fbef6b056f9596b60b7cb2ccf78eb6f"),
+])
+def test_random_back_and_forth_is_unchanged(kind, seed, count, expected):
+    """Random ramps (manual 4.1), random distances and start positions, six moves back and forth each:
+    the traces hash to the value computed before the optimisation."""
+    assert back_and_forth_digest(kind, seed, count) == expected

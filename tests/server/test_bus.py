@@ -1,5 +1,4 @@
 """ModuleBus: several modules on one bus, CAN addressing, real-time pacing, events."""
-import pytest
 
 from opentmcl import VirtualModule
 from opentmcl.protocol.frame import Reply

@@ -208,3 +208,199 @@ def test_fuzz_can():
     finally:
         host.shutdown()
         server.stop()
+
+
+# --- ASCII mode (PD28-1021 manual 3.4, PD86-1180 manual 4.5) ---------------------------------
+
+ENTER_ASCII = request(1, 139)      # binary command 139: enter ASCII mode
+ASCII_VECTORS = [                  # the manual's command lines (3.4.2) and a few more
+    b"AMVP ABS, 1, 50000\r", b"A MVP ABS, 1, 50000\r", b"AROL 2, 500\r", b"A MST 1\r", b"ABIN\r",
+    b"AGAP 1, 0\r", b"AGGP 66, 0\r", b"ARUN\r", b"ASTOP\r", b"BGAP 1, 0\r", b"ASGP 67, 0, 16\r",
+    b"ASGP 67, 0, 32\r", b"ASAP 4, 0, 1000\r", b"A GAP 9\x08\x084, 0\r", b"AFOO\r", b"\r",
+    b"ABIN\r" + GGP_66, b"ABIN\r" + ENTER_ASCII + b"AGGP 66, 0\r",
+]
+TEXT = st.binary(max_size=20) | st.text(alphabet="ABGPSMVRUNT0123456789 ,-\r\n\x08\x7f", max_size=20).map(
+    str.encode)
+
+
+@st.composite
+def mutated_line(draw):
+    """A manual command line with a changed, removed or inserted character, or cut short."""
+    line = bytearray(draw(st.sampled_from(ASCII_VECTORS)))
+    op = draw(st.sampled_from(["keep", "flip", "drop", "insert", "truncate"]))
+    if op == "flip" and line:
+        line[draw(st.integers(0, len(line) - 1))] = draw(st.integers(0, 255))
+    elif op == "drop" and line:
+        del line[draw(st.integers(0, len(line) - 1))]
+    elif op == "insert":
+        line.insert(draw(st.integers(0, len(line))), draw(st.sampled_from([8, 127, 10, 13, 32, 0, 255])))
+    elif op == "truncate":
+        line = line[:draw(st.integers(0, len(line)))]
+    return bytes(line)
+
+
+ascii_streams = st.lists(st.one_of(mutated_line(), TEXT, st.just(ENTER_ASCII), mutated_frame()),
+                         max_size=10).map(b"".join)
+
+
+def reference_output(vm, data: bytes) -> bytes:
+    """What one module answers to `data` arriving in one piece: 9-byte frames in binary mode
+    (TMCM-6212 manual 3.1), text in ASCII mode (3.4), the bytes after a BIN line binary again."""
+    out, frame, pos = bytearray(), b"", 0
+    while pos < len(data):
+        if vm.ascii_mode:
+            out += vm.feed_ascii(data[pos:])
+            if vm.ascii_mode:
+                break
+            pos, frame = len(data) - len(vm.ascii.leftover), b""
+            continue
+        take = data[pos:pos + 9 - len(frame)]
+        frame, pos = frame + take, pos + len(take)
+        if len(frame) == 9:
+            out += vm.handle(frame)
+            frame = b""
+    return bytes(out)
+
+
+def cut(stream: bytes, cuts: list[int]) -> list[bytes]:
+    """`stream` split at the given offsets (taken modulo its length)."""
+    points = sorted({c % (len(stream) + 1) for c in cuts} | {0, len(stream)})
+    return [stream[a:b] for a, b in zip(points, points[1:], strict=False)]
+
+
+@given(stream=ascii_streams, cuts=st.lists(st.integers(0, 400), max_size=6),
+       name=st.sampled_from(["PD28-1021", "PD86-1180"]))
+def test_session_in_ascii_mode_matches_the_module(stream, cuts, name):
+    """Any mix of command lines, text, 139 frames and binary garbage, cut anywhere: the session
+    writes exactly what the module itself answers to the whole stream (echo, replies, BIN and 139
+    switching modes), and never raises."""
+    written = bytearray()
+    bus = ModuleBus([VirtualModule(name, address=1)], clock=lambda: 0.0)
+    session = SerialSession(bus, written.extend, gap=GAP, clock=lambda: 0.0, sleep=lambda s: None)
+    reference = VirtualModule(name, address=1)
+    session.receive(ENTER_ASCII)
+    reference.handle(ENTER_ASCII)
+    written.clear()
+    for chunk in cut(stream, cuts):
+        session.receive(chunk)
+    assert bytes(written) == reference_output(reference, stream)
+    assert bus.modules[0].ascii_mode == reference.ascii_mode
+
+
+@given(stream=ascii_streams)
+def test_two_ascii_modules_never_raise_and_stay_reachable(stream):
+    """Two modules in ASCII mode on one line (3.4.2: each answers its own address character):
+    after any stream, a <CR> and a pause, each module answers its own GGP 66 line or frame."""
+    t = [0.0]
+    written = bytearray()
+    modules = [VirtualModule("PD28-1021", address=1), VirtualModule("PD86-1180", address=2)]
+    bus = ModuleBus(modules, clock=lambda: t[0])
+    session = SerialSession(bus, written.extend, gap=GAP, clock=lambda: t[0], sleep=lambda s: None)
+    session.receive(ENTER_ASCII + request(2, 139))
+    session.receive(stream)
+    for vm in modules:
+        t[0] += 10 * GAP
+        session.receive(b"\r")  # ends a partial text line (binary mode: a partial frame, dropped below)
+        t[0] += 10 * GAP
+        address = vm.address
+        written.clear()
+        if vm.ascii_mode:
+            vm.globals.set(0, 67, 0x20)  # bit 5: reply only
+            letter = chr(ord("A") + address - 1).encode()
+            session.receive(letter + b"GGP 66, 0\r")
+            assert bytes(written).endswith(b"B" + letter + b" 100 %d\r" % address)
+        else:
+            session.receive(request(address, 10, 66, 0))
+            assert bytes(written).endswith(reply(2, address, 100, 10, address))
+
+
+def safe_ascii_stream(stream: bytes) -> bool:
+    """No S (no SGP/STGP/SAP/SIO: address, echo and host address stay as they are) and no valid
+    binary request to module 1 other than 139 (enter ASCII mode)."""
+    if b"S" in stream.upper():
+        return False
+    return not any(stream[i] == 1 and checksum(stream[i:i + 8]) == stream[i + 8] and stream[i:i + 9] != ENTER_ASCII
+                   for i in range(len(stream) - 8))
+
+
+def ascii_check(vm, write, read_all, read_n):
+    """After any stream: a pause, then the module answers in the mode it is in."""
+    time.sleep(3 * GAP)
+    if vm.ascii_mode:
+        write(b"\r")                          # ends a partial line
+        time.sleep(3 * GAP)
+        read_all()
+        write(b"AGGP 66, 0\r")                 # 3.4.4 character echo (GP67 = 0), 3.4.3 reply
+        expected = b"AGGP 66, 0\rBA 100 1\r"
+        assert read_n(len(expected)) == expected
+    else:
+        read_all()
+        write(GGP_66)
+        assert read_check_reply(lambda: read_n(9)) == GOOD_REPLY
+
+
+def test_fuzz_ascii_pty():
+    server = Server([VirtualModule("PD28-1021", address=1)])
+    pty = server.add(PtyServer(server.bus, gap=GAP))
+    server.start()
+    vm = server.modules[0]
+    try:
+        with serial.Serial(pty.path, timeout=5) as port:
+            port.write(ENTER_ASCII)
+            assert port.read(9) == reply(2, 1, 100, 139, 0)
+
+            def read_all():
+                time.sleep(0.05)
+                port.reset_input_buffer()
+
+            @ENDPOINT_SETTINGS
+            @given(stream=ascii_streams)
+            def check(stream):
+                assume(safe_ascii_stream(stream))
+                port.write(stream)
+                port.flush()
+                ascii_check(vm, port.write, read_all, port.read)
+
+            check()
+    finally:
+        server.stop()
+
+
+def test_fuzz_ascii_tcp():
+    import socket
+
+    server = Server([VirtualModule("PD86-1180", address=1)])
+    tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0, gap=GAP))
+    server.start()
+    vm = server.modules[0]
+    try:
+        with socket.create_connection(tcp.address, timeout=5) as s:
+            s.sendall(ENTER_ASCII)
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 139, 0)
+
+            @ENDPOINT_SETTINGS
+            @given(stream=ascii_streams)
+            def check(stream):
+                assume(safe_ascii_stream(stream))
+                s.sendall(stream)
+                ascii_check(vm, s.sendall, lambda: drain_socket(s, 0.05), lambda n: recv_exactly(s, n))
+
+            check()
+    finally:
+        server.stop()
+
+
+def test_fuzz_ascii_urlhandler():
+    with serial.serial_for_url(f"opentmcl://PD28-1021?gap={GAP}", timeout=5) as port:
+        vm = port.modules[0]
+        port.write(ENTER_ASCII)
+        assert port.read(9) == reply(2, 1, 100, 139, 0)
+
+        @ENDPOINT_SETTINGS
+        @given(stream=ascii_streams)
+        def check(stream):
+            assume(safe_ascii_stream(stream))
+            port.write(stream)
+            ascii_check(vm, port.write, port.reset_input_buffer, port.read)
+
+        check()

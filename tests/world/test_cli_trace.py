@@ -91,3 +91,12 @@ def test_documented_examples_are_valid_scenarios():
         data = tomllib.loads(text)
         vm = VirtualModule(data["module"], scenario=data)
         vm.advance(0.5)
+
+
+def test_csv_to_stdout(capsys):
+    """`--csv -` prints the CSV trace instead of writing a file."""
+    sc = EXAMPLES / "pd28_1021_home.toml"
+    assert main(["demo", "--scenario", str(sc), "--duration", "0.2", "--interval", "0.1", "--csv", "-"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0].startswith("time,pos0") and len(lines) == 4
+    assert lines[2].split(",")[1] == "200"       # 0.1 s into the demo move (AP5 = 40000 pps^2)

@@ -239,3 +239,30 @@ def test_stallguard_homing_program(rig):
     r.vm.advance(10)
     assert r.gap(1) == 0
     assert r.phys() == -60000         # the left hard stop of the example stage
+
+
+def test_stall_detected_when_the_speed_reaches_the_stall_limit(rig):
+    """TMCM-6212 manual 4.1 AP181: a motor already overloaded at low speed stops the moment its
+    speed reaches the stop-on-stall speed during the acceleration (not at the end of the ramp).
+    AMAX 10000 pps^2: 2000 pps are reached after 0.2 s, 200 microsteps from the start."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.9}}})
+    r.sap(5, 10000)
+    r.sap(181, 2000)
+    r.cmd(1, 0, 0, 20000)
+    r.vm.advance(1)
+    assert r.gap(3) == 0
+    assert r.gap(207) == 1
+    assert r.gap(1) == 200             # the counter ran on (the rotor slipped from the start)
+    assert r.phys() == 0
+
+
+def test_load_ramp_over_time_is_followed(rig):
+    """Issue 5 item 3 (time-dependent load): a load ramping from 0 to 1 within 2 s; AP206 falls
+    with it while the motor runs (full current, C = 1)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"by": "time", "ramp": [[0, 0.0], [2, 1.0]]}}}})
+    r.sap(6, 255)
+    r.cmd(1, 0, 0, 5000)
+    r.vm.advance(0.5)
+    assert r.gap(206) == 767
+    r.vm.advance(1.0)
+    assert r.gap(206) == 256

@@ -225,6 +225,8 @@ def test_scenario_files_and_their_errors(rig, tmp_path):
         rig("TMCM-6212", {"input": [{"bank": 0, "port": 7, "value": 1}]})
     with pytest.raises(ScenarioError):
         rig("TMCM-6212", 42)
+    with pytest.raises(ScenarioError, match="axis.1"):
+        rig("TMCM-1180", {"axis": {"1": {}}})
     y = tmp_path / "s.yaml"
     y.write_text("axis:\n  0:\n    right: {position: 100}\n")
     try:
@@ -234,3 +236,19 @@ def test_scenario_files_and_their_errors(rig, tmp_path):
             rig("TMCM-6212", str(y))
     else:
         assert rig("TMCM-6212", str(y)).gap(10) == 0
+
+
+def test_wait_refsw_and_limsw_wake_at_the_switch_edge(rig):
+    """TMCM-6212 manual 3.6.20 WAIT REFSW "Wait until the reference switch ... has been
+    triggered", LIMSW likewise for a limit switch: the program continues at the edge; the GAP
+    after it runs one instruction (100 us, 2 microsteps at 20000 pps) later. The limit switch
+    has stopped the motor at its switching point."""
+    from tests.firmware.test_program_support import Wire
+
+    for cond, expected in (("REFSW", 4502), ("LIMSW", 30000)):
+        r = rig("TMCM-6212", STAGE)
+        w = Wire(r.vm)
+        w.load(f"ROR 0, 20000\nWAIT {cond}, 0, 0\nGAP 1, 0\nSTOP")
+        w.run()
+        r.vm.advance(3)
+        assert w.a == expected, cond

@@ -12,7 +12,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--duration", type=float, default=2.0, help="virtual seconds to run (default 2)")
     p.add_argument("--interval", type=float, default=0.1, help="table row interval in seconds (default 0.1)")
     p.add_argument("--scenario", metavar="FILE", help="run in a physical world (docs/scenarios.md) and print its trace")
-    p.add_argument("--csv", metavar="FILE", help="with --scenario: save the trace as CSV instead of printing it")
+    p.add_argument("--csv", metavar="FILE", help="with --scenario: save the trace as CSV instead of printing it (- for stdout)")
     p.set_defaults(func=run)
 
 

@@ -40,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scenario", metavar="FILE", help="physical-world scenario for the in-process "
                    "virtual module (switches, loads, inputs over time)")
     p.add_argument("--csv", metavar="FILE", help="save the world trace (position, velocity, switches, load "
-                   "value, current of every axis, each --sample) of the in-process module as CSV")
+                   "value, current of every axis, each --sample) of the in-process module as CSV (- for stdout)")
     p.set_defaults(func=run)
 
 

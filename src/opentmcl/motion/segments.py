@@ -110,8 +110,10 @@ def quadratic_guess(c0: float, c1: float, c2: float) -> float:
     if disc < 0:
         return max(-c1 / (2 * c2), 0.0)
     r = math.sqrt(disc)
-    roots = [x for x in ((-c1 - r) / (2 * c2), (-c1 + r) / (2 * c2)) if x >= 0]
-    return min(roots) if roots else 0.0
+    x1, x2 = (-c1 - r) / (2 * c2), (-c1 + r) / (2 * c2)
+    if x1 >= 0:  # the smaller root that is >= 0 (NaNs compare false and are skipped)
+        return x2 if 0 <= x2 < x1 else x1
+    return x2 if x2 >= 0 else 0.0
 
 
 def snap(p: int, direction: int) -> int:
@@ -211,6 +213,10 @@ class SegmentQueue:
         self.pieces = pieces
 
     def at(self, k: int) -> Segment:
+        s = self.pieces[0]  # after drop_before(now) the first piece holds now
+        k1 = s.k1
+        if k1 is None or k < k1:
+            return s
         for s in self.pieces:
             if s.k1 is None or k < s.k1:
                 return s

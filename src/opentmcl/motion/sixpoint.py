@@ -17,6 +17,13 @@ taken in one jump of less than one tick's acceleration; deceleration starts
 on the first tick at which the remaining distance is at most the braking
 distance. Model choices are listed
 in docs/notes/motion-sixpoint.md and docs/motion.md.
+
+Cost per move (bench/run.py bench_6212): planning uses integer arithmetic
+only (braking distances in closed form per parameter set, `Ramp.braking`),
+moves from a standstill reuse the plan of an earlier move over the same
+distance (`RestPlans`), and the per-event calls (advance, next_event,
+position, position_reached) look at the first queued piece only. All of it
+is bit-identical to planning from scratch (tests/motion/test_sixpoint_golden.py).
 """
 from __future__ import annotations
 
@@ -40,6 +47,10 @@ from .segments import (
     snap,
 )
 
+_new = tuple.__new__
+"""`_new(Segment, (k0, k1, p0, v0, a, rest_since))`: a Segment without the
+keyword handling of its constructor (planners make many)."""
+
 TZEROWAIT_CLOCKS = 512
 """Unit of the ramp wait time AP21: 512 clocks = 32 us at 16 MHz (manual 4.1: 0.000032 s)."""
 
@@ -54,6 +65,8 @@ class RampParameterError(ValueError):
 
 
 def _real(name: str, value: object) -> Fraction:
+    if type(value) is int:  # the common case, without the numbers-ABC checks
+        return Fraction(value)
     if isinstance(value, bool) or not isinstance(value, Real):
         raise RampParameterError(f"{name} must be a number, got {value!r}")
     if isinstance(value, float) and not math.isfinite(value):
@@ -61,19 +74,29 @@ def _real(name: str, value: object) -> Fraction:
     return Fraction(value)
 
 
-def _units(x: Fraction) -> int:
-    """Nearest integer engine unit (exact for every pps and internal-unit value)."""
-    return math.floor(x + Fraction(1, 2))
+_V_PER_PPS = int(V_PER_PPS)    # both are whole numbers: DEN is a multiple of CLOCK_HZ^2
+_A_PER_PPS2 = int(A_PER_PPS2)
+assert _V_PER_PPS == V_PER_PPS and _A_PER_PPS2 == A_PER_PPS2
+
+
+def _scaled(x, k: int) -> int:
+    """Nearest engine unit to x * k (ties upwards; exact for every pps and
+    internal-unit value), in integer arithmetic."""
+    if type(x) is int:
+        return x * k
+    f = x if type(x) is Fraction else Fraction(x)
+    n, d = f.numerator, f.denominator
+    return (2 * n * k + d) // (2 * d)  # floor(n*k/d + 1/2)
 
 
 def velocity_units(pps) -> int:
     """pps -> engine velocity units (1/DEN microsteps per tick)."""
-    return _units(Fraction(pps) * V_PER_PPS)
+    return _scaled(pps, _V_PER_PPS)
 
 
 def acceleration_units(pps2) -> int:
     """pps^2 -> engine acceleration units (1/DEN microsteps per tick^2)."""
-    return _units(Fraction(pps2) * A_PER_PPS2)
+    return _scaled(pps2, _A_PER_PPS2)
 
 
 @dataclass(frozen=True)
@@ -91,6 +114,15 @@ class Ramp:
     vstart: int = 0
     vstop: int = 0
     wait: int = 0
+
+    def __post_init__(self) -> None:
+        # constants of `braking` (the band loop in closed form), set once per parameter set
+        vstop2 = self.vstop * self.vstop
+        v1 = self.v1
+        object.__setattr__(self, "_low_rate", self.d1 if v1 > 0 else self.dmax)
+        object.__setattr__(self, "_vstop2", vstop2)
+        object.__setattr__(self, "_v1_2", v1 * v1)
+        object.__setattr__(self, "_c1", v1 * v1 - vstop2)  # V1^2 - VSTOP^2 (D1 band), used if V1 > VSTOP
 
     @classmethod
     def from_pps(cls, *, vmax, amax, dmax, v1=0, a1=0, d1=0, vstart=0, vstop=0, wait_ticks=0) -> Ramp:
@@ -113,7 +145,26 @@ class Ramp:
     def braking(self, u: int) -> tuple[int, int]:
         """Distance (num, den) in position units from speed u down to VSTOP
         (DMAX above V1, D1 below). A band whose deceleration is 0 is skipped
-        (no ramp there, see docs/notes/motion-sixpoint.md)."""
+        (no ramp there, see docs/notes/motion-sixpoint.md).
+
+        Closed form of `braking_loop` (the same pair, term for term)."""
+        if u <= self.vstop:
+            return 0, 1
+        v1 = self.v1
+        if v1 == 0 or u <= v1:  # one band: D1 (or DMAX without V1) down to VSTOP
+            rate = self._low_rate
+            return (u * u - self._vstop2, rate) if rate else (0, 1)
+        dmax, d1 = self.dmax, self.d1
+        if v1 <= self.vstop:  # the DMAX band reaches down to VSTOP
+            return (u * u - self._vstop2, dmax) if dmax else (0, 1)
+        if dmax:  # DMAX down to V1, then D1 down to VSTOP
+            if d1:
+                return (u * u - self._v1_2) * d1 + self._c1 * dmax, dmax * d1
+            return u * u - self._v1_2, dmax
+        return (self._c1, d1) if d1 else (0, 1)
+
+    def braking_loop(self, u: int) -> tuple[int, int]:
+        """`braking` band by band (the definition; kept as the test oracle)."""
         num, den = 0, 1
         while u > self.vstop:
             rate, low = self.decel_band(u, self.vstop)
@@ -148,7 +199,7 @@ class _Run:
 
     def emit(self, k1: int | None, alpha: int) -> None:
         """Append the piece [t, k1) accelerating at alpha along s and move the cursor to k1."""
-        self.out.append(Segment(self.t, k1, self.p, self.s * self.u, self.s * alpha, self.rest))
+        self.out.append(_new(Segment, (self.t, k1, self.p, self.s * self.u, self.s * alpha, self.rest)))
         if k1 is not None:
             dt = k1 - self.t
             self.p += self.s * (2 * self.u + alpha * dt) * dt
@@ -157,7 +208,7 @@ class _Run:
 
     def rest_here(self) -> None:
         """Come to a standstill at the last whole microstep and stay."""
-        self.out.append(Segment(self.t, None, snap(self.p, self.s), 0, 0, self.t))
+        self.out.append(_new(Segment, (self.t, None, snap(self.p, self.s), 0, 0, self.t)))
 
 
 def plan_position(r: Ramp, t: int, p: int, v: int, rest: int | None, target: int,
@@ -185,11 +236,11 @@ def _from_rest(r: Ramp, t: int, p: int, rest: int | None, target: int, out: list
     dist = target - p
     u0 = min(r.vstart, r.vmax)
     if dist == 0 or (u0 == 0 and (r.vmax == 0 or r.accel_band(0)[0] == 0)):
-        out.append(Segment(t, None, p, 0, 0, rest))  # arrived, or cannot move
+        out.append(_new(Segment, (t, None, p, 0, 0, rest)))  # arrived, or cannot move
         return
     start = t if rest is None else max(t, rest + r.wait)
     if start > t:
-        out.append(Segment(t, start, p, 0, 0, rest))  # ramp wait time (TZEROWAIT)
+        out.append(_new(Segment, (t, start, p, 0, 0, rest)))  # ramp wait time (TZEROWAIT)
     _drive(r, _Run(start, p, sign(dist), u0, rest, out), target)
 
 
@@ -236,7 +287,9 @@ def _decel_offset(r: Ramp, run: _Run, target: int, alpha: int, n: int | None) ->
         num, den = r.braking(u0 + alpha * j)
         return (r0 - (2 * u0 + alpha * j) * j) * den <= num
 
-    rate, _ = r.decel_band(u0, r.vstop)
+    # the float guess uses the braking band the speed moves into (above V1 once it rises past V1);
+    # the predicate is monotone within a phase, so the guess only changes how fast the search ends
+    rate, _ = r.decel_band(u0 + 1 if alpha > 0 else u0, r.vstop)
     k = 1.0 + (alpha / rate if rate else 0.0)
     guess = quadratic_guess(float(r0) - r.braking_f(u0), -2.0 * u0 * k, -float(alpha) * k)
     return first_integer(pred, 0, n, guess)
@@ -282,7 +335,7 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
                 run.emit(run.t + ceil_div(rem, 2 * run.u), 0)
             break
         run.u = low  # V1 reached (jump < DMAX per tick)
-    run.out.append(Segment(run.t, None, target, 0, 0, run.t))  # arrival: stop on the target
+    run.out.append(_new(Segment, (run.t, None, target, 0, 0, run.t)))  # arrival: stop on the target
 
 
 def _stop_then(r: Ramp, run: _Run, target: int) -> None:
@@ -299,8 +352,6 @@ def _stop_then(r: Ramp, run: _Run, target: int) -> None:
 
 _REST = object()
 """Stands for "the tick the move started resting at" inside a cached plan."""
-
-_new = tuple.__new__
 
 
 def _rest_template(r: Ramp, pm: int, dist: int) -> tuple:
@@ -338,11 +389,17 @@ class RestPlans:
             return [_new(Segment, (t, None, p, 0, 0, rest))]  # arrived, or cannot move
         pm = p % PSCALE
         key = (dist, pm)
-        tpl = self.plans.get(key)
-        if tpl is None:
-            if len(self.plans) >= self.LIMIT:
-                self.plans.clear()
-            tpl = self.plans[key] = _rest_template(self.ramp, pm, dist)
+        plans = self.plans
+        tpl = plans.get(key)
+        if tpl is None:  # a distance seen for the first time is planned directly, the second time cached
+            if len(plans) >= self.LIMIT:
+                plans.clear()
+            if key not in plans:
+                plans[key] = None
+                out: list[Segment] = []
+                _from_rest(self.ramp, t, p, rest, target, out)
+                return out
+            tpl = plans[key] = _rest_template(self.ramp, pm, dist)
         start = t if rest is None else max(t, rest + self.ramp.wait)
         out = [_new(Segment, (t, start, p, 0, 0, rest))] if start > t else []  # ramp wait (TZEROWAIT)
         append = out.append
@@ -356,25 +413,25 @@ def plan_velocity(amax: int, t: int, p: int, v: int, rest: int | None, vt: int) 
     """Velocity-mode plan: ramp with AMAX from v to vt (through zero if the
     sign changes), then run at vt forever (engine units)."""
     if amax == 0 or v == vt:
-        return [Segment(t, None, p, v, 0, rest if v == 0 else None)]
+        return [_new(Segment, (t, None, p, v, 0, rest if v == 0 else None))]
     out: list[Segment] = []
     if v != 0 and sign(vt) != sign(v):
         n = abs(v) // amax
         if n:
-            seg = Segment(t, t + n, p, v, -sign(v) * amax, None)
+            seg = _new(Segment, (t, t + n, p, v, -sign(v) * amax, None))
             out.append(seg)
             p = seg.p_at(t + n)
         p, t, rest = snap(p, sign(v)), t + n, t + n
         v = 0
         if vt == 0:
-            out.append(Segment(t, None, p, 0, 0, rest))
+            out.append(_new(Segment, (t, None, p, 0, 0, rest)))
             return out
     n = abs(vt - v) // amax
     if n:
-        seg = Segment(t, t + n, p, v, sign(vt - v) * amax, rest if v == 0 else None)
+        seg = _new(Segment, (t, t + n, p, v, sign(vt - v) * amax, rest if v == 0 else None))
         out.append(seg)
         p, t = seg.p_at(t + n), t + n
-    out.append(Segment(t, None, p, vt, 0, None))
+    out.append(_new(Segment, (t, None, p, vt, 0, None)))
     return out
 
 
@@ -407,6 +464,7 @@ class SixPointRampEngine(RampEngine):
         self.now = 0
         self._params: dict[str, Fraction] = {k: Fraction(v) for k, v in self.PARAMS.items()}
         self._params.update(self._checked(params))
+        self._plan_sets: dict[Ramp, RestPlans] = {}
         self._set_ramp(self._make_ramp(self._params))
         self._mode = Mode.POSITION
         self._target = 0          # AP0, wrapped
@@ -436,8 +494,16 @@ class SixPointRampEngine(RampEngine):
             wait_ticks=int(p["ramp_wait_time"]) * TZEROWAIT_CLOCKS)
 
     def _set_ramp(self, r: Ramp) -> None:
+        """Use ramp `r`, with the plan cache of that parameter set (kept for a
+        few sets: programs that switch between speeds keep their plans)."""
         self._ramp = r
-        self._rest_plans = RestPlans(r)
+        sets = self._plan_sets
+        plans = sets.get(r)
+        if plans is None:
+            if len(sets) >= 8:
+                sets.clear()
+            plans = sets[r] = RestPlans(r)
+        self._rest_plans = plans
 
     @property
     def params(self) -> dict[str, Fraction]:
@@ -522,9 +588,13 @@ class SixPointRampEngine(RampEngine):
     @property
     def position_reached(self) -> bool:
         """AP8: actual position equals target position and the motor stands."""
-        seg = self._seg()
+        seg = self._queue.pieces[0]  # inline `_seg()`: polled after every event
+        k1 = seg.k1
+        if k1 is not None and k1 <= self.now:
+            seg = self._queue.at(self.now)
         if seg.v0 == 0 and seg.a == 0:
-            return seg.p0 == self._target_abs * PSCALE or wrap32(seg.p0 // PSCALE) == self._target
+            p0 = seg.p0
+            return p0 == self._target_abs * PSCALE or wrap32(p0 // PSCALE) == self._target
         return seg.v_at(self.now) == 0 and wrap32(seg.step(self.now)) == self._target
 
     @property

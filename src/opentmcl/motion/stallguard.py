@@ -146,3 +146,34 @@ class CurrentModel:
         if prof is not None:
             bits |= int(round(prof.at(aw.vm.now / CLOCK_HZ))) & 0x7E
         return bits
+
+
+def time_at_speed(engine, pps) -> int | None:
+    """First tick >= now at which |velocity| >= `pps` (pps) on engines with a segment queue
+    (six-point, linear), or None (also for other engines): the instant the speed crosses the
+    stop-on-stall limit AP181 during an acceleration."""
+    queue = getattr(engine, "_queue", None)
+    if queue is None or pps <= 0:
+        return None
+    from fractions import Fraction
+    from math import ceil
+
+    from .segments import V_PER_PPS
+
+    th = ceil(Fraction(pps) * V_PER_PPS)
+    now = engine.now
+    for s in queue.pieces:
+        if s.k1 is not None and s.k1 <= now:
+            continue
+        k0 = max(now, s.k0)
+        if abs(s.v_at(k0)) >= th:
+            return k0
+        if s.a == 0:
+            continue
+        if s.a > 0:
+            k = s.k0 - ((s.v0 - th) // s.a)           # ceil((th - v0) / a)
+        else:
+            k = s.k0 - ((s.v0 + th) // -s.a)          # ceil((th + v0) / -a)
+        if k >= k0 and (s.k1 is None or k < s.k1):
+            return k
+    return None

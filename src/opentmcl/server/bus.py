@@ -22,8 +22,8 @@ import inspect
 import logging
 import threading
 import time
-from functools import partial
 from collections.abc import Callable, Iterable
+from functools import partial
 from typing import NamedTuple, Protocol
 
 from ..protocol.frame import Request
