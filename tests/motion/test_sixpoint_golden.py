@@ -274,14 +274,18 @@ def test_unit_conversion_is_nearest_engine_unit(x):
     assert acceleration_units(x) == math.floor(f * A_PER_PPS2 + Fraction(1, 2))
 
 
-def back_and_forth(engine_cls, params: dict, base: int, dist: int, idles: list[int]) -> list:
+def back_and_forth(engine_cls, params: dict, base: int, dist: int, idles: list[int],
+                   speeds: list[int] | None = None) -> list:
     """MVP base+dist, base, base+dist, ... each once the last one has arrived (after an idle time):
-    the repeated distances of a back-and-forth program. Returns the trace."""
+    the repeated distances of a back-and-forth program; with `speeds`, AP4 is set to the next one
+    before each move. Returns the trace."""
     e = engine_cls(**params)
     e.set_position(base)
     trace: list = []
     target = base
-    for idle in idles:
+    for i, idle in enumerate(idles):
+        if speeds:
+            e.configure(max_positioning_speed=speeds[i % len(speeds)])
         target = base + dist if target == base else base
         e.move_to(((target + 2**31) & 0xFFFF_FFFF) - 2**31)
         trace.append(tuple(seg_tuple(s) for s in e.segments))
@@ -305,25 +309,30 @@ def back_and_forth_digest(kind: str, seed: int, count: int) -> str:
         dist = rng.choice([rng.randint(-300000, 300000), rng.randint(-50, 50), 51200])
         base = rng.randint(-2**31, 2**31 - 1)
         idles = [rng.choice([0, 0, rng.randint(0, 100000)]) for _ in range(6)]
-        h.update(repr(back_and_forth(ENGINES[kind], params, base, dist, idles)).encode())
+        speeds = rng.choice([None, [random_value(rng, "max_positioning_speed") for _ in range(rng.randint(1, 3))]])
+        h.update(repr(back_and_forth(ENGINES[kind], params, base, dist, idles, speeds)).encode())
     return h.hexdigest()
 
 
 @pytest.mark.parametrize(("kind", "params", "expected"), [
-    ("six", {}, "99ee787e0d443e3017de35043a85665ddd9142ce788f5ee53c818d7799c68ccc"),
-    ("six", B6, "d475848643e64c36bdac81661e5663df3a4584ab63b8da4476fbb902930c145c"),
-    ("lin", {}, "b88c92ba949861c0b15c23c52021fc9eacc3f366a39d9a8694be81a83acadf2c"),
+    ("six", {}, "0b8411595d604360f72afc247ea332e05a3e19a752ee41cefff8e804f4e11f6a"),
+    ("six", B6, "6e6b29ec218d3c10735d5a5d4069f25348378fc97a1d853006838e410c578b82"),
+    ("lin", {}, "2c32ebf6ce28f395da2b7b6088529d6ee82c300c173972b6eea244fb19ed7806"),
+    ("six", {"speeds": [51200, 100000, 51200]}, "ed5091288bc9831f7015067265a5c96fbc6a928ebfbe129b92a5525d4f791931"),
 ])
 def test_repeated_moves_are_unchanged(kind, params, expected):
     """MVP back and forth over the same distance (manual 3.6.4), the ramp wait time (AP21) between
-    moves: the same trace as before the optimisation, also once plans are reused."""
-    trace = back_and_forth(ENGINES[kind], params, 0, 51200, [0, 0, 1000, 0, 7, 0])
+    moves, AP4 switched between moves: the same trace as before the optimisation, also once plans
+    are reused."""
+    params = dict(params)
+    speeds = params.pop("speeds", None)
+    trace = back_and_forth(ENGINES[kind], params, 0, 51200, [0, 0, 1000, 0, 7, 0, 0, 0, 0], speeds)
     assert hashlib.sha256(repr(trace).encode()).hexdigest() == expected
 
 
 @pytest.mark.parametrize(("kind", "seed", "count", "expected"), [
-    ("six", 3, 150, "17769e5f0a4d348fdf72a630c0994987cc57e1af85244801bec05961d8b0808a"),
-    ("lin", 4, 50, "58d727cd2819cffae09fb5cb8e56e33c3fbef6b056f9596b60b7cb2ccf78eb6f"),
+    ("six", 3, 150, "cfe97160e7912aaa2ea7d284ca00fdcee8a1effc2db7ae94a9b4a0dc18fb429e"),
+    ("lin", 4, 50, "d5385d6fc6852594e671fad8880c2594c2ea21c953fb2a9026e8a95e72c2cdb3"),
 ])
 def test_random_back_and_forth_is_unchanged(kind, seed, count, expected):
     """Random ramps (manual 4.1), random distances and start positions, six moves back and forth each:

@@ -169,9 +169,10 @@ def test_can_heartbeat_gp82_applies_to_can_traffic():
     bus = ModuleBus([VirtualModule("TMCM-6212", address=1)], clock=clock)
     bus.can_request(1, bytes([9, 82, 0, 0, 0, 0, 200]))  # SGP 82, 0, 200
     bus.can_request(1, bytes([1, 0, 0, 0, 0, 0x03, 0xE8]))  # ROR 0, 1000
-    clock.t += 0.15
-    [(_, _, p1)] = bus.can_request(1, bytes([6, 3, 0, 0, 0, 0, 0]))  # GAP 3: CAN host still talking
-    assert p1[3:7] != bytes(4)
+    for _ in range(4):  # the CAN host keeps talking every 0.15 s: still turning after 0.6 s
+        clock.t += 0.15
+        [(_, _, p1)] = bus.can_request(1, bytes([6, 3, 0, 0, 0, 0, 0]))  # GAP 3
+        assert p1[3:7] != bytes(4)
     for _ in range(5):  # only serial traffic for 0.5 s: the CAN host has fallen silent
         clock.t += 0.1
         bus.request(request(1, 6, 3, 0))

@@ -151,3 +151,37 @@ def test_socketcan_vcan0(vcan0):
             t.close()
     finally:
         server.stop()
+
+
+def test_can_endpoint_feeds_the_can_heartbeat_gp82():
+    """Manual 5.1 GP82 "Heartbeat for CAN interface. If this time limit is up and no further
+    command is received the motor will be stopped": requests through the CAN endpoint restart
+    it (the endpoint hands them over as CAN traffic). The bus clock is driven by hand."""
+    from opentmcl.server.bus import ModuleBus
+
+    class Clock:
+        t = 0.0
+
+        def __call__(self):
+            return self.t
+
+    clock = Clock()
+    channel = unique_channel()
+    bus = ModuleBus([VirtualModule("TMCM-6212", address=1)], clock=clock)
+    endpoint = CanServer(bus, "virtual", channel)
+    endpoint.start()
+    host = can.Bus(interface="virtual", channel=channel)
+    try:
+        def ask(data):
+            return bytes(exchange(host, 1, bytes(data)).data)
+
+        ask([9, 82, 0, 0, 0, 0, 200])                   # SGP 82, 0, 200 (ms)
+        ask([1, 0, 0, 0, 0, 0x03, 0xE8])                # ROR 0, 1000
+        for _ in range(4):                              # CAN host keeps talking every 0.15 s
+            clock.t += 0.15
+            assert ask([6, 3, 0, 0, 0, 0, 0])[3:7] != bytes(4)   # GAP 3: still turning
+        clock.t += 0.5                                  # CAN silent for longer than GP82
+        assert ask([6, 3, 0, 0, 0, 0, 0])[3:7] == bytes(4)       # stopped
+    finally:
+        host.shutdown()
+        endpoint.stop()

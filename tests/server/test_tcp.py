@@ -179,3 +179,33 @@ def test_a_module_bug_does_not_kill_the_endpoint():
             assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
     finally:
         server.stop()
+
+
+def test_a_client_that_never_reads_is_dropped_and_others_are_served(tcp_server):
+    """Safety (docs/endpoints.md): a client whose replies pile up unread for the send time-out is
+    disconnected instead of blocking the server; another client is then answered (manual 3.6.8
+    GGP 66 example as the probe)."""
+    _, tcp = tcp_server
+    lazy = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    lazy.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)   # fills quickly
+    lazy.settimeout(1)
+    lazy.connect(tcp.address)
+    lazy.sendall(GGP_66)
+    assert recv_exactly(lazy, 9) == reply(2, 1, 100, 10, 1)    # accepted and served
+    assert tcp.client_count == 1
+    burst = GGP_66 * 200
+    deadline = time.monotonic() + 60
+    dropped = False
+    try:
+        while not dropped and time.monotonic() < deadline:
+            try:
+                lazy.sendall(burst)                   # never reads a reply
+            except (TimeoutError, OSError):
+                pass
+            dropped = tcp.client_count == 0
+        assert dropped
+    finally:
+        lazy.close()
+    with connect(tcp) as other:
+        other.sendall(GGP_66)
+        assert recv_exactly(other, 9) == reply(2, 1, 100, 10, 1)

@@ -12,7 +12,8 @@ from .can import CanServer
 from .framer import SerialFramer
 from .pty import PtyServer
 from .session import SerialSession
+from .stream import SerialStream
 from .tcp import TcpServer
 
 __all__ = ["CanServer", "ModuleBus", "PtyServer", "RealTimeRunner", "SerialFramer", "SerialSession",
-           "Server", "TcpServer"]
+           "SerialStream", "Server", "TcpServer"]

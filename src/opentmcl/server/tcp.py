@@ -22,6 +22,7 @@ from .session import SerialSession
 
 DEFAULT_MAX_CLIENTS = 4
 POLL = 0.2
+SEND_BUFFER = 64 * 1024
 
 
 def is_loopback(host: str) -> bool:
@@ -125,6 +126,10 @@ class TcpServer:
                 conn.close()
                 continue
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            try:  # replies are 9 bytes: a small send buffer bounds memory and finds idle readers soon
+                conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
+            except OSError:
+                pass
             bound_blocking(conn, POLL)
             session = SerialSession(self.bus, lambda data, c=conn: self._send(c, data),
                                     gap=self.gap, pace_bytes=self.pace_bytes)
