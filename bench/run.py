@@ -100,7 +100,7 @@ def main(argv: list[str] | None = None) -> dict:
     results["in-process round trips per s (target >= 50000)"] = bench_round_trips(int(200000 * scale))
     width = max(map(len, results))
     for key, value in results.items():
-        print(f"{key:<{width}}  {value:>14,.1f}")
+        print(f"{key:<{width}}  {value:>14,.2f}" if value < 100 else f"{key:<{width}}  {value:>14,.0f}")
     return results
 
 

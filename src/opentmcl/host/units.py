@@ -16,9 +16,10 @@ the nearest integer (halves away from zero), as the module takes only integers.
 """
 from __future__ import annotations
 
-F_CLK = 16_000_000  # Hz, the clock of the TMCM-1180 / TMCM-6212 motion controllers
+from ..motion import units as exact
 
-MICROSTEP_CODES = range(0, 9)  # axis parameter 140: 0 = full step ... 8 = 256 microsteps
+F_CLK = exact.F_CLK  # Hz, the clock of the TMCM-1180 / TMCM-6212 motion controllers
+
 DIVISORS = range(0, 14)  # pulse_div / ramp_div (axis parameters 154 / 153): 0 .. 13
 
 
@@ -36,35 +37,27 @@ def _int_in(name: str, value: int, allowed: range) -> int:
 
 def microsteps_per_fullstep(microstep_resolution: int) -> int:
     """Axis parameter 140 code -> microsteps per full step (TMCM-6212 manual 4.1, parameter 140)."""
-    return 2 ** _int_in("microstep resolution (axis parameter 140)", microstep_resolution, MICROSTEP_CODES)
-
-
-def _steps_per_round(microstep_resolution: int, fullstep_resolution: int) -> int:
-    if isinstance(fullstep_resolution, bool) or not isinstance(fullstep_resolution, int) \
-            or fullstep_resolution <= 0:
-        raise ValueError(f"full step resolution (axis parameter 202) must be a positive integer, "
-                         f"got {fullstep_resolution!r}")
-    return fullstep_resolution * microsteps_per_fullstep(microstep_resolution)
+    return exact.microsteps_per_fullstep(microstep_resolution)
 
 
 def pps_to_rps(pps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> float:
     """Microsteps per second -> rounds per second (TMCM-6212 manual 6.5)."""
-    return pps / _steps_per_round(microstep_resolution, fullstep_resolution)
+    return float(exact.pps_to_rps(pps, microstep_resolution, fullstep_resolution))
 
 
 def rps_to_pps(rps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> int:
     """Rounds per second -> microsteps per second, rounded to an integer (TMCM-6212 manual 6.5)."""
-    return _round(rps * _steps_per_round(microstep_resolution, fullstep_resolution))
+    return exact.round_half_away(exact.rps_to_pps(rps, microstep_resolution, fullstep_resolution))
 
 
 def pps_to_rpm(pps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> float:
     """Microsteps per second -> rounds per minute (``v_rpm = v_rps * 60``, TMCM-6212 manual 6.5)."""
-    return 60 * pps_to_rps(pps, microstep_resolution, fullstep_resolution)
+    return float(exact.pps_to_rpm(pps, microstep_resolution, fullstep_resolution))
 
 
 def rpm_to_pps(rpm: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> int:
     """Rounds per minute -> microsteps per second, rounded to an integer."""
-    return _round(rpm * _steps_per_round(microstep_resolution, fullstep_resolution) / 60)
+    return exact.round_half_away(exact.rpm_to_pps(rpm, microstep_resolution, fullstep_resolution))
 
 
 # ---------------------------------------------------------------- TMC429 / TMC4210 (TMCM-1180)
@@ -99,17 +92,25 @@ def pps2_to_tmc429_accel(pps2: float, pulse_div: int, ramp_div: int, f_clk: int 
 
 def tmc5130_velocity_to_pps(velocity: int, f_clk: int = F_CLK) -> float:
     """Internal VMAX-style velocity -> microsteps per second (``v * f_CLK / 2**24``)."""
+    if f_clk == F_CLK:
+        return float(exact.pps_from_internal_velocity(velocity))
     return velocity * f_clk / 2**24
 
 
 def pps_to_tmc5130_velocity(pps: float, f_clk: int = F_CLK) -> int:
+    if f_clk == F_CLK:
+        return exact.internal_velocity_from_pps(pps)
     return _round(pps * 2**24 / f_clk)
 
 
 def tmc5130_accel_to_pps2(accel: int, f_clk: int = F_CLK) -> float:
     """Internal AMAX-style acceleration -> microsteps per second² (``a * f_CLK**2 / 2**41``)."""
+    if f_clk == F_CLK:
+        return float(exact.pps2_from_internal_acceleration(accel))
     return accel * f_clk * f_clk / 2**41
 
 
 def pps2_to_tmc5130_accel(pps2: float, f_clk: int = F_CLK) -> int:
+    if f_clk == F_CLK:
+        return exact.internal_acceleration_from_pps2(pps2)
     return _round(pps2 * 2**41 / (f_clk * f_clk))

@@ -41,7 +41,7 @@ def _number(name: str, x: object) -> Fraction:
         raise UnitError(f"{name} must be finite, got {x!r}") from exc
 
 
-def _round(x: Fraction) -> int:
+def round_half_away(x: Fraction) -> int:
     """Round half away from zero."""
     n = abs(x)
     r = int(n + Fraction(1, 2))
@@ -56,7 +56,7 @@ def pps_from_internal_velocity(v: int | Fraction) -> Fraction:
 
 def internal_velocity_from_pps(pps: int | float | Fraction) -> int:
     """Nearest internal velocity value of a pps value."""
-    return _round(_number("velocity", pps) / VELOCITY_SCALE)
+    return round_half_away(_number("velocity", pps) / VELOCITY_SCALE)
 
 
 def pps2_from_internal_acceleration(a: int | Fraction) -> Fraction:
@@ -66,7 +66,7 @@ def pps2_from_internal_acceleration(a: int | Fraction) -> Fraction:
 
 def internal_acceleration_from_pps2(pps2: int | float | Fraction) -> int:
     """Nearest internal acceleration value of a pps^2 value."""
-    return _round(_number("acceleration", pps2) / ACCELERATION_SCALE)
+    return round_half_away(_number("acceleration", pps2) / ACCELERATION_SCALE)
 
 
 # --- rounds per second / minute (manual 6.5) --------------------------------
@@ -78,7 +78,7 @@ def microsteps_per_fullstep(microstep_resolution: int) -> int:
     return 1 << int(microstep_resolution)
 
 
-def _per_round(microstep_resolution: int, fullstep_resolution: int) -> int:
+def _perround_half_away(microstep_resolution: int, fullstep_resolution: int) -> int:
     if isinstance(fullstep_resolution, bool) or not isinstance(fullstep_resolution, Integral) \
             or fullstep_resolution <= 0:
         raise UnitError(f"full step resolution (AP202) must be a positive integer, got {fullstep_resolution!r}")
@@ -87,11 +87,11 @@ def _per_round(microstep_resolution: int, fullstep_resolution: int) -> int:
 
 def pps_to_rps(pps, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> Fraction:
     """v_rps = v_pps / (r_fullstep * r_microstep) (manual 6.5)."""
-    return _number("velocity", pps) / _per_round(microstep_resolution, fullstep_resolution)
+    return _number("velocity", pps) / _perround_half_away(microstep_resolution, fullstep_resolution)
 
 
 def rps_to_pps(rps, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> Fraction:
-    return _number("velocity", rps) * _per_round(microstep_resolution, fullstep_resolution)
+    return _number("velocity", rps) * _perround_half_away(microstep_resolution, fullstep_resolution)
 
 
 def pps_to_rpm(pps, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> Fraction:
