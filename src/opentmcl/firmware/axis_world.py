@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 from ..motion import CLOCK_HZ
 from ..motion.scenario import AxisSpec
 from ..motion.stage import Load, Profile, ceil_ticks
-from ..motion.stallguard import CurrentModel, load_value, time_at_speed
+from ..motion.stallguard import CurrentModel, load_value
 from . import flags as fl
 
 if TYPE_CHECKING:
@@ -21,17 +21,6 @@ END_LOAD = 100.0                     # a mechanical end: far more than any curre
 
 def _sign(x) -> int:
     return (x > 0) - (x < 0)
-
-
-def _velocity_sign(e) -> int:
-    """Sign of the actual velocity, exact (cheaper than the engines' public properties)."""
-    queue = getattr(e, "_queue", None)
-    if queue is not None:
-        return _sign(queue.at(e.now).v_at(e.now))
-    ramp = getattr(e, "ramp", None)
-    if ramp is not None:
-        return _sign(ramp.v_internal)
-    return _sign(e.velocity)
 
 
 class AxisWorld:
@@ -167,7 +156,7 @@ class AxisWorld:
     def heading(self) -> int:
         """Direction of motion, or of the motion about to start (0 when there is none)."""
         e = self.engine
-        v = _velocity_sign(e)
+        v = e.direction
         if v:
             return v
         if e.mode.value == "velocity":
@@ -397,14 +386,7 @@ class AxisWorld:
 
     def _signature(self) -> tuple:
         """Everything the next world event depends on besides time (for the cache)."""
-        e = self.engine
-        queue = getattr(e, "_queue", None)
-        if queue is not None:   # six-point / linear engines: a command makes a new segment queue
-            eng = (queue, e._mode, e._target_abs, e._vt_pps)
-        else:
-            r = getattr(e, "ramp", None)
-            eng = (e.mode, e.target_position, e.target_velocity, e.velocity, e.position) if r is None else \
-                (r.mode, r.x_target, r.v_target, r.v_internal, r.v_max, r.a_max, r.pulse_div, r.ramp_div)
+        eng = self.engine.plan_token
         ram = self.axis.ram
         search = self.vm.reference_search(self.axis)
         gp79 = self.vm.globals.ram.get((0, 79), 0)
@@ -479,7 +461,7 @@ class AxisWorld:
                 best = t
         limit = self.p(181)
         if limit:                            # the speed reaching the stop-on-stall limit AP181
-            t = time_at_speed(e, abs(self.axis.to_engine(181, limit)))
+            t = e.time_at_speed(abs(self.axis.to_engine(181, limit)))
             if t is not None and t > now and (best is None or t < best):
                 best = t
         return best

@@ -68,6 +68,23 @@ class RampEngine(ABC):
     def moving(self) -> bool:
         return self.velocity != 0
 
+    @property
+    def direction(self) -> int:
+        """Sign of the actual velocity (-1, 0, 1), exact."""
+        v = self.velocity
+        return (v > 0) - (v < 0)
+
+    @property
+    def accelerating(self) -> bool:
+        """The ramp is changing the velocity now."""
+        return False
+
+    @property
+    def plan_token(self) -> object:
+        """A value that changes whenever a command or parameter change re-plans the motion
+        (the axis world caches its next event against it)."""
+        return (self.mode, self.target_position, self.target_velocity, self.velocity, self.position)
+
     # --- commands ---------------------------------------------------------
     @abstractmethod
     def move_to(self, target: int) -> None:
@@ -102,6 +119,11 @@ class RampEngine(ABC):
     def next_event(self) -> int | None:
         """Absolute tick of the next ramp phase change or arrival, or None when
         nothing will change without a new command (standing still or cruising)."""
+
+    def time_at_speed(self, speed: int | float) -> int | None:
+        """First tick >= now at which |velocity| >= `speed` (engine units) if no command intervenes,
+        or None when unknown or never (used for the stop-on-stall speed AP181)."""
+        return None
 
     def time_at_position(self, position: int) -> int | None:
         """First tick >= now at which the actual position equals `position`

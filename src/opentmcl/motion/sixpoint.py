@@ -688,6 +688,43 @@ class SixPointRampEngine(RampEngine):
             return k1
         return self._queue.next_boundary(self.now)
 
+    @property
+    def direction(self) -> int:
+        v = self._queue.at(self.now).v_at(self.now)
+        return (v > 0) - (v < 0)
+
+    @property
+    def accelerating(self) -> bool:
+        return self._queue.at(self.now).a != 0
+
+    @property
+    def plan_token(self) -> object:
+        """Every command builds a new segment queue; mode and targets complete the plan."""
+        return (self._queue, self._mode, self._target_abs, self._vt_pps)
+
+    def time_at_speed(self, speed) -> int | None:
+        """First tick >= now at which |velocity| >= `speed` (pps), from the segment queue: the instant
+        the speed crosses the stop-on-stall limit AP181 during an acceleration."""
+        if speed <= 0:
+            return None
+        th = math.ceil(Fraction(speed) * V_PER_PPS)
+        now = self.now
+        for s in self._queue.pieces:
+            if s.k1 is not None and s.k1 <= now:
+                continue
+            k0 = max(now, s.k0)
+            if abs(s.v_at(k0)) >= th:
+                return k0
+            if s.a == 0:
+                continue
+            if s.a > 0:
+                k = s.k0 - ((s.v0 - th) // s.a)           # ceil((th - v0) / a)
+            else:
+                k = s.k0 - ((s.v0 + th) // -s.a)          # ceil((th + v0) / -a)
+            if k >= k0 and (s.k1 is None or k < s.k1):
+                return k
+        return None
+
     def time_at_position(self, position: int) -> int | None:
         """First tick >= now at which the counter reaches (or, at more than one
         microstep per tick, passes) `position`, following the 32-bit wrap."""

@@ -30,15 +30,6 @@ def load_value(load: float, capacity: float, sgt: int) -> int:
     return max(0, min(1023, sg))
 
 
-def accelerating(engine) -> bool:
-    """True while the ramp changes the velocity (for the boost current AP200)."""
-    acc = getattr(engine, "actual_acceleration", None)
-    if acc is not None:
-        return acc != 0
-    queue = getattr(engine, "_queue", None)
-    return bool(queue is not None and queue.at(engine.now).a != 0)
-
-
 class CurrentModel:
     """Which current drives the motor now: run, boost, slow-run, coolStep-regulated, standby or none."""
 
@@ -118,7 +109,7 @@ class CurrentModel:
             if still >= aw.p(214, 200) * TICKS_PER_10MS:
                 return aw.p(7, 8)                # standby current after the power-down delay
             return aw.p(6, 128)
-        if aw.p(200) and accelerating(e):
+        if aw.p(200) and e.accelerating:  # boost current while the ramp changes the velocity
             return aw.p(200)                     # boost current during acceleration / deceleration
         if aw.has(183) and aw.p(182) and abs(e.velocity) < abs(aw.axis.to_engine(182, aw.p(182))):
             return aw.p(183)                     # slow-run current below the coolStep threshold speed
@@ -146,34 +137,3 @@ class CurrentModel:
         if prof is not None:
             bits |= int(round(prof.at(aw.vm.now / CLOCK_HZ))) & 0x7E
         return bits
-
-
-def time_at_speed(engine, pps) -> int | None:
-    """First tick >= now at which |velocity| >= `pps` (pps) on engines with a segment queue
-    (six-point, linear), or None (also for other engines): the instant the speed crosses the
-    stop-on-stall limit AP181 during an acceleration."""
-    queue = getattr(engine, "_queue", None)
-    if queue is None or pps <= 0:
-        return None
-    from fractions import Fraction
-    from math import ceil
-
-    from .segments import V_PER_PPS
-
-    th = ceil(Fraction(pps) * V_PER_PPS)
-    now = engine.now
-    for s in queue.pieces:
-        if s.k1 is not None and s.k1 <= now:
-            continue
-        k0 = max(now, s.k0)
-        if abs(s.v_at(k0)) >= th:
-            return k0
-        if s.a == 0:
-            continue
-        if s.a > 0:
-            k = s.k0 - ((s.v0 - th) // s.a)           # ceil((th - v0) / a)
-        else:
-            k = s.k0 - ((s.v0 + th) // -s.a)          # ceil((th + v0) / -a)
-        if k >= k0 and (s.k1 is None or k < s.k1):
-            return k
-    return None

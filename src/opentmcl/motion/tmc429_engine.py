@@ -167,6 +167,20 @@ class Tmc429Engine(RampEngine):
         self.ramp.set(v_max=V_LIMIT, v_target=v)
         self._params["ramp_mode"] = 2
 
+    @property
+    def direction(self) -> int:
+        v = self.ramp.v_internal
+        return (v > 0) - (v < 0)
+
+    @property
+    def accelerating(self) -> bool:
+        return self.actual_acceleration != 0
+
+    @property
+    def plan_token(self) -> object:
+        r = self.ramp
+        return (r.mode, r.x_target, r.v_target, r.v_internal, r.v_max, r.a_max, r.pulse_div, r.ramp_div)
+
     def hold(self, velocity: int) -> None:
         """AP3 write: hold_mode, V_ACTUAL := velocity at once (TMC4210 datasheet: hold_mode
         takes V_ACTUAL as written, without ramp or limits)."""
