@@ -162,3 +162,21 @@ def test_unit_mode_internal_units(m6212):
     assert abs(internal - 53687) <= 1
     m6212.ok(5, 255, 0, 1)
     assert abs(m6212.ok(6, 3, 0) - 51200) <= 1
+
+
+def test_eeprom_magic_gp64_reinitialises_at_next_power_up(tmp_path):
+    """PD86-1180 6.1 GP64 "Setting this parameter to a different value as $E4 will cause re-initialization
+    of the axis and global parameters (to factory defaults) after the next power up"."""
+    path = tmp_path / "ee.json"
+    host = Host(VirtualModule("PD86-1180", eeprom=path))
+    host.ok(5, 4, 0, 1500)
+    host.ok(7, 4, 0)
+    host.ok(9, 75, 0, 9)
+    host.ok(9, 64, 0, 0xE4)
+    again = Host(VirtualModule("PD86-1180", eeprom=path))
+    assert (again.ok(6, 4, 0), again.ok(10, 75, 0)) == (1500, 9)
+    again.ok(9, 64, 0, 0)
+    assert again.ok(6, 4, 0) == 1500                     # only after the next power up
+    fresh = Host(VirtualModule("PD86-1180", eeprom=path))
+    default = fresh.vm.profile.axis_parameters[4].default
+    assert (fresh.ok(6, 4, 0), fresh.ok(10, 75, 0), fresh.ok(10, 64, 0)) == (default, 0, 0xE4)

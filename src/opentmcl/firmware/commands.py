@@ -287,7 +287,6 @@ HANDLERS: dict[int, Handler] = {
     30: cmd_sco, 31: cmd_gco, 32: cmd_cco, 34: cmd_aap, 35: cmd_agp, 36: cmd_cle, 37: cmd_vect,
     25: cmd_ei, 26: cmd_di, 39: cmd_aco, 136: cmd_136, 137: cmd_137, 138: cmd_138, 139: cmd_139,
 }
-COMMANDS = HANDLERS
 PROGRAM_CONTROL = frozenset(range(128, 136))
 
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..protocol.frame import Reply, checksum, to_int32
+from ..protocol.frame import to_int32
+from ..protocol.replies import MemoryReply
 from ..protocol.status import Status
 from .status import TmclStatus
 
@@ -102,10 +103,4 @@ def program_control(vm: VirtualModule, command: int, type: int, value: int):
 def read_reply(vm: VirtualModule, ins: tuple[int, int, int, int]) -> bytes:
     """Special reply of 134: host address, then the stored instruction's command,
     type, motor and value in place of module address, status, command and value."""
-    cmd, type, motor, value = ins
-    body = bytes([vm.host_address & 0xFF, cmd, type, motor]) + to_int32(value).to_bytes(4, "big", signed=True)
-    return body + bytes([checksum(body)])
-
-
-__all__ = ["EMPTY", "RESET", "RUNNING", "STEPPING", "STOPPED", "ProgramMemory", "Reply",
-           "program_control", "store_instruction"]
+    return MemoryReply(vm.host_address, *ins).encode()

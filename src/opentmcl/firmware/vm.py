@@ -19,7 +19,7 @@ from ..protocol.frame import FRAME_LEN, Reply, Request, to_int32
 from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .axis import Axis
-from .commands import COMMANDS, NO_SUPPRESS, execute
+from .commands import NO_SUPPRESS, execute
 from .eeprom import Eeprom
 from .globals import GlobalParameters
 from .interpreter import Interpreter
@@ -33,6 +33,7 @@ TICKS_PER_MS = CLOCK_HZ // 1000
 _REQUEST = struct.Struct(">BBBBiB")
 _REPLY = struct.Struct(">BBBBi")
 _ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
+EEPROM_MAGIC, MAGIC_VALUE = (0, 64), 0xE4
 _HEARTBEATS = (("serial", (0, 68)), ("can", (0, 82)))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 
@@ -56,6 +57,9 @@ class VirtualModule:
     def power_up(self) -> None:
         """State after switching on: factory defaults overlaid by the EEPROM."""
         prof, ee = self.profile, self.eeprom
+        magic = ee.get_global(0, EEPROM_MAGIC[1])
+        if EEPROM_MAGIC in prof.global_parameters and magic is not None and magic != MAGIC_VALUE:
+            ee.clear()  # PD86-1180 6.1 GP64: another value than $E4 re-initialises to factory defaults
         self.globals = GlobalParameters(self)
         if self._address_override is not None:
             self.globals.ram[(0, 66)] = self._address_override
@@ -315,4 +319,4 @@ class VirtualModule:
         return f"VirtualModule({self.profile.name!r}, address={self.address}, t={self.time:.6f}s)"
 
 
-__all__ = ["COMMANDS", "VirtualModule"]
+__all__ = ["VirtualModule"]
