@@ -7,10 +7,12 @@ Each figure stands next to its yardstick, measured in the same run over the same
 - our server (`opentmcl.server`, a TMCM-6212 answering GAP 1 = actual position, TMCM-6212
   manual 3.6.6) against a bare echo server that sends every received byte straight back
   (target: ours >= 50 % of the echo rate); the client is the same plain socket / pyserial loop
-  for both (send nine bytes, read nine bytes);
+  for both (send nine bytes, read nine bytes), run in a separate Python process as a host program
+  is; each pair is measured in interleaved rounds and the best round of each is kept (the least
+  disturbed one on a busy machine);
 - our client (`opentmcl.connect("tcp://...")`, `Module.request`) against PyTrinamic's
-  (`socket_serial_tmcl` interface, `send`) on the same served virtual module (target: ours at least
-  as fast). Skipped when PyTrinamic is not installed.
+  (`socket_serial_tmcl` interface, `get_axis_parameter`) on the same served virtual module, both
+  in this process (target: ours at least as fast). Skipped when PyTrinamic is not installed.
 """
 from __future__ import annotations
 

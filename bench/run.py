@@ -7,7 +7,11 @@ Prints, for the virtual module core:
 - virtual seconds per wall second, TMCM-6212 with six axes doing back-and-forth MVP moves (target >= 3600);
 - virtual seconds per wall second, PD86-1180 at pulse_div = ramp_div = 0 (target >= 100);
 - speed-up of the event-driven TMC429 engine over the per-tick reference model (exact agreement checked);
-- in-process round trips per second through VirtualModule.handle (target >= 50,000).
+- in-process round trips per second through VirtualModule.handle (target >= 50,000);
+- the engines alone (bench_sixpoint.py, bench_tmc429.py);
+- round trips through TCP and the pseudo-terminal next to a bare echo server on the same transport
+  (target: ours >= 50 % of echo), and our client against PyTrinamic on the same module (target >= 1)
+  (bench_endpoints.py).
 """
 from __future__ import annotations
 

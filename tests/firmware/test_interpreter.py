@@ -46,7 +46,7 @@ def test_reading_commands_load_the_accumulator_only_in_a_program():
 def test_calc_operations(op, a, operand, result):
     """3.6.14 CALC: ADD, SUB, MUL, DIV, MOD, AND, OR, XOR, NOT ("logical invert accumulator"),
     LOAD, on 32-bit two's complement; division by zero: DIV gives 0, MOD leaves A
-    (docs/notes/interpreter.md)."""
+    (docs/assumptions.md)."""
     assert accu_after(f"CALC LOAD, {a}\nCALC {op}, {operand}\nSTOP") == result
 
 
@@ -175,7 +175,7 @@ def test_subroutine_stack_is_eight_deep():
 
 def test_wait_ticks_are_10_ms():
     """3.6.20 WAIT TICKS: "one tick is 10 milliseconds". Each instruction takes 100 µs of virtual
-    time (docs/notes/interpreter.md): SIO at T, WAIT at 2T, next SIO at 2T + 500 ms + T."""
+    time (docs/assumptions.md): SIO at T, WAIT at 2T, next SIO at 2T + 500 ms + T."""
     assert INSTRUCTION_TICKS == 1600
     w = module()
     w.load("SIO 0, 2, 1\nWAIT TICKS, 0, 50\nSIO 0, 2, 0\nSTOP")
@@ -235,7 +235,7 @@ def test_aap_agp_aco():
 
 def test_failing_instruction_is_skipped():
     """An instruction the module would answer with an error (here SAP on a motor the module lacks)
-    has no effect and the program goes on (docs/notes/interpreter.md)."""
+    has no effect and the program goes on (docs/assumptions.md)."""
     w = run_program("SAP 4, 9, 100\nCALC LOAD, 3\nSTOP", 0.01)
     assert w.a == 3
     assert w.vm.interpreter.last_error == (0, 5, 4)

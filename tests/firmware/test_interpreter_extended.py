@@ -1,6 +1,6 @@
 """The PD28-1021 extended command set (PD28-1021 manual 3.5 Table 5; the manual is cut off before
 the detailed pages 3.7.36-3.7.50, so the semantics follow the overview table - see
-docs/notes/interpreter.md)."""
+docs/assumptions.md)."""
 from __future__ import annotations
 
 import pytest

@@ -154,7 +154,7 @@ def test_target_reached_interrupt_per_axis():
 
 def test_timer_interrupts_a_wait_which_keeps_its_deadline():
     """3.6.20 WAIT holds the program; an interrupt taken meanwhile returns to the same WAIT, which
-    ends at its original time (docs/notes/interpreter.md)."""
+    ends at its original time (docs/assumptions.md)."""
     src = ("VECT 1, T1\nSGP 1, 3, 100\nEI 1\nEI 255\nWAIT TICKS, 0, 50\nSIO 0, 2, 1\nSTOP\n"
            "T1: GGP 12, 2\nCALC ADD, 1\nAGP 12, 2\nRETI")
     w = module()

@@ -39,7 +39,7 @@ def test_download_mode_stores_and_does_not_execute(w):
 def test_read_program_memory_special_reply(w):
     """3.6.36: 134 "Return contents of the specified program memory location (special reply
     format)": host address, then the stored command, type, motor/bank and value (MSB first) in
-    place of module address, status, command and value, and a checksum (docs/notes/interpreter.md)."""
+    place of module address, status, command and value, and a checksum (docs/assumptions.md)."""
     w.download([(4, 0, 0, -5000), (27, 1, 0, 0)], start=3)
     raw = w.vm.handle(Request(1, 134, 0, 0, 3).encode())
     assert raw[:8] == bytes([2, 4, 0, 0]) + (-5000).to_bytes(4, "big", signed=True)
@@ -84,7 +84,7 @@ def test_code_protection(w):
 
 def test_application_status_and_gp128_130_mirror_the_state(w):
     """3.6.36 135 types 0-3 and 5.1 GP128 (0 stop, 1 run, 2 step, 3 reset), GP130 (program counter).
-    Types 0/1 pack mode << 24 | wait flag << 16 | address (layout: docs/notes/interpreter.md)."""
+    Types 0/1 pack mode << 24 | wait flag << 16 | address (layout: docs/assumptions.md)."""
     w.load("CALC LOAD, 42\nCALCX LOAD\nCALC LOAD, 7\nWAIT TICKS, 0, 100\nSTOP")
     w.run()
     w.vm.advance(10 * T)

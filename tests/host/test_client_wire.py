@@ -208,7 +208,7 @@ def test_can_event_reply_belongs_to_the_transports_module():
 
 
 def test_memory_reply_carries_the_stored_instruction():
-    """Command 134 "special reply format" (TMCM-6212 manual 3.6.36; docs/notes/protocol.md): the
+    """Command 134 "special reply format" (TMCM-6212 manual 3.6.36; docs/assumptions.md): the
     stored instruction's command, type, motor and value in place of address, status, command, value."""
     t = ScriptedTransport(bytes.fromhex("02 04 01 00 FF FF D8 F0") + bytes([(0x02 + 0x04 + 0x01 + 0xFF * 2 + 0xD8 + 0xF0) & 0xFF]))
     r = Client(t).request(134, 0, 0, 7)

@@ -78,7 +78,7 @@ def test_extended_commands():
 
 
 def test_raw_pseudo_instruction():
-    """Our RAW pseudo-instruction (docs/notes/lang.md) emits any record, e.g. control command 136."""
+    """Our RAW pseudo-instruction (docs/assumptions.md) emits any record, e.g. control command 136."""
     assert ins("RAW 136, 1, 0, -5") == [(136, 1, 0, -5), STOP]
 
 

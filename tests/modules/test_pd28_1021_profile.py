@@ -2,7 +2,7 @@
 
 Sources: PD28-1021 TMCL firmware manual V1.46 (partial copy: chapters 1-3.6 only), the parameter
 numbers public clients use on this module (shared/FACTS.md), and for their definitions the TMCM-1180
-manual V4.45 (TMCM-6212 V1.05 where the 1180 lacks a number). Choices: docs/notes/profile-pd28-1021.md.
+manual V4.45 (TMCM-6212 V1.05 where the 1180 lacks a number). Choices: docs/assumptions.md.
 """
 from __future__ import annotations
 

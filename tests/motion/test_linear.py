@@ -51,7 +51,7 @@ def test_default_minimum_speed_reaches_the_target_exactly():
 
 
 def test_minimum_speed_is_start_and_stop_speed():
-    """AP130 acts as VSTART and VSTOP of the linear ramp (docs/notes/motion-sixpoint.md)."""
+    """AP130 acts as VSTART and VSTOP of the linear ramp (docs/assumptions.md)."""
     e = LinearRampEngine(max_positioning_speed=51200, max_acceleration=51200, minimum_speed=12800)
     e.move_to(99200)
     e.advance(1)

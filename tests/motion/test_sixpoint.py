@@ -226,7 +226,7 @@ def test_mst_is_a_soft_stop_with_amax():
 
 def test_position_reached_flag():
     """4.1 AP8 'always set when target position and actual position are equal' (and the
-    motor stands there; see docs/notes/motion-sixpoint.md)."""
+    motor stands there; see docs/assumptions.md)."""
     e = plain()
     assert e.position_reached
     e.move_to(12800)

@@ -3,7 +3,7 @@
 This is the *definition* the fast event-driven core (`opentmcl.motion.tmc429`)
 must reproduce exactly. It walks every clock cycle on which a divided clock
 fires and applies the datasheet's rules literally (TMC4210 datasheet ch. 6.1;
-choices where the datasheet is silent: docs/notes/tmc429.md):
+choices where the datasheet is silent: docs/assumptions.md):
 
 * 6.1.12: f_CLK is divided by 32, then by 2^RAMP_DIV (ramp generator clock) and
   by 2^PULSE_DIV (pulse generator clock). Both dividers run from cycle 0; on a

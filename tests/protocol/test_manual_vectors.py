@@ -3,7 +3,7 @@
 Each vector is transcribed from the manual: the mnemonic of the example and the bytes of its
 "Binary Form of ..." table (TMCM-6212) or its "Value (hex)" row (PD86-1180, eight bytes without
 checksum). Where a printed table contradicts itself, the test pins the contradiction (see
-ERRATA below and docs/notes/protocol.md) instead of hiding it.
+ERRATA below and docs/assumptions.md) instead of hiding it.
 """
 from __future__ import annotations
 

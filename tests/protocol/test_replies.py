@@ -50,7 +50,7 @@ def test_target_reached_event():
 
 def test_memory_reply_round_trip():
     """134 read program memory: the stored instruction in the module-address, status, command and
-    value positions of the reply (docs/notes/protocol.md)."""
+    value positions of the reply (docs/assumptions.md)."""
     rep = MemoryReply(2, 4, 1, 0, -10000)
     raw = rep.encode()
     assert raw[:8] == bytes([2, 4, 1, 0, 0xFF, 0xFF, 0xD8, 0xF0]) and raw[8] == checksum(raw[:8])

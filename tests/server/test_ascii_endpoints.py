@@ -104,7 +104,7 @@ def test_echo_modes_of_gp67_bits_4_and_5():
 
 def test_ascii_text_gets_no_telegram_pause():
     """GP75 "Pause time before the reply via RS485 is sent" delays binary replies; the echo of a
-    typed character is sent at once (docs/notes/endpoints.md)."""
+    typed character is sent at once (docs/assumptions.md)."""
     sleeps = []
     bus = ModuleBus([VirtualModule("PD28-1021", address=1)])
     session = SerialSession(bus, lambda b: None, gap=GAP, sleep=sleeps.append)

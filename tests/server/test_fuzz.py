@@ -323,6 +323,14 @@ def safe_ascii_stream(stream: bytes) -> bool:
                    for i in range(len(stream) - 8))
 
 
+def wait_consumed(session, total: int) -> None:
+    """Until the endpoint has handled `total` bytes (bounded: 30 s)."""
+    deadline = time.monotonic() + 30
+    while session.bytes_received < total and time.monotonic() < deadline:
+        time.sleep(0.005)
+    assert session.bytes_received == total
+
+
 def ascii_check(vm, write, read_all, read_n):
     """After any stream: a pause, then the module answers in the mode it is in."""
     time.sleep(3 * GAP)
@@ -353,13 +361,18 @@ def test_fuzz_ascii_pty():
                 time.sleep(0.05)
                 port.reset_input_buffer()
 
+            def write(data):
+                total = pty.session.bytes_received + len(data)
+                port.write(data)
+                port.flush()
+                wait_consumed(pty.session, total)  # the mode is read after the bytes are handled
+
             @ENDPOINT_SETTINGS
             @given(stream=ascii_streams)
             def check(stream):
                 assume(safe_ascii_stream(stream))
-                port.write(stream)
-                port.flush()
-                ascii_check(vm, port.write, read_all, port.read)
+                write(stream)
+                ascii_check(vm, write, read_all, port.read)
 
             check()
     finally:
@@ -377,13 +390,19 @@ def test_fuzz_ascii_tcp():
         with socket.create_connection(tcp.address, timeout=5) as s:
             s.sendall(ENTER_ASCII)
             assert recv_exactly(s, 9) == reply(2, 1, 100, 139, 0)
+            [session] = tcp.sessions
+
+            def write(data):
+                total = session.bytes_received + len(data)
+                s.sendall(data)
+                wait_consumed(session, total)  # the mode is read after the bytes are handled
 
             @ENDPOINT_SETTINGS
             @given(stream=ascii_streams)
             def check(stream):
                 assume(safe_ascii_stream(stream))
-                s.sendall(stream)
-                ascii_check(vm, s.sendall, lambda: drain_socket(s, 0.05), lambda n: recv_exactly(s, n))
+                write(stream)
+                ascii_check(vm, write, lambda: drain_socket(s, 0.05), lambda n: recv_exactly(s, n))
 
             check()
     finally:

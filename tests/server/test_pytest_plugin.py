@@ -3,6 +3,7 @@
 Inner runs load the plugin with ``-p opentmcl.pytest_plugin`` and plugin autoloading off, so the
 tests do not depend on the ``pytest11`` entry point being installed (nor clash with it when it is).
 """
+import os
 from pathlib import Path
 
 import pytest
@@ -160,3 +161,27 @@ def test_documented_example_passes(pytester, monkeypatch):
     pytester.makepyfile(test_example=EXAMPLE.read_text())
     result = pytester.runpytest("-p", "opentmcl.pytest_plugin", "-p", "no:cacheprovider")
     result.assert_outcomes(passed=4)
+
+
+ENTRY_POINT_NAME = "opentmcl.pytest_plugin"
+"""The name proposed for `[project.entry-points.pytest11]`: the module's own name, so that pytest
+finds the plugin already registered when a project also names it in `-p` or `pytest_plugins`."""
+
+
+@pytest.mark.parametrize("extra", [[], ["-p", "opentmcl.pytest_plugin"], ["conftest"]])
+def test_entry_point_loads_the_plugin_without_clashes(pytester, monkeypatch, extra):
+    """With the pytest11 entry point installed (simulated by a dist-info directory on the path),
+    the fixture is there without -p; naming the plugin again (-p, pytest_plugins) is harmless."""
+    site = pytester.mkdir("site")
+    info = site / "opentmcl_entry_point_probe-0.dist-info"
+    info.mkdir()
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: opentmcl-entry-point-probe\nVersion: 0\n")
+    (info / "entry_points.txt").write_text(f"[pytest11]\n{ENTRY_POINT_NAME} = opentmcl.pytest_plugin\n")
+    pytester.makepyfile(test_inner="def test_it(tmcl_module):\n    assert tmcl_module.name == 'TMCM-6212'\n")
+    args = [a for a in extra if a != "conftest"]
+    if "conftest" in extra:
+        pytester.makeconftest('pytest_plugins = ["opentmcl.pytest_plugin"]\n')
+    monkeypatch.setenv("PYTHONPATH", os.pathsep.join([str(site), os.environ.get("PYTHONPATH", "")]))
+    monkeypatch.delenv("PYTEST_DISABLE_PLUGIN_AUTOLOAD", raising=False)
+    result = pytester.runpytest_subprocess("-p", "no:cacheprovider", *args)
+    result.assert_outcomes(passed=1)

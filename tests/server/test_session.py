@@ -42,7 +42,7 @@ def test_reply_is_written_without_pause_by_default():
 
 def test_telegram_pause_gp75_delays_the_reply():
     """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent" (units: ms,
-    docs/notes/endpoints.md); PD86-1180 manual 7.4 suggests SGP 75, 0, 15."""
+    docs/assumptions.md); PD86-1180 manual 7.4 suggests SGP 75, 0, 15."""
     ft, writes, session = make()
     session.receive(request(1, 9, 75, 0, 15))  # SGP 75, 0, 15
     writes.clear()

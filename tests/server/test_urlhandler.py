@@ -53,7 +53,7 @@ def test_modules_run_in_real_time_and_send_events():
 
 
 def test_telegram_pause_delays_readability():
-    """Manual 5.1 GP75: the reply is sent after the pause (ms, docs/notes/endpoints.md)."""
+    """Manual 5.1 GP75: the reply is sent after the pause (ms, docs/assumptions.md)."""
     with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
         port.write(request(1, 9, 75, 0, 200))  # SGP 75, 0, 200
         port.read(9)

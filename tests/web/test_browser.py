@@ -96,7 +96,7 @@ def test_switch_output_and_force_input(page, served):
 
 
 def test_run_stops_at_breakpoint(page, served):
-    """Host-side breakpoints (docs/notes/web.md): Run single-steps (manual 3.6.36 command 130) until
+    """Host-side breakpoints (docs/assumptions.md): Run single-steps (manual 3.6.36 command 130) until
     the program counter reaches the line; the accumulator counts the passes of the loop (manual
     3.6.26 CALC ADD)."""
     page.fill("#editor", "    CALC LOAD, 0\nLoop:\n    CALC ADD, 1\n    JA Loop\n")

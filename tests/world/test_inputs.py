@@ -87,7 +87,7 @@ def test_extended_error_flags_cleared_by_a_motion_command(rig):
 
 def test_jc_error_conditions_follow_the_world(rig):
     """TMCM-6212 manual 3.6.16 JC conditions EDV (deviation) and EPO (position error, set by a
-    stall here - docs/notes/world.md); CLE clears them (3.6.29)."""
+    stall here - docs/assumptions.md); CLE clears them (3.6.29)."""
     r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[1000, 0.9]]}}}})
     w = Wire(r.vm)
     w.load("SAP 212, 0, 500\nROR 0, 5000\nWAIT TICKS, 0, 100\nJC EDV, Dev\nSTOP\n"

@@ -43,7 +43,7 @@ def _stall_rig(rig, sgt=0, limit=1000):
 def test_stop_on_stall(rig):
     """TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load
     value reaches zero", AP207 bit 0 "stallGuard error" (cleared when read), the stall
-    interrupt (5.4) and the JC EPO condition (our choice, docs/notes/world.md)."""
+    interrupt (5.4) and the JC EPO condition (our choice, docs/assumptions.md)."""
     r = _stall_rig(rig)
     r.cmd(1, 0, 0, 20000)
     r.vm.advance(2)

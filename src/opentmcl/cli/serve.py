@@ -151,7 +151,7 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
     modules = build_modules(args)
     if len(modules) > 1:
         # Several modules on one CAN bus need distinct CAN IDs (GP 71, default 1 on every
-        # module): each gets its serial address as CAN ID, in RAM only (docs/notes/endpoints.md).
+        # module): each gets its serial address as CAN ID, in RAM only (docs/assumptions.md).
         from ..server import vmapi
 
         for vm in modules:

@@ -6,7 +6,7 @@ extended set). Results wrap to 32 bits like the modules' C firmware. Division
 truncates towards zero and MOD takes the sign of the dividend (C semantics).
 Division by zero: DIV gives 0 and MOD leaves the dividend unchanged - what the
 ARM Cortex-M hardware divider (SDIV returns 0 for a zero divisor) and the
-remainder computed as a - (a / b) * b produce. See docs/notes/interpreter.md.
+remainder computed as a - (a / b) * b produce. See docs/assumptions.md.
 """
 from __future__ import annotations
 

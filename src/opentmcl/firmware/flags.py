@@ -3,7 +3,7 @@
 `vm.flags` holds the error flags in bits 0-4 in CLE order (ETO = CLE 1 is bit 0,
 ..., ESD = CLE 5 is bit 4, so `VirtualModule.clear_error_flags(n)` clears bit
 n - 1) and the arithmetic flags in bits 8-11. The manual names the flags but
-not their layout; this one is our choice (docs/notes/interpreter.md).
+not their layout; this one is our choice (docs/assumptions.md).
 """
 from __future__ import annotations
 

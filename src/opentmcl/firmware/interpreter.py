@@ -410,7 +410,7 @@ class Interpreter:
             self.next_time = None
         return True
 
-    # --- PD28-1021 extended set (manual 3.5 Table 5; semantics: docs/notes/interpreter.md) -------
+    # --- PD28-1021 extended set (manual 3.5 Table 5; semantics: docs/assumptions.md) -------
     def _var(self, index: int) -> int:
         if not 0 <= index < len(self.vm.user_vars):
             raise TmclStatus(3)

@@ -12,7 +12,7 @@ Switching point calibration: after the switch is hit the motor leaves it at AP19
 (first switching point), re-enters it (second switching point) and the reference point
 is the centre of the two. The motor then drives to the reference point, AP197 takes the
 position counter there and the counter and the encoder (AP209) are set to 0. Details
-and choices: docs/world.md, docs/notes/world.md.
+and choices: docs/world.md, docs/assumptions.md.
 """
 from __future__ import annotations
 

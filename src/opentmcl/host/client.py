@@ -171,7 +171,7 @@ class Client:
 
     def _read_memory(self, req: Request, timeout: float) -> MemoryReply:
         """Command 134: the stored instruction in place of module address, status, command and
-        value, with a normal checksum (docs/notes/protocol.md). A normal frame with command 134 and
+        value, with a normal checksum (docs/assumptions.md). A normal frame with command 134 and
         an error status is the module refusing the request."""
         deadline = self.transport.monotonic() + timeout
         while True:

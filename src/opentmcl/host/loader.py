@@ -13,7 +13,7 @@ Command 134 answers in a special format: the host address, then the stored instr
 command, type, motor/bank and value in place of module address, status, command and value,
 then a checksum (on CAN the seven bytes without host address and checksum). The manuals only
 say "special reply format"; this layout is the one our virtual modules use
-(docs/notes/interpreter.md).
+(docs/assumptions.md).
 """
 from __future__ import annotations
 

@@ -16,7 +16,7 @@ ramp phase ends on the last whole tick before its target speed, which is then
 taken in one jump of less than one tick's acceleration; deceleration starts
 on the first tick at which the remaining distance is at most the braking
 distance. Model choices are listed
-in docs/notes/motion-sixpoint.md and docs/motion.md.
+in docs/assumptions.md and docs/motion.md.
 
 Cost per move (bench/run.py bench_6212): planning uses integer arithmetic
 only (braking distances in closed form per parameter set, `Ramp.braking`),
@@ -145,7 +145,7 @@ class Ramp:
     def braking(self, u: int) -> tuple[int, int]:
         """Distance (num, den) in position units from speed u down to VSTOP
         (DMAX above V1, D1 below). A band whose deceleration is 0 is skipped
-        (no ramp there, see docs/notes/motion-sixpoint.md).
+        (no ramp there, see docs/assumptions.md).
 
         Closed form of `braking_loop` (the same pair, term for term)."""
         if u <= self.vstop:

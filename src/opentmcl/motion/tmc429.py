@@ -2,7 +2,7 @@
 
 One axis of the TMC429 (three-axis, inside the PD86-1180) / TMC4210 (one axis)
 ramp generator, following the TMC4210 datasheet ch. 6.1 (see
-docs/motion-tmc429.md for the model and its equations, docs/notes/tmc429.md for
+docs/motion-tmc429.md for the model and its equations, docs/assumptions.md for
 the choices where the datasheet is silent):
 
 * f_CLK / 32 / 2^RAMP_DIV clocks the ramp generator, f_CLK / 32 / 2^PULSE_DIV

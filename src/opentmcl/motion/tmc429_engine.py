@@ -17,7 +17,7 @@ How the firmware maps its axis parameters onto the TMC429 (manual ch. 5):
   PULSE_DIV (PMUL/PDIV recomputed); AP8 <- position reached.
 * The clock is 16 MHz, the VM tick (motion.base.CLOCK_HZ); velocities are in
   TMC429 internal units (0..2047).
-Choices the manual leaves open are listed in docs/notes/tmc429.md.
+Choices the manual leaves open are listed in docs/assumptions.md.
 """
 from __future__ import annotations
 
@@ -158,7 +158,7 @@ class Tmc429Engine(RampEngine):
     def rotate(self, velocity: int | float) -> None:
         """ROR/ROL/MST (4.6.1-4.6.3): velocity mode, V_TARGET := velocity.
         V_MAX is opened to 2047 so that AP4 (the *positioning* speed) does not
-        limit ROR/ROL (docs/notes/tmc429.md)."""
+        limit ROR/ROL (docs/assumptions.md)."""
         v = int(velocity)
         if not -V_LIMIT <= v <= V_LIMIT:
             raise Tmc429ConfigError(f"velocity {velocity} out of range -2047..2047")
@@ -238,7 +238,7 @@ class Tmc429Engine(RampEngine):
             if mode != r.mode:
                 regs["mode"] = mode
                 regs["v_max"] = V_LIMIT if mode == VELOCITY_MODE else self._params["max_positioning_speed"]
-                if mode == VELOCITY_MODE:       # keep the present speed (docs/notes/tmc429.md)
+                if mode == VELOCITY_MODE:       # keep the present speed (docs/assumptions.md)
                     regs["v_target"] = r.v_actual
         if regs:
             r.set(**regs)

@@ -4,7 +4,7 @@ Sources: TMCM-6212 manual 3.4.1 (overview), 3.6.1-3.6.36 (each command's "Mnemon
 binary representation); PD86-1180 manual 4.4.1, 4.6.1-4.6.39; PD28-1021 manual 3.5 (overview of the
 extended command set 40-57). The PD28-1021 manual is cut off before its detailed descriptions: the
 field mapping of the extended commands is inferred from the overview's operand order (see
-docs/notes/protocol.md).
+docs/assumptions.md).
 
 An operand form is the order in which the binary fields appear in TMCL-IDE source, e.g.
 ``MVP ABS, 0, 1000`` is ``("type", "motor", "value")`` and ``ROL 0, 500`` is ``("motor", "value")``.

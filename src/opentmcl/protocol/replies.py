@@ -8,7 +8,7 @@
   with status 128 and the motor bit mask in the value field.
 - Command 134 (read program memory), TMCM-6212 manual 3.6.36: "special reply format". The manuals
   do not print it; public clients read it as the stored command's seven bytes in place of module
-  address, status, command and value, followed by the usual checksum (docs/notes/protocol.md).
+  address, status, command and value, followed by the usual checksum (docs/assumptions.md).
 """
 from __future__ import annotations
 

@@ -50,7 +50,7 @@ class Channel(Protocol):
 MIN_STEP = 0.002
 """Seconds of wall time below which a request does not advance the modules' clocks: advancing
 costs the same however short the step, so a burst of requests shares one advance. The modules
-lag the wall clock by at most this much (docs/notes/endpoints.md)."""
+lag the wall clock by at most this much (docs/assumptions.md)."""
 
 
 def _takes_interface(vm) -> bool:

@@ -6,7 +6,7 @@ truncated frame would shift every following frame; the framer therefore drops
 a partial frame when the line has been silent for longer than `gap` seconds
 (an inter-byte gap). A host that waits for a reply, times out and retries
 sends its next request after such a gap, so the stream resynchronises by
-itself and the port never wedges (docs/notes/endpoints.md).
+itself and the port never wedges (docs/assumptions.md).
 
 The class is pure: the caller passes the arrival time of every chunk, so it
 is tested without clocks or sockets.

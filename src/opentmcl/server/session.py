@@ -6,7 +6,7 @@ and writes the replies back, as a module on an RS-485 line does:
 
 - it waits the telegram pause time (global parameter 75) before a reply
   ("Pause time before the reply via RS485 is sent", manual 5.1); the manual
-  gives no unit, we use milliseconds (docs/notes/endpoints.md);
+  gives no unit, we use milliseconds (docs/assumptions.md);
 - with `pace_bytes`, it sends the reply one byte at a time at the module's
   RS485 baud rate (global parameter 65), ten bit times per byte (8N1);
 - unsolicited replies (command 138) arrive through `deliver` and are written
@@ -14,7 +14,7 @@ and writes the replies back, as a module on an RS-485 line does:
 - ASCII echo and reply text (PD28-1021 manual 3.4) is written at once, with
   pacing but without the telegram pause: a terminal user expects the echo of
   a key at once, and the manual ties GP75 to replies "via RS485" only
-  (docs/notes/endpoints.md).
+  (docs/assumptions.md).
 
 The session owns no thread; the endpoint that reads the link calls `receive`.
 """
@@ -53,6 +53,8 @@ class SerialSession:
         self._sleep = sleep
         self._write_lock = threading.Lock()
         self._readers: dict[int, object] = {}  # id(vm) -> vmapi.raw_reader(vm)
+        self.bytes_received = 0
+        """Bytes handled so far (replies written): for diagnostics and tests."""
         self.closed = False
 
     @property
@@ -70,6 +72,7 @@ class SerialSession:
         outputs = self.stream.feed(data, self._clock() if now is None else now, self)
         for vm, out, kind in outputs:
             self.send_reply(vm, out, pause=kind == BINARY)
+        self.bytes_received += len(data)
         return self.stream.frames - before
 
     def deliver(self, vm, reply: bytes) -> None:

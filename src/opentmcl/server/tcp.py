@@ -171,6 +171,12 @@ class TcpServer:
             pass
 
     @property
+    def sessions(self) -> list[SerialSession]:
+        """The sessions of the connected clients."""
+        with self._lock:
+            return list(self._clients.values())
+
+    @property
     def client_count(self) -> int:
         with self._lock:
             return len(self._clients)

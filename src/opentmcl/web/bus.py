@@ -3,7 +3,7 @@
 
 Requests are offered to the bus without a channel, so the bus keeps routing the modules'
 unsolicited replies (command 138, TMCM-6212 manual 3.6.35) to the TCP/pty/CAN client that
-asked for them: the dashboard never steals another host's events (docs/notes/web.md).
+asked for them: the dashboard never steals another host's events (docs/assumptions.md).
 """
 from __future__ import annotations
 

@@ -270,7 +270,7 @@ class Dashboard:
 
     def force_input(self, bank: int, port: int, value: int | None) -> None:
         """Virtual modules only: hold an input at `value` (None releases it). No TMCL command
-        sets an input, so this reaches into the in-process module (docs/notes/web.md)."""
+        sets an input, so this reaches into the in-process module (docs/assumptions.md)."""
         if self.vm is None:
             raise DashboardError("inputs can only be forced on a virtual module")
         io = self.profile.io.get((bank, port))
