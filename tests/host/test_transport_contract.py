@@ -40,7 +40,6 @@ def test_tcp_keeps_bytes_received_before_a_timeout():
 
 
 @pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals need POSIX")
-@pytest.mark.xfail(strict=True, reason="serial transport drops a partial frame on timeout (reported)")
 def test_serial_keeps_bytes_received_before_a_timeout():
     from opentmcl.host.transports.serial import open_serial
 

@@ -22,6 +22,8 @@ from __future__ import annotations
 import time
 from abc import ABC, abstractmethod
 
+from .errors import TmclConnectionError, TmclTimeout
+
 
 class Transport(ABC):
     """Abstract byte transport. Implementations must be safe to close twice."""
@@ -64,3 +66,56 @@ class Transport(ABC):
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+class StreamTransport(Transport):
+    """A byte stream (serial line, TCP socket). Bytes that arrived before a timeout stay in a
+    receive buffer for the next `recv`; subclasses supply `_read_some`, `_write` and `_release`."""
+
+    frame_format = "serial"
+    name = "link"
+
+    def __init__(self) -> None:
+        self._rx = bytearray()
+        self._closed = False
+
+    @abstractmethod
+    def _read_some(self, timeout: float) -> bytes:
+        """Whatever arrives within `timeout` (b"" if nothing); TmclConnectionError if the link broke."""
+
+    @abstractmethod
+    def _write(self, data: bytes) -> None: ...
+
+    @abstractmethod
+    def _release(self) -> None:
+        """Close the underlying link (may raise; close() swallows it)."""
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise TmclConnectionError(f"{self.name} is closed")
+
+    def send(self, data: bytes) -> None:
+        self._check_open()
+        self._write(data)
+
+    def recv(self, n: int, timeout: float) -> bytes:
+        self._check_open()
+        deadline = time.monotonic() + max(0.0, timeout)
+        while len(self._rx) < n:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TmclTimeout(f"{self.name}: no reply within {timeout:g} s "
+                                  f"({len(self._rx)} of {n} bytes received)")
+            self._rx += self._read_some(left)
+        out = bytes(self._rx[:n])
+        del self._rx[:n]
+        return out
+
+    def close(self) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._release()
+        except Exception:  # closing a vanished port or socket must not raise
+            pass

@@ -10,77 +10,56 @@ pyserial port name works too, including pyserial URLs given as
 """
 from __future__ import annotations
 
-import time
 import urllib.parse
 
-from ..errors import TmclConnectionError, TmclTimeout
-from ..transport import Transport
+from ..errors import TmclConnectionError
+from ..transport import StreamTransport
 
 DEFAULT_BAUD = 9600
 
 
-class SerialTransport(Transport):
+class SerialTransport(StreamTransport):
     """A pyserial port; `recv` returns exactly n bytes or raises `TmclTimeout`."""
-
-    frame_format = "serial"
 
     def __init__(self, port: str, baud: int = DEFAULT_BAUD) -> None:
         import serial
 
+        super().__init__()
         self.port = port
+        self.name = f"serial port {port}"
         try:
             self._ser = serial.serial_for_url(port, baudrate=baud, timeout=0.1, write_timeout=5.0)
         except (serial.SerialException, ValueError, OSError) as exc:
             raise TmclConnectionError(f"cannot open serial port {port}: {exc}") from None
-        self._closed = False
 
-    def _check_open(self) -> None:
-        if self._closed:
-            raise TmclConnectionError(f"serial port {self.port} is closed")
-
-    def send(self, data: bytes) -> None:
+    def _write(self, data: bytes) -> None:
         import serial
 
-        self._check_open()
         try:
             self._ser.write(data)
             self._ser.flush()
         except (serial.SerialException, OSError) as exc:
-            raise TmclConnectionError(f"serial port {self.port}: write failed: {exc}") from None
+            raise TmclConnectionError(f"{self.name}: write failed: {exc}") from None
 
-    def recv(self, n: int, timeout: float) -> bytes:
+    def _read_some(self, timeout: float) -> bytes:
         import serial
 
-        self._check_open()
-        deadline = time.monotonic() + max(0.0, timeout)
-        buf = bytearray()
-        while len(buf) < n:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise TmclTimeout(f"serial port {self.port}: no reply within {timeout:g} s "
-                                  f"({len(buf)} of {n} bytes received)")
-            try:
-                self._ser.timeout = left
-                buf += self._ser.read(n - len(buf))
-            except (serial.SerialException, OSError) as exc:
-                raise TmclConnectionError(f"serial port {self.port}: read failed: {exc}") from None
-        return bytes(buf)
+        try:
+            self._ser.timeout = timeout
+            return self._ser.read(max(1, self._ser.in_waiting))
+        except (serial.SerialException, OSError) as exc:
+            raise TmclConnectionError(f"{self.name}: read failed: {exc}") from None
 
     def reset_input(self) -> None:
+        self._rx.clear()
         if not self._closed:
             try:
                 self._ser.reset_input_buffer()
             except Exception:  # pyserial raises various types on a vanished port
                 pass
 
-    def close(self) -> None:
-        if self._closed:
-            return
-        self._closed = True
-        try:
-            self._ser.close()
-        except Exception:  # closing a vanished port must not raise
-            pass
+    def _release(self) -> None:
+        self._ser.close()
 
 
 def open_serial(url: urllib.parse.SplitResult) -> SerialTransport:

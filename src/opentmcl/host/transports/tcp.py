@@ -8,22 +8,21 @@ a real module, which carry the serial line's bytes unchanged.
 from __future__ import annotations
 
 import socket
-import time
 import urllib.parse
 
-from ..errors import TmclConnectionError, TmclTimeout
-from ..transport import Transport
+from ..errors import TmclConnectionError
+from ..transport import StreamTransport
 
 DEFAULT_CONNECT_TIMEOUT = 5.0
 
 
-class TcpTransport(Transport):
+class TcpTransport(StreamTransport):
     """A connected TCP socket; `recv` returns exactly n bytes or raises `TmclTimeout`."""
 
-    frame_format = "serial"
-
     def __init__(self, host: str, port: int, connect_timeout: float = DEFAULT_CONNECT_TIMEOUT) -> None:
+        super().__init__()
         self.host, self.port = host, port
+        self.name = f"tcp://{host}:{port}"
         try:
             self._sock = socket.create_connection((host, port), timeout=connect_timeout)
         except TimeoutError:
@@ -31,42 +30,25 @@ class TcpTransport(Transport):
         except OSError as exc:
             raise TmclConnectionError(f"tcp://{host}:{port}: {exc.strerror or exc}") from None
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        self._rx = bytearray()
-        self._closed = False
 
-    def _check_open(self) -> None:
-        if self._closed:
-            raise TmclConnectionError(f"tcp://{self.host}:{self.port} is closed")
-
-    def send(self, data: bytes) -> None:
-        self._check_open()
+    def _write(self, data: bytes) -> None:
         try:
             self._sock.settimeout(DEFAULT_CONNECT_TIMEOUT)
             self._sock.sendall(data)
         except OSError as exc:
-            raise TmclConnectionError(f"tcp://{self.host}:{self.port}: send failed: {exc}") from None
+            raise TmclConnectionError(f"{self.name}: send failed: {exc}") from None
 
-    def recv(self, n: int, timeout: float) -> bytes:
-        self._check_open()
-        deadline = time.monotonic() + max(0.0, timeout)
-        while len(self._rx) < n:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise TmclTimeout(f"tcp://{self.host}:{self.port}: no reply within {timeout:g} s "
-                                  f"({len(self._rx)} of {n} bytes received)")
-            try:
-                self._sock.settimeout(left)
-                chunk = self._sock.recv(4096)
-            except TimeoutError:
-                continue
-            except OSError as exc:
-                raise TmclConnectionError(f"tcp://{self.host}:{self.port}: receive failed: {exc}") from None
-            if not chunk:
-                raise TmclConnectionError(f"tcp://{self.host}:{self.port}: connection closed by the server")
-            self._rx += chunk
-        out = bytes(self._rx[:n])
-        del self._rx[:n]
-        return out
+    def _read_some(self, timeout: float) -> bytes:
+        try:
+            self._sock.settimeout(timeout)
+            chunk = self._sock.recv(4096)
+        except TimeoutError:
+            return b""
+        except OSError as exc:
+            raise TmclConnectionError(f"{self.name}: receive failed: {exc}") from None
+        if not chunk:
+            raise TmclConnectionError(f"{self.name}: connection closed by the server")
+        return chunk
 
     def reset_input(self) -> None:
         self._rx.clear()
@@ -84,14 +66,8 @@ class TcpTransport(Transport):
             except OSError:
                 pass
 
-    def close(self) -> None:
-        if self._closed:
-            return
-        self._closed = True
-        try:
-            self._sock.close()
-        except OSError:
-            pass
+    def _release(self) -> None:
+        self._sock.close()
 
 
 def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
