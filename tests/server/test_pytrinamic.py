@@ -13,12 +13,14 @@ from opentmcl.server import PtyServer, Server, TcpServer
 pytrinamic = pytest.importorskip("pytrinamic")
 from pytrinamic.connections import ConnectionManager  # noqa: E402
 from pytrinamic.connections.serial_tmcl_interface import SerialTmclInterface  # noqa: E402
-from pytrinamic.modules import TMCM6212  # noqa: E402
+from pytrinamic.modules import TMCM1021, TMCM6212  # noqa: E402
+
+MODULE_CLASSES = {"TMCM-6212": TMCM6212, "PD28-1021": TMCM1021}
 
 
-@pytest.fixture
-def server():
-    srv = Server([VirtualModule("TMCM-6212", address=1)])
+@pytest.fixture(params=["TMCM-6212", "TMCM-1021"])
+def server(request):
+    srv = Server([VirtualModule(request.param, address=1)])
     tcp = srv.add(TcpServer(srv.bus, "127.0.0.1", 0))
     pty = srv.add(PtyServer(srv.bus)) if sys.platform != "win32" else None
     srv.start()
@@ -29,13 +31,21 @@ def server():
 
 
 def exercise(interface, vm):
-    """Manual 3.6.36 command 136 (version string), 3.6.8 GGP 66, 3.6.4 MVP and axis
-    parameter 8 "position reached" through PyTrinamic's own API."""
+    """Manual 3.6.36 command 136 (version string), 3.6.8 GGP 66, 3.6.1 ROR / 3.6.3 MST, 3.6.4 MVP and axis
+    parameter 8 "position reached" through PyTrinamic's own module classes (TMCM6212, TMCM1021)."""
     assert interface.get_version_string() == vm.profile.firmware_version
     assert interface.get_global_parameter(66, 0) == 1
-    module = TMCM6212(interface)
+    module = MODULE_CLASSES[vm.profile.name](interface)
     motor = module.motors[0]
     motor.set_axis_parameter(motor.AP.MaxVelocity, 20000)
+    assert motor.get_axis_parameter(motor.AP.MaxVelocity) == 20000
+    motor.set_axis_parameter(motor.AP.MaxAcceleration, 200000)
+    module.rotate(0, 5000)
+    deadline = time.monotonic() + 10
+    while motor.get_axis_parameter(motor.AP.ActualVelocity, signed=True) != 5000 and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert motor.get_axis_parameter(motor.AP.ActualVelocity, signed=True) == 5000
+    module.stop(0)
     module.move_to(0, 2000)
     deadline = time.monotonic() + 10
     while not motor.get_position_reached() and time.monotonic() < deadline:
@@ -62,7 +72,7 @@ def test_pytrinamic_socket_over_tcp(server):
 
 def test_pytrinamic_with_serial_for_url_port():
     """PyTrinamic's SerialTmclInterface accepts an open pyserial port object."""
-    port = serial.serial_for_url("opentmcl://TMCM-6212", timeout=5)
+    port = serial.serial_for_url("opentmcl://TMCM-1021", timeout=5)
     interface = SerialTmclInterface(port)
     try:
         exercise(interface, port.modules[0])
