@@ -150,19 +150,26 @@ class Client:
                 raise TmclProtocolError(f"reply with wrong checksum: {first_bad.hex(' ')}") from None
         return Reply.decode(buf)
 
-    def _read_reply(self, req: Request, timeout: float) -> Reply:
-        deadline = self.transport.monotonic() + timeout
+    def _next_frame(self, req: Request, deadline: float, timeout: float) -> Reply:
+        """The next frame that is not a command-138 event, or TmclTimeout naming the request."""
         while True:
             try:
                 reply = self._read_frame(deadline)
             except TmclTimeout:
                 raise TmclTimeout(f"no reply from module {req.address} to "
                                   f"{describe_request(req)} within {timeout:g} s") from None
-            if self._take_event(reply):
-                continue
-            # On CAN the reply ID already names the module; its address byte is not compared.
-            same_module = self.transport.frame_format == "can" or reply.module_address == req.address
-            if not same_module or reply.command != req.command:
+            if not self._take_event(reply):
+                return reply
+
+    def _same_module(self, reply: Reply, req: Request) -> bool:
+        # On CAN the reply ID already names the module; its address byte is not compared.
+        return self.transport.frame_format == "can" or reply.module_address == req.address
+
+    def _read_reply(self, req: Request, timeout: float) -> Reply:
+        deadline = self.transport.monotonic() + timeout
+        while True:
+            reply = self._next_frame(req, deadline, timeout)
+            if not self._same_module(reply, req) or reply.command != req.command:
                 self.stray_replies += 1
                 continue
             if not is_success(reply.status):
@@ -173,20 +180,10 @@ class Client:
         """Command 134: the stored instruction in place of module address, status, command and
         value, with a normal checksum (docs/assumptions.md). A normal frame with command 134 and
         an error status is the module refusing the request."""
-        deadline = self.transport.monotonic() + timeout
-        while True:
-            try:
-                reply = self._read_frame(deadline)
-            except TmclTimeout:
-                raise TmclTimeout(f"no reply from module {req.address} to "
-                                  f"{describe_request(req)} within {timeout:g} s") from None
-            if self._take_event(reply):
-                continue
-            same_module = self.transport.frame_format == "can" or reply.module_address == req.address
-            if reply.command == READ_PROGRAM_MEMORY and same_module and not is_success(reply.status):
-                raise TmclStatusError(reply.status, req, reply)
-            return MemoryReply(reply.reply_address, reply.module_address, reply.status, reply.command,
-                               reply.value)
+        reply = self._next_frame(req, self.transport.monotonic() + timeout, timeout)
+        if reply.command == READ_PROGRAM_MEMORY and self._same_module(reply, req) and not is_success(reply.status):
+            raise TmclStatusError(reply.status, req, reply)
+        return MemoryReply(reply.reply_address, reply.module_address, reply.status, reply.command, reply.value)
 
     def _read_version(self, req: Request, timeout: float) -> VersionReply:
         deadline = self.transport.monotonic() + timeout
