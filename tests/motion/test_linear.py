@@ -12,18 +12,11 @@ from opentmcl.motion import CLOCK_HZ, Mode
 from opentmcl.motion.linear import LinearRampEngine
 from opentmcl.motion.sixpoint import wrap32
 
+from .test_sixpoint import events
+
 F = CLOCK_HZ
 
 
-def events(e, limit=1000):
-    out = []
-    for _ in range(limit):
-        n = e.next_event()
-        if n is None:
-            return out
-        e.advance(n)
-        out.append((n, e.position, e.velocity_exact))
-    raise AssertionError("no rest")
 
 
 def test_trapezoid_takes_the_analytic_time():
