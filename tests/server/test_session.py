@@ -74,3 +74,28 @@ def test_frames_for_other_addresses_produce_no_bytes():
     _, writes, session = make()
     session.receive(request(4, 10, 66, 0))
     assert writes == []
+
+
+def test_time_spent_answering_is_not_silence_on_the_line():
+    """Manual 3.1: a request is nine bytes with no start marker, so frames are found by
+    counting and a partial frame is dropped only after an inter-byte gap (docs/assumptions.md).
+    Time the session itself spends answering (here: a slow write of the GGP 66 reply, manual
+    3.6.8 example) is not silence: the second frame, split across two reads, still completes."""
+    ft = FakeTime()
+    writes = []
+
+    def slow_write(data):
+        writes.append(bytes(data))
+        ft.t += 1.0  # ten times the gap, e.g. a blocked socket or a loaded machine
+
+    bus = ModuleBus([VirtualModule("TMCM-6212", address=1)], clock=ft.clock)
+    session = SerialSession(bus, slow_write, gap=0.1, clock=ft.clock, sleep=ft.sleep)
+    assert session.receive(GGP_66 + GGP_66[:4]) == 1
+    assert session.receive(GGP_66[4:]) == 1          # arrived while the reply was written
+    assert writes == [reply(2, 1, 100, 10, 1)] * 2
+    ft.t += 0.5                                      # real silence still resynchronises
+    assert session.receive(GGP_66[:4]) == 0
+    ft.t += 0.5
+    assert session.receive(GGP_66) == 1              # the partial frame was dropped first
+    assert session.framer.dropped == 4
+    assert writes[-1] == reply(2, 1, 100, 10, 1)

@@ -203,7 +203,9 @@ def test_a_client_that_never_reads_is_dropped_and_others_are_served(tcp_server):
             except (TimeoutError, OSError):
                 pass
             dropped = tcp.client_count == 0
-        assert dropped
+        sessions = tcp.sessions
+        assert dropped, (f"still connected; framer dropped {sessions[0].framer.dropped} bytes"
+                         if sessions else "still connected")
     finally:
         lazy.close()
     with connect(tcp) as other:

@@ -17,6 +17,10 @@ and writes the replies back, as a module on an RS-485 line does:
   (docs/assumptions.md).
 
 The session owns no thread; the endpoint that reads the link calls `receive`.
+The inter-byte gap is measured on a "line clock" that stands still while the
+session itself is busy (handling frames, writing replies, waiting for the bus
+lock): bytes that queued up in the kernel meanwhile were not silence, so a
+loaded machine never splits a host's frames (docs/assumptions.md).
 """
 from __future__ import annotations
 
@@ -56,6 +60,7 @@ class SerialSession:
         self.bytes_received = 0
         """Bytes handled so far (replies written): for diagnostics and tests."""
         self.closed = False
+        self._busy = 0.0  # seconds spent inside `receive`, left out of the line clock
 
     @property
     def framer(self):
@@ -69,10 +74,13 @@ class SerialSession:
         status code) is logged and the frame gets no reply; the link lives on.
         """
         before = self.stream.frames
-        outputs = self.stream.feed(data, self._clock() if now is None else now, self)
+        start = self._clock()
+        outputs = self.stream.feed(data, start - self._busy if now is None else now, self)
         for vm, out, kind in outputs:
             self.send_reply(vm, out, pause=kind == BINARY)
         self.bytes_received += len(data)
+        if now is None:
+            self._busy += self._clock() - start
         return self.stream.frames - before
 
     def deliver(self, vm, reply: bytes) -> None:
