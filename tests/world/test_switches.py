@@ -227,15 +227,16 @@ def test_scenario_files_and_their_errors(rig, tmp_path):
         rig("TMCM-6212", 42)
     with pytest.raises(ScenarioError, match="axis.1"):
         rig("TMCM-1180", {"axis": {"1": {}}})
-    y = tmp_path / "s.yaml"
+    y = tmp_path / "s.yaml"                          # the same stage as YAML (issue 5: TOML or YAML)
     y.write_text("axis:\n  0:\n    right: {position: 100}\n")
-    try:
-        import yaml  # noqa: F401
-    except ImportError:
-        with pytest.raises(ScenarioError, match="PyYAML"):
-            rig("TMCM-6212", str(y))
-    else:
-        assert rig("TMCM-6212", str(y)).gap(10) == 0
+    r = rig("TMCM-6212", str(y))
+    r.cmd(1, 0, 0, 1000)
+    r.vm.advance(1)
+    assert r.gap(1) == 100
+    bad_yaml = tmp_path / "bad.yaml"
+    bad_yaml.write_text("axis: [unclosed\n")
+    with pytest.raises(ScenarioError, match="bad.yaml"):
+        rig("TMCM-6212", str(bad_yaml))
 
 
 def test_wait_refsw_and_limsw_wake_at_the_switch_edge(rig):
