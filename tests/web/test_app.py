@@ -2,15 +2,11 @@
 from __future__ import annotations
 
 import pytest
+from starlette.testclient import TestClient  # its HTTP client comes from httpx2 (test extra)
 
-pytest.importorskip("starlette", reason="the dashboard needs the web extra")
-pytest.importorskip("httpx", reason="starlette's test client needs httpx")
-
-from starlette.testclient import TestClient  # noqa: E402
-
-import opentmcl  # noqa: E402
-from opentmcl.web.app import create_app  # noqa: E402
-from opentmcl.web.service import Dashboard  # noqa: E402
+import opentmcl
+from opentmcl.web.app import create_app
+from opentmcl.web.service import Dashboard
 
 
 @pytest.fixture
