@@ -34,6 +34,24 @@ def served():
         handle.stop()
 
 
+@pytest.fixture
+def served_bus():
+    """A running dashboard for a bus with a TMCM-6212 at address 1 and a PD86-1180 at address 2
+    (real clock), as `opentmcl serve --web` starts it; yields the handle."""
+    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    from opentmcl import VirtualModule
+    from opentmcl.server.bus import ModuleBus
+    from opentmcl.web import start_dashboard_for_bus
+
+    bus = ModuleBus([VirtualModule("TMCM-6212", address=1), VirtualModule("PD86-1180", address=2)])
+    handle = start_dashboard_for_bus(bus, "127.0.0.1", 0)
+    try:
+        yield handle
+    finally:
+        handle.stop()
+
+
 @pytest.fixture(scope="session")
 def browser():
     """Headless Chromium (Debian package) through Playwright, with a fresh profile directory;

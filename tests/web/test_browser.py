@@ -9,6 +9,14 @@ from .conftest import ARTIFACTS
 TIMEOUT_MS = 60000  # only a guard against hanging: the tests wait for a state, they do not time anything
 
 
+def test_single_module_has_no_selector(page, served):
+    """One module: the page is at /m/ADDRESS/ (global parameter 66, default 1, TMCM-6212 manual 5.1)
+    and the module selector stays hidden."""
+    assert page.url == served.module_url(1)
+    page.wait_for_function("document.getElementById('module-select').options.length === 1", timeout=TIMEOUT_MS)
+    assert not page.is_visible("#module-select")
+
+
 def test_page_shows_module_overview(page, served):
     """TMCM-6212 manual 3.6.36 command 136: the overview shows the version string "6212V105" and the
     module's six axes (manual 1 "Features": six axes)."""
@@ -105,7 +113,7 @@ def test_run_stops_at_breakpoint(page, served):
                            timeout=TIMEOUT_MS)
     page.click("#gutter-3")
     page.wait_for_selector("#gutter-3.bp")
-    page.wait_for_function("window.fetch('/api/program').then(r => r.json())"
+    page.wait_for_function("window.fetch('api/program').then(r => r.json())"
                            ".then(j => j.state.breakpoints.length === 1)", timeout=TIMEOUT_MS)
     page.click("#btn-run")  # from address 0: CALC LOAD runs, then the PC is at the breakpoint
     page.wait_for_function("document.getElementById('prog-line').textContent === '3' && "
@@ -116,3 +124,41 @@ def test_run_stops_at_breakpoint(page, served):
                            "document.getElementById('prog-a').textContent === '1'", timeout=TIMEOUT_MS)
     st = served.dashboard.program_state()
     assert st["pc"] == 1 and st["a"] == 1 and st["mode"] != 1
+
+
+def test_bus_with_two_modules_has_a_selector(browser, served_bus):
+    """Two modules on one bus, at serial addresses 1 and 2 (global parameter 66, TMCM-6212 manual 5.1).
+    Choosing the PD86-1180 opens its page: command 136 gives its version (PD86-1180 manual 4.6.39,
+    "1180V445" for firmware V4.45) and it has one motor (manual 4.6.4 MVP: "only one motor is
+    involved"). "MVP ABS, 0, 1000" there moves that motor to 1000; the TMCM-6212's motor 0 stays."""
+    ARTIFACTS.mkdir(exist_ok=True)
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    try:
+        page.goto(served_bus.url)
+        page.wait_for_selector("#axis-0")
+        page.wait_for_selector("#module-select", state="visible", timeout=TIMEOUT_MS)
+        assert page.inner_text("#ov-module") == "TMCM-6212"
+        labels = page.locator("#module-select option").all_inner_texts()
+        assert labels == ["TMCM-6212 (address 1)", "PD86-1180 (address 2)"]
+        page.select_option("#module-select", label="PD86-1180 (address 2)")
+        page.wait_for_url(served_bus.module_url(2), timeout=TIMEOUT_MS)
+        page.wait_for_function("document.getElementById('ov-version').textContent === '1180V445'",
+                               timeout=TIMEOUT_MS)
+        assert page.inner_text("#ov-module") == "PD86-1180" and page.inner_text("#ov-address") == "2"
+        assert page.locator(".axis-card").count() == 1
+        assert page.eval_on_selector("#module-select", "s => s.value") == "/m/2/"
+        page.fill("#console-input", "MVP ABS, 0, 1000")
+        page.press("#console-input", "Enter")
+        page.wait_for_function("document.getElementById('console-log').textContent.includes('status 100')",
+                               timeout=TIMEOUT_MS)
+        page.wait_for_function("document.getElementById('axis-0-position').textContent === '1000'",
+                               timeout=TIMEOUT_MS)
+        first, second = served_bus.dashboards
+        assert second.module.axes[0].position == 1000
+        assert first.module.axes[0].position == 0 and first.module.axes[0].target_position == 0
+        page.screenshot(path=str(ARTIFACTS / "dashboard-two-modules.png"), full_page=True)
+    finally:
+        page.close()
+    assert not errors, f"JavaScript errors on the page: {errors}"

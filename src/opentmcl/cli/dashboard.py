@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         from ..web.server import DashboardStartError, start_dashboard
     except ImportError as exc:
-        raise CliError(f"the dashboard needs the web extra (pip install 'opentmcl[web]'): {exc}") from None
+        raise CliError(f"the dashboard needs starlette, uvicorn and websockets (dependencies of opentmcl; reinstall it): {exc}") from None
     url = sim_url_real_time(args.url)
     try:
         module = connect(url, address=args.address, timeout=args.timeout)

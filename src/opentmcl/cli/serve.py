@@ -45,7 +45,8 @@ def register(subparsers) -> None:
     p.add_argument("--pace", action="store_true",
                    help="send reply bytes at the module's RS485 baud rate (global parameter 65)")
     p.add_argument("--web", metavar="HOST:PORT",
-                   help="also serve the browser dashboard of the first module, e.g. 127.0.0.1:8080")
+                   help="also serve the browser dashboard of every module, e.g. 127.0.0.1:8080 "
+                        "(each module at /m/ADDRESS/, a selector on the page)")
     p.set_defaults(func=run)
 
 
@@ -233,7 +234,13 @@ def run(args) -> int:
         for line in describe(server):
             print(f"  {line}", flush=True)
         if web is not None:
-            print(f"  dashboard {web.url}", flush=True)
+            if len(web.dashboards) == 1:
+                print(f"  dashboard {web.url}", flush=True)
+            else:
+                print(f"  dashboard {web.url} ({len(web.dashboards)} modules, choose on the page):", flush=True)
+                for d in web.dashboards:
+                    print(f"    {d.profile.name} at address {d.module.address}: {web.module_url(d.module.address)}",
+                          flush=True)
         print("Press Ctrl-C to stop.", flush=True)
         while not stop.wait(0.5):
             pass
@@ -248,12 +255,12 @@ def run(args) -> int:
 
 
 def _start_web(server, spec: str):
-    """The dashboard (opentmcl.web) for the first served module on HOST:PORT."""
+    """The dashboard (opentmcl.web) for every served module on HOST:PORT."""
     host, port = parse_hostport(spec)
     try:
         from ..web.server import DashboardStartError, start_dashboard_for_bus
     except ImportError as exc:
-        raise CliError(f"--web needs the web extra (pip install 'opentmcl[web]'): {exc}") from None
+        raise CliError(f"--web needs starlette, uvicorn and websockets (dependencies of opentmcl; reinstall it): {exc}") from None
     try:
         return start_dashboard_for_bus(server.bus, host or "127.0.0.1", port)
     except DashboardStartError as exc:

@@ -7,16 +7,17 @@ Needs the ``web`` extra (starlette, uvicorn, websockets).
 """
 from __future__ import annotations
 
-__all__ = ["Dashboard", "DashboardError", "DashboardHandle", "DashboardStartError", "start_dashboard",
-           "start_dashboard_for_bus"]
+__all__ = ["Dashboard", "DashboardError", "DashboardHandle", "DashboardStartError", "serve_dashboards",
+           "start_dashboard", "start_dashboard_for_bus"]
 
 
 def __getattr__(name: str):
-    # Lazy: importing opentmcl.web must not require the web extra until it is used.
+    # Lazy: importing opentmcl.web must not import the web stack until it is used.
     if name in ("Dashboard", "DashboardError"):
         from . import service
         return getattr(service, name)
-    if name in ("DashboardHandle", "DashboardStartError", "start_dashboard", "start_dashboard_for_bus"):
+    if name in ("DashboardHandle", "DashboardStartError", "serve_dashboards", "start_dashboard",
+                "start_dashboard_for_bus"):
         from . import server
         return getattr(server, name)
     raise AttributeError(name)

@@ -1,6 +1,13 @@
-"""The dashboard web app (Starlette): a single page, a JSON API and one WebSocket.
+"""The dashboard web app (Starlette): a single page, a JSON API and one WebSocket per module.
 
-    GET  /                         the page (static files, no build step, no CDN)
+    GET  /                         redirects to the first module's page
+    GET  /api/modules              [{address, module, url}] of every module served
+    GET  /static/...               the page's script and style (no build step, no CDN)
+
+Each module lives under /m/{address}; these paths follow that prefix (the page uses relative paths,
+so one page serves every module). An unknown address is a 404 with {"error": ...}.
+
+    GET  /                         the module's page
     GET  /api/overview             module type, firmware version, address, connection, I/O map
     GET  /api/state                axis cards, I/O and program status (5 per second)
     GET  /api/params/axis/{n}      axis parameter table with values; POST /api/params/axis sets one
@@ -17,12 +24,13 @@ import asyncio
 import contextlib
 import json
 import logging
+from collections.abc import Sequence
 from importlib import resources
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
-from starlette.responses import FileResponse, JSONResponse, Response
+from starlette.responses import FileResponse, JSONResponse, RedirectResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
@@ -75,9 +83,45 @@ def _str(data: dict, key: str) -> str:
     return value
 
 
-def create_app(dashboard: Dashboard) -> Starlette:
-    """The Starlette app for one `Dashboard`."""
-    d = dashboard
+def create_app(dashboards: Dashboard | Sequence[Dashboard]) -> Starlette:
+    """The Starlette app for one `Dashboard` or several (one per module, distinct addresses)."""
+    if isinstance(dashboards, Dashboard):
+        dashboards = [dashboards]
+    by_address: dict[int, Dashboard] = {}
+    for d in dashboards:
+        if d.module.address in by_address:
+            raise ValueError(f"two dashboards for module address {d.module.address}")
+        by_address[d.module.address] = d
+    if not by_address:
+        raise ValueError("the dashboard needs at least one module")
+
+    def listing(request: Request) -> list[dict]:
+        root = request.scope.get("root_path", "")
+        return [{"address": a, "module": d.profile.name, "url": f"{root}/m/{a}/"} for a, d in by_address.items()]
+
+    async def modules(request: Request) -> Response:
+        return JSONResponse(listing(request))
+
+    async def home(request: Request) -> Response:
+        return RedirectResponse(listing(request)[0]["url"])
+
+    async def unknown(request: Request) -> Response:
+        known = ", ".join(map(str, by_address))
+        return JSONResponse({"error": f"no module at address {request.path_params['address']} "
+                                      f"(addresses: {known})"}, status_code=404)
+
+    routes = [
+        Route("/", home),
+        Route("/api/modules", modules),
+        *(Mount(f"/m/{a}", routes=_module_routes(d)) for a, d in by_address.items()),
+        Route("/m/{address}/{rest:path}", unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
+        Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
+    ]
+    return Starlette(routes=routes)
+
+
+def _module_routes(d: Dashboard) -> list:
+    """The page, API and WebSocket of one module, relative to its /m/{address} prefix."""
 
     def api(handler):
         async def endpoint(request: Request) -> Response:
@@ -204,7 +248,7 @@ def create_app(dashboard: Dashboard) -> Starlette:
                 with contextlib.suppress(RuntimeError, ConnectionError):
                     await websocket.close(1001)
 
-    routes = [
+    return [
         Route("/", index),
         Route("/api/overview", api(overview)),
         Route("/api/state", api(state)),
@@ -225,6 +269,4 @@ def create_app(dashboard: Dashboard) -> Starlette:
         Route("/api/program/step", api(action(d.step)), methods=["POST"]),
         Route("/api/program/reset", api(action(d.reset)), methods=["POST"]),
         WebSocketRoute("/ws", ws),
-        Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
     ]
-    return Starlette(routes=routes)

@@ -2,8 +2,10 @@
 `opentmcl dashboard --to URL`.
 
     handle = start_dashboard(module, "127.0.0.1", 8080)          # a host Module
-    handle = start_dashboard_for_bus(server.bus, "127.0.0.1", 8080)  # modules of `opentmcl serve`
+    handle = start_dashboard_for_bus(server.bus, "127.0.0.1", 8080)  # every module of `opentmcl serve`
     print(handle.url); ...; handle.stop()
+
+Each module's page is at /m/ADDRESS/; the root redirects to the first one.
 """
 from __future__ import annotations
 
@@ -14,15 +16,21 @@ from .service import Dashboard, Poller
 
 
 class DashboardHandle:
-    """A running dashboard: `url`, `dashboard` (the service), `stop()`."""
+    """A running dashboard: `url` (the page to open), `dashboards` (one service per module, the
+    first also as `dashboard`), `module_url(address)`, `stop()`."""
 
-    def __init__(self, dashboard: Dashboard, server, thread: threading.Thread, poller: Poller, on_stop=None):
-        self.dashboard = dashboard
+    def __init__(self, dashboards: list[Dashboard], server, thread: threading.Thread, pollers: list[Poller],
+                 on_stop=None):
+        self.dashboards = list(dashboards)
         self._server = server
         self._thread = thread
-        self._poller = poller
+        self._pollers = list(pollers)
         self._on_stop = on_stop
         self.host, self.port = self._bound()
+
+    @property
+    def dashboard(self) -> Dashboard:
+        return self.dashboards[0]
 
     def _bound(self) -> tuple[str, int]:
         for srv in getattr(self._server, "servers", []):
@@ -33,13 +41,20 @@ class DashboardHandle:
 
     @property
     def url(self) -> str:
+        """The root: it redirects to the first module's page, which offers the others."""
         host = f"[{self.host}]" if ":" in self.host else self.host
         return f"http://{host}:{self.port}/"
 
+    def module_url(self, address: int) -> str:
+        """The page of the module at `address`."""
+        return f"{self.url}m/{address}/"
+
     def stop(self) -> None:
-        self.dashboard.closed.set()
-        self.dashboard.cancel_run()
-        self._poller.stop()
+        for d in self.dashboards:
+            d.closed.set()
+            d.cancel_run()
+        for poller in self._pollers:
+            poller.stop()
         self._server.should_exit = True
         self._thread.join(timeout=5.0)
         if self._on_stop is not None:
@@ -79,18 +94,25 @@ def warn_if_exposed(host: str, err=None) -> None:
 
 def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=None, vm_lock=None,
                     url: str = "", on_stop=None, poll: bool = True) -> DashboardHandle:
-    """Serve the dashboard for a host `Module` on http://host:port/ from a daemon thread.
+    """Serve the dashboard for a host `Module` at http://host:port/m/ADDRESS/ (the root redirects
+    there) from a daemon thread.
 
     `vm`/`vm_lock`: the in-process VirtualModule behind `module` and the lock that guards it, for
     the virtual-only features (forcing inputs). `port` 0 picks a free port (see `handle.port`).
     """
+    dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
+    return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll)
+
+
+def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port: int = 8080, *,
+                     on_stop=None, poll: bool = True) -> DashboardHandle:
+    """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each."""
     import uvicorn
 
     from .app import create_app
 
+    app = create_app(dashboards)
     warn_if_exposed(host)
-    dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
-    app = create_app(dashboard)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
                             ws=_ws_implementation(), access_log=False)
     server = uvicorn.Server(config)
@@ -114,28 +136,54 @@ def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=Non
         raise DashboardStartError(f"cannot serve the dashboard on {host}:{port}"
                                   + (f": {failure[0]}" if failure and str(failure[0]) else
                                      " (address in use or not available)"))
-    poller = Poller(dashboard)
+    pollers = [Poller(d) for d in dashboards]
     if poll:
-        poller.start()
-    return DashboardHandle(dashboard, server, thread, poller, on_stop)
+        for poller in pollers:
+            poller.start()
+    return DashboardHandle(dashboards, server, thread, pollers, on_stop)
 
 
-def start_dashboard_for_bus(bus, host: str = "127.0.0.1", port: int = 8080, *, address: int | None = None,
-                            timeout: float = 2.0) -> DashboardHandle:
-    """Dashboard for the first module (or the one at `address`) of a running server's `ModuleBus`.
-    Requests go through the bus like any client's; the bus lock guards the in-process module."""
+def bus_dashboards(bus, *, address: int | None = None, timeout: float = 2.0) -> tuple[list[Dashboard], object]:
+    """One `Dashboard` per module of a `ModuleBus` (or only the one at `address`), each talking to
+    its module through the bus (BusTransport). Returns the dashboards and a function that closes
+    their clients."""
     from ..host import Client
     from ..server import vmapi
     from .bus import BusTransport
 
     with bus.lock:
         vms = {vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS): vm for vm in bus.modules}
-    if address is None:
-        address = next(iter(vms))
-    if address not in vms:
-        raise ValueError(f"no served module at address {address} (addresses: {sorted(vms)})")
-    vm = vms[address]
-    client = Client(BusTransport(bus), address=address, timeout=timeout)
-    module = client.module(address, getattr(getattr(vm, "profile", None), "name", None))
-    return start_dashboard(module, host, port, vm=vm, vm_lock=bus.lock, url=f"serve (address {address})",
-                           on_stop=client.close)
+    if address is not None:
+        if address not in vms:
+            raise ValueError(f"no served module at address {address} (addresses: {sorted(vms)})")
+        vms = {address: vms[address]}
+    clients = []
+
+    def close() -> None:
+        for client in clients:
+            client.close()
+
+    dashboards = []
+    try:
+        for addr, vm in vms.items():
+            client = Client(BusTransport(bus), address=addr, timeout=timeout)
+            clients.append(client)
+            module = client.module(addr, getattr(getattr(vm, "profile", None), "name", None))
+            dashboards.append(Dashboard(module, vm=vm, vm_lock=bus.lock, url=f"serve (address {addr})"))
+    except BaseException:
+        close()
+        raise
+    return dashboards, close
+
+
+def start_dashboard_for_bus(bus, host: str = "127.0.0.1", port: int = 8080, *, address: int | None = None,
+                            timeout: float = 2.0) -> DashboardHandle:
+    """Dashboard for every module of a running server's `ModuleBus` (or only the one at `address`),
+    each at /m/ADDRESS/. Requests go through the bus like any client's; the bus lock guards the
+    in-process modules."""
+    dashboards, close = bus_dashboards(bus, address=address, timeout=timeout)
+    try:
+        return serve_dashboards(dashboards, host, port, on_stop=close)
+    except BaseException:
+        close()
+        raise

@@ -1,4 +1,5 @@
 // OpenTMCL dashboard: plain JavaScript, no build step, no CDN.
+// The page of one module at /m/ADDRESS/: every request path is relative to it.
 "use strict";
 const $ = id => document.getElementById(id);
 const el = (tag, attrs = {}, ...kids) => {
@@ -100,7 +101,9 @@ function onState(st) {
 }
 
 function connect() {
-  const ws = new WebSocket(`${location.protocol === "https:" ? "wss" : "ws"}://${location.host}/ws`);
+  const url = new URL("ws", location.href);
+  url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
+  const ws = new WebSocket(url);
   ws.onopen = () => { D.wsOpen = true; setConnection(); };
   ws.onclose = () => { D.wsOpen = false; setConnection(); setTimeout(connect, 1000); };
   ws.onmessage = ev => {
@@ -116,6 +119,18 @@ function animate() {
   requestAnimationFrame(animate);
 }
 
+// ---------------------------------------------------------------- module selector
+async function setupModules() {
+  const modules = await api("../../api/modules");  // every module the server serves
+  const here = new URL(location.href).pathname;
+  const sel = $("module-select");
+  sel.replaceChildren(...modules.map(m => el("option", {value: m.url}, `${m.module} (address ${m.address})`)));
+  const current = modules.find(m => m.url === here);
+  if (current) sel.value = current.url;
+  sel.addEventListener("change", () => location.assign(sel.value));
+  $("module-choice").hidden = modules.length < 2;
+}
+
 // ---------------------------------------------------------------- direct-mode console
 function log(text, cls) {
   const box = $("console-log");
@@ -126,7 +141,7 @@ function log(text, cls) {
 async function sendConsole(line) {
   log(`> ${line}`, "req");
   try {
-    const r = await api("/api/console", {line});
+    const r = await api("api/console", {line});
     log(`  [${r.request.join(", ")}] ${r.text}`, r.ok ? "ok" : "err");
   } catch (e) { log(`  ${e.message}`, "err"); }
 }
@@ -162,7 +177,7 @@ function buildIo(ov) {
     if (p.kind === "output") {
       control = el("input", {type: "checkbox", id: `io-out-${key}`, title: `SIO ${p.port}, ${p.bank}, 0/1`,
         onchange: async e => {
-          try { await api("/api/io/output", {bank: p.bank, port: p.port, value: e.target.checked ? 1 : 0}); }
+          try { await api("api/io/output", {bank: p.bank, port: p.port, value: e.target.checked ? 1 : 0}); }
           catch (err) { log(err.message, "err"); }
         }});
     } else if (ov.virtual) {
@@ -182,7 +197,7 @@ function buildIo(ov) {
 }
 
 async function force(p, value) {
-  try { await api("/api/io/force", {bank: p.bank, port: p.port, value}); }
+  try { await api("api/io/force", {bank: p.bank, port: p.port, value}); }
   catch (err) { log(err.message, "err"); }
 }
 
@@ -214,7 +229,7 @@ function paramRows(table, params, kind, index) {
         const body = kind === "axis" ? {axis: index, number: p.number, value: input.value}
                                      : {bank: p.bank, number: p.number, value: input.value};
         try {
-          const r = await api(`/api/params/${kind}`, body);
+          const r = await api(`api/params/${kind}`, body);
           input.value = r.value; input.classList.add("saved");
         } catch (e) { input.classList.add("failed"); input.title = e.message; log(e.message, "err"); }
       });
@@ -236,7 +251,7 @@ function paramRows(table, params, kind, index) {
 
 async function storeParam(kind, p, index, restore) {
   try {
-    await api("/api/params/store", {kind, number: p.number, index: kind === "axis" ? index : p.bank, restore});
+    await api("api/params/store", {kind, number: p.number, index: kind === "axis" ? index : p.bank, restore});
     log(`${restore ? "restored" : "stored"} ${kind} parameter ${p.number}`, "ok");
     if (restore) loadParams();
   } catch (e) { log(e.message, "err"); }
@@ -245,7 +260,7 @@ async function storeParam(kind, p, index, restore) {
 async function loadParams() {
   const axis = Number($("param-axis").value || 0);
   try {
-    const [a, g] = await Promise.all([api(`/api/params/axis/${axis}`), api("/api/params/global")]);
+    const [a, g] = await Promise.all([api(`api/params/axis/${axis}`), api("api/params/global")]);
     D.axisParams = a.params; D.globalParams = g.params;
     renderParams();
   } catch (e) { log(e.message, "err"); }
@@ -272,6 +287,8 @@ Loop:
     AGP 0, 2
     JA Loop
 `;
+
+const SOURCE_KEY = `opentmcl-source ${location.pathname}`;  // each module keeps its own program
 
 function editorLines() { return $("editor").value.split("\n").length; }
 
@@ -302,7 +319,7 @@ async function toggleBreakpoint(line) {
 }
 
 async function pushBreakpoints() {
-  try { await api("/api/program/breakpoints", {lines: [...D.breakpoints]}); }
+  try { await api("api/program/breakpoints", {lines: [...D.breakpoints]}); }
   catch (e) { message(e.message, true); }
 }
 
@@ -320,7 +337,7 @@ function showErrors(errors) {
 async function assembleOnly(download) {
   const source = $("editor").value;
   try {
-    const r = await api(download ? "/api/program/download" : "/api/program/assemble", {source});
+    const r = await api(download ? "api/program/download" : "api/program/assemble", {source});
     showErrors(r.errors || []);
     if (!r.ok) { message(`${r.errors.length} error(s)`, true); return false; }
     if (download) {
@@ -335,7 +352,7 @@ async function assembleOnly(download) {
 }
 
 async function programAction(name) {
-  try { showProgramState(await api(`/api/program/${name}`, {})); message(name); }
+  try { showProgramState(await api(`api/program/${name}`, {})); message(name); }
   catch (e) { message(e.message, true); }
 }
 
@@ -361,9 +378,9 @@ function showProgramState(p) {
 
 function setupEditor() {
   const t = $("editor");
-  t.value = localStorage.getItem("opentmcl-source") || EXAMPLE;
+  t.value = localStorage.getItem(SOURCE_KEY) || EXAMPLE;
   t.addEventListener("input", () => {
-    localStorage.setItem("opentmcl-source", t.value);
+    localStorage.setItem(SOURCE_KEY, t.value);
     D.downloaded = false;
     if (editorLines() !== $("editor-gutter").childElementCount) renderGutter();
   });
@@ -392,9 +409,10 @@ async function main() {
   $("btn-params-reload").addEventListener("click", loadParams);
   $("param-filter").addEventListener("input", renderParams);
   $("param-filter-writable").addEventListener("change", renderParams);
-  try { showOverview(await api("/api/overview")); } catch (e) { log(e.message, "err"); }
+  try { showOverview(await api("api/overview")); } catch (e) { log(e.message, "err"); }
+  try { await setupModules(); } catch (e) { log(e.message, "err"); }
   try {  // the program the dashboard downloaded before (e.g. from another tab) is what runs
-    const prog = await api("/api/program");
+    const prog = await api("api/program");
     if (prog.source) {
       $("editor").value = prog.source;
       D.downloaded = true;
