@@ -1,4 +1,6 @@
 """Inputs, outputs and error flags driven by the world (item 5)."""
+import pytest
+
 from opentmcl.firmware import flags
 from opentmcl.motion.stage import Profile
 from tests.firmware.test_program_support import Wire
@@ -33,6 +35,21 @@ def test_input_api(rig):
     r.vm.world.set_input(0, 2, Profile([(1.0, 0)], before=1))
     r.vm.advance(1.1)
     assert r.cmd(15, 2, 0) == 0
+
+
+def test_input_signals_saturate_at_the_port_range(rig):
+    """TMCM-6212 manual 3.6.13: "Digital lines will read as 0 or 1, while the ADC channels
+    deliver their 16 bit result in the range of 0...65535"; PD86-1180 4.6.15: "10 bit result in
+    the range of 0… 1023" - a scenario signal beyond the range reads as the range's end."""
+    r = rig("TMCM-6212", {"input": [{"bank": 1, "port": 0, "ramp": [[0, 0], [1, 10**6]]},
+                                    {"bank": 0, "port": 1, "value": -3}]})
+    r.vm.advance(0.5)
+    assert r.cmd(15, 0, 1) == 65535
+    assert r.cmd(15, 1, 0) == 0
+    r = rig("TMCM-1180", {"input": [{"bank": 1, "port": 0, "value": 5000}]})
+    assert r.cmd(15, 0, 1) == 1023
+    with pytest.raises(ValueError):
+        r.vm.world.set_input(9, 9, 1)
 
 
 def test_input_change_interrupt_on_the_selected_transition(rig):

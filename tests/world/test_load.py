@@ -108,6 +108,28 @@ def test_encoder_follows_the_stage_and_is_writable(rig):
     assert abs(r.gap(209) - (100 + 1000)) < 13   # resolution 51200 / 4000 = 12.8 microsteps
 
 
+def test_encoder_matches_the_motor_only_with_the_right_ap210(rig):
+    """TMCM-6212 manual 6.2: "When parameters #202 and #210 are set to the right values the
+    module will automatically convert the encoder resolution to the motor microstep resolution
+    so that the encoder position is the same as the motor position" - a 1000-line encoder
+    (4000 counts per round, scenario) read with the default AP210 = 51200 counts one round of
+    51200 microsteps as 4000; AP210 = 4000 makes it read 51200; the wrong value trips AP212."""
+    sc = {"axis": {"0": {"encoder": {"counts_per_round": 4000}}}}
+    r = rig("TMCM-6212", sc)
+    r.cmd(4, 0, 0, 51200)
+    r.vm.advance(3)
+    assert r.gap(1) == 51200
+    assert r.gap(209) == 4000
+    r.sap(210, 4000)
+    assert r.gap(209) == 51200
+    r = rig("TMCM-6212", sc)
+    r.sap(212, 1000)
+    r.cmd(4, 0, 0, 51200)
+    r.vm.advance(3)
+    assert r.gap(3) == 0 and r.gap(1) < 51200
+    assert r.gap(207) == 2
+
+
 def test_1180_encoder_prescaler(rig):
     """PD86-1180 manual 7.2: prescaler = p / 512 on the 256-count sensOstep encoder; p = 6400
     (12.5) with 16 microsteps makes the encoder read microsteps; p = 3200 reads half of it."""

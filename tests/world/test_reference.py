@@ -202,3 +202,101 @@ def test_1180_plus_128_inverts_the_reference_input(rig):
     sc = {"axis": {"0": {"left": {"position": -20000, "inverted": True}}}}
     r = _run(rig, "TMCM-1180", 129, sc)
     assert r.phys() == -20000 and r.gap(1) == 0
+
+
+# A stage for the home-switch modes whose home switch lies behind the slider or beyond an end
+# switch: left switch on [-23000, -20000], right on [30000, 33000], the slider starts at 10000.
+BEHIND = {"axis": {"0": {"start": 10000, "left": {"position": -20000, "width": 3000},
+                         "right": {"position": 30000, "width": 3000},
+                         "home": {"position": 5000, "width": 1000}}}}
+H_HI = [("leave", "home", 5501), ("enter", "home", 5500)]         # upper edge, met moving left
+BEYOND = {"axis": {"0": {"left": {"position": -20000, "width": 3000},
+                         "right": {"position": 30000, "width": 3000},
+                         "home": {"position": -40000, "width": 1000}}},
+          "axis_right": {"0": {"left": {"position": -20000, "width": 3000},
+                               "right": {"position": 30000, "width": 3000},
+                               "home": {"position": 40000, "width": 1000}}}}
+
+FIGURES = {
+    # 6.1.5 (figure 7): "searches the home switch in negative direction" - found at once moving left
+    (5, "behind"): ([("seek", "home", -1), ("found", "home", 5500), *H_HI], 5500),
+    # 6.1.6 (figure 8, table 21): positive direction, "reverse the direction when right stop
+    # switch reached", then the home switch is met moving left
+    (6, "behind"): ([("seek", "home", 1), ("turn", "right", 30000), ("found", "home", 5500), *H_HI], 5500),
+    # table 21 mode 8: negative direction, the middle of the switch (both edges)
+    (8, "behind"): ([("seek", "home", -1), ("found", "home", 5500), *H_HI,
+                     ("leave", "home", 4499), ("enter", "home", 4500)], 5000),
+}
+
+
+@pytest.mark.parametrize(("mode", "stage"), sorted(FIGURES))
+def test_home_switch_modes_from_the_other_side(rig, mode, stage):
+    """TMCM-6212 manual 6.1.5, 6.1.6 and table 21 (figures 7, 8 and 10): the home switch modes
+    with the slider right of the home switch - the sequence of switch events, the reference point
+    at the centre of the switching points (modes 5/6) or the middle of the switch (mode 8)."""
+    log, ref = FIGURES[(mode, stage)]
+    r = _run(rig, "TMCM-6212", mode, BEHIND)
+    counter = [(what, sw, x if what == "seek" else x - 10000) for what, sw, x in log]  # counter 0 at 10000
+    assert r.vm.reference_search(r.vm.axes[0]).log == [*counter, ("zero", None, ref - 10000)]
+    assert r.phys() == ref
+    assert r.gap(1) == 0 and r.gap(209) == 0 and r.gap(197) == ref - 10000
+
+
+@pytest.mark.parametrize(("mode", "scenario", "middle"), [(7, "axis_right", 40000), (8, "axis", -40000)])
+def test_modes_7_and_8_ignore_the_end_switches(rig, mode, scenario, middle):
+    """TMCM-6212 manual table 21: mode 7 "Search home switch in positive direction, ignore end
+    switches", mode 8 the same in negative direction - the motor drives through the limit
+    switch to a home switch beyond it and zeroes at the middle of the home switch."""
+    r = rig("TMCM-6212", {"axis": BEYOND[scenario]})
+    r.sap(193, mode)
+    r.search()
+    log = r.vm.reference_search(r.vm.axes[0]).log
+    assert log[:2] == [("seek", "home", 1 if mode == 7 else -1), ("found", "home", middle - (1 if mode == 7 else -1) * 500)]
+    assert not any(what == "turn" for what, _, _ in log)
+    r.search()
+    assert r.phys() == middle and r.gap(1) == 0
+
+
+@pytest.mark.parametrize(("mode", "ref"), [(129, 4500), (130, 4500), (131, 5000), (132, -40000)])
+def test_129_to_132_are_modes_5_to_8_with_an_inverted_home_switch(rig, mode, ref):
+    """TMCM-6212 manual 6.1.5-6.1.8: "Add 128 to the mode number (i.e. set axis parameter #193
+    to 129) to reverse the polarity of the home switch input" (129..132 for modes 5..8, see
+    docs/assumptions.md) - a normally closed home switch is found as in modes 5..8."""
+    home = {"position": -40000 if mode == 132 else 5000, "width": 1000, "inverted": True}
+    sc = {"axis": {"0": {"left": {"position": -20000, "width": 3000},
+                         "right": {"position": 30000, "width": 3000}, "home": home}}}
+    r = _run(rig, "TMCM-6212", mode, sc)
+    assert r.vm.reference_search(r.vm.axes[0]).log[0][:2] == ("seek", "home")
+    assert r.phys() == ref and r.gap(1) == 0
+
+
+@pytest.mark.parametrize(("command", "value"), [(3, 0), (4, 1000), (1, 5000)])
+def test_a_motion_command_ends_a_running_search(rig, command, value):
+    """TMCM-6212 manual 3.6.11: RFS STATUS tells "if it already has finished"; the manual does
+    not say what MST, MVP or ROR do to a running search - here they take the motor over and end
+    the search (docs/assumptions.md), so RFS STATUS and WAIT RFS do not wait for ever."""
+    r = rig("TMCM-6212", STAGE)
+    r.cmd(13, 0)
+    r.vm.advance(0.2)
+    assert r.cmd(13, 2) != 0
+    r.cmd(command, 0, 0, value)
+    r.vm.advance(0.01)
+    assert r.cmd(13, 2) == 0
+    assert r.vm.reference_search(r.vm.axes[0]).log[-1][0] == "interrupted"
+    r.vm.advance(3)
+    assert r.gap(3) == (value if command == 1 else 0)
+    if command == 4:
+        assert r.gap(1) == 1000
+
+
+def test_shutdown_pin_ends_a_running_search(rig):
+    """PD86-1180 manual 6 GP80 "Select the functionality of the SHUTDOWN pin": an active pin
+    stops the motor, so the search it was driving ends (RFS STATUS 0)."""
+    r = rig("TMCM-1180", {"axis": {"0": {"left": {"position": -20000}}}})
+    r.cmd(9, 80, 0, 1)
+    r.cmd(13, 0)
+    r.vm.advance(0.5)
+    r.vm.world.set_shutdown(1)
+    r.vm.advance(0.5)
+    assert r.gap(3) == 0
+    assert r.cmd(13, 2) == 0

@@ -201,6 +201,13 @@ def test_switch_state_persists_across_a_restart(rig):
     {"axis": {"x": {}}},
     {"axis": {"0": {"load": {"steps": "no"}}}},
     {"unknown": 1},
+    {"axis": {"0": {"ends": [5000, -5000]}}},
+    {"axis": {"0": {"left": {"position": 100}, "right": {"position": -100}}}},
+    {"axis": {"0": {"load": float("nan")}}},
+    {"axis": {"0": {"force": {"left": 2}}}},
+    {"axis": {"0": {"start": 2**40}}},
+    {"axis": {"0": {"right": {"position": -2**31 - 1}}}},
+    {"axis": [{"index": 0}, {"index": 0}]},
 ])
 def test_bad_scenarios_raise_scenario_error(rig, bad):
     """House rules: bad input gives a clear typed exception."""

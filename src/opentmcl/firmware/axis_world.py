@@ -177,12 +177,19 @@ class AxisWorld:
         """Encoder reading (in microsteps) of a physical position, before the offset."""
         spr = self._steps_per_round()
         if self.vm.profile.engine == "sixpoint":
-            # TMCM-6212 manual 6.2: counts per round AP210 converted with AP202 and AP140
+            # TMCM-6212 manual 6.2: counts per round AP210 converted with AP202 and AP140. The
+            # encoder itself has the scenario's counts per round on a motor of its full steps
+            # (without them: exactly what AP210 / AP202 say, so the conversion always matches).
             res = self.p(210, 51200)
             spr = self.p(202, 200) * (1 << self.p(140, 8))
             if res <= 0 or spr <= 0:
                 return 0
-            counts = (phys * res) // spr
+            if self.spec.encoder_counts:
+                real = self.spec.encoder_counts
+                real_spr = self.spec.fullsteps_per_round * (1 << self.p(140, 8))
+            else:
+                real, real_spr = res, spr
+            counts = (phys * real) // real_spr
             return (counts * spr) // res
         # PD86-1180 manual 7.2: prescaler p/512 applied to the encoder's own counts
         cpr = self.spec.encoder_counts or (256 if self.vm.profile.engine == "tmc429" else 1024)

@@ -28,12 +28,34 @@ LEFT, RIGHT, HOME = "left", "right", "home"
 class ReferenceSearch:
     def __init__(self, axis) -> None:
         self.axis = axis
-        self.active = False
+        self._active = False
+        self._drive: tuple | None = None     # (mode, target velocity) of the search's last command
         self._gen: Steps | None = None
         self._cond: Cond | None = None
         self.mode = 0
         self.log: list[tuple] = []
         """Phases of the last search: (what, switch, direction or position), for tests and traces."""
+
+    @property
+    def active(self) -> bool:
+        """The search runs. A motion command from outside (MVP, ROR, ROL, MST, a SHUTDOWN stop)
+        ends it: the motor no longer does what the search commanded (docs/world.md)."""
+        if self._active and self._drive is not None:
+            e = self.axis.engine
+            if (e.mode, e.target_velocity) != self._drive:
+                self.log.append(("interrupted", None, self.pos))
+                self._finish()
+        return self._active
+
+    @active.setter
+    def active(self, value: bool) -> None:
+        self._active = value
+
+    def _command(self, action, *args) -> None:
+        """An engine command of the search itself; remembered to tell it from outside commands."""
+        e = self.axis.engine
+        action(*args)
+        self._drive = (e.mode, e.target_velocity)
 
     # --- RFS ----------------------------------------------------------------------------------
     def start(self) -> None:
@@ -46,6 +68,7 @@ class ReferenceSearch:
         self.mode = ax.ram.get(193, 1)
         ax.error_flags = 0              # PD86-1180 4.28: RFS start resets the deviation flags
         self.active = True
+        self._drive = None
         self.log = []
         ax.reference_search_active = True
         self._gen = self._program()
@@ -67,6 +90,7 @@ class ReferenceSearch:
 
     def _finish(self) -> None:
         self.active = False
+        self._drive = None
         self.axis.reference_search_active = False
         self._gen = None
         self._cond = None
@@ -110,7 +134,7 @@ class ReferenceSearch:
         return abs(ax.to_engine(number, ax.ram.get(number, 0)))
 
     def _rotate(self, direction: int, number: int) -> None:
-        self.axis.engine.rotate(direction * self._speed(number))
+        self._command(self.axis.engine.rotate, direction * self._speed(number))
 
     def _stopped(self) -> bool:
         return not self.axis.engine.moving
@@ -118,10 +142,7 @@ class ReferenceSearch:
     def _halt_after_hit(self) -> Steps:
         """The switch was found at search speed: stop (soft if enabled) and wait for standstill."""
         e = self.axis.engine
-        if self.aw.soft_stop_enabled():
-            e.stop()
-        else:
-            e.hard_stop()
+        self._command(e.stop if self.aw.soft_stop_enabled() else e.hard_stop)
         yield self._stopped
         return 0
 
@@ -151,7 +172,7 @@ class ReferenceSearch:
         self._rotate(direction, 195)
         yield lambda: self.state(name) == level
         self.log.append(("enter" if level else "leave", name, self.pos))
-        self.axis.engine.hard_stop()
+        self._command(self.axis.engine.hard_stop)
         yield self._stopped
         return self.pos
 
@@ -181,7 +202,7 @@ class ReferenceSearch:
             self.aw.watch = target
             self._rotate(d, 195)
             yield lambda: (self.pos - target) * d >= 0
-            self.axis.engine.hard_stop()
+            self._command(self.axis.engine.hard_stop)
             self.aw.watch = None
             yield self._stopped
         return self.pos
@@ -201,6 +222,8 @@ class ReferenceSearch:
         mode = self.mode
         base = mode & 0x3F
         three_switch = self.aw.has(141)           # PD86-1180 numbering (mode 3 = three-switch mode)
+        if mode & 128 and 1 <= base <= 4 and 64 + base in getattr(self.axis.params.get(193), "values", ()):
+            base += 4       # TMCM-6212 6.1.5-6.1.8: 129..132 are modes 5..8 with an inverted home switch
         left, right, d = LEFT, RIGHT, -1
         if mode & 64:                              # +64: the right switch instead of the left one
             left, right, d = RIGHT, LEFT, 1

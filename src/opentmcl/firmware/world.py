@@ -58,6 +58,8 @@ class World:
 
     def set_input(self, bank: int, port: int, value: float | Profile) -> None:
         """Drive an input with a constant or a Profile over time (seconds since power-up of the world)."""
+        if (bank, port) not in self.vm.io.ports:
+            raise ScenarioError(f"input bank {bank} port {port}: {self.vm.profile.name} has no such port")
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
         self._input_cache = None
         self._drive_inputs()
@@ -87,8 +89,9 @@ class World:
     def _drive_inputs(self) -> None:
         s = self.vm.now / CLOCK_HZ
         io = self.vm.io
-        for (bank, port), sig in self.inputs.items():
-            io.drive_input(bank, port, round(sig.at(s)))
+        for key, sig in self.inputs.items():
+            p = io.ports[key]          # a signal outside the port's range saturates there
+            io.drive_input(*key, min(max(round(sig.at(s)), p.min), p.max))
 
     def next_event(self) -> int | None:
         best = None

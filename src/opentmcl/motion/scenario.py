@@ -7,6 +7,7 @@ returns a `Scenario`. Malformed input raises `ScenarioError` with the key at fau
 """
 from __future__ import annotations
 
+import math
 import os
 import sys
 from dataclasses import dataclass, field
@@ -63,9 +64,17 @@ def _int(value, where: str) -> int:
 
 
 def _num(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ScenarioError(f"{where}: expected a number, got {value!r}")
     return float(value)
+
+
+def _position(value, where: str) -> int:
+    """A stage position: an integer the 32-bit position counter can reach."""
+    p = _int(value, where)
+    if not -2**31 <= p < 2**31:
+        raise ScenarioError(f"{where}: {p} is outside the 32-bit position range")
+    return p
 
 
 def _table(value, where: str) -> dict:
@@ -83,7 +92,7 @@ def _known(d: dict, keys: set[str], where: str) -> None:
 def parse_profile(value, where: str) -> Profile:
     """A number, or {steps = [[x, v], ...]} / {ramp = [[x, v], ...]} (optionally `before`)."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
-        return Profile.constant(float(value))
+        return Profile.constant(_num(value, where))
     d = _table(value, where)
     _known(d, {"steps", "ramp", "before", "by", "value"}, where)
     if "value" in d:
@@ -108,7 +117,7 @@ def _switch(name: str, d, where: str) -> Switch:
     _known(d, {"position", "width", "hysteresis", "inverted"}, where)
     if "position" not in d:
         raise ScenarioError(f"{where}: 'position' is required")
-    pos = _int(d["position"], f"{where}.position")
+    pos = _position(d["position"], f"{where}.position")
     width = d.get("width")
     width = None if width is None else _int(width, f"{where}.width")
     hyst = _int(d.get("hysteresis", 0), f"{where}.hysteresis")
@@ -138,7 +147,7 @@ def parse_axis(d, where: str) -> AxisSpec:
         raise ScenarioError(f"{where}.type: 'linear' or 'circular', got {kind!r}")
     spec = AxisSpec()
     st = spec.stage
-    st.start = _int(d.get("start", 0), f"{where}.start")
+    st.start = _position(d.get("start", 0), f"{where}.start")
     if kind == "circular":
         if "steps_per_turn" not in d:
             raise ScenarioError(f"{where}: a circular axis needs 'steps_per_turn'")
@@ -154,7 +163,11 @@ def parse_axis(d, where: str) -> AxisSpec:
         ends = d["ends"]
         if not isinstance(ends, list) or len(ends) != 2:
             raise ScenarioError(f"{where}.ends: expected [left end, right end]")
-        st.ends = tuple(None if e is None else _int(e, f"{where}.ends") for e in ends)  # type: ignore[assignment]
+        st.ends = tuple(None if e is None else _position(e, f"{where}.ends") for e in ends)  # type: ignore[assignment]
+        if None not in st.ends and st.ends[0] >= st.ends[1]:
+            raise ScenarioError(f"{where}.ends: the left end must lie left of the right end")
+    if st.left and st.right and st.left.hi >= st.right.lo:
+        raise ScenarioError(f"{where}: the left switch must lie left of the right switch")
     if "load" in d:
         by = d["load"].get("by", "position") if isinstance(d["load"], dict) else "position"
         if by not in ("position", "time"):
@@ -174,6 +187,8 @@ def parse_axis(d, where: str) -> AxisSpec:
         force = _table(d["force"], f"{where}.force")
         _known(force, set(SWITCH_NAMES), f"{where}.force")
         spec.force = {k: _int(v, f"{where}.force.{k}") for k, v in force.items()}
+        if any(v not in (0, 1) for v in spec.force.values()):
+            raise ScenarioError(f"{where}.force: levels are 0 or 1")
     if "torque_falloff_speed" in d:
         spec.torque_falloff_speed = _num(d["torque_falloff_speed"], f"{where}.torque_falloff_speed")
         if spec.torque_falloff_speed <= 0:
@@ -199,6 +214,8 @@ def parse_scenario(data: dict) -> Scenario:
             raise ScenarioError(f"axis.{key}: axis keys are axis numbers") from None
         if index < 0:
             raise ScenarioError(f"axis.{key}: negative axis number")
+        if index in sc.axes:
+            raise ScenarioError(f"axis.{key}: axis {index} is given twice")
         sc.axes[index] = parse_axis(spec, f"axis.{key}")
     inputs = d.get("input", [])
     if not isinstance(inputs, list):
