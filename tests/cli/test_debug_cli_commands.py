@@ -76,3 +76,17 @@ def test_run_with_a_scenario_drives_the_potentiometer(tmp_path, capsys):
     lines = capsys.readouterr().out.splitlines()
     assert [ln.split() for ln in lines[1:5]] == [["0.000", "adc0=302", "target0=0"], ["0.250", "target0=1208"],
                                                  ["0.500", "adc0=1000"], ["0.750", "target0=4000"]]
+
+
+def test_debug_bad_numbers_are_usage_errors_and_do_nothing(tmp_path, capsys):
+    """Bad input to the debugger (preamble: "clear error, never a traceback or hang"): a step count
+    that is not a positive number executes nothing (130 is not sent), `sleep inf` does not hang, a
+    bad `set var` names the expected form; the session goes on."""
+    cmds = tmp_path / "cmds.txt"
+    cmds.write_text("step -3\nstep x\nsleep inf\nsleep abc\nset var 1 x\ninfo\nquit\n")
+    assert main(["debug", str(EXAMPLES / TIMER), "-x", str(cmds)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("usage: step [N]") == 2
+    assert "seconds must be a finite number >= 0" in out and "usage: sleep SECONDS" in out
+    assert "usage: set var N VALUE" in out
+    assert "[reset]" in out and "PC=0 " in out and "[paused]" not in out

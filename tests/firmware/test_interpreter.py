@@ -209,6 +209,48 @@ def test_wait_pos_ends_on_arrival():
     assert w.a == 5000 and w.state == 0 and not w.vm.flags & flags.ETO
 
 
+def test_wait_ends_when_a_host_command_meets_its_condition():
+    """3.6.20: "the TMCL program counter is ... held at the address of this WAIT command until the
+    condition is met"; 7.6: direct mode commands are processed while the program runs. A host MVP
+    to where the stopped motor stands meets WAIT POS at once: the program goes on then, not at the
+    end of the host's next `advance` (GP132 tick timer, 1 ms, records when)."""
+    w = module()
+    w.load("MVP ABS, 0, 10000000\nWAIT POS, 0, 0\nGGP 132, 0\nAGP 1, 2\nSTOP")
+    w.run()
+    w.vm.advance(0.5)
+    w.ok(3, 0, 0)                             # MST: the target is not reached
+    w.vm.advance(0.5)
+    assert w.pc == 1 and w.state == 1
+    w.ok(4, 0, 0, w.ok(6, 1, 0))              # MVP ABS to the actual position at t = 1 s
+    w.vm.advance(3.0)
+    assert w.state == 0 and 1000 <= w.var(1) <= 1001
+
+
+def test_wait_met_during_an_interrupt_handler_ends_after_reti():
+    """3.5.6.2: after RETI "the execution of the normal program will be continued"; 3.6.20: a WAIT
+    holds the PC only "until the condition is met". The motor arrives while the timer handler runs
+    (it waits 1 s itself); the interrupted WAIT POS ends right after RETI (about 1050 ms)."""
+    w = module()
+    w.load("""
+    VECT 0, Handler
+    SGP 0, 3, 50
+    EI 0
+    EI 255
+    MVP ABS, 0, 100
+    WAIT POS, 0, 0
+    GGP 132, 0
+    AGP 1, 2
+    STOP
+Handler:
+    DI 255
+    WAIT TICKS, 0, 100
+    RETI""")
+    w.run()
+    w.vm.advance(5.0)
+    assert w.state == 0 and w.ok(6, 1, 0) == 100
+    assert 1050 <= w.var(1) <= 1052
+
+
 def test_wait_rfs_and_refsw_limsw_time_out_without_switches():
     """3.6.20 RFS waits for the end of the reference search; REFSW / LIMSW for a switch - with
     no switch ever closing, each WAIT ends at its timeout with ETO."""

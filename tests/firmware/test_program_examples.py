@@ -84,6 +84,7 @@ def test_first_program(name, v1, v2, targets):
 
 @pytest.mark.parametrize(("name", "targets"), [
     ("tmcm6212_3.6.17_jump_always_loop.tmc", {51200, 0}),
+    ("pd86_1180_4.6.19_jump_always_loop.tmc", {10000, 0}),
     ("tmcm6212_3.6.18_call_subroutine.tmc", {10000, 0}),
     ("pd86_1180_4.6.20_call_subroutine.tmc", {10000, 0}),
     ("tmcm6212_7.2_main_loop.tmc", {5000, 0}),
@@ -92,7 +93,7 @@ def test_first_program(name, v1, v2, targets):
     ("pd86_1180_8.3_symbolic_constants.tmc", {5000, 0}),
 ])
 def test_loops_alternate_between_two_positions(name, targets):
-    """3.6.17 JA "An infinite loop", 3.6.18 CSUB example, 7.2 / 8.2 main loop, 7.3 / 8.3 symbolic
+    """3.6.17 / 4.6.19 JA "An infinite loop", 3.6.18 CSUB example, 7.2 / 8.2 main loop, 7.3 / 8.3 symbolic
     constants: the motor keeps moving between the two positions and stops at each."""
     w, _ = start(name)
     seen = positions_visited(w, 45.0)
@@ -140,11 +141,25 @@ def test_compare_example_rotates_only_from_1000_on():
         assert w.ok(6, 2, 0) == velocity
 
 
-def test_user_variables_example():
-    """7.4: SGP MyVariable, 2, 1234; GGP; CALC MUL, 2; store back: variable 42 holds 2468."""
-    w, _ = start("tmcm6212_7.4_user_variables.tmc")
+@pytest.mark.parametrize("name", ["tmcm6212_7.4_user_variables.tmc", "pd86_1180_8.4_user_variables.tmc"])
+def test_user_variables_example(name):
+    """7.4 / 8.4: SGP MyVariable, 2, 1234; GGP; CALC MUL, 2; store back: variable 42 holds 2468."""
+    w, _ = start(name)
     w.vm.advance(0.01)
     assert w.var(42) == 2468 and w.state == 0
+
+
+def test_inputs_to_outputs_example_mirrors_the_inputs():
+    """PD86-1180 4.6.14: "The following program will show the states of the input lines on the
+    output lines" (GIO 255, 0 / SIO 255, 2, -1: "the contents of the lower 8 bits of the
+    accumulator are copied to the output pins")."""
+    w, _ = start("pd86_1180_4.6.14_inputs_to_outputs.tmc")
+    for in0, in1 in ((1, 0), (0, 1), (1, 1), (0, 0)):
+        w.vm.io.drive_input(0, 0, in0)
+        w.vm.io.drive_input(0, 1, in1)
+        w.vm.advance(0.01)
+        assert (w.out(0), w.out(1)) == (in0, in1)
+    assert w.state == 1
 
 
 @pytest.mark.parametrize("name", ["tmcm6212_7.6_host_routines.tmc", "pd86_1180_8.6_host_routines.tmc"])

@@ -1,12 +1,13 @@
 """Property tests: disassembly re-assembles to identical bytes."""
 from __future__ import annotations
 
+import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
 from opentmcl.lang import binfile
 from opentmcl.lang.assembler import assemble
-from opentmcl.lang.binfile import Instruction
+from opentmcl.lang.binfile import BinFileError, Instruction
 from opentmcl.lang.disassembler import disassemble
 from opentmcl.protocol.opcodes import COMMANDS, MOTOR, TYPE, VALUE
 
@@ -114,3 +115,23 @@ def test_module_names_in_disassembly():
         "    SGP GPTimer0Period, 3, 1000", "    SGP 7, 2, 5", "    EI TI_GLOBAL", "    VECT TI_TIMER0, L0",
         "    WAIT POS, 1, 0"]
     assert assemble(text).image() == prog.image()
+
+
+def test_disassemble_refuses_what_is_not_a_program():
+    """Bad input is a clear error, not garbage source: a str is not a binary image (it used to
+    come out as `RAW a, 0, 0, 0` lines), and list entries must be 4 integers in the fields'
+    ranges (binary format: command, type and motor/bank are single bytes)."""
+    with pytest.raises(TypeError, match="not str"):
+        disassemble("abc")
+    with pytest.raises(BinFileError, match="instruction 1"):
+        disassemble([(28, 0, 0, 0), (1, 2)])
+    with pytest.raises(BinFileError, match="command must be 0..255"):
+        disassemble([(300, 0, 0, 0)])
+    assert "ROR 0, 5" in disassemble([(1, 0, 0, 5)])
+
+
+def test_assemble_takes_text_or_bytes_only():
+    """Source bytes are read as UTF-8 text; anything else is a TypeError that says what is expected."""
+    assert assemble(b"ROR 0, 5\n").image() == assemble("ROR 0, 5\n").image()
+    with pytest.raises(TypeError, match="source text"):
+        assemble(None)

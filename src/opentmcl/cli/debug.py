@@ -103,7 +103,7 @@ class DebugShell(cmd.Cmd):
 
     def do_step(self, arg):
         """step [N]: execute N instructions (default 1)"""
-        n = int(arg) if arg.strip() else 1
+        n = _number(arg, "step [N]", minimum=1) if arg.strip() else 1
         self.show_stop(self.dbg.step(n))
 
     do_s = do_step
@@ -193,9 +193,12 @@ class DebugShell(cmd.Cmd):
 
     def do_sleep(self, arg):
         """sleep SECONDS: let time pass"""
-        seconds = float(arg)
-        if seconds < 0:
-            raise ValueError("seconds must be >= 0")
+        try:
+            seconds = float(arg)
+        except ValueError:
+            raise ValueError("usage: sleep SECONDS (a number >= 0)") from None
+        if not 0 <= seconds < float("inf"):
+            raise ValueError("seconds must be a finite number >= 0")
         self.dbg.loader.client.sleep(seconds)
         self.show_stop(self.dbg.status())
 
@@ -205,8 +208,21 @@ class DebugShell(cmd.Cmd):
         if len(parts) != 3 or parts[0] != "var":
             self.say("usage: set var N VALUE")
             return
-        self.dbg.loader.request(9, int(parts[1], 0), 2, int(parts[2], 0))
-        self.say(f"var{int(parts[1], 0)} = {int(parts[2], 0)}")
+        number = _number(parts[1], "set var N VALUE", minimum=0)
+        value = _number(parts[2], "set var N VALUE")
+        self.dbg.loader.request(9, number, 2, value)
+        self.say(f"var{number} = {value}")
+
+
+def _number(text: str, usage: str, minimum: int | None = None) -> int:
+    """An integer argument (decimal or 0x...), else ValueError with the command's usage."""
+    try:
+        value = int(text.strip(), 0)
+    except ValueError:
+        raise ValueError(f"{text.strip()!r} is not a number; usage: {usage}") from None
+    if minimum is not None and value < minimum:
+        raise ValueError(f"{value} is out of range (>= {minimum}); usage: {usage}")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:

@@ -97,6 +97,8 @@ class Interpreter:
                 candidates.append(self.wait.deadline)
             if status == RUNNING and vm.interrupts.next_dispatch() is not None:
                 candidates.append(now + 1)
+            if wait.satisfied(vm, self.wait):  # met outside an event: host command, after RETI
+                candidates.append(now + 1)
         elif status == RUNNING and self.next_time is not None:
             candidates.append(self.next_time)
         timer = vm.interrupts.next_timer_event(now, refresh=False)

@@ -569,6 +569,11 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
     and checks that every command exists on that module and the program fits its memory; without
     it the TMCM-6212 includes are used and nothing is checked. `defines` are extra constants.
     """
+    if isinstance(source, (bytes, bytearray)):
+        source = bytes(source).decode("utf-8", errors="replace")
+    if not isinstance(source, str):
+        raise TypeError(f"assemble() takes the source text (str or bytes), not {type(source).__name__}; "
+                        "assemble_file() reads a file")
     profile = _profile(module)
     st = _State(module, [Path(p) for p in include_path], append_stop, filename)
     where = _Where("<defines>", 0, "")

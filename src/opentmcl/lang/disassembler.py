@@ -20,7 +20,7 @@ from functools import cache
 from ..protocol import opcodes
 from ..protocol.opcodes import MOTOR, TYPE, VALUE
 from .assembler import RAW, STOP, AsmError, assemble, include_key
-from .binfile import Instruction, decode
+from .binfile import BinFileError, Instruction, decode
 
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _RESERVED = {RAW}
@@ -98,6 +98,23 @@ def _text(ins: Instruction, labels: Mapping[int, str], names: _Names) -> str:
     return f"{cmd.mnemonic} {', '.join(parts)}".rstrip()
 
 
+def _instructions(program) -> list[Instruction]:
+    """The instructions of a binary image or of a sequence of (command, type, motor, value)."""
+    if isinstance(program, (bytes, bytearray, memoryview)):
+        return decode(program)
+    if isinstance(program, str):
+        raise TypeError("disassemble() takes the bytes of a binary file or a list of instructions, not str")
+    out = []
+    for index, ins in enumerate(program):
+        fields = tuple(ins) if isinstance(ins, (tuple, list)) else ()
+        if len(fields) != 4 or not all(isinstance(f, int) for f in fields):
+            raise BinFileError(f"instruction {index}: expected (command, type, motor, value) integers, "
+                               f"got {ins!r}")
+        out.append(Instruction(*fields))
+        out[-1].encode()  # BinFileError for a field out of range
+    return out
+
+
 def disassemble(program: bytes | list[Instruction], *, labels: Mapping[str, int] | None = None,
                 comments: bool = True, module: str | None = None) -> str:
     """TMCL source for a binary image (8-byte records) or a list of instructions.
@@ -106,8 +123,7 @@ def disassemble(program: bytes | list[Instruction], *, labels: Mapping[str, int]
     get ``L<address>``. With `comments`, each line ends with ``// <address>``. With `module`, the
     text includes that module's bundled names (the output then needs the bundled include files).
     """
-    instrs = decode(program) if isinstance(program, (bytes, bytearray, memoryview)) else \
-        [Instruction(*i) for i in program]
+    instrs = _instructions(program)
     tail_stop = bool(instrs) and instrs[-1] == STOP
     body = instrs[:-1] if tail_stop else instrs
     try:
