@@ -122,3 +122,38 @@ def test_trace_until(tmp_path, capsys):
     script.write_text("until X_ACTUAL == 5 0.5\n")
     rc, _, err = run(capsys, "trace", str(script))
     assert rc == 2 and "u.txt:1" in err and "not reached within 0.5 s" in err
+
+
+@pytest.mark.parametrize("name,text,expect", [
+    ("timeout.py", "def main(chip):\n    raise TimeoutError('target 5 not reached')\n",
+     "timeout.py: the script stopped with TimeoutError: target 5 not reached"),
+    ("crash.py", "def main(chip):\n    raise RuntimeError('boom')\n",
+     "crash.py: the script stopped with RuntimeError: boom"),
+    ("syntax.py", "def main(chip)\n    pass\n", "syntax.py:1:"),
+    ("binary.txt", b"\xff\xfe\x00", "binary.txt: not a UTF-8 text file"),
+])
+def test_trace_reports_a_failing_script_in_one_line(tmp_path, capsys, name, text, expect):
+    """Bad input (audit brief): a script that fails is reported as one line naming the script and
+    the failure - not as an internal error or a traceback, and a TimeoutError raised by the
+    script's own polling loop is not mistaken for a file that cannot be read."""
+    script = tmp_path / name
+    if isinstance(text, bytes):
+        script.write_bytes(text)
+    else:
+        script.write_text(text)
+    rc, _, err = run(capsys, "trace", str(script))
+    assert rc == 2
+    assert expect in err and "cannot read" not in err and "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_trace_reads_and_writes_registers_holding_several_fields(tmp_path, capsys):
+    """5.3 / 6.1.9: PMUL_PDIV by its register name - the 24 data bits as they are, PMUL's MSB
+    fixed to 1 (6.1.9.1)."""
+    script = tmp_path / "p.txt"
+    script.write_text("write PMUL_PDIV $004608\nread PMUL_PDIV\n")
+    rc, out, _ = run(capsys, "trace", str(script))
+    assert rc == 0
+    lines = out.splitlines()
+    assert "> $12004608  write PMUL_PDIV" in lines[0]
+    assert "< $1500C608" in lines[3] and "PMUL=198 PDIV=8" in lines[3]

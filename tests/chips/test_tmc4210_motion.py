@@ -238,7 +238,7 @@ def test_within_the_a_max_limits_ramp_mode_never_overshoots(pd, extra, where, v_
     Moves shorter than the acceleration distance S to V_MAX (6.1.12.2) never reach the ramp the
     p calculation is made for: there one ramp tick's velocity step may carry the motor one step past
     the target before it returns (docs/assumptions.md, TMC4210), so the no-overshoot claim is checked
-    for moves of at least 2 S; every move settles exactly on its target."""
+    for moves of at least 2 S; they settle exactly on their target, shorter ones within one step."""
     rd = pd + extra
     lower, upper = units.a_max_limits(rd, pd)
     a_max = lower + int(where * (upper - lower))
@@ -253,28 +253,65 @@ def test_within_the_a_max_limits_ramp_mode_never_overshoots(pd, extra, where, v_
     for _ in range(100):
         chip.advance(t_move / 50)
         peak = max(peak, chip.read("X_ACTUAL"))
-    assert chip.read("X_ACTUAL") == target
     if target >= 2 * units.steps_during_acceleration(v_max, a_max, pd, rd):
         assert peak == target
+        assert chip.read("X_ACTUAL") == target
+    else:  # a short move may swing +-1 step around the target (xfail test below)
+        assert abs(chip.read("X_ACTUAL") - target) <= 1
 
 
-@example(pd=3, extra=6, where=0.5, v_max=42, v_min=2, target=13)  # short move: overshoots by one step
+@example(pd=0, extra=5, where=0.25, v_max=17, v_min=3, target=1)  # the endless +-1 swing below
 @settings(max_examples=10, deadline=None)
 @given(st.integers(0, 6), st.integers(0, 6), st.floats(0, 1), st.integers(10, 2047), st.integers(1, 10),
        st.integers(1, 40))
-def test_short_moves_settle_on_the_target(pd, extra, where, v_max, v_min, target):
-    """6.1.7.1.1 "oscillations around a target position" do not occur inside the A_MAX limits: even a
-    move too short for the ramp ends on its target."""
+def test_short_moves_end_within_one_step_of_the_target(pd, extra, where, v_max, v_min, target):
+    """6.1.7.1.1 inside the A_MAX limits and 6.1.9.2 hints ("overshooting of one step (respectively
+    one microstep) may occur"): a move too short for the ramp ends at most one step from its target.
+    (Exactly on it, as 6.1.7.1.1 promises, is not always true yet - see the xfail test below.)"""
+    chip = _short_move(pd, extra, where, v_max, v_min, target)
+    chip.advance(2 * target / units.step_rate(v_min, pd) + 1)
+    for _ in range(20):
+        chip.advance(0.01)
+        assert abs(chip.read("X_ACTUAL") - target) <= 1
+
+
+def _short_move(pd, extra, where, v_max, v_min, target, a_max=None) -> TMC4210:
     rd = pd + extra
     lower, upper = units.a_max_limits(rd, pd)
-    a_max = lower + int(where * (upper - lower))
+    if a_max is None:
+        a_max = lower + int(where * (upper - lower))
+    assert lower <= a_max <= upper
     calc = calc_pmul_pdiv(a_max, rd, pd, 0.01)
     chip = setup(v_min=v_min, v_max=v_max, a_max=a_max, pulse_div=pd, ramp_div=rd, pmul=calc.pmul,
                  pdiv=calc.pdiv)
     chip.write("X_TARGET", target)
-    chip.advance(2 * target / units.step_rate(v_min, pd) + 1)
-    assert chip.read("X_ACTUAL") == target
-    assert chip.read("V_ACTUAL") == 0
+    return chip
+
+
+def test_a_short_move_that_overshoots_by_one_step_settles():
+    """6.1.9.2 hints: a one-step overshoot may occur; the motor comes back and stops on target
+    (6.1.3: V_MIN >= 1 "assures reaching each target position exactly")."""
+    chip = _short_move(pd=3, extra=6, where=0.5, v_max=42, v_min=2, target=13)
+    chip.advance(2 * 13 / units.step_rate(2, 3) + 1)
+    assert chip.read("X_ACTUAL") == 13 and chip.read("V_ACTUAL") == 0
+
+
+@pytest.mark.xfail(strict=True, reason="shared ramp core: a one-step overshoot of a short move can "
+                   "turn into an endless +-1 step oscillation (reported to the lead, issue 6 audit)")
+@pytest.mark.parametrize("pd,extra,a_max,v_max,v_min,target", [
+    (0, 5, 523, 17, 3, 1), (2, 6, 1024, 1842, 9, 14), (0, 5, 530, 491, 6, 6), (3, 5, 1345, 1514, 3, 40),
+])
+def test_short_moves_settle_on_the_target(pd, extra, a_max, v_max, v_min, target):
+    """6.1.7.1.1: with A_MAX inside its limits "any target position" is reached "without
+    oscillations"; 6.1.3: V_MIN >= 1 "assures reaching each target position exactly". These
+    short moves (found by hypothesis) swing target-1 / target / target+1 for ever instead."""
+    chip = _short_move(pd, extra, None, v_max, v_min, target, a_max=a_max)
+    chip.advance(2.0)
+    seen = set()
+    for _ in range(50):
+        chip.advance(0.01)
+        seen.add((chip.read("X_ACTUAL"), chip.read("V_ACTUAL")))
+    assert seen == {(target, 0)}
 
 
 def test_a_max_far_below_the_lower_limit_oscillates_around_the_target():

@@ -235,6 +235,7 @@ def test_access_by_name(chip):
     lambda c: c.write("NO_SUCH", 1), lambda c: c.write("V_MAX", 2048), lambda c: c.write("V_MAX", -1),
     lambda c: c.write("V_TARGET", 2048), lambda c: c.read(None), lambda c: c.advance(-1),
     lambda c: c.advance(float("inf")), lambda c: c.set_inputs(ref_l=2), lambda c: c.advance_cycles(1.5),
+    lambda c: c.pin_level("REF_X"), lambda c: c.attach_switch("gp_in", 0, 1),
 ])
 def test_bad_input_raises_chip_error(chip, call):
     with pytest.raises(ChipError):
@@ -282,3 +283,37 @@ def test_the_issue_contract_calls(chip):
     chip.advance(0.01)
     chip.set_inputs(ref_l=1)
     assert chip.spi(0x0D000123) >> 24 & R.STATUS_R_L
+
+
+@pytest.mark.parametrize("name,address,data", [
+    ("PMUL_PDIV", 0x09, 0xC608), ("RAMP_MODE_REF_CONF", 0x0A, 0x0502),
+    ("PULSE_DIV_RAMP_DIV", 0x0C, 0x5800), ("POS_COMP_INT_4210", 0x36, 0x0100),
+    ("GLOBAL_PARAMETERS", 0x3F, 1 << 21 | 3 << 8),
+])
+def test_registers_holding_several_fields_by_register_name(chip, name, address, data):
+    """5.3 register mapping: "Some addresses select a couple of registers mapped together into the
+    24 data bit space" - by the register's own name read/write/peek move those 24 data bits,
+    the same as a datagram to its address."""
+    chip.write(name, data)
+    assert chip.spi(R.read_datagram(address)) & 0xFFFFFF == data
+    assert chip.read(name) == data == chip.peek(name) == chip.registers()[name]
+
+
+def test_whole_register_names_keep_the_register_semantics(chip):
+    """6.1.9.1 PMUL's MSB is fixed to 1; 6.1.11 writing 1 clears a flag; 6.2.1.5 the reference
+    switch read-out is read-only; 6.2.1.3 POWER_DOWN is a write trigger."""
+    chip.write("PMUL_PDIV", 0x4608)
+    assert chip.read("PMUL_PDIV") == 0xC608
+    chip.write("mask_stop_left_high", 1)
+    chip.set_inputs(ref_l=1)
+    assert chip.read("INTERRUPT") == R.INT_BIT["stop_left_high"] * 0x101
+    chip.write("INTERRUPT", 0xFF00 | R.INT_BIT["stop_left_high"])
+    assert chip.read("INTERRUPT") == 0xFF00
+    with pytest.raises(ChipError, match="read-only"):
+        chip.write("REFERENCE_SWITCHES", 0)
+    assert chip.read("REFERENCE_SWITCHES") == 0b10  # r_l
+    for bad in (-1, 1 << 24, "1", 1.0):
+        with pytest.raises(ChipError):
+            chip.write("PMUL_PDIV", bad)
+    chip.write("POWER_DOWN", 0)
+    assert chip.powered_down

@@ -66,9 +66,11 @@ def test_a_max_limits():
     lambda: units.step_rate(1, 0, f_clk=33e6), lambda: units.step_rate(1, 0, f_clk=0),
     lambda: units.velocity_for_rate(600_000, 0), lambda: units.step_pulse_cycles(16),
     lambda: units.step_rate(float("nan"), 0), lambda: units.steps_during_acceleration(10, 0, 0, 0),
+    lambda: units.a_max_for_rate_change(-5, 5, 8),
 ])
 def test_bad_values_raise_unit_error(call):
-    """Out-of-range register values (6.1.12: 0..2047, dividers 0..13; 13.3: f_CLK up to 32 MHz)."""
+    """Out-of-range register values (6.1.12: 0..2047, dividers 0..13; 13.3: f_CLK up to 32 MHz;
+    6.1.7: A_MAX is "the absolute value of the desired acceleration", so no negative dR)."""
     with pytest.raises(units.UnitError):
         call()
 

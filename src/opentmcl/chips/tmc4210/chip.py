@@ -151,12 +151,18 @@ class TMC4210(ChipEvents):
         """Write one register or field by its datasheet name; returns the datagram sent back.
 
         Fields that share an address (PMUL/PDIV, REF_CONF/RAMP_MODE, ...) are written
-        read-modify-write; interrupt flags are never cleared by accident.
+        read-modify-write; interrupt flags are never cleared by accident. The name of a register
+        holding several fields (PMUL_PDIV, INTERRUPT, ...) writes its 24 data bits as they are.
         """
-        if name in R.BY_NAME and not R.BY_NAME[name].fields:  # POWER_DOWN: write-only trigger
+        whole = R.whole_register(name)
+        if whole is not None:  # PMUL_PDIV, INTERRUPT, ..., POWER_DOWN: the raw 24 data bits
+            if whole.read_only and whole.name != "POWER_DOWN":
+                raise ChipError(f"{whole.name} is read-only")
             if isinstance(value, bool) or not isinstance(value, int):
-                raise ChipError(f"{name}: value must be an integer, got {value!r}")
-            return self.spi(R.write_datagram(R.BY_NAME[name].address, value & R.DATA_MASK))
+                raise ChipError(f"{whole.name}: value must be an integer, got {value!r}")
+            if not 0 <= value <= R.DATA_MASK:
+                raise ChipError(f"{whole.name}: {value} out of range 0..{R.DATA_MASK} (24 data bits)")
+            return self.spi(R.write_datagram(whole.address, value))
         try:
             f = R.lookup(name)
         except R.RegisterError as exc:
@@ -176,20 +182,28 @@ class TMC4210(ChipEvents):
         return self.spi(R.write_datagram(reg.address, data))
 
     def read(self, name: str) -> int:
-        """Read one register or field by its datasheet name (signed where the datasheet says so)."""
-        try:
-            f = R.lookup(name)
-        except R.RegisterError as exc:
-            raise ChipError(str(exc)) from None
+        """Read one register or field by its datasheet name (signed where the datasheet says so);
+        a register holding several fields (PMUL_PDIV, INTERRUPT, ...) reads as its 24 data bits."""
+        whole = R.whole_register(name)
+        if whole is not None:
+            return self.spi(R.read_datagram(whole.address)) & R.DATA_MASK
+        f = self._field(name)
         reply = self.spi(R.read_datagram(f.address))
         return f.extract(reply & R.DATA_MASK)
 
-    def peek(self, name: str) -> int:
-        """Like read() but without a datagram (no trace, no power-down wake up)."""
+    @staticmethod
+    def _field(name: str) -> R.Field:
         try:
-            f = R.lookup(name)
+            return R.lookup(name)
         except R.RegisterError as exc:
             raise ChipError(str(exc)) from None
+
+    def peek(self, name: str) -> int:
+        """Like read() but without a datagram (no trace, no power-down wake up)."""
+        whole = R.whole_register(name)
+        if whole is not None:
+            return self._read(whole.address)
+        f = self._field(name)
         return f.extract(self._read(f.address))
 
     def registers(self) -> dict[str, int]:
@@ -234,6 +248,8 @@ class TMC4210(ChipEvents):
 
     def pin_level(self, pin: str) -> int:
         """Electrical level of an input pin (static level OR switch windows)."""
+        if pin not in self._pins:
+            raise ChipError(f"pin must be 'ref_l', 'ref_r' or 'gp_in', got {pin!r}")
         level = self._pins[pin]
         x = self.x_actual + self._axis_offset
         for lo, hi in self._windows.get(pin, ()):

@@ -199,6 +199,17 @@ def lookup(name: str) -> Field:
     raise RegisterError(f"unknown TMC4210 register or field {name!r}")
 
 
+def whole_register(name) -> Register | None:
+    """The register called `name` when that name is not also a field (PMUL_PDIV, INTERRUPT, ...):
+    read and written as its 24 raw data bits."""
+    if not isinstance(name, str):
+        return None
+    reg = BY_NAME.get(name) or BY_NAME.get(name.upper())
+    if reg is None or reg.name in FIELDS:
+        return None
+    return reg
+
+
 # --- datagrams ----------------------------------------------------------------------------
 
 @dataclass(frozen=True)

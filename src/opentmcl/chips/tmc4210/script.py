@@ -14,10 +14,11 @@ A `.py` file instead must define `main(chip)`; it is run against a traced chip.
 """
 from __future__ import annotations
 
-import importlib.util
 import operator
 import re
 import shlex
+import sys
+import types
 from collections.abc import Callable
 from pathlib import Path
 
@@ -123,14 +124,34 @@ def run_file(chip: TMC4210, path: str | Path) -> None:
     """Run a text script, or a Python file's main(chip)."""
     p = Path(path)
     if p.suffix == ".py":
-        spec = importlib.util.spec_from_file_location(f"_tmc4210_script_{p.stem}", p)
-        if spec is None or spec.loader is None:
-            raise ScriptError(f"{p}: cannot load")
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
-        main = getattr(module, "main", None)
-        if not callable(main):
-            raise ScriptError(f"{p}: a Python script must define main(chip)")
-        main(chip)
+        source = _read(p)
+        try:
+            code = compile(source, str(p), "exec")
+        except SyntaxError as exc:
+            raise ScriptError(f"{p}:{exc.lineno or '?'}: {exc.msg}") from None
+        module = types.ModuleType(f"_tmc4210_script_{p.stem}")
+        module.__file__ = str(p)
+        sys.modules[module.__name__] = module  # dataclasses and the like look their module up
+        try:
+            exec(code, module.__dict__)  # noqa: S102 - the user's own script, as `python SCRIPT` runs it
+            main = getattr(module, "main", None)
+            if not callable(main):
+                raise ScriptError(f"{p}: a Python script must define main(chip)")
+            main(chip)
+        except (ScriptError, ChipError, BrokenPipeError):
+            raise
+        except Exception as exc:  # the script's own failure, reported in one line
+            raise ScriptError(f"{p}: the script stopped with {type(exc).__name__}: {exc}") from None
+        finally:
+            sys.modules.pop(module.__name__, None)
         return
-    run_text(chip, p.read_text(encoding="utf-8"), str(p))
+    run_text(chip, _read(p), str(p))
+
+
+def _read(p: Path) -> str:
+    try:
+        return p.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ScriptError(f"{p}: not a UTF-8 text file") from None
+    except OSError as exc:
+        raise ScriptError(f"cannot read {p}: {exc.strerror or exc}") from None

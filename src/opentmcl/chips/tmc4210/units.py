@@ -68,7 +68,10 @@ def rate_change(a_max: int, pulse_div: int, ramp_div: int, f_clk=16_000_000) -> 
 def a_max_for_rate_change(hz_per_s: float, pulse_div: int, ramp_div: int, f_clk=16_000_000) -> int:
     """The A_MAX register value (rounded) nearest to a change of step rate of `hz_per_s` Hz/s."""
     f = check_f_clk(f_clk)
-    a = round(_number("acceleration", hz_per_s)
+    if _number("acceleration", hz_per_s) < 0:
+        raise UnitError(f"A_MAX is the absolute value of the acceleration (6.1.7): give a change of step "
+                        f"rate >= 0 Hz/s, got {hz_per_s}")
+    a = round(hz_per_s
               * 2 ** (_div("PULSE_DIV", pulse_div) + _div("RAMP_DIV", ramp_div) + 29) / (f * f))
     if not 0 <= a <= A_LIMIT:
         raise UnitError(f"{hz_per_s} Hz/s needs A_MAX {a}, outside 0..2047 with "
