@@ -30,7 +30,8 @@ def test_demo_other_module():
 
 def test_demo_bad_input_is_one_line_and_nonzero():
     """DEVELOPERS.md: bad input gets non-zero exit and a one-line message, never a traceback."""
-    for args in (["--module", "TMCM-9999"], ["--interval", "0"]):
+    for args in (["--module", "TMCM-9999"], ["--interval", "0"], ["--duration", "nan"],
+                 ["--duration", "inf"], ["--interval", "1e-9"]):
         out = opentmcl("demo", *args)
         assert out.returncode == 2
         assert len(out.stderr.strip().splitlines()) == 1 and "Traceback" not in out.stderr

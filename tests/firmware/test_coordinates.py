@@ -51,8 +51,25 @@ def test_255_forms_copy_between_ram_and_eeprom(tmp_path):
     host.ok(31, 1, 255, 0)
     assert host.ok(31, 1, 0) == 22
     again = Host(VirtualModule("TMCM-6212", eeprom=path))
+    assert again.ok(31, 1, 0) == 0 and again.ok(31, 2, 3) == 0   # GP84 = 0: RAM only at startup
+    again.ok(31, 0, 255, 0)                                       # GCO 0, 255, 0: all back from EEPROM
     assert again.ok(31, 0, 0) == 0
     assert again.ok(31, 1, 0) == 22 and again.ok(31, 2, 3) == 33
+
+
+def test_coordinates_come_back_at_startup_only_with_gp84(tmp_path):
+    """TMCM-6212 3.6.22 SCO: "Depending on the global parameter 84, the coordinates are only stored in
+    RAM or also stored in the EEPROM and copied back on startup (with the default setting the
+    coordinates are stored in RAM only)"; 5.1 GP84 "0 - coordinates are stored in RAM only (but can be
+    copied explicitly between RAM and EEPROM)". A coordinate copied to the EEPROM explicitly is not in
+    RAM after a restart with GP84 = 0; with GP84 = 1 it is."""
+    path = tmp_path / "ee.json"
+    host = Host(VirtualModule("TMCM-6212", eeprom=path))
+    host.ok(30, 4, 2, 444)
+    host.ok(30, 4, 255, 0)                      # SCO 4, 255, 0: this coordinate to the EEPROM
+    assert Host(VirtualModule("TMCM-6212", eeprom=path)).ok(31, 4, 2) == 0
+    host.ok(9, 84, 0, 1)                        # bank 0 is stored automatically
+    assert Host(VirtualModule("TMCM-6212", eeprom=path)).ok(31, 4, 2) == 444
 
 
 def test_gp84_coordinates_always_in_eeprom(tmp_path):

@@ -52,6 +52,19 @@ def test_mvp_rel_from_last_target_default_6212(m6212):
     assert m6212.ok(6, 0, 0) == actual + 10
 
 
+def test_mvp_rel_from_encoder_position_6212(m6212):
+    """TMCM-6212 4.1 AP127 "Start position for MVP REL command: ... 2 encoder position": the offset is
+    added to the encoder position AP209 as the module reads it now (after a move the encoder has
+    counted along), not to a stale value."""
+    m6212.ok(4, 0, 0, 5000)
+    m6212.vm.advance(3.0)
+    encoder = m6212.ok(6, 209, 0)
+    assert encoder != 0
+    m6212.ok(5, 127, 0, 2)
+    m6212.ok(4, 1, 0, 100)
+    assert m6212.ok(6, 0, 0) == encoder + 100
+
+
 def test_mvp_rel_from_actual_position_1180(m1180):
     """PD86-1180 4.6.4 MVP REL: "a relative movement by means of an offset to the actual position"."""
     m1180.ok(5, 1, 0, 300)
@@ -145,3 +158,22 @@ def test_1180_actual_acceleration_ap135(m1180):
     m1180.ok(3, 0, 0)
     m1180.vm.advance(60)
     assert m1180.ok(6, 135, 0) == 0
+
+
+def test_1180_ramp_mode_follows_the_motion_commands(m1180):
+    """PD86-1180 ch. 5 AP138 "Ramp mode: Automatically set when using ROR, ROL, MST and MVP. 0: position
+    mode ... 2: velocity mode ... the soft mode (value 1) ... can be selected": GAP 138 reads the mode
+    the last motion command chose, and a selected soft mode stays selected for MVP."""
+    assert m1180.ok(6, 138, 0) == 0
+    m1180.ok(1, 0, 0, 500)                      # ROR
+    assert m1180.ok(6, 138, 0) == 2
+    m1180.ok(4, 0, 0, 1000)                     # MVP ABS
+    assert m1180.ok(6, 138, 0) == 0
+    m1180.ok(2, 0, 0, 300)                      # ROL
+    assert m1180.ok(6, 138, 0) == 2
+    m1180.ok(4, 0, 0, 0)
+    m1180.ok(3, 0, 0)                           # MST: velocity mode, target speed 0
+    assert m1180.ok(6, 138, 0) == 2
+    m1180.ok(5, 138, 0, 1)                      # soft mode selected
+    m1180.ok(4, 0, 0, 2000)
+    assert m1180.ok(6, 138, 0) == 1

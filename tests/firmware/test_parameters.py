@@ -180,3 +180,21 @@ def test_eeprom_magic_gp64_reinitialises_at_next_power_up(tmp_path):
     fresh = Host(VirtualModule("PD86-1180", eeprom=path))
     default = fresh.vm.profile.axis_parameters[4].default
     assert (fresh.ok(6, 4, 0), fresh.ok(10, 75, 0), fresh.ok(10, 64, 0)) == (default, 0, 0xE4)
+
+
+def test_unit_mode_switch_keeps_the_motion_and_reexpresses_the_ramp(m6212):
+    """TMCM-6212 4.1 AP255 "Units of velocity and acceleration/deceleration settings: 0 - the internal
+    units of the TMC5130 are used directly 1 - the units are pps"; 6.5: v_pps = v*16 MHz/2^24 and
+    a_pps2 = a*(16 MHz)^2/2^41. The unit mode changes how the ramp parameters are read, not the ramp:
+    after SAP 255, 0, 0 the default AP4 = 51200 pps reads as its TMC5130 value and a move runs at the
+    same top speed as before."""
+    m6212.ok(5, 255, 0, 0)
+    vmax = m6212.ok(6, 4, 0)
+    assert vmax == round(51200 * 2**24 / 16_000_000)
+    assert m6212.ok(6, 5, 0) == round(51200 * 2**41 / 16_000_000**2)
+    m6212.ok(4, 0, 0, 10**7)
+    m6212.vm.advance(3.0)
+    assert abs(m6212.ok(6, 3, 0) - vmax) <= 1           # cruising at AP4, in internal units
+    m6212.ok(5, 255, 0, 1)
+    assert abs(m6212.ok(6, 4, 0) - 51200) <= 1          # and back in pps
+    assert abs(m6212.ok(6, 3, 0) - 51200) <= 1

@@ -191,3 +191,33 @@ def test_position_reached_event_for_a_move_to_where_the_motor_is(m6212):
     m6212.ok(4, 0, 0, 0)
     m6212.vm.advance(0.001)
     assert [Reply.decode(e).value for e in m6212.vm.drain_events()] == [1]
+
+
+@pytest.mark.parametrize("address", [0, 256, -1, "1", 1.0])
+def test_constructor_rejects_an_address_outside_gp66(address):
+    """TMCM-6212 5.1 GP66 "Serial address" range 1...255: a module address outside it (or not an
+    integer) is a ValueError, not a module that answers from `address & 0xFF`."""
+    with pytest.raises(ValueError, match="GP66"):
+        VirtualModule("TMCM-6212", address=address)
+
+
+@pytest.mark.parametrize("seconds", [float("nan"), float("inf"), -0.5])
+def test_advance_rejects_non_finite_or_negative_time(seconds):
+    """Issue #2 contract `vm.advance(seconds)` (DESIGN.md "Errors and bad input"): NaN, infinity and
+    negative spans are a clear ValueError, and the module's clock does not move."""
+    vm = VirtualModule("TMCM-6212")
+    with pytest.raises(ValueError, match="finite number"):
+        vm.advance(seconds)
+    assert vm.now == 0
+
+
+def test_eeprom_file_that_cannot_be_created_fails_at_construction(tmp_path):
+    """Issue #2: `eeprom="path"` keeps the EEPROM in that file; a path whose folder cannot be made
+    (here: below a regular file) raises EepromError when the module is built, not a raw OSError
+    from the first store command (TMCM-6212 3.6.9 STGP, 5.1 bank 0 auto-stored parameters)."""
+    from opentmcl.firmware.eeprom import EepromError
+
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(EepromError, match="cannot create"):
+        VirtualModule("TMCM-6212", eeprom=blocker / "ee.json")

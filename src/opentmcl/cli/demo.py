@@ -2,8 +2,11 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 from . import CliError
+
+MAX_ROWS = 100_000  # a table longer than this is a typo in --duration / --interval
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -35,8 +38,12 @@ def _plan(vm) -> list[tuple[int, int, int, int]]:
 def run(args: argparse.Namespace) -> int:
     from ..firmware.vm import VirtualModule
 
+    if not (math.isfinite(args.interval) and math.isfinite(args.duration)):
+        raise CliError("--duration and --interval must be finite numbers")
     if args.interval <= 0 or args.duration <= 0:
         raise CliError("--duration and --interval must be positive")
+    if args.duration / args.interval > MAX_ROWS:
+        raise CliError(f"--duration / --interval gives more than {MAX_ROWS} rows; use a longer --interval")
     if args.scenario or args.csv:
         from ..trace import world_demo  # the world trace (position, switches, load value, current)
         return world_demo(args, _plan, CliError)

@@ -16,6 +16,7 @@ from ..motion.units import (
     internal_velocity_from_pps,
     pps2_from_internal_acceleration,
     pps_from_internal_velocity,
+    round_half_away,
 )
 from ..protocol.frame import to_int32
 from .engines import ENGINE_PARAMS, make_engine
@@ -64,6 +65,21 @@ class Axis:
             return internal_acceleration_from_pps2(value)
         return int(value)
 
+    def _convert_units(self) -> None:
+        """AP255 changed: the ramp registers keep their values, so the stored velocity and
+        acceleration parameters are re-expressed in the new unit (the motion is unchanged)."""
+        to_internal = self.internal_units
+        for n in VELOCITY_PARAMS | ACCEL_PARAMS:
+            if n not in self.ram:
+                continue
+            v = self.ram[n]
+            if n in VELOCITY_PARAMS:
+                self.ram[n] = internal_velocity_from_pps(v) if to_internal else \
+                    round_half_away(pps_from_internal_velocity(v))
+            else:
+                self.ram[n] = internal_acceleration_from_pps2(v) if to_internal else \
+                    round_half_away(pps2_from_internal_acceleration(v))
+
     def _configure_all(self) -> None:
         self.engine.configure(**{name: self.to_engine(num, self.ram[num])
                                  for num, name in self.engine_keys.items() if num in self.ram})
@@ -104,6 +120,8 @@ class Axis:
             return int(e.position_reached)
         if number == 135 and hasattr(e, "actual_acceleration"):
             return e.actual_acceleration
+        if number == 138 and hasattr(e, "ramp_mode"):  # "Automatically set when using ROR, ROL, MST and MVP"
+            return e.ramp_mode
         if number == 207:
             flags, self.error_flags = self.error_flags, 0
             return flags
@@ -130,8 +148,11 @@ class Axis:
             else:
                 self.rotate(value)
         else:
+            was_internal = self.internal_units
             self.ram[number] = value
             if number == 255:
+                if self.internal_units != was_internal:
+                    self._convert_units()
                 self._configure_all()
             elif number in self.engine_keys:
                 self.engine.configure(**{self.engine_keys[number]: self.to_engine(number, value)})
@@ -161,5 +182,5 @@ class Axis:
         if option == 1:
             return self.engine.position
         if option == 2:
-            return self.ram.get(209, 0)
+            return self.get(209)  # the live encoder position (world model), not the last SAP 209
         return self.last_target

@@ -38,6 +38,12 @@ class Eeprom:
         self.deferred = False
         if self.path is not None and self.path.exists():
             self.data = self._read(self.path)
+        elif self.path is not None:  # a new file: fail now, not at the first store
+            self.dirty = True
+            try:
+                self.flush()
+            except OSError as exc:
+                raise EepromError(f"cannot create EEPROM file {self.path}: {exc.strerror or exc}") from None
 
     def _read(self, path: Path) -> dict:
         try:

@@ -44,6 +44,8 @@ class VirtualModule:
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
                  eeprom: str | os.PathLike | None = None, scenario=None) -> None:
         self.profile: ModuleProfile = load_profile(name)
+        if address is not None and not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
+            raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
         self.opcodes = self.profile.opcodes
         self.eeprom = Eeprom(eeprom, module=self.profile.name)
         self._address_override = address
@@ -77,7 +79,8 @@ class VirtualModule:
             if restore and v is not None:
                 self.user_vars[n] = v
         self.coords = [[0] * (prof.coordinates + 1) for _ in range(prof.axes)]
-        for a in range(prof.axes):
+        restore_coords = self.globals.get_raw(0, 84) == 1  # GP84 = 1: "copied back on startup"
+        for a in range(prof.axes if restore_coords else 0):
             for c in range(1, prof.coordinates + 1):
                 v = ee.get_coord(a, c)
                 if v is not None:
@@ -185,8 +188,8 @@ class VirtualModule:
         return self.now / CLOCK_HZ
 
     def advance(self, seconds: float) -> None:
-        if seconds < 0:
-            raise ValueError("time cannot run backwards")
+        if not seconds >= 0 or seconds == float("inf"):  # also NaN
+            raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
         self.advance_to(self.now + round(seconds * CLOCK_HZ))
 
     def advance_to(self, until: int) -> None:
