@@ -38,11 +38,13 @@ def _row(p: Param, *, name, lo, hi, access, unit=None, default=None, values=None
 
 # --- the manual's parameter numbers --------------------------------------------------------------
 
-# Chapter 5 "Axis Parameters": every number of the table.
+# Chapter 5 "Axis Parameters": every number of the table, plus 197 that the revision history (10.1,
+# firmware 4.41) adds: "the last position before setting the counter to zero can be read out with
+# axis parameter 197".
 MANUAL_AXIS_NUMBERS = [
     0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 130, 135, 138, 140, 141, 149, 153, 154,
     160, 161, 162, 163, 164, 165, 166, 167, 168, 169, 170, 171, 172, 173, 174, 175, 176, 177, 178, 179,
-    180, 181, 182, 183, 193, 194, 195, 196, 200, 204, 206, 208, 209, 210, 212, 214, 215, 254,
+    180, 181, 182, 183, 193, 194, 195, 196, 197, 200, 204, 206, 208, 209, 210, 212, 214, 215, 254,
 ]
 # 6.1 "Bank 0" table, plus 84 (coordinate storage) that 4.6.24-4.6.27 (SCO/GCO/CCO/ACO) refer to.
 MANUAL_BANK0_NUMBERS = [64, 65, 66, 67, 68, 69, 70, 71, 73, 75, 76, 77, 79, 80, 81, 82, 83, 84, 85, 87,
@@ -71,8 +73,9 @@ def test_firmware_version_reply(prof):
 
 def test_axis_parameters_are_exactly_chapter_5(prof):
     """Chapter 5: "The following sections describe all axis parameters that can be used with the SAP,
-    GAP, AAP, STAP and RSAP commands." The profile holds each number of the table and no other."""
-    assert len(MANUAL_AXIS_NUMBERS) == 60
+    GAP, AAP, STAP and RSAP commands." The profile holds each number of the table (and 197 of the
+    revision history) and no other."""
+    assert len(MANUAL_AXIS_NUMBERS) == 61
     assert sorted(prof.axis_parameters) == MANUAL_AXIS_NUMBERS
 
 

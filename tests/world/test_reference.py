@@ -172,12 +172,15 @@ MODES_1180 = {
 def test_1180_modes(rig, mode):
     """PD86-1180 manual 5 AP193 modes 1 and 2, 7.1: "After hitting the reference switch, the
     motor slowly moves right until the switch is released. Finally the switch is re-entered in
-    left direction, setting the reference point to the center of the two switching points"."""
+    left direction, setting the reference point to the center of the two switching points".
+    Revision history 10.1, firmware 4.41: "the last position before setting the counter to zero
+    can be read out with axis parameter 197"."""
     sc = {"axis": {"0": {"left": {"position": -20000}, "right": {"position": 30000}}}}
     log, ref, distance = MODES_1180[mode]
     r = _run(rig, "TMCM-1180", mode, sc)
     assert r.vm.reference_search(r.vm.axes[0]).log == [*log, ("zero", None, ref)]
     assert r.phys() == ref and r.gap(1) == 0 and r.gap(196) == distance
+    assert r.gap(197) == ref
     assert r.gap(209) == 0
 
 
