@@ -82,6 +82,22 @@ def test_code_protection(w):
     assert raw[1] == 22
 
 
+def test_erasing_a_running_program_by_gp81_stops_it(w):
+    """5.1 GP81: switching off the protection against disassembling "the program will be erased
+    first!". A program running at that moment has nothing left to run: it is reset (GP128 = 3,
+    PC 0, command 131's state, docs/assumptions.md) and the motor it was turning keeps the last
+    command, as after a 128 stop. The loop below would otherwise run on (manual 3.6.17 JA)."""
+    w.load("SGP 81, 0, 1\nLoop: CALC ADD, 1\nJA Loop")
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.state == 1 and w.ok(135, 2) > 0
+    w.ok(9, 81, 0, 0)
+    assert w.state == 3 and w.pc == 0
+    w.vm.advance(10 * T)
+    assert w.state == 3 and w.ok(135, 2) == 0
+    assert w.vm.program.code[0] == (0, 0, 0, 0)
+
+
 def test_application_status_and_gp128_130_mirror_the_state(w):
     """3.6.36 135 types 0-3 and 5.1 GP128 (0 stop, 1 run, 2 step, 3 reset), GP130 (program counter).
     Types 0/1 pack mode << 24 | wait flag << 16 | address (layout: docs/assumptions.md)."""

@@ -75,6 +75,20 @@ def test_run_homing_program_with_csv(capsys, tmp_path):
     assert rows[-1]["pos0"] == "0" and rows[-1]["stage0"] == "-60000"
 
 
+def test_run_takes_the_module_from_the_scenario(capsys, tmp_path):
+    """docs/scenarios.md: a scenario names its module, so `opentmcl run` needs no --module. PD86-1180
+    manual 7.1 three-switch mode (AP193 = 3) on the example stage wired that way: the search ends
+    (WAIT RFS) with the position counter zeroed."""
+    program = tmp_path / "rfs.tmc"
+    program.write_text("    SAP 193, 0, 3\n    RFS START, 0\n    WAIT RFS, 0, 0\n    STOP\n")
+    scenario = str(EXAMPLES / "pd86_1180_three_switch.toml")
+    assert main(["run", str(program), "--scenario", scenario, "-t", "60", "-w", "state,pos0"]) == 0
+    out = capsys.readouterr().out
+    assert "program stopped at address 3" in out and out.splitlines()[-2].endswith("pos0=0")
+    assert main(["run", str(program), "--scenario", scenario, "--module", "TMCM-6212"]) == 2
+    assert "not TMCM-6212" in capsys.readouterr().err
+
+
 def test_documented_examples_are_valid_scenarios():
     """docs/scenarios.md: every TOML example in the schema document loads and runs on its module."""
     import re

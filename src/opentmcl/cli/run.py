@@ -72,8 +72,8 @@ def open_target(args: argparse.Namespace):
     from ..firmware.eeprom import EepromError
     from ..firmware.vm import VirtualModule
 
-    name = args.module or DEFAULT_MODULE
     scenario = _scenario(args.scenario)
+    name = args.module or getattr(scenario, "module", None) or DEFAULT_MODULE
     try:
         vm = VirtualModule(name, address=args.address, eeprom=args.eeprom, scenario=scenario)
     except KeyError as exc:

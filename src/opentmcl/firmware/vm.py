@@ -307,6 +307,9 @@ class VirtualModule:
         return store_instruction(self, command, type, motor, value)
 
     def erase_program(self) -> None:
+        """GP81 protection off erases the program; a running program is reset first (131), as
+        it has nothing left to run (docs/assumptions.md)."""
+        self.interpreter.reset()
         self.program.erase()
 
     def restore_factory_defaults(self) -> None:
