@@ -7,7 +7,7 @@ import pytest
 from opentmcl.host import TmclStatusError, connect
 from opentmcl.host.debugger import DebugError, Debugger, parse_watch, parse_watches
 from opentmcl.host.loader import Loader, LoaderError, VerifyError, instructions_of
-from opentmcl.lang.assembler import assemble
+from opentmcl.lang.assembler import AsmError, assemble
 from opentmcl.lang.binfile import Instruction
 
 SRC = """
@@ -41,6 +41,26 @@ def test_download_verify_and_read_back(target):
     assert loader.read(10, len(written)) == written
     assert vm.program.code[10] == tuple(written[0])
     assert loader.read_one(0) == Instruction(0, 0, 0, 0)
+
+
+def test_a_program_assembled_for_its_load_address_runs_there(target, tmp_path, capsys):
+    """3.6.36 command 132 "enter download mode" at a start address, 129 type 1 "start from the
+    given address": the loop's JC (3.6.15) must target the loop where it lies, so source loaded at
+    address 10 is assembled for 10 (the loop counts user variable 5 up to 3, then X = A)."""
+    module, vm = target
+    prog = assemble(SRC, module="TMCM-6212", origin=10)
+    assert prog.labels["Loop"] == 11 and prog.instructions[5].value == 11
+    assert prog.listing().splitlines()[0].startswith("0010 ")
+    loader = Loader(module)
+    loader.download(prog, start=10)
+    loader.run(10)
+    vm.advance(1.0)
+    assert module.request(10, 5, 2).value == 3       # GGP 5, 2: the loop ran three times
+    assert module.request(10, 130, 0).value == 18    # GP130 program counter: on the STOP
+    with pytest.raises(ValueError):
+        assemble(SRC, origin=-1)
+    with pytest.raises(AsmError, match="from address 6140"):
+        assemble(SRC, module="TMCM-6212", origin=6140)
 
 
 def test_binary_image_and_tuples_are_accepted(target):

@@ -27,8 +27,10 @@ class LoadedProgram:
     filename: str = ""
 
 
-def read_program(path: str, module: str | None, include: list[str] | None = None) -> LoadedProgram:
-    """Assemble a .tmc file (for `module`) or read a .bin file; CliError on any problem."""
+def read_program(path: str, module: str | None, include: list[str] | None = None,
+                 origin: int = 0) -> LoadedProgram:
+    """Assemble a .tmc file (for `module`, to be loaded at address `origin`) or read a .bin file
+    (loaded as it is: its jump addresses are those it was assembled with); CliError on any problem."""
     from ..lang.assembler import AsmError, assemble_file
     from ..lang.binfile import BinFileError, decode
 
@@ -42,7 +44,7 @@ def read_program(path: str, module: str | None, include: list[str] | None = None
             raise CliError(f"{path}: {exc}") from None
         return LoadedProgram(code, {}, [None] * len(code), str(p))
     try:
-        prog = assemble_file(p, module=module, include_path=include or [])
+        prog = assemble_file(p, module=module, include_path=include or [], origin=origin)
     except AsmError as exc:
         raise CliError(str(exc)) from None
     return LoadedProgram(prog.instructions, dict(prog.labels), list(prog.source), str(p))
@@ -66,7 +68,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("program", help="TMCL source (.tmc) or binary (.bin)")
     add_connection_options(p, required=True)
-    p.add_argument("--start", type=int, default=0, help="program memory address to load at (default 0)")
+    p.add_argument("--start", type=int, default=0, help="program memory address to load at (default 0); .tmc source is assembled for it, a .bin "
+                   "image is loaded unchanged")
     p.add_argument("--no-verify", action="store_true", help="do not read the program back (134)")
     p.add_argument("--run", action="store_true", help="start the program after loading (129)")
     p.set_defaults(func=run)
@@ -99,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         module = client.module(args.address)
         name = module_name(module, args.module) if args.program.lower().endswith(".tmc") else args.module
-        program = read_program(args.program, name, args.include)
+        program = read_program(args.program, name, args.include, origin=args.start)
         loader = Loader(module)
         try:
             loader.download(program.instructions, start=args.start, verify=not args.no_verify)

@@ -74,6 +74,7 @@ class Program:
     source: list[SourceLine | None]  # per instruction; None for the appended STOP
     module: str | None = None
     filename: str = "<source>"
+    origin: int = 0  # program memory address of the first instruction (labels are absolute)
 
     def image(self) -> bytes:
         """The binary file contents (TMCL-IDE format: 8-byte records, no header)."""
@@ -90,17 +91,18 @@ class Program:
         for name, addr in self.labels.items():
             by_addr.setdefault(addr, []).append(name)
         out = []
-        for addr, ins in enumerate(self.instructions):
+        for index, ins in enumerate(self.instructions):
+            addr = self.origin + index
             for name in sorted(by_addr.get(addr, ())):
                 out.append(f"{'':4}  {'':23}  {'':>6}  {name}:")
             raw = " ".join(f"{b:02X}" for b in ins.encode())
-            src = self.source[addr]
+            src = self.source[index]
             if src is None:
                 out.append(f"{addr:04d}  {raw}  {'':>6}  STOP  // appended")
                 continue
             where = str(src.line) if src.file == self.filename else f"{src.file}:{src.line}"
             out.append(f"{addr:04d}  {raw}  {where:>6}  {src.text.strip()}")
-        for name in sorted(by_addr.get(len(self.instructions), ())):
+        for name in sorted(by_addr.get(self.origin + len(self.instructions), ())):
             out.append(f"{'':4}  {'':23}  {'':>6}  {name}:")
         return "\n".join(out) + "\n"
 
@@ -250,6 +252,7 @@ class _State:
     include_path: list[Path]
     append_stop: bool = True
     filename: str = "<source>"
+    origin: int = 0
     statements: list[_Stmt] = field(default_factory=list)
     labels: dict[str, tuple[int, _Where]] = field(default_factory=dict)
     constants: dict[str, list[_Const]] = field(default_factory=dict)
@@ -426,7 +429,7 @@ def _define_label(name: str, col: int, where: _Where, st: _State) -> None:
     if name in st.constants:
         first = st.constants[name][0].where
         _fail(where, col, f"{name!r} is already a constant (defined at {first.file}:{first.line})")
-    st.labels[name] = (len(st.statements), where)
+    st.labels[name] = (st.origin + len(st.statements), where)
 
 
 def _define_constant(name: str, col: int, expr: _Expr, where: _Where, st: _State) -> None:
@@ -538,16 +541,17 @@ def _finish(st: _State, profile) -> Program:
     if st.append_stop:
         instructions.append(STOP)
         sources.append(None)
-    if profile is not None and len(instructions) > profile.program_memory:
-        over = st.statements[min(profile.program_memory, len(st.statements) - 1)]
-        _fail(over.where, over.column, f"program has {len(instructions)} instructions; "
+    if profile is not None and st.origin + len(instructions) > profile.program_memory:
+        over = st.statements[max(0, min(profile.program_memory - st.origin, len(st.statements) - 1))]
+        at = f" from address {st.origin}" if st.origin else ""
+        _fail(over.where, over.column, f"program has {len(instructions)} instructions{at}; "
               f"{profile.name} program memory holds {profile.program_memory}")
     constants = {}
     for name in st.constants:
         constants[name] = _lookup(name, 1, st.constants[name][0].where, st)
     labels = {name: addr for name, (addr, _) in st.labels.items()}
     return Program(instructions, labels, constants, sources, profile.name if profile else None,
-                   st.filename)
+                   st.filename, st.origin)
 
 
 def _profile(module: str | None):
@@ -562,20 +566,23 @@ def _profile(module: str | None):
 
 def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[str | os.PathLike] = (),
              module: str | None = None, append_stop: bool = True,
-             defines: Mapping[str, int] | None = None) -> Program:
+             defines: Mapping[str, int] | None = None, origin: int = 0) -> Program:
     """Assemble TMCL source text.
 
     `module` ("TMCM-6212", "PD86-1180", "PD28-1021" or an alias) selects the bundled include files
     and checks that every command exists on that module and the program fits its memory; without
     it the TMCM-6212 includes are used and nothing is checked. `defines` are extra constants.
+    `origin` is the program memory address the program is loaded at (labels are absolute).
     """
+    if isinstance(origin, bool) or not isinstance(origin, int) or origin < 0:
+        raise ValueError(f"origin must be a program memory address >= 0, not {origin!r}")
     if isinstance(source, (bytes, bytearray)):
         source = bytes(source).decode("utf-8", errors="replace")
     if not isinstance(source, str):
         raise TypeError(f"assemble() takes the source text (str or bytes), not {type(source).__name__}; "
                         "assemble_file() reads a file")
     profile = _profile(module)
-    st = _State(module, [Path(p) for p in include_path], append_stop, filename)
+    st = _State(module, [Path(p) for p in include_path], append_stop, filename, origin)
     where = _Where("<defines>", 0, "")
     for name, value in (defines or {}).items():
         st.constants[name] = [_Const(where, 0, _Expr("num", 0, value=int(value)))]
@@ -588,7 +595,7 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
 
 def assemble_file(path: str | os.PathLike, *, include_path: Iterable[str | os.PathLike] = (),
                   module: str | None = None, append_stop: bool = True,
-                  defines: Mapping[str, int] | None = None) -> Program:
+                  defines: Mapping[str, int] | None = None, origin: int = 0) -> Program:
     """Assemble a source file; AsmError (line 0) if it cannot be read."""
     p = Path(path)
     try:
@@ -596,4 +603,4 @@ def assemble_file(path: str | os.PathLike, *, include_path: Iterable[str | os.Pa
     except OSError as exc:
         raise AsmError(str(p), 0, 0, f"cannot read file: {exc.strerror or exc}") from None
     return assemble(text, filename=str(p), include_path=include_path, module=module,
-                    append_stop=append_stop, defines=defines)
+                    append_stop=append_stop, defines=defines, origin=origin)
