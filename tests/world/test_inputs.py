@@ -52,6 +52,34 @@ def test_input_signals_saturate_at_the_port_range(rig):
         r.vm.world.set_input(9, 9, 1)
 
 
+def test_an_adin_line_reads_as_digital_and_analog_at_once(rig):
+    """TMCM-6212 manual 3.6.13: "The ADIN lines can be read as digital or analogue inputs at the same
+    time. The digital states can be accessed in bank 0" (analog 0...65535 in bank 1). One level per
+    line: a rising analog ramp sets the digital reading from mid-scale on (docs/assumptions.md) and
+    raises the input-change interrupt 39 (manual 5 bank 3 parameter 39 = 1, low-high) there;
+    driving the digital side reads as full scale. PD86-1180 4.6.15 likewise with 0...1023."""
+    r = rig("TMCM-6212", {"input": [{"bank": 1, "port": 0, "ramp": [[0, 0], [2, 65535]]}]})
+    w = Wire(r.vm)
+    w.load("SGP 39, 3, 1\nVECT 39, Changed\nEI 39\nEI 255\nLoop: JA Loop\n"
+           "Changed: GGP 1, 2\nCALC ADD, 1\nAGP 1, 2\nGIO 0, 1\nAGP 2, 2\nRETI")
+    w.run()
+    r.vm.advance(0.9)
+    assert (r.cmd(15, 0, 0), r.cmd(10, 1, 2)) == (0, 0)
+    r.vm.advance(0.2)                                   # 32768 is crossed at 1.0 s
+    assert (r.cmd(15, 0, 0), r.cmd(10, 1, 2)) == (1, 1)
+    assert 32768 <= r.cmd(10, 2, 2) <= 32768 + 33       # the handler saw the level just past mid-scale
+    r.vm.world.set_input(0, 0, 0)                       # now the digital side drives the line
+    assert (r.cmd(15, 0, 0), r.cmd(15, 0, 1)) == (0, 0)
+    r.vm.world.set_input(0, 0, 1)
+    assert r.cmd(15, 0, 1) == 65535
+    r = rig("TMCM-1180", {"input": [{"bank": 1, "port": 1, "value": 511}]})
+    assert r.cmd(15, 1, 0) == 0
+    r.vm.world.set_input(1, 1, 512)
+    assert r.cmd(15, 1, 0) == 1
+    with pytest.raises(ValueError, match="one line"):
+        rig("TMCM-6212", {"input": [{"bank": 0, "port": 3, "value": 1}, {"bank": 1, "port": 3, "value": 0}]})
+
+
 def test_input_change_interrupt_on_the_selected_transition(rig):
     """TMCM-6212 manual 5 bank 3 parameters 39-42 select the input-change transition (1 low-high,
     2 high-low, 3 both); interrupt 39 + port runs its handler when the scenario's input changes."""

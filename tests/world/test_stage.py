@@ -42,3 +42,21 @@ def test_profiles():
     assert ramp.next_integer_change(0.0) == pytest.approx(0.25)
     assert ramp.next_integer_change(1.9) is None      # 3.8 rounds to 4, the end value
     assert Profile.constant(3).next_integer_change(0) is None
+    # 1.25 s: the value is 2.5 exactly, which round() keeps at 2; the change comes just after
+    assert 1.25 < ramp.next_integer_change(1.25) < 1.25 + 1e-12
+
+
+def test_threshold_crossings():
+    """Manual 3.6.13 ("The ADIN lines can be read as digital or analogue inputs at the same time"):
+    a digital reading of an analog signal changes only where the signal crosses its threshold,
+    both ways, and at a tie just after it (docs/scenarios.md)."""
+    tri = Profile([(0.0, 0), (2.0, 1000), (4.0, 0)], "ramp")
+    assert tri.next_crossing(0.0, 512) == pytest.approx(1.023)          # up through 511.5
+    assert tri.next_crossing(1.5, 512) == pytest.approx(2.977)          # down through 511.5
+    assert tri.next_crossing(3.5, 512) is None
+    assert tri.next_crossing(0.0, 2000) is None                          # never reaches it
+    at_tie = 2 * 511.5 / 1000
+    assert at_tie < tri.next_crossing(at_tie, 512) < at_tie + 1e-12
+    steps = Profile([(1.0, 300), (2.0, 700), (3.0, 900), (4.0, 100)], "steps")
+    assert steps.next_crossing(0.0, 512) == 2.0 and steps.next_crossing(2.0, 512) == 4.0
+    assert Profile.constant(600).next_crossing(0.0, 512) is None

@@ -6,9 +6,16 @@ Bank 0 digital inputs, bank 1 analog inputs, bank 2 digital outputs. Port
 (PD86-1180: `SIO 255, 2, x`, value -1 copies the accumulator's low bits;
 `GIO 255, 0`). `SIO <n>, 0, <mask>` switches input pull-ups on modules whose
 profile has pull-up ports in bank 0.
+
+"The ADIN lines can be read as digital or analogue inputs at the same time"
+(TMCM-6212 3.6.13, PD86-1180 4.6.15): a line that has both a digital port and
+an analog port (same name) carries one level. Driving the analog side sets the
+digital reading (1 from half of the ADC range on); driving the digital side
+sets the analog reading to 0 or full scale (docs/assumptions.md).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from .status import TmclStatus
@@ -26,6 +33,8 @@ class IOBanks:
         self.values: dict[tuple[int, int], int] = {key: 0 for key in self.ports}
         self.forced: dict[tuple[int, int], int] = {}
         self.pullups = 0
+        self.twins = _adin_twins(self.ports)
+        self.sources: dict[tuple[int, int], Callable[[], int]] = {}  # driven by the world, read lazily
 
     def _bank_ports(self, bank: int, kind: str | None = None) -> list[tuple[int, int]]:
         return sorted(k for k, p in self.ports.items() if k[0] == bank and (kind is None or p.kind == kind))
@@ -73,10 +82,54 @@ class IOBanks:
         return self.read((bank, port))
 
     def read(self, key: tuple[int, int]) -> int:
-        return self.forced.get(key, self.values.get(key, 0))
+        if key in self.forced:
+            return self.forced[key]
+        source = self.sources.get(key)
+        return source() if source is not None else self.values.get(key, 0)
+
+    def drive_source(self, bank: int, port: int, source: Callable[[], int]) -> None:
+        """The outside world drives an input with a level that `source()` gives at any moment
+        (a scenario signal over time); the line's other reading follows it."""
+        key = (bank, port)
+        if key not in self.ports:
+            raise KeyError(f"no I/O port {port} in bank {bank}")
+        self.sources[key] = source
+        twin = self.twins.get(key)
+        if twin is not None:
+            driven, other = self.ports[key], self.ports[twin]
+            self.sources[twin] = lambda: _twin_level(driven, other, source())
 
     def drive_input(self, bank: int, port: int, value: int) -> None:
         """The outside world sets an input (scenario, tests, dashboard)."""
-        if (bank, port) not in self.ports:
+        key = (bank, port)
+        if key not in self.ports:
             raise KeyError(f"no I/O port {port} in bank {bank}")
-        self.values[(bank, port)] = value
+        self.values[key] = value
+        self.sources.pop(key, None)
+        twin = self.twins.get(key)
+        if twin is not None:
+            self.sources.pop(twin, None)
+            self.values[twin] = _twin_level(self.ports[key], self.ports[twin], value)
+
+
+def threshold(port) -> int:
+    """Smallest level of a digital input or of an ADIN line's analog side that reads as 1."""
+    return 1 if port.kind == "digital" else (port.max + 2) // 2
+
+
+def _adin_twins(ports) -> dict[tuple[int, int], tuple[int, int]]:
+    """Digital input port <-> analog input port of the same line (same name), both ways."""
+    analog = {p.name: key for key, p in ports.items() if p.kind == "analog"}
+    twins = {}
+    for key, p in ports.items():
+        if p.kind == "digital" and p.name in analog and "W" not in p.access:
+            twins[key] = analog[p.name]
+            twins[analog[p.name]] = key
+    return twins
+
+
+def _twin_level(driven, twin, value: int) -> int:
+    """The other reading of one line: analog -> digital at mid-scale, digital -> 0 or full scale."""
+    if driven.kind == "analog":
+        return 1 if value >= threshold(driven) else 0
+    return twin.max if value else twin.min

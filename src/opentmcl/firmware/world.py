@@ -21,6 +21,7 @@ from ..motion.scenario import Scenario, ScenarioError, load_scenario
 from ..motion.stage import Profile, ceil_ticks
 from . import flags as fl
 from .axis_world import AxisWorld
+from .io import threshold
 
 if TYPE_CHECKING:
     from .axis import Axis
@@ -60,9 +61,10 @@ class World:
         """Drive an input with a constant or a Profile over time (seconds since power-up of the world)."""
         if (bank, port) not in self.vm.io.ports:
             raise ScenarioError(f"input bank {bank} port {port}: {self.vm.profile.name} has no such port")
+        self.inputs.pop(self.vm.io.twins.get((bank, port)), None)  # one line: the newest drive wins
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
         self._input_cache = None
-        self._drive_inputs()
+        self._drive_input((bank, port))
 
     def set_shutdown(self, level: int) -> None:
         """The SHUTDOWN pin (PD86-1180 GP80) at a constant level."""
@@ -76,6 +78,10 @@ class World:
         for key in self.inputs:
             if key not in vm.io.ports:
                 raise ScenarioError(f"input bank {key[0]} port {key[1]}: {vm.profile.name} has no such port")
+            twin = vm.io.twins.get(key)
+            if twin in self.inputs and twin < key:
+                raise ScenarioError(f"input bank {twin[0]} port {twin[1]} and bank {key[0]} port {key[1]} are "
+                                    f"one line ({vm.io.ports[key].name}): drive only one of them")
         extra = [i for i in self.scenario.axes if i >= len(vm.axes)]
         if extra:
             raise ScenarioError(f"axis.{extra[0]}: {vm.profile.name} has {len(vm.axes)} axis/axes")
@@ -84,14 +90,25 @@ class World:
             self.axes_world.append(AxisWorld(self, i, self.scenario.axis(i)))
         for aw, ax in zip(self.axes_world, vm.axes, strict=False):
             aw.bind(ax)
-        self._drive_inputs()
+        for key in self.inputs:
+            self._drive_input(key)
 
-    def _drive_inputs(self) -> None:
-        s = self.vm.now / CLOCK_HZ
+    def _drive_input(self, key: tuple[int, int]) -> None:
+        """The port reads the signal at the moment it is read, rounded; a signal outside the
+        port's range saturates there."""
+        vm, sig, p = self.vm, self.inputs[key], self.vm.io.ports[key]
+        lo, hi = p.min, p.max
+        vm.io.drive_source(*key, lambda: min(max(round(sig.at(vm.now / CLOCK_HZ)), lo), hi))
+
+    def _watched_levels(self, key: tuple[int, int]) -> tuple[int, ...]:
+        """Levels whose crossing someone can see at once: a digital reading (input-change
+        interrupts); an analog value is only read, so it needs no events of its own."""
         io = self.vm.io
-        for key, sig in self.inputs.items():
-            p = io.ports[key]          # a signal outside the port's range saturates there
-            io.drive_input(*key, min(max(round(sig.at(s)), p.min), p.max))
+        port = io.ports[key]
+        if port.kind == "digital":
+            return (threshold(port),)
+        twin = io.twins.get(key)
+        return (threshold(port),) if twin is not None else ()
 
     def next_event(self) -> int | None:
         best = None
@@ -114,8 +131,11 @@ class World:
             return cached[1]
         best = None
         s = now / CLOCK_HZ
-        for sig in [*self.inputs.values(), *([self.shutdown] if self.shutdown else [])]:
-            x = sig.next_integer_change(s)
+        changes = [sig.next_crossing(s, level) for key, sig in self.inputs.items()
+                   for level in self._watched_levels(key)]
+        if self.shutdown:
+            changes.append(self.shutdown.next_integer_change(s))
+        for x in changes:
             if x is not None:
                 t = max(now + 1, ceil_ticks(x, CLOCK_HZ))
                 if best is None or t < best:
@@ -125,8 +145,6 @@ class World:
 
     def service(self) -> None:
         vm = self.vm
-        if self.inputs:
-            self._drive_inputs()
         if self.shutdown is not None:
             self._check_shutdown()
         now = vm.now

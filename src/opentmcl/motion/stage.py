@@ -143,6 +143,27 @@ class Profile:
     def breakpoints(self) -> list[float]:
         return list(self._xs)
 
+    def next_crossing(self, x: float, level: int) -> float | None:
+        """Smallest x' > x at which `round(at(x')) >= level` differs from its truth at x: when a
+        reading that only tells "at least `level`" (a digital input, a threshold) changes."""
+        above = round(self.at(x)) >= level
+        if self.kind == "steps":
+            for bx in self._xs:
+                if bx > x and (round(self.at(bx)) >= level) != above:
+                    return bx
+            return None
+        edge = level - 0.5
+        for i in range(1, len(self.points)):
+            (x0, v0), (x1, v1) = self.points[i - 1], self.points[i]
+            if x1 <= x or v1 == v0 or (v1 > v0) == above:
+                continue  # before x, flat, or moving away from the edge
+            t = x0 + (edge - v0) * (x1 - x0) / (v1 - v0)
+            if t > x1:
+                continue
+            lo = max(x, x0)
+            return t if t > lo else math.nextafter(lo, math.inf)  # at the edge (round() ties): just after
+        return None
+
     def next_integer_change(self, x: float) -> float | None:
         """Smallest x' > x at which round(at(x')) differs from round(at(x)) (inputs)."""
         now = round(self.at(x))
@@ -159,6 +180,8 @@ class Profile:
             slope = (v1 - v0) / (x1 - x0)
             target = now + (0.5 if slope > 0 else -0.5)
             t = x0 + (target - v0) / slope
+            if x0 <= t <= lo < x1:  # at the half-way point (round() keeps an even n there): just after it
+                return math.nextafter(lo, math.inf)
             if lo < t <= x1:
                 return t
             if round(v1) != now:
