@@ -71,6 +71,8 @@ def make_tmcl_module(name: str = DEFAULT_MODULE, *, address: int = 1, eeprom=Non
 
     if isinstance(address, bool) or not isinstance(address, int) or not 1 <= address <= 255:
         raise ValueError(f"module address must be 1..255, got {address!r}")
+    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0 < timeout < float("inf"):
+        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
     vm = VirtualModule(name, address=address, eeprom=eeprom)
     try:
         return TmclModule(vm, address=address, clock=clock, timeout=timeout, host_address=host_address)

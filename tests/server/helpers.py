@@ -66,3 +66,23 @@ def is_ok(frame: bytes, host: int, module: int, command: int) -> bool:
     """A well-formed status-100 reply (manual 3.2) whose value is "don't care" (e.g. SGP)."""
     return (len(frame) == 9 and frame[8] == sum(frame[:8]) & 0xFF
             and tuple(frame[:4]) == (host, module, 100, command))
+
+
+def wait_handled(session, total: int, timeout: float = 30.0) -> None:
+    """Until an endpoint's session has handled `total` received bytes (bounded).
+
+    A test that pauses to make an inter-byte gap first waits for this: on a loaded machine the
+    endpoint may read the bytes before the pause only after it, and then sees no gap at all."""
+    deadline = time.monotonic() + timeout
+    while session.bytes_received < total and time.monotonic() < deadline:
+        time.sleep(0.002)
+    assert session.bytes_received == total
+
+
+def only_session(tcp, timeout: float = 10.0):
+    """The session of the one client of a TcpServer, once it has been accepted (bounded)."""
+    deadline = time.monotonic() + timeout
+    while not tcp.sessions and time.monotonic() < deadline:
+        time.sleep(0.002)
+    [session] = tcp.sessions
+    return session

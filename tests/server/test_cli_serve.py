@@ -11,6 +11,7 @@ import time
 
 import pytest
 
+from opentmcl import VirtualModule
 from opentmcl.cli import CliError, main
 from opentmcl.cli.serve import assign_addresses, parse_hostport
 
@@ -168,6 +169,45 @@ def test_unknown_module_is_a_one_line_error(capsys):
     assert err.count("\n") == 1 and "TMCM-9999" in err
 
 
+SCENARIO = """module = "TMCM-6212"
+
+[[input]]
+bank = 0
+port = 2
+steps = [[0.0, 1]]
+"""
+
+
+def test_scenario_drives_the_served_module(serve, tmp_path):
+    """`--scenario FILE` (docs/scenarios.md) sets up the served module's world: the digital input
+    the scenario switches on reads 1 through GIO 2, 0 (manual 3.6.13); it reads 0 without it."""
+    scenario = tmp_path / "in2.toml"
+    scenario.write_text(SCENARIO)
+    for args, expected in (((), 0), (("--scenario", str(scenario)), 1)):
+        p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", *args)
+        with socket.create_connection(p.tcp_address(), timeout=5) as s:
+            s.sendall(request(1, 15, 2, 0))
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 15, expected)
+        assert p.stop()[0] == 0
+
+
+def test_scenario_for_another_module_is_a_one_line_error(capsys, tmp_path):
+    scenario = tmp_path / "in2.toml"
+    scenario.write_text(SCENARIO)
+    assert main(["serve", "--module", "PD86-1180", "--tcp", "127.0.0.1:0", "--scenario", str(scenario)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "TMCM-6212" in err
+
+
+@pytest.mark.parametrize("gap", ["0", "-1", "nan", "inf"])
+def test_bad_gap_is_a_one_line_error(capsys, gap):
+    """The inter-byte gap must let a truncated frame expire (manual 3.1: frames are found by
+    counting nine bytes), so only a positive, finite number of seconds is accepted."""
+    assert main(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--gap", gap]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--gap" in err
+
+
 def test_bad_can_spec_and_busy_port(capsys):
     assert main(["serve", "--module", "TMCM-6212", "--can", "virtual"]) == 2
     with socket.socket() as busy:
@@ -209,7 +249,8 @@ def test_several_modules_get_distinct_can_ids(serve):
 
 def test_build_server_assigns_can_ids_in_ram(tmp_path):
     """The same rule in-process, exercised on python-can's virtual bus: ID 3 reaches the
-    module at address 3, ID 1 the other; the EEPROM file is not written."""
+    module at address 3, ID 1 the other; the IDs are not stored in the EEPROM file: a module
+    powered up from it again has the default CAN ID 1 (manual 5.1, GP71)."""
     import can
 
     from opentmcl.cli import build_parser
@@ -230,4 +271,8 @@ def test_build_server_assigns_can_ids_in_ram(tmp_path):
     finally:
         host.shutdown()
         server.stop()
-    assert not (tmp_path / "a.json").exists()
+    again = VirtualModule("TMCM-6212", eeprom=tmp_path / "a.json")
+    try:
+        assert again.globals.get_raw(0, 71) == 1
+    finally:
+        again.close()

@@ -66,6 +66,9 @@ def test_expire_and_deadline():
 def test_bad_arguments_raise():
     with pytest.raises(ValueError):
         SerialFramer(gap=0)
+    for gap in (float("nan"), float("inf")):  # a partial frame would never expire: the port could wedge
+        with pytest.raises(ValueError):
+            SerialFramer(gap=gap)
     with pytest.raises(ValueError):
         SerialFramer(frame_len=0)
 

@@ -23,10 +23,12 @@ from .helpers import (
     REQ_EVENT_0_2,
     SGP_66_3,
     drain_socket,
+    only_session,
     recv_exactly,
     reply,
     request,
     unique_channel,
+    wait_handled,
 )
 
 GAP = 0.03
@@ -116,14 +118,19 @@ def test_fuzz_tcp():
         import socket
 
         with socket.create_connection(tcp.address, timeout=5) as s:
+            session = only_session(tcp)
+            sent = [0]  # bytes sent so far (a reply is written before its bytes are counted)
 
             @ENDPOINT_SETTINGS
             @given(stream=streams)
             def check(stream):
                 assume(not addresses_module_1(stream))
+                sent[0] += len(stream)
                 s.sendall(stream)
+                wait_handled(session, sent[0])  # then the pause below is silence on the line
                 time.sleep(3 * GAP)
                 drain_socket(s, 0.05)
+                sent[0] += len(GGP_66)
                 s.sendall(GGP_66)
                 assert read_check_reply(lambda: recv_exactly(s, 9)) == GOOD_REPLY
 
@@ -138,16 +145,20 @@ def test_fuzz_pty():
     server.start()
     try:
         with serial.Serial(pty.path, timeout=5) as port:
+            sent = [0]  # bytes sent so far (a reply is written before its bytes are counted)
 
             @ENDPOINT_SETTINGS
             @given(stream=streams)
             def check(stream):
                 assume(not addresses_module_1(stream))
+                sent[0] += len(stream)
                 port.write(stream)
                 port.flush()
+                wait_handled(pty.session, sent[0])  # then the pause below is silence on the line
                 time.sleep(3 * GAP)
                 time.sleep(0.05)
                 port.reset_input_buffer()
+                sent[0] += len(GGP_66)
                 port.write(GGP_66)
                 assert read_check_reply(lambda: port.read(9)) == GOOD_REPLY
 
@@ -325,10 +336,7 @@ def safe_ascii_stream(stream: bytes) -> bool:
 
 def wait_consumed(session, total: int) -> None:
     """Until the endpoint has handled `total` bytes (bounded: 30 s)."""
-    deadline = time.monotonic() + 30
-    while session.bytes_received < total and time.monotonic() < deadline:
-        time.sleep(0.005)
-    assert session.bytes_received == total
+    wait_handled(session, total)
 
 
 def ascii_check(vm, write, read_all, read_n):
@@ -356,6 +364,7 @@ def test_fuzz_ascii_pty():
         with serial.Serial(pty.path, timeout=5) as port:
             port.write(ENTER_ASCII)
             assert port.read(9) == reply(2, 1, 100, 139, 0)
+            wait_consumed(pty.session, len(ENTER_ASCII))  # counted after its reply is written
 
             def read_all():
                 time.sleep(0.05)
@@ -390,7 +399,8 @@ def test_fuzz_ascii_tcp():
         with socket.create_connection(tcp.address, timeout=5) as s:
             s.sendall(ENTER_ASCII)
             assert recv_exactly(s, 9) == reply(2, 1, 100, 139, 0)
-            [session] = tcp.sessions
+            session = only_session(tcp)
+            wait_consumed(session, len(ENTER_ASCII))  # counted after its reply is written
 
             def write(data):
                 total = session.bytes_received + len(data)

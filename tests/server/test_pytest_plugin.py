@@ -125,7 +125,7 @@ def test_restored(tmcl_module):
 
 
 def test_bad_marker_or_name_fails_clearly(run):
-    """An unknown module, option or address is a test failure with a message, not a traceback."""
+    """An unknown module, option, address or time-out is a test failure with a message, not a traceback."""
     result = run('''
 import pytest
 
@@ -140,10 +140,14 @@ def test_bad_option(tmcl_module):
 @pytest.mark.tmcl_module("TMCM-6212", address=0)
 def test_bad_address(tmcl_module):
     pass
+
+@pytest.mark.tmcl_module("TMCM-6212", timeout=-1)
+def test_bad_timeout(tmcl_module):
+    pass
 ''')
-    result.assert_outcomes(errors=3)
+    result.assert_outcomes(errors=4)
     result.stdout.fnmatch_lines(["*unknown module 'TMCM-9999'*", "*unknown option(s) speed*",
-                                 "*module address must be 1..255*"])
+                                 "*module address must be 1..255*", "*timeout must be a positive number*"])
     assert "Traceback" not in result.stdout.str()
 
 

@@ -99,3 +99,29 @@ def test_time_spent_answering_is_not_silence_on_the_line():
     assert session.receive(GGP_66) == 1              # the partial frame was dropped first
     assert session.framer.dropped == 4
     assert writes[-1] == reply(2, 1, 100, 10, 1)
+
+
+def test_serial_traffic_feeds_the_serial_heartbeat_gp68_only():
+    """Manual 5.1 GP68 "Serial heartbeat for RS485 interface and USB interface. If this time limit
+    is up and no further command is received by the module the motor will be stopped" and GP82,
+    the separate "Heartbeat for CAN interface": frames through a serial session (pty, TCP) keep the
+    serial heartbeat alive, not the CAN one."""
+    ft, writes, session = make()
+
+    def speed_after_talking(seconds):
+        for _ in range(round(seconds / 0.15)):             # the serial host talks every 0.15 s
+            ft.t += 0.15
+            session.receive(request(1, 6, 3, 0))
+        writes.clear()
+        session.receive(request(1, 6, 3, 0))               # GAP 3: actual speed
+        return writes[0][1][4:8]
+
+    session.receive(request(1, 9, 68, 0, 200))             # SGP 68, 0, 200 (ms)
+    session.receive(request(1, 1, 0, 0, 1000))             # ROR 0, 1000
+    assert speed_after_talking(0.6) != bytes(4)            # still turning after 3 heartbeats
+    ft.t += 0.5                                            # the serial host falls silent
+    assert speed_after_talking(0) == bytes(4)              # stopped
+    session.receive(request(1, 9, 68, 0, 0))               # serial heartbeat off,
+    session.receive(request(1, 9, 82, 0, 200))             # CAN heartbeat 200 ms
+    session.receive(request(1, 1, 0, 0, 1000))
+    assert speed_after_talking(0.6) == bytes(4)            # serial traffic is no CAN traffic

@@ -1,5 +1,6 @@
 """TCP endpoint and TCP host transport: raw 9-byte frames over a socket."""
 import socket
+import threading
 import time
 import urllib.parse
 
@@ -12,7 +13,18 @@ from opentmcl.server import Server
 from opentmcl.server.tcp import TcpServer, is_loopback
 
 from .conftest import GAP
-from .helpers import GGP_66, REQ_EVENT_0_2, SGP_66_3, drain_socket, is_ok, recv_exactly, reply, request
+from .helpers import (
+    GGP_66,
+    REQ_EVENT_0_2,
+    SGP_66_3,
+    drain_socket,
+    is_ok,
+    only_session,
+    recv_exactly,
+    reply,
+    request,
+    wait_handled,
+)
 
 
 def connect(tcp):
@@ -49,11 +61,14 @@ def test_garbage_and_truncated_frame_resynchronise_after_gap(tcp_server):
     next well-formed request (manual 3.6.8 example) gets its reply."""
     _, tcp = tcp_server
     with connect(tcp) as s:
+        session = only_session(tcp)
         s.sendall(GGP_66[:5])
+        wait_handled(session, 5)
         time.sleep(GAP * 3)
         s.sendall(GGP_66)
         assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
         s.sendall(b"\x00\x13\x37")
+        wait_handled(session, 17)
         time.sleep(GAP * 3)
         s.sendall(GGP_66)
         assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
@@ -109,6 +124,35 @@ def test_bounded_number_of_clients(tcp_server):
         assert recv_exactly(d, 9) == reply(2, 1, 100, 10, 1)
 
 
+class AbortOnce:
+    """The listening socket, except that its next accept() fails as when a client resets its
+    connection before the server accepts it (ECONNABORTED)."""
+
+    def __init__(self, sock):
+        self.sock = sock
+        self.failed = threading.Event()
+
+    def accept(self):
+        if not self.failed.is_set():
+            self.failed.set()
+            raise ConnectionAbortedError(103, "Software caused connection abort")
+        return self.sock.accept()
+
+    def __getattr__(self, name):
+        return getattr(self.sock, name)
+
+
+def test_a_failed_accept_does_not_stop_the_endpoint(tcp_server):
+    """DESIGN.md "Errors and bad input": the server never dies. A failed accept leaves the TCP
+    endpoint listening; the next client gets its reply to the manual 3.6.8 GGP 66 example."""
+    _, tcp = tcp_server
+    tcp._sock = AbortOnce(tcp._sock)
+    assert tcp._sock.failed.wait(5)
+    with connect(tcp) as s:
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+
+
 def test_loopback_detection():
     assert is_loopback("127.0.0.1") and is_loopback("::1") and is_loopback("localhost")
     assert not is_loopback("0.0.0.0") and not is_loopback("192.168.1.2")
@@ -150,7 +194,8 @@ def test_transport_reports_server_going_away(tcp_server):
         t.close()
 
 
-@pytest.mark.parametrize("url", ["tcp://", "tcp://host", "tcp://127.0.0.1:99999", "tcp://h:1?connect_timeout=x"])
+@pytest.mark.parametrize("url", ["tcp://", "tcp://host", "tcp://127.0.0.1:99999", "tcp://h:1?connect_timeout=x",
+                                 "tcp://h:1?connect_timeout=-1", "tcp://h:1?connect_timeout=nan"])
 def test_bad_tcp_urls(url):
     with pytest.raises(TmclConnectionError):
         open_tcp(urllib.parse.urlsplit(url))

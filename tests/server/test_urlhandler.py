@@ -1,6 +1,4 @@
 """pyserial URL handler: serial.serial_for_url("opentmcl://TMCM-6212")."""
-import time
-
 import pytest
 import serial
 
@@ -52,16 +50,58 @@ def test_modules_run_in_real_time_and_send_events():
         assert port.read(9) == reply(2, 1, 128, 138, 1)
 
 
-def test_telegram_pause_delays_readability():
-    """Manual 5.1 GP75: the reply is sent after the pause (ms, docs/assumptions.md)."""
+class FakeTime:
+    """Stands in for the `time` module of the port class: sleep() moves the clock forward."""
+
+    def __init__(self):
+        self.t = 1000.0
+
+    def monotonic(self):
+        return self.t
+
+    def sleep(self, seconds):
+        self.t += seconds
+
+
+@pytest.fixture
+def fake_time(monkeypatch):
+    from opentmcl.urlhandler import protocol_opentmcl
+
+    ft = FakeTime()
+    monkeypatch.setattr(protocol_opentmcl, "time", ft)
+    return ft
+
+
+def test_telegram_pause_delays_readability(fake_time):
+    """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent" (ms, docs/assumptions.md):
+    the reply to the 3.6.8 GGP 66 example becomes readable only when the pause is over."""
     with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
         port.write(request(1, 9, 75, 0, 200))  # SGP 75, 0, 200
         port.read(9)
         port.write(GGP_66)
         assert port.in_waiting == 0
-        t0 = time.monotonic()
+        fake_time.t += 0.199
+        assert port.in_waiting == 0
+        fake_time.t += 0.002
+        assert port.in_waiting == 9
         assert port.read(9) == reply(2, 1, 100, 10, 1)
-        assert time.monotonic() - t0 >= 0.15
+
+
+@pytest.mark.parametrize(("gp65", "baud"), [(0, 9600), (7, 115200)])
+def test_pace_sends_reply_bytes_at_the_gp65_baud_rate(fake_time, gp65, baud):
+    """Manual 5.1 GP65 "RS485 baud rate" table: with ?pace=1 the reply bytes become readable one
+    per ten bit times (8N1) at that rate; the 3.6.8 GGP 66 reply (9 bytes) as the probe."""
+    byte = 10 / baud
+    with serial.serial_for_url("opentmcl://TMCM-6212?pace=1", timeout=2) as port:
+        port.write(request(1, 9, 65, 0, gp65))  # SGP 65, 0, gp65
+        fake_time.t += 1.0
+        port.read(9)
+        port.write(GGP_66)
+        assert port.in_waiting == 0
+        fake_time.t += 4.5 * byte
+        assert port.in_waiting == 4
+        fake_time.t += 5 * byte
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
 
 
 def test_eeprom_file_is_flushed_on_close(tmp_path):
@@ -78,7 +118,8 @@ def test_eeprom_file_is_flushed_on_close(tmp_path):
 
 @pytest.mark.parametrize("url", ["opentmcl://", "opentmcl://NO-SUCH-MODULE", "opentmcl://TMCM-6212@x",
                                  "opentmcl://TMCM-6212@1,TMCM-6212@1", "opentmcl://TMCM-6212?color=red",
-                                 "opentmcl://TMCM-6212@300"])
+                                 "opentmcl://TMCM-6212@300", "opentmcl://TMCM-6212?gap=nan",
+                                 "opentmcl://TMCM-6212?gap=inf", "opentmcl://TMCM-6212?gap=0"])
 def test_bad_urls_raise_serial_exception(url):
     with pytest.raises(serial.SerialException):
         serial.serial_for_url(url)

@@ -24,7 +24,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"module URL: sim://TMCM-6212, tcp://HOST:PORT, serial:///dev/ttyUSB0?baud=9600, "
                         f"can://socketcan/can0?id=1 (default ${ENV_URL})")
     p.add_argument("--address", type=int, default=None,
-                   help="module address (default 1, or the address a sim:// URL sets)")
+                   help="module address (default 1, or the address a sim:// URL sets); "
+                        "on CAN the URL's ?id=N chooses the module")
     p.add_argument("--host-address", type=int, default=2, help="reply (host) address (default 2)")
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each reply (default 5)")
     p.add_argument("-v", "--verbose", action="store_true", help="print the whole reply, not just the value")
@@ -94,9 +95,13 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.url:
         raise CliError(f"no module URL: give --to URL (or set ${ENV_URL})")
+    if args.address is not None and args.url.strip().lower().startswith("can:"):
+        # CAN frames carry no address byte (manual 3.1): the CAN ID in the URL picks the module.
+        raise CliError("on CAN the module is chosen by its CAN ID in the URL (can://IFACE/CHANNEL?id=N), "
+                       "not by --address")
     requests = [parse(text) for text in args.instructions]  # all parsed before anything is sent
-    if args.timeout <= 0:
-        raise CliError("--timeout must be positive")
+    if not 0 < args.timeout < float("inf"):  # also NaN
+        raise CliError(f"--timeout must be a positive number of seconds, got {args.timeout}")
     try:
         client = open_bus(args.url, address=args.address, timeout=args.timeout, host_address=args.host_address)
     except (TmclError, ValueError) as exc:

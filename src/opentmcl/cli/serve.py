@@ -130,7 +130,7 @@ def build_modules(args) -> list:
             modules.append(VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario))
         except KeyError as exc:
             raise CliError(f"unknown module {name!r}: {exc.args[0] if exc.args else ''}") from None
-        except EepromError as exc:
+        except (EepromError, ValueError) as exc:  # also a scenario for another module
             raise CliError(str(exc)) from None
     return modules
 
@@ -140,8 +140,8 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
     from ..server import CanServer, PtyServer, Server, TcpServer
     from ..server.tcp import is_loopback
 
-    if args.gap <= 0:
-        raise CliError("--gap must be positive")
+    if not 0 < args.gap < float("inf"):  # also NaN
+        raise CliError(f"--gap must be a positive number of seconds, got {args.gap}")
     if args.max_clients < 1:
         raise CliError("--max-clients must be at least 1")
     if args.link and not args.pty:

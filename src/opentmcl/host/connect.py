@@ -32,7 +32,10 @@ def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
     if not isinstance(url, str) or "://" not in url:
         raise TmclConnectionError(f"not a module URL: {url!r} (expected e.g. sim://TMCM-6212, "
                                   f"tcp://HOST:PORT, serial:///dev/ttyUSB0, can://socketcan/can0?id=1)")
-    parts = urllib.parse.urlsplit(url.strip())
+    try:
+        parts = urllib.parse.urlsplit(url.strip())
+    except ValueError as exc:  # e.g. an unclosed [IPv6 bracket
+        raise TmclConnectionError(f"bad module URL {url!r}: {exc}") from None
     scheme = parts.scheme.lower()
     if scheme not in SCHEMES:
         raise TmclConnectionError(f"unknown URL scheme {parts.scheme!r} in {url!r}; "
@@ -67,7 +70,10 @@ def open_transport(url: str, *, address: int | None = None) -> Transport:
 
 def _default_address(url: str) -> int:
     """1, or the address a sim:// URL gives its first module (``?address=N`` or ``NAME@N``)."""
-    parts = urllib.parse.urlsplit(url.strip()) if isinstance(url, str) else None
+    try:
+        parts = urllib.parse.urlsplit(url.strip()) if isinstance(url, str) else None
+    except ValueError:
+        return 1  # open_transport reports the bad URL
     if parts is None or parts.scheme.lower() != "sim":
         return 1
     first = parts.netloc.split(",")[0]

@@ -23,8 +23,8 @@ class SerialFramer:
     """Collects bytes into `frame_len`-byte frames, resetting after a silent gap."""
 
     def __init__(self, gap: float = DEFAULT_GAP, frame_len: int = FRAME_LEN) -> None:
-        if gap <= 0:
-            raise ValueError("gap must be positive")
+        if not 0 < gap < float("inf"):  # also NaN: a partial frame must expire some time
+            raise ValueError(f"gap must be a positive number of seconds, got {gap!r}")
         if frame_len <= 0:
             raise ValueError("frame_len must be positive")
         self.gap = gap

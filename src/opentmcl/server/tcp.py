@@ -12,6 +12,7 @@ accepted and closed at once); received bytes are only ever parsed as frames.
 from __future__ import annotations
 
 import ipaddress
+import logging
 import socket
 import struct
 import sys
@@ -19,6 +20,8 @@ import threading
 
 from .framer import DEFAULT_GAP
 from .session import SerialSession
+
+log = logging.getLogger("opentmcl.server")
 
 DEFAULT_MAX_CLIENTS = 4
 POLL = 0.2
@@ -117,15 +120,25 @@ class TcpServer:
                 conn, _peer = self._sock.accept()
             except TimeoutError:
                 continue
-            except OSError:
-                break
+            except OSError as exc:
+                if self._stop.is_set() or self._sock.fileno() < 0:
+                    break  # stop() closed the listening socket
+                # A client that reset before it was accepted, or no file descriptor left
+                # (EMFILE): the endpoint lives on and accepts again a moment later.
+                log.warning("TCP accept failed: %s", exc)
+                self._stop.wait(POLL)
+                continue
             with self._lock:
                 full = len(self._clients) >= self.max_clients
             if full or self._stop.is_set():
                 self.rejected += 1
                 conn.close()
                 continue
-            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            try:
+                conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            except OSError:  # the client is already gone
+                conn.close()
+                continue
             try:  # replies are 9 bytes: a small send buffer bounds memory and finds idle readers soon
                 conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
             except OSError:

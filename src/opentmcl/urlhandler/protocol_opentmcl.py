@@ -75,8 +75,8 @@ def parse_url(url: str) -> dict:
                 options["gap"] = float(value)
             except ValueError:
                 raise ValueError(f"bad gap {value!r}") from None
-            if not options["gap"] > 0:
-                raise ValueError("gap must be positive")
+            if not 0 < options["gap"] < float("inf"):
+                raise ValueError(f"gap must be a positive number of seconds, got {value!r}")
         elif key == "pace":
             options["pace"] = value.lower() in ("1", "true", "yes", "on")
         else:

@@ -24,6 +24,10 @@ class SerialTransport(StreamTransport):
     def __init__(self, port: str, baud: int = DEFAULT_BAUD) -> None:
         import serial
 
+        if port.lower().startswith("opentmcl://"):
+            from ...urlhandler import register
+
+            register()  # pyserial finds the opentmcl:// scheme (idempotent)
         super().__init__()
         self.port = port
         self.name = f"serial port {port}"

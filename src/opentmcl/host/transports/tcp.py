@@ -83,4 +83,6 @@ def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
         connect_timeout = float(query.get("connect_timeout", DEFAULT_CONNECT_TIMEOUT))
     except ValueError:
         raise TmclConnectionError(f"bad connect_timeout in {url.geturl()!r}") from None
+    if not 0 < connect_timeout < float("inf"):
+        raise TmclConnectionError(f"connect_timeout must be a positive number of seconds, got {connect_timeout}")
     return TcpTransport(url.hostname, port, connect_timeout)
