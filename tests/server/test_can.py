@@ -96,6 +96,26 @@ def test_can_transport_roundtrip(can_server):
         t.close()
 
 
+def test_a_can_connection_reaches_only_the_module_of_its_can_id(can_server):
+    """Manual 3.1: on CAN the address byte is left out - the CAN ID (GP71) selects the module. A
+    connection to CAN ID 3 (the second module, address 2) answers for that module; asking it for
+    another address is a typed error before anything is sent, never a reply from the wrong module
+    (manual 3.6.8 GGP 66 as the probe)."""
+    from opentmcl.host import TmclAddressError, open_bus
+
+    _, _, channel = can_server
+    client = open_bus(f"can://virtual/{channel}?id=3&reply_id=4", address=2, timeout=5)
+    try:
+        assert client.module().request(10, 66, 0).value == 2
+        with pytest.raises(TmclAddressError, match="CAN ID"):
+            client.request(10, 66, 0, address=1)
+        with pytest.raises(TmclAddressError):
+            client.module(1)
+        assert client.request(10, 66, 0).value == 2   # the connection still works
+    finally:
+        client.close()
+
+
 def test_can_transport_timeout_and_errors(can_server):
     _, _, channel = can_server
     t = CanTransport("virtual", channel, can_id=77)

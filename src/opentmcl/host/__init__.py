@@ -12,6 +12,7 @@ from __future__ import annotations
 from .client import Client, VersionReply
 from .connect import SCHEMES, connect, open_bus, open_transport
 from .errors import (
+    TmclAddressError,
     TmclConnectionError,
     TmclError,
     TmclProtocolError,
@@ -23,7 +24,7 @@ from .module import Axis, Module, profile_for_version
 from .transport import Transport
 
 __all__ = [
-    "SCHEMES", "Axis", "Client", "Module", "TmclConnectionError", "TmclError", "TmclProtocolError",
+    "SCHEMES", "Axis", "Client", "Module", "TmclConnectionError", "TmclError", "TmclAddressError", "TmclProtocolError",
     "TmclStatusError", "TmclTimeout", "Transport", "UnknownParameterError", "VersionReply", "connect",
     "open_bus", "open_transport", "profile_for_version",
 ]

@@ -15,7 +15,7 @@ from typing import ClassVar
 from ..protocol.frame import FRAME_LEN, Reply, Request, checksum, to_int32
 from ..protocol.replies import MemoryReply
 from ..protocol.status import Status, is_success
-from .errors import TmclProtocolError, TmclStatusError, TmclTimeout, describe_request
+from .errors import TmclAddressError, TmclProtocolError, TmclStatusError, TmclTimeout, describe_request
 from .transport import Transport
 
 READ_PROGRAM_MEMORY = 134  # control command with a special reply format (manual 3.6.36)
@@ -96,6 +96,7 @@ class Client:
         Command 136 type 0 returns a `VersionReply`, command 134 a `MemoryReply` (the stored
         instruction); command 137 sends no reply and returns None.
         """
+        self._check_reachable(address)
         req = Request(_check_byte("address", self.address if address is None else address),
                       _check_byte("command", command), _check_byte("type", type),
                       _check_byte("motor", motor), _check_value(value))
@@ -109,6 +110,14 @@ class Client:
             if req.command == READ_PROGRAM_MEMORY:
                 return self._read_memory(req, timeout)
             return self._read_reply(req, timeout)
+
+    def _check_reachable(self, address: int | None) -> None:
+        """On CAN the connection's CAN ID selects the module: other addresses cannot be reached."""
+        if address is not None and address != self.address and self.transport.frame_format == "can":
+            raise TmclAddressError(
+                f"module address {address}: a CAN connection reaches only the module of its CAN ID "
+                f"({getattr(self.transport, 'can_id', '?')}, address {self.address} here); the address "
+                "byte is not sent on CAN (manual 3.1). Open can://...?id=N for another module")
 
     def send_raw(self, frame: bytes, *, timeout: float | None = None) -> Reply | VersionReply | None:
         """Send a ready-made 9-byte request frame (its checksum is not checked) and return the reply."""
@@ -274,6 +283,7 @@ class Client:
         """A `Module` at `address` on this client's bus (several modules may share one client)."""
         from .module import Module
 
+        self._check_reachable(address)
         return Module(self, address, profile)
 
     def sleep(self, seconds: float) -> None:

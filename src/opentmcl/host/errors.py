@@ -53,6 +53,11 @@ class TmclConnectionError(TmclError, ConnectionError):
     """The transport could not be opened, or it was closed or broke."""
 
 
+class TmclAddressError(TmclError, ValueError):
+    """A request for a module address this connection cannot reach (on CAN the connection's
+    CAN ID, not an address byte, selects the module)."""
+
+
 class TmclProtocolError(TmclError):
     """Bytes were received that are not a valid reply (e.g. wrong checksum)."""
 
