@@ -17,6 +17,16 @@ def test_single_module_has_no_selector(page, served):
     assert not page.is_visible("#module-select")
 
 
+def move_from_console(page, position: int) -> None:
+    """Type "MVP ABS, 0, <position>" into the console; wait for status 100 and the axis card."""
+    page.fill("#console-input", f"MVP ABS, 0, {position}")
+    page.press("#console-input", "Enter")
+    page.wait_for_function("document.getElementById('console-log').textContent.includes('status 100')",
+                           timeout=TIMEOUT_MS)
+    page.wait_for_function(f"document.getElementById('axis-0-position').textContent === '{position}'",
+                           timeout=TIMEOUT_MS)
+
+
 def test_page_shows_module_overview(page, served):
     """TMCM-6212 manual 3.6.36 command 136: the overview shows the version string "6212V105" and the
     module's six axes (manual 1 "Features": six axes)."""
@@ -31,12 +41,7 @@ def test_page_shows_module_overview(page, served):
 def test_console_move_changes_the_position(page, served):
     """Manual 3.6.4 MVP ABS: "MVP ABS, 0, 51200" moves motor 0 to 51200; the axis card and the live
     chart follow the actual position (axis parameter 1) until it equals the target."""
-    page.fill("#console-input", "MVP ABS, 0, 51200")
-    page.press("#console-input", "Enter")
-    page.wait_for_function("document.getElementById('console-log').textContent.includes('status 100')",
-                           timeout=TIMEOUT_MS)
-    page.wait_for_function("document.getElementById('axis-0-position').textContent === '51200'",
-                           timeout=TIMEOUT_MS)
+    move_from_console(page, 51200)
     points = page.evaluate("window.dashboard.charts.position.series[0].y")
     assert points[-1] == 51200 and min(points) < 51200  # the chart saw the motor on its way
     assert served.dashboard.module.axes[0].position == 51200
@@ -149,12 +154,7 @@ def test_bus_with_two_modules_has_a_selector(browser, served_bus):
         assert page.inner_text("#ov-module") == "PD86-1180" and page.inner_text("#ov-address") == "2"
         assert page.locator(".axis-card").count() == 1
         assert page.eval_on_selector("#module-select", "s => s.value") == "/m/2/"
-        page.fill("#console-input", "MVP ABS, 0, 1000")
-        page.press("#console-input", "Enter")
-        page.wait_for_function("document.getElementById('console-log').textContent.includes('status 100')",
-                               timeout=TIMEOUT_MS)
-        page.wait_for_function("document.getElementById('axis-0-position').textContent === '1000'",
-                               timeout=TIMEOUT_MS)
+        move_from_console(page, 1000)
         first, second = served_bus.dashboards
         assert second.module.axes[0].position == 1000
         assert first.module.axes[0].position == 0 and first.module.axes[0].target_position == 0

@@ -215,18 +215,23 @@ def test_bad_scenarios_raise_scenario_error(rig, bad):
         rig("TMCM-6212", bad)
 
 
-def test_scenario_files_and_their_errors(rig, tmp_path):
-    """docs/scenarios.md: TOML files load; syntax errors, unknown ports and YAML without PyYAML
-    are ScenarioErrors naming the problem."""
-    good = tmp_path / "s.toml"
-    good.write_text("[axis.0]\nright = { position = 100 }\n")
+@pytest.mark.parametrize(("name", "text", "broken"), [
+    ("s.toml", "[axis.0]\nright = { position = 100 }\n", "[axis.0\n"),
+    ("s.yaml", "axis:\n  0:\n    right: {position: 100}\n", "axis: [unclosed\n"),   # issue 5: TOML or YAML
+])
+def test_scenario_files_and_their_errors(rig, tmp_path, name, text, broken):
+    """docs/scenarios.md: TOML and YAML files load (a right limit switch at 100 stops a move to
+    1000 there, TMCM-6212 manual 4 AP10); syntax errors, unknown ports and axes are ScenarioErrors
+    naming the problem."""
+    good = tmp_path / name
+    good.write_text(text)
     r = rig("TMCM-6212", str(good))
     r.cmd(1, 0, 0, 1000)
     r.vm.advance(1)
     assert r.gap(1) == 100
-    bad = tmp_path / "bad.toml"
-    bad.write_text("[axis.0\n")
-    with pytest.raises(ScenarioError, match="bad.toml"):
+    bad = tmp_path / f"bad{good.suffix}"
+    bad.write_text(broken)
+    with pytest.raises(ScenarioError, match=bad.name):
         rig("TMCM-6212", str(bad))
     with pytest.raises(ScenarioError, match="port 7"):
         rig("TMCM-6212", {"input": [{"bank": 0, "port": 7, "value": 1}]})
@@ -234,16 +239,6 @@ def test_scenario_files_and_their_errors(rig, tmp_path):
         rig("TMCM-6212", 42)
     with pytest.raises(ScenarioError, match="axis.1"):
         rig("TMCM-1180", {"axis": {"1": {}}})
-    y = tmp_path / "s.yaml"                          # the same stage as YAML (issue 5: TOML or YAML)
-    y.write_text("axis:\n  0:\n    right: {position: 100}\n")
-    r = rig("TMCM-6212", str(y))
-    r.cmd(1, 0, 0, 1000)
-    r.vm.advance(1)
-    assert r.gap(1) == 100
-    bad_yaml = tmp_path / "bad.yaml"
-    bad_yaml.write_text("axis: [unclosed\n")
-    with pytest.raises(ScenarioError, match="bad.yaml"):
-        rig("TMCM-6212", str(bad_yaml))
 
 
 def test_wait_refsw_and_limsw_wake_at_the_switch_edge(rig):
