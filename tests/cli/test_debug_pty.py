@@ -6,6 +6,7 @@ from __future__ import annotations
 import os
 import re
 import select
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -20,12 +21,27 @@ PROMPT = b"(tmcl) "
 HANG_GUARD = 60.0  # seconds without any output before the test gives up (not a speed limit)
 
 
+STARTED: list[subprocess.Popen] = []
+
+
+@pytest.fixture(autouse=True)
+def no_leftover_debuggers():
+    """A test that fails half-way must not leave its debugger (maybe running a program) behind."""
+    yield
+    while STARTED:
+        proc = STARTED.pop()
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=HANG_GUARD)
+
+
 class Terminal:
     def __init__(self, *args: str):
         self.master, slave = os.openpty()
         env = dict(os.environ, PYTHONPATH=str(ROOT / "src"), TERM="dumb")
         self.proc = subprocess.Popen([sys.executable, "-m", "opentmcl", *args], stdin=slave, stdout=slave,
                                      stderr=slave, cwd=ROOT, env=env, close_fds=True, start_new_session=True)
+        STARTED.append(self.proc)
         os.close(slave)
         self.buf = b""
 
@@ -120,8 +136,6 @@ def test_variables_program_runs_to_stop():
 def test_ctrl_c_stops_a_free_run(tmp_path):
     """A program that never stops: `cont` runs it freely until the user presses Ctrl-C (SIGINT),
     which stops it (128) and returns to the prompt."""
-    import signal
-
     src = tmp_path / "forever.tmc"
     src.write_text("Loop: CALC ADD, 1\n  JA Loop\n")
     t = Terminal("debug", str(src))

@@ -25,8 +25,11 @@ from __future__ import annotations
 
 import argparse
 import cmd
+import contextlib
 import shlex
+import signal
 import sys
+import threading
 
 from . import CliError
 from .load import add_connection_options, module_name, read_program
@@ -111,7 +114,11 @@ class DebugShell(cmd.Cmd):
 
     def do_cont(self, arg):
         """cont: continue to the next breakpoint, or until the program stops"""
-        self.show_stop(self.dbg.cont(on_start=lambda: self.say("running (Ctrl-C stops)")))
+        with _ctrl_c() as pressed:
+            st = self.dbg.cont(on_start=lambda: self.say("running (Ctrl-C stops)"), interrupted=pressed)
+        if pressed():
+            self.say("interrupted; program stopped")
+        self.show_stop(st)
 
     do_c = do_cont
 
@@ -212,6 +219,21 @@ class DebugShell(cmd.Cmd):
         value = _number(parts[2], "set var N VALUE")
         self.dbg.loader.request(9, number, 2, value)
         self.say(f"var{number} = {value}")
+
+
+@contextlib.contextmanager
+def _ctrl_c():
+    """While a program runs freely, Ctrl-C (SIGINT) only sets a flag that the run loop reads: the
+    module is never interrupted in the middle of a request. Yields a callable: was it pressed?"""
+    pressed = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield pressed.is_set
+        return
+    previous = signal.signal(signal.SIGINT, lambda *_: pressed.set())
+    try:
+        yield pressed.is_set
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _number(text: str, usage: str, minimum: int | None = None) -> int:

@@ -204,9 +204,11 @@ class Debugger:
                 return st
 
     def cont(self, *, max_seconds: float | None = None,
-             on_start: Callable[[], None] | None = None) -> AppStatus:
+             on_start: Callable[[], None] | None = None,
+             interrupted: Callable[[], bool] | None = None) -> AppStatus:
         """Continue: to the next breakpoint by stepping, or freely (129) until the program stops
-        (`on_start` is called once the program runs freely)."""
+        (`on_start` is called once the program runs freely). When `interrupted()` turns true
+        the program is stopped (128) and its status returned."""
         if self.breakpoints:
             return self.run_to(self.breakpoints)
         self.loader.run()
@@ -214,6 +216,9 @@ class Debugger:
             on_start()
         waited = 0.0
         while True:
+            if interrupted is not None and interrupted():
+                self.loader.stop()
+                return self.status()
             self.loader.client.sleep(POLL)
             waited += POLL
             st = self.status()
