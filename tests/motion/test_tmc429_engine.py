@@ -33,7 +33,10 @@ def test_manual_example_program_back_and_forth():
     """PD86-1180 manual 8.2: SAP 4, 0, 500 / SAP 5, 0, 100 / MVP ABS, 0, 5000 /
     WAIT POS / MVP ABS, 0, 0 / WAIT POS. 500 internal units are 122 070 steps/s
     (ch. 5 AP4), so 5000 steps take about 41 ms plus the short ramps and the last
-    steps at the minimum speed (AP130 default 1)."""
+    steps at the minimum speed (AP130 default 1). The way back is the same ramp mirrored, except
+    that the TMC429's pulse generator first walks back the fraction of a step it made past 5000
+    (TMC4210 datasheet 6.1.12.1, signed velocity), so it is never slower; a first move to -5000
+    is the exact mirror image of the move to 5000, and so is its way back."""
     e = engine(max_positioning_speed=500, max_acceleration=100)
     e.move_to(5000)
     assert e.target_velocity == 500                         # AP2 during acceleration
@@ -45,7 +48,16 @@ def test_manual_example_program_back_and_forth():
     assert e.target_velocity == -500
     run_to_rest(e)
     assert e.position == 0 and e.position_reached
-    assert e.now - start == start                           # the same ramp mirrored
+    back = e.now - start
+    pulse_period = 32 << e.ramp.pulse_div                   # one step at V_ACTUAL 1 at most:
+    assert start - 2048 * pulse_period < back <= start
+    mirror = engine(max_positioning_speed=500, max_acceleration=100)
+    mirror.move_to(-5000)
+    run_to_rest(mirror)
+    assert (mirror.position, mirror.now) == (-5000, start)
+    mirror.move_to(0)
+    run_to_rest(mirror)
+    assert (mirror.position, mirror.now - start) == (0, back)
 
 
 def test_pmul_pdiv_follow_ap5_ap153_ap154():

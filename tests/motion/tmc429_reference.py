@@ -13,7 +13,10 @@ choices where the datasheet is silent: docs/assumptions.md):
   towards the ramp generator's target velocity, and stops at that target.
 * 6.1.12.1: each pulse tick adds |V_ACTUAL| (the 11 integer bits) to an 11-bit
   accumulator; its overflow (>= 2048) is one step in the direction of the
-  velocity's sign.
+  velocity's sign. The pulse generator takes the signed velocity ("Range
+  +-2047"): the accumulator holds the fraction of a step made in the direction
+  of the last motion, and when the motion reverses that fraction is walked back
+  first (acc := 2047 - acc), so X_ACTUAL * 2048 + fraction is an up/down count.
 * ramp_mode (6.1.9, FACTS.md): the chip computes the velocity from which a
   deceleration at A_MAX just ends on target, v^2 = 2048 * p * |dx| with
   p = PMUL / 2^(3+PDIV). While |V_ACTUAL| is not above it the target velocity
@@ -54,6 +57,7 @@ class ReferenceRamp:
         self.x_target = 0
         self.v = 0                # signed velocity, 1/256 units (8 fractional bits)
         self.acc = 0              # pulse accumulator, 0..2047
+        self.acc_dir = 0          # direction `acc` counts in (0: no motion since power-on)
         self.braking = False      # ramp_mode: deceleration towards V_MIN has begun
         self.stopping = False     # soft switch stop in progress
         self.v_min = 0
@@ -166,10 +170,14 @@ class ReferenceRamp:
         self.v = _toward(self.v, s * speed * 256, self.a_max)
 
     def pulse_tick(self, cycle: int) -> None:
+        direction = _sign(self.v)
+        if direction and direction != self.acc_dir:
+            if self.acc_dir:                 # reversal: walk back the fraction made
+                self.acc = 2047 - self.acc
+            self.acc_dir = direction
         self.acc += abs(self.v) >> 8
         if self.acc >= 2048:
             self.acc -= 2048
-            direction = _sign(self.v)
             self.x_actual = (self.x_actual + direction) % (1 << self.bits)
             self.on_step(cycle, direction)
             if (self.mode in (RAMP_MODE, SOFT_MODE) and self.x_actual == self.x_target

@@ -11,7 +11,10 @@ the choices where the datasheet is silent):
 * The velocity has 8 fractional bits; each ramp tick moves it by at most A_MAX
   (A_MAX/256 velocity units) towards the target velocity (6.1.9.2).
 * Each pulse tick adds |V_ACTUAL| to an 11-bit accumulator; an overflow is one
-  step, so R = f_CLK * |v| / (2^PULSE_DIV * 2048 * 32) (6.1.12.1).
+  step, so R = f_CLK * |v| / (2^PULSE_DIV * 2048 * 32) (6.1.12.1). The pulse
+  generator takes the signed velocity: on a reversal the fraction of a step
+  already made is walked back first (acc := 2047 - acc), which lets the
+  overshoot of a short move settle on the target.
 * ramp_mode: V_MAX until |V_ACTUAL| exceeds sqrt(2048 * p * |dx|), p =
   PMUL / 2^(3+PDIV) (6.1.9), then a deceleration with A_MAX down to V_MIN;
   soft_mode: target velocity p * |dx|; velocity_mode: V_TARGET; hold_mode: the
@@ -101,7 +104,8 @@ class _Phase:
     w0: int          # |v| at t0 (1/256 units)
     delta: int       # change of |v| per ramp tick (+a, -a or 0)
     direction: int   # sign of the velocity throughout the phase (0: no motion)
-    acc0: int
+    acc0: int        # accumulator counting in `direction`, valid from pulse tick i_dir
+    i_dir: int       # first pulse tick that may add to acc0 (a reversal flips acc there)
 
     def w(self, k: int) -> int:
         """|v| after ramp tick j0 + k (k >= 0)."""
@@ -185,6 +189,7 @@ class Tmc429Ramp:
         self._xt = 0
         self._v = 0              # signed velocity, 8 fractional bits
         self._acc = 0            # pulse accumulator
+        self._acc_dir = 0        # direction _acc counts in (0: no motion since power-on)
         self._braking = False    # ramp_mode deceleration towards V_MIN has begun
         self._stopping = False   # soft switch stop in progress
         self._v_min = 0
@@ -409,11 +414,15 @@ class Tmc429Ramp:
         self._v = _toward(self._v, self._position_target(s, abs(dx)), self._a_max)
 
     def _pulse_tick(self) -> int:
+        direction = _sign(self._v)
+        if direction and direction != self._acc_dir:
+            if self._acc_dir:               # reversal: walk back the fraction made
+                self._acc = 2047 - self._acc
+            self._acc_dir = direction
         self._acc += abs(self._v) >> 8
         if self._acc < 2048:
             return 0
         self._acc -= 2048
-        direction = _sign(self._v)
         self._x = (self._x + direction) % self._modulus
         if (self._mode in (RAMP_MODE, SOFT_MODE) and self._x == self._xt
                 and abs(self._v) <= self._v_min * 256):
@@ -494,7 +503,13 @@ class Tmc429Ramp:
         else:
             delta = -a
         j0, i0 = self.now // rp, self.now // pp
-        phase = _Phase(self.now, rp, pp, j0, i0, w0, delta, direction, self._acc)
+        acc0, i_dir = self._acc, i0 + 1
+        if direction != 0 and direction != self._acc_dir:
+            if self._acc_dir:
+                acc0 = 2047 - acc0
+            if v0 == 0:                     # v turns non-zero at the next ramp tick
+                i_dir = _ceil_div((j0 + 1) * rp, pp)
+        phase = _Phase(self.now, rp, pp, j0, i0, w0, delta, direction, acc0, i_dir)
 
         ramp_events: list[int] = []
         clamp = None
@@ -624,9 +639,13 @@ class Tmc429Ramp:
         if t <= self.now:
             return
         self._cached_plan = None
-        total = phase.acc0 + phase.pulse_sum(t // phase.pulse_period)
-        steps, self._acc = total >> 11, total & 2047
-        self._x = (self._x + phase.direction * steps) % self._modulus
+        i = t // phase.pulse_period
+        if i >= phase.i_dir:
+            total = phase.acc0 + phase.pulse_sum(i)
+            steps, self._acc = total >> 11, total & 2047
+            self._x = (self._x + phase.direction * steps) % self._modulus
+            if phase.direction:
+                self._acc_dir = phase.direction
         k = t // phase.ramp_period - phase.j0
         if phase.delta != 0:
             self._v = phase.direction * phase.w(k)
