@@ -23,6 +23,12 @@ def _sign(x) -> int:
     return (x > 0) - (x < 0)
 
 
+DEFAULT_FALLOFF_RPS = 30
+"""Speed (full-step revolutions per second) at which the torque has fallen to 0 unless the
+scenario sets `torque_falloff_speed`: about half the torque at 15 rev/s, as a typical stepper."""
+FULLSTEPS = 200
+
+
 class AxisWorld:
     """Stage, load, encoder and drive currents of one axis."""
 
@@ -220,10 +226,11 @@ class AxisWorld:
         return float(v)
 
     def falloff(self) -> float:
-        """Share of the torque left at the present speed (scenario `torque_falloff_speed`)."""
+        """Share of the torque left at the present speed: falls linearly to 0 at the scenario's
+        `torque_falloff_speed` (pps), by default DEFAULT_FALLOFF_RPS of a 200-step motor."""
         fall = self.spec.torque_falloff_speed
         if not fall:
-            return 1.0
+            fall = DEFAULT_FALLOFF_RPS * FULLSTEPS * (1 << self.p(140, 8))
         return max(0.0, 1.0 - abs(self._pps(self.engine.velocity)) / fall)
 
     def capacity(self) -> float:
