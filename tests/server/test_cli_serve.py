@@ -247,6 +247,30 @@ def test_several_modules_get_distinct_can_ids(serve):
     assert p.stop()[0] == 0
 
 
+def test_can_between_processes_on_python_can_udp_multicast(serve):
+    """Manual 3.1 (CAN: the CAN ID selects the module, 7 data bytes) and 5.1 GP71/GP70: a module
+    served by one process on python-can's `udp_multicast` virtual bus (a CAN bus between processes
+    without SocketCAN) answers this process; manual 3.6.4 MVP ABS and 3.6.6 GAP 0 read back the
+    target. A group address of our own keeps parallel runs apart."""
+    from opentmcl.host import TmclConnectionError, connect
+
+    group = f"239.{os.getpid() % 250 + 1}.{time.monotonic_ns() % 250 + 1}.{os.getppid() % 250 + 1}"
+    p = serve("--module", "TMCM-6212", "--can", f"udp_multicast:{group}")
+    url = p.endpoint("can")
+    assert url == f"can://udp_multicast/{group}?id=1&reply_id=2"
+    try:
+        module = connect(url, timeout=5)
+    except TmclConnectionError as exc:  # the server could open it, so this is rare: no loopback route
+        pytest.skip(f"udp_multicast not usable here: {exc}")
+    try:
+        assert module.request(10, 66, 0).value == 1          # GGP 66: the module's address
+        module.request(4, 0, 0, 1000)                         # MVP ABS, 0, 1000
+        assert module.request(6, 0, 0).value == 1000          # GAP 0: target position
+    finally:
+        module.client.close()
+    assert p.stop()[0] == 0
+
+
 def test_build_server_assigns_can_ids_in_ram(tmp_path):
     """The same rule in-process, exercised on python-can's virtual bus: ID 3 reaches the
     module at address 3, ID 1 the other; the IDs are not stored in the EEPROM file: a module

@@ -1,7 +1,7 @@
 """`opentmcl serve`: host virtual modules in real time on TCP, a pty and/or CAN.
 
     opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH]]
-                   [--can virtual:CH | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
+                   [--can virtual:CH | udp_multicast:GROUP | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
 
 Several --module options put several modules on one bus; the n-th --address,
 --eeprom and --scenario belong to the n-th --module (a module without
@@ -35,7 +35,8 @@ def register(subparsers) -> None:
     p.add_argument("--pty", action="store_true", help="create a pseudo-terminal and print its path")
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
     p.add_argument("--can", metavar="INTERFACE:CHANNEL",
-                   help="serve on a python-can bus, e.g. virtual:opentmcl or socketcan:vcan0")
+                   help="serve on a python-can bus, e.g. virtual:opentmcl (this process), udp_multicast:239.74.163.2 "
+                        "(other processes) or socketcan:vcan0")
     p.add_argument("--eeprom", action="append", default=[], metavar="FILE",
                    help="EEPROM file of the n-th module (created if missing)")
     p.add_argument("--scenario", action="append", default=[], metavar="FILE",
