@@ -221,3 +221,49 @@ def test_eeprom_file_that_cannot_be_created_fails_at_construction(tmp_path):
     blocker.write_text("x")
     with pytest.raises(EepromError, match="cannot create"):
         VirtualModule("TMCM-6212", eeprom=blocker / "ee.json")
+
+
+@pytest.mark.parametrize("content", [
+    '{"format":"opentmcl-eeprom","version":1,"module":"TMCM-6212","axis":[1],"global":"x"}',
+    '{"format":"opentmcl-eeprom","version":1,"module":"TMCM-6212","user":{"3":1.5}}',
+    '{"format":"opentmcl-eeprom","version":1,"module":"TMCM-6212","program":[[1,2,300,0]]}',
+    '{"format":"opentmcl-eeprom","version":99,"module":"TMCM-6212"}',
+])
+def test_a_damaged_eeprom_file_is_refused_and_left_unchanged(tmp_path, content):
+    """DESIGN.md "Errors and bad input" (never a corrupted EEPROM file): an image whose sections
+    are not what the module writes (stored parameters are 32-bit integers, manual 3.6.7 STAP;
+    program instructions are four bytes-and-value fields, 3.1) or of a newer format is an
+    EepromError when the module is built, and the file keeps its bytes."""
+    from opentmcl.firmware.eeprom import EepromError
+
+    path = tmp_path / "ee.json"
+    path.write_text(content)
+    with pytest.raises(EepromError, match="EEPROM file"):
+        VirtualModule("TMCM-6212", eeprom=path)
+    assert path.read_text() == content
+
+
+def test_eeprom_and_binary_files_get_ordinary_permissions(tmp_path):
+    """Files we write atomically (EEPROM images, .bin programs) are readable like any file the
+    user creates (mode from the umask), an existing file keeps its mode, and a missing folder is
+    an error rather than a new folder tree."""
+    import os
+    import stat
+
+    from opentmcl.atomicfile import write_atomic
+
+    old = os.umask(0o022)
+    try:
+        new = tmp_path / "new.bin"
+        write_atomic(new, b"x")
+        kept = tmp_path / "kept.bin"
+        kept.write_bytes(b"")
+        kept.chmod(0o640)
+        write_atomic(kept, b"y")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(new.stat().st_mode) == 0o666 & ~old
+    assert stat.S_IMODE(kept.stat().st_mode) == 0o640 and kept.read_bytes() == b"y"
+    with pytest.raises(FileNotFoundError):
+        write_atomic(tmp_path / "no" / "such" / "x.bin", b"z")
+    assert not (tmp_path / "no").exists()

@@ -19,8 +19,15 @@ class CliError(Exception):
     """A user-facing error: printed as one line, exit status 2."""
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with the house rule for usage errors: one line, exit status 2 (not the usage block)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="opentmcl", description="Open TMCL tools: virtual modules, client, assembler.")
+    parser = _Parser(prog="opentmcl", description="Open TMCL tools: virtual modules, client, assembler.")
     from .. import __version__
     parser.add_argument("--version", action="version", version=f"opentmcl {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -31,7 +38,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # --help, --version or a usage error: its status, also when called in-process
+        return exc.code if isinstance(exc.code, int) else 2
     if not getattr(args, "func", None):
         parser.print_help()
         return 0

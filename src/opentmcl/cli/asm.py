@@ -12,7 +12,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("asm", help="assemble TMCL source (.tmc) to a binary program (.bin)",
                        description="Assemble TMCL-IDE source to the 8-byte-record binary file format.")
     p.add_argument("source", help="TMCL source file")
-    p.add_argument("-o", "--output", help="binary output file (default: SOURCE with .bin)")
+    p.add_argument("-o", "--output", help="binary output file (default: SOURCE with .bin; '-' for stdout)")
     p.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
                    help="add a directory to the #include search path (repeatable)")
     p.add_argument("-m", "--module", help="target module (TMCM-6212, PD86-1180, PD28-1021): selects the "
@@ -41,10 +41,39 @@ def _emit(target: str, text: str) -> None:
     if target == "-":
         sys.stdout.write(text)
         return
+    _check_folder(target)
     try:
         Path(target).write_text(text, encoding="utf-8")
     except OSError as exc:
         raise CliError(f"cannot write {target}: {exc.strerror or exc}") from None
+
+
+def same_file(a: str, b: str) -> bool:
+    """Do two paths name one file (so writing one would destroy the other)?"""
+    if a == "-" or b == "-":
+        return False
+    try:
+        return Path(a).resolve() == Path(b).resolve()
+    except OSError:
+        return False
+
+
+def _check_outputs(source: str, outputs: list[str]) -> None:
+    """House rule "loses nothing": no output may overwrite the source or another output."""
+    named = [t for t in outputs if t and t != "-"]
+    for i, target in enumerate(named):
+        if same_file(target, source):
+            raise CliError(f"output {target} would overwrite the source {source}")
+        if any(same_file(target, other) for other in named[i + 1:]):
+            raise CliError(f"two outputs are the same file {target}")
+        _check_folder(target)   # before anything is written
+
+
+def _check_folder(target: str) -> None:
+    """A typo in an output path is an error, not a new folder (the atomic writer would create it)."""
+    folder = Path(target).parent
+    if not folder.is_dir():
+        raise CliError(f"cannot write {target}: folder {folder} does not exist")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -57,14 +86,21 @@ def run(args: argparse.Namespace) -> int:
     except AsmError as exc:
         raise CliError(str(exc)) from None
     out = args.output or str(Path(args.source).with_suffix(".bin"))
-    try:
-        binfile.write(out, program.instructions)
-    except OSError as exc:
-        raise CliError(f"cannot write {out}: {exc.strerror or exc}") from None
+    if "-" in (args.listing, args.symbols) and out == "-":
+        raise CliError("only one of -o, -l and -s can write to stdout ('-')")
+    _check_outputs(args.source, [out, args.listing, args.symbols])
+    if out == "-":
+        sys.stdout.buffer.write(binfile.encode(program.instructions))
+        sys.stdout.flush()
+    else:
+        try:
+            binfile.write(out, program.instructions)
+        except OSError as exc:
+            raise CliError(f"cannot write {out}: {exc.strerror or exc}") from None
     if args.listing:
         _emit(args.listing, program.listing())
     if args.symbols:
         _emit(args.symbols, program.symbol_file())
-    if args.listing != "-" and args.symbols != "-":
+    if "-" not in (out, args.listing, args.symbols):
         print(f"{out}: {len(program.instructions)} instructions, {len(program.labels)} labels")
     return 0

@@ -247,11 +247,23 @@ def _number(text: str, usage: str, minimum: int | None = None) -> int:
     return value
 
 
+def _command_lines(path: str) -> list[str]:
+    """The -x FILE, read whole before the first command runs: a bad file is a one-line error."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            return fh.read().splitlines()
+    except OSError as exc:
+        raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise CliError(f"{path}: debugger commands must be UTF-8 text") from None
+
+
 def run(args: argparse.Namespace) -> int:
     from ..host import TmclError
     from ..host.debugger import DebugError, Debugger, parse_watches
     from ..host.loader import Loader
 
+    commands = _command_lines(args.commands) if args.commands else []
     client, name = open_target(args)
     try:
         module = client.module(args.address, name)
@@ -269,14 +281,9 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(str(exc)) from None
         shell = DebugShell(dbg)
         print(f"loaded {len(program.instructions)} instructions from {program.filename}, verified")
-        if args.commands:
-            try:
-                with open(args.commands, encoding="utf-8") as fh:
-                    for line in fh:
-                        if shell.onecmd(line.strip()):
-                            return 0
-            except OSError as exc:
-                raise CliError(f"cannot read {args.commands}: {exc.strerror or exc}") from None
+        for line in commands:
+            if shell.onecmd(line.strip()):
+                return 0
         try:
             shell.cmdloop()
         except KeyboardInterrupt:

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import sys
 from pathlib import Path
 
 from . import CliError
@@ -12,7 +13,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("disasm", help="disassemble a binary program (.bin) to TMCL source",
                        description="Disassemble an 8-byte-record TMCL binary file; the output "
                        "re-assembles to identical bytes.")
-    p.add_argument("binary", help="binary program file")
+    p.add_argument("binary", help="binary program file ('-' for stdin)")
     p.add_argument("-o", "--output", help="source output file (default: stdout)")
     p.add_argument("-s", "--symbols", metavar="FILE",
                    help="label table (as written by 'opentmcl asm -s') to name jump targets")
@@ -26,6 +27,8 @@ def _read_symbols(path: str) -> dict[str, int]:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise CliError(f"{path}: not a label table (not UTF-8 text)") from None
     out = {}
     for n, line in enumerate(text.splitlines(), 1):
         if not line.strip():
@@ -33,6 +36,8 @@ def _read_symbols(path: str) -> dict[str, int]:
         parts = line.split()
         if len(parts) != 2 or not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", parts[0]) or not parts[1].isdigit():
             raise CliError(f"{path}:{n}: expected 'NAME ADDRESS'")
+        if parts[0] in out:
+            raise CliError(f"{path}:{n}: label {parts[0]} defined twice")
         out[parts[0]] = int(parts[1])
     return out
 
@@ -42,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
     from ..lang.disassembler import disassemble
 
     try:
-        data = Path(args.binary).read_bytes()
+        data = sys.stdin.buffer.read() if args.binary == "-" else Path(args.binary).read_bytes()
     except OSError as exc:
         raise CliError(f"cannot read {args.binary}: {exc.strerror or exc}") from None
     labels = _read_symbols(args.symbols) if args.symbols else None
@@ -53,6 +58,11 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise CliError(str(exc)) from None
     if args.output:
+        from .asm import same_file
+
+        for given in (args.binary, args.symbols):
+            if given and same_file(args.output, given):
+                raise CliError(f"output {args.output} would overwrite the input {given}")
         try:
             Path(args.output).write_text(text, encoding="utf-8")
         except OSError as exc:

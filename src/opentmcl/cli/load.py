@@ -42,6 +42,8 @@ def read_program(path: str, module: str | None, include: list[str] | None = None
             raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
         except BinFileError as exc:
             raise CliError(f"{path}: {exc}") from None
+        if not code:
+            raise CliError(f"{path}: empty program file (no 8-byte records)")
         return LoadedProgram(code, {}, [None] * len(code), str(p))
     try:
         prog = assemble_file(p, module=module, include_path=include or [], origin=origin)
@@ -61,6 +63,12 @@ def add_connection_options(p: argparse.ArgumentParser, *, required: bool) -> Non
                    "module with command 136, or TMCM-6212 for a new virtual module)")
     p.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
                    help="#include search directory (repeatable)")
+
+
+def check_connection_options(args: argparse.Namespace) -> None:
+    """--timeout is a finite number of seconds > 0 (NaN would wait forever or never)."""
+    if not 0 < args.timeout < float("inf"):
+        raise CliError(f"--timeout must be a positive number of seconds, got {args.timeout}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -93,8 +101,9 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.url:
         raise CliError(f"no module URL: give --to URL (or set ${ENV_URL})")
-    if args.start < 0:
-        raise CliError("--start must be >= 0")
+    if not 0 <= args.start < 2 ** 31:   # a 32-bit value of command 132 (manual 3.6.36)
+        raise CliError(f"--start must be 0..{2 ** 31 - 1}, got {args.start}")
+    check_connection_options(args)
     try:
         client = open_bus(args.url, address=args.address, timeout=args.timeout)
     except (TmclError, ValueError) as exc:
@@ -112,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
             if args.run:
                 loader.run(args.start)
                 print(f"running from {args.start}")
-        except (TmclError, LoaderError) as exc:
+        except (TmclError, LoaderError, ValueError) as exc:   # ValueError: --start beyond 32 bits
             raise CliError(str(exc)) from None
     finally:
         client.close()

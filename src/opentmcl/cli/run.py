@@ -21,9 +21,10 @@ from __future__ import annotations
 import argparse
 
 from . import CliError
-from .load import add_connection_options, module_name, read_program
+from .load import add_connection_options, check_connection_options, module_name, read_program
 
 DEFAULT_MODULE = "TMCM-6212"
+MAX_SAMPLES = 1_000_000  # more looks than this is a typo in --seconds / --sample
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -64,6 +65,7 @@ def open_target(args: argparse.Namespace):
     if args.url:
         if args.scenario or args.eeprom:
             raise CliError("--scenario and --eeprom apply to the in-process virtual module only (no --to)")
+        check_connection_options(args)
         try:
             client = open_bus(args.url, address=args.address, timeout=args.timeout)
         except (TmclError, ValueError) as exc:
@@ -72,6 +74,7 @@ def open_target(args: argparse.Namespace):
     from ..firmware.eeprom import EepromError
     from ..firmware.vm import VirtualModule
 
+    check_connection_options(args)
     scenario = _scenario(args.scenario)
     name = args.module or getattr(scenario, "module", None) or DEFAULT_MODULE
     try:
@@ -93,8 +96,14 @@ def run(args: argparse.Namespace) -> int:
     from ..host.debugger import DebugError, parse_watches, read_watch
     from ..host.loader import Loader
 
-    if args.seconds < 0 or args.sample <= 0:
-        raise CliError("--seconds must be >= 0 and --sample > 0")
+    if not (0 <= args.seconds < float("inf") and 0 < args.sample < float("inf")):  # also NaN
+        raise CliError(f"--seconds must be a finite number >= 0 and --sample one > 0, "
+                       f"got {args.seconds} and {args.sample}")
+    if not -(2 ** 31) <= args.start < 2 ** 31:   # the 32-bit value of command 129
+        raise CliError(f"--from must fit in 32 bits, got {args.start}")
+    if args.seconds / args.sample > MAX_SAMPLES:
+        raise CliError(f"--seconds / --sample gives more than {MAX_SAMPLES} samples; use a longer --sample")
+    _check_csv(args)
     client, name = open_target(args)
     try:
         module = client.module(args.address, name)
@@ -117,11 +126,20 @@ def run(args: argparse.Namespace) -> int:
             finally:
                 if args.recorder is not None:
                     args.recorder.save()
-        except TmclError as exc:
+        except (TmclError, ValueError) as exc:   # ValueError: --from beyond 32 bits
             raise CliError(str(exc)) from None
     finally:
         client.close()
     return 0
+
+
+def _check_csv(args: argparse.Namespace) -> None:
+    """House rule "loses nothing": the --csv trace may not overwrite an input file."""
+    from .asm import same_file
+
+    for option, given in (("program", args.program), ("--eeprom", args.eeprom), ("--scenario", args.scenario)):
+        if args.csv and given and same_file(args.csv, given):
+            raise CliError(f"--csv {args.csv} would overwrite the {option} {given}")
 
 
 def _trace(loader, watches, read_watch, args) -> None:

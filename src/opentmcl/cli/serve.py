@@ -130,7 +130,7 @@ def build_modules(args) -> list:
         try:
             modules.append(VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario))
         except KeyError as exc:
-            raise CliError(f"unknown module {name!r}: {exc.args[0] if exc.args else ''}") from None
+            raise CliError(str(exc.args[0]) if exc.args else f"unknown module {name!r}") from None
         except (EepromError, ValueError) as exc:  # also a scenario for another module
             raise CliError(str(exc)) from None
     return modules

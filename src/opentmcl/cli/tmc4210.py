@@ -123,6 +123,8 @@ def cmd_convert(args) -> int:
             raise CliError("give a velocity (-v/--hz) and/or an acceleration (-a/--hz-per-s)")
     except units.UnitError as exc:
         raise CliError(str(exc)) from None
+    except OverflowError:  # e.g. --hz-per-s 1e300: beyond every register value
+        raise CliError("a value is far outside the register ranges (velocity -2047..2047, A_MAX 0..2047)") from None
     print("\n".join(lines))
     return 0
 

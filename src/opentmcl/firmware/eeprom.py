@@ -23,6 +23,25 @@ class EepromError(Exception):
     """The EEPROM file exists but cannot be used (not ours, unreadable)."""
 
 
+def _int(v, lo: int = -(2 ** 31), hi: int = 2 ** 31 - 1) -> bool:
+    return type(v) is int and lo <= v <= hi
+
+
+def _flat(d) -> bool:
+    return isinstance(d, dict) and all(_int(v) for v in d.values())
+
+
+def _whole(raw: dict) -> bool:
+    """Every section has the shape `flush` writes: {"n": {"m": int}} for axis/global/coord,
+    {"n": int} for user variables, [[command, type, motor, value], ...] for the program."""
+    nested = all(isinstance(raw.get(k, {}), dict) and all(_flat(v) for v in raw.get(k, {}).values())
+                 for k in ("axis", "global", "coord"))
+    program = raw.get("program", [])
+    return (nested and _flat(raw.get("user", {})) and isinstance(program, list)
+            and all(isinstance(ins, list) and len(ins) == 4 and all(_int(x, 0, 255) for x in ins[:3])
+                    and _int(ins[3]) for ins in program))
+
+
 def _empty() -> dict:
     return {"axis": {}, "global": {}, "user": {}, "coord": {}, "program": []}
 
@@ -54,6 +73,12 @@ class Eeprom:
             raise EepromError(f"{path} is not an OpenTMCL EEPROM file")
         if self.module and raw.get("module") not in (None, self.module):
             raise EepromError(f"{path} belongs to a {raw.get('module')}, not a {self.module}")
+        if raw.get("version", VERSION) != VERSION:
+            raise EepromError(f"{path}: EEPROM file format version {raw.get('version')!r}; "
+                              f"this OpenTMCL reads version {VERSION}")
+        if not _whole(raw):
+            raise EepromError(f"{path}: damaged EEPROM file (a section or value is not what OpenTMCL "
+                              "writes); left unchanged")
         data = _empty()
         for key in data:
             if key in raw:

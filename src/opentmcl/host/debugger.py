@@ -85,6 +85,8 @@ def _flags(ld: Loader) -> str:
 def parse_watch(spec: str) -> Watch:
     """One watch expression (see the module docstring); DebugError if it cannot be read."""
     text = spec.strip().lower()
+    if any(int(n) > 255 for n in re.findall(r"\d+", text)):  # type and motor/bank are bytes (manual 3.1)
+        raise DebugError(f"cannot watch {spec!r}: numbers must be 0..255")
     if text in _SIMPLE:
         return Watch(text, _SIMPLE[text])
     if text == "flags":

@@ -52,7 +52,7 @@ def velocity_for_rate(rate_hz: float, pulse_div: int, f_clk=16_000_000) -> int:
     """The velocity register value (rounded) whose step rate is nearest `rate_hz`."""
     v = round(_number("rate", rate_hz) * 2 ** _div("PULSE_DIV", pulse_div) * 2048 * 32 / check_f_clk(f_clk))
     if abs(v) > V_LIMIT:
-        raise UnitError(f"{rate_hz} Hz needs velocity {v}, beyond +-2047 with PULSE_DIV={pulse_div}")
+        raise UnitError(f"{rate_hz} Hz needs velocity {v:.6g}, beyond +-2047 with PULSE_DIV={pulse_div}")
     return v
 
 
