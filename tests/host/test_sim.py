@@ -433,3 +433,17 @@ def test_reading_beyond_program_memory_is_refused(m6212):
     """TMCM-6212 manual 1: program memory for 6144 commands; 3.2.1 status 4 "Invalid value"."""
     with pytest.raises(TmclStatusError, match="Invalid value"):
         m6212.read_program_memory(6144)
+
+
+@pytest.mark.parametrize("url", [
+    "sim://TMCM-6212?clok=real",                 # typo of clock
+    "serial:///dev/ttyUSB0?baudrate=9600",       # typo of baud
+    "tcp://127.0.0.1:2323?timeout=1",            # connect_timeout is meant
+    "can://virtual/x?id=1&replyid=2",            # typo of reply_id
+])
+def test_a_url_with_an_unknown_query_key_is_refused(url):
+    """DESIGN.md "Errors and bad input": a typo in a transport URL (docs/host.md lists each
+    scheme's keys) is a TmclConnectionError naming the key, not silently ignored - the user would
+    otherwise talk at the wrong baud rate or with the wrong clock without knowing it."""
+    with pytest.raises(TmclConnectionError, match="unknown"):
+        opentmcl.connect(url)

@@ -20,6 +20,7 @@ of bytes asked for, or raises `TmclTimeout`. Concrete transports live in
 from __future__ import annotations
 
 import time
+import urllib.parse
 from abc import ABC, abstractmethod
 
 from .errors import TmclConnectionError, TmclTimeout
@@ -119,3 +120,15 @@ class StreamTransport(Transport):
             self._release()
         except Exception:  # closing a vanished port or socket must not raise
             pass
+
+
+def url_query(url: urllib.parse.SplitResult, known: tuple[str, ...]) -> dict[str, str]:
+    """The query of a transport URL as a dict; a key the transport does not know (a typo such as
+    ``?baudrate=``) is a TmclConnectionError instead of being ignored."""
+    query = dict(urllib.parse.parse_qsl(url.query, keep_blank_values=True))
+    unknown = sorted(set(query) - set(known))
+    if unknown:
+        raise TmclConnectionError(f"unknown {', '.join(repr(k) for k in unknown)} in {url.scheme}:// URL "
+                                  f"(it takes {', '.join(known)})")
+    return query
+

@@ -15,7 +15,7 @@ import time
 import urllib.parse
 
 from ..errors import TmclConnectionError, TmclProtocolError, TmclTimeout
-from ..transport import Transport
+from ..transport import Transport, url_query
 
 DEFAULT_ID = 1
 DEFAULT_REPLY_ID = 2
@@ -104,7 +104,7 @@ class CanTransport(Transport):
 
 def open_can(url: urllib.parse.SplitResult) -> CanTransport:
     """Factory for ``can://INTERFACE/CHANNEL?id=N&reply_id=M[&bitrate=B]``."""
-    query = dict(urllib.parse.parse_qsl(url.query))
+    query = url_query(url, ("id", "reply_id", "bitrate"))
     interface = url.netloc
     channel = urllib.parse.unquote(url.path.lstrip("/"))
     if not interface or not channel:

@@ -26,7 +26,7 @@ import urllib.parse
 from collections.abc import Callable, Iterable
 
 from ..errors import TmclConnectionError, TmclTimeout
-from ..transport import Transport
+from ..transport import Transport, url_query
 
 
 class Clock:
@@ -230,7 +230,7 @@ def _parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
 
 def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
     """Factory for ``sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S]``."""
-    query = dict(urllib.parse.parse_qsl(url.query))
+    query = url_query(url, ("address", "clock", "step"))
     try:
         default_address = int(query.get("address", "1"), 0)
     except ValueError:

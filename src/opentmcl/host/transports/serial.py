@@ -13,7 +13,7 @@ from __future__ import annotations
 import urllib.parse
 
 from ..errors import TmclConnectionError
-from ..transport import StreamTransport
+from ..transport import StreamTransport, url_query
 
 DEFAULT_BAUD = 9600
 
@@ -68,7 +68,7 @@ class SerialTransport(StreamTransport):
 
 def open_serial(url: urllib.parse.SplitResult) -> SerialTransport:
     """Factory for ``serial:///dev/ttyX?baud=N``, ``serial://COM3?baud=N`` or ``serial://?port=URL``."""
-    query = dict(urllib.parse.parse_qsl(url.query))
+    query = url_query(url, ("port", "baud"))
     port = query.get("port") or (url.netloc + url.path if url.netloc else url.path)
     if not port:
         raise TmclConnectionError(f"serial URL names no port, e.g. serial:///dev/ttyUSB0, got {url.geturl()!r}")

@@ -11,7 +11,7 @@ import socket
 import urllib.parse
 
 from ..errors import TmclConnectionError
-from ..transport import StreamTransport
+from ..transport import StreamTransport, url_query
 
 DEFAULT_CONNECT_TIMEOUT = 5.0
 
@@ -72,7 +72,7 @@ class TcpTransport(StreamTransport):
 
 def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
     """Factory for ``tcp://HOST:PORT[?connect_timeout=S]``."""
-    query = dict(urllib.parse.parse_qsl(url.query))
+    query = url_query(url, ("connect_timeout",))
     try:
         port = url.port
     except ValueError:
