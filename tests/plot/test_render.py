@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-pytest.importorskip("matplotlib", reason="plots need the plot extra (matplotlib)")
+pytest.importorskip("matplotlib", reason="plots need matplotlib")
 
 from opentmcl.cli import main  # noqa: E402
 from opentmcl.plot import Trace, TraceError, render  # noqa: E402
@@ -28,12 +28,14 @@ def _trace() -> Trace:
 
 
 def test_svg_has_labelled_axes_with_units(tmp_path):
-    """Manual 6.5: velocities in pps or rpm; positions in µsteps; time in s."""
+    """Manual 6.5: velocities in pps or rpm; positions in µsteps; time in s. Manual 4.1: the load
+    value (AP 206) is 0...1023, the actual current (AP 180) a scaling factor 0...31: 1/32 ... 32/32."""
     out = tmp_path / "t.svg"
     assert render(_trace(), out) == "svg"
     text = out.read_text(encoding="utf-8")
     assert text.lstrip().startswith("<?xml") and "<svg" in text
-    for label in ("position [µsteps]", "velocity [pps]", "acceleration [pps²]", "time [s]"):
+    for label in ("position [µsteps]", "velocity [pps]", "acceleration [pps²]", "time [s]",
+                  "load [0…1023]", "current [(n+1)/32 CS]"):
         assert label in text
 
 
@@ -110,3 +112,47 @@ def test_cli_records_a_served_module_over_tcp(tmp_path):
 def test_cli_record_only_needs_a_url(tmp_path, capsys):
     assert main(["plot", "-", "-o", str(tmp_path / "x.png")]) == 2
     assert "--to" in capsys.readouterr().err
+
+
+def test_cli_refuses_recordings_it_cannot_hold_and_empty_channel_lists(tmp_path, capsys):
+    """Bad numbers are one-line errors before anything runs: a nanosecond interval (10^9 samples
+    a second) and an infinite duration never finish; `--channels ,` names no panel."""
+    src = tmp_path / "move.tmc"
+    src.write_text(PROGRAM)
+    out = str(tmp_path / "x.png")
+    assert main(["plot", str(src), "-o", out, "--seconds", "1", "--interval", "1e-9"]) == 2
+    assert main(["plot", str(src), "-o", out, "--seconds", "inf"]) == 2
+    assert main(["plot", str(src), "-o", out, "--channels", ","]) == 2
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and err.count("error:") == 3
+    assert "samples" in err and "--channels needs" in err
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_cli_unwritable_output_and_binary_trace_are_one_line_errors(tmp_path, capsys):
+    csv = tmp_path / "t.csv"
+    _trace().to_csv(csv)
+    assert main(["plot", str(csv), "-o", str(tmp_path / "no" / "x.png")]) == 2
+    binary = tmp_path / "b.csv"
+    binary.write_bytes(b"\xff\xfe\x00")
+    assert main(["plot", str(binary), "-o", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("opentmcl plot: error: cannot write") and "No such file" in err
+    assert "cannot read" in err and "UTF-8" in err and "Traceback" not in err
+
+
+def test_cli_axes_choose_from_a_csv_trace(tmp_path, capsys):
+    """A two-axis trace: `--axes 0` draws axis 0 only (even though 0 is also the default for a
+    recording); without --axes every axis of the trace is drawn; an axis the trace lacks is an error."""
+    tr = Trace([0, 1], module="TMCM-6212")
+    for i in range(5):
+        tr.add(i * 0.1, {(0, "position"): i, (1, "position"): -i, (0, "velocity"): 0, (1, "velocity"): 0})
+    csv = tmp_path / "two.csv"
+    tr.to_csv(csv)
+    png = str(tmp_path / "x.png")
+    assert main(["plot", str(csv), "-o", png, "--axes", "0"]) == 0
+    assert capsys.readouterr().out.rstrip().endswith("axes 0)")
+    assert main(["plot", str(csv), "-o", png]) == 0
+    assert capsys.readouterr().out.rstrip().endswith("axes 0, 1)")
+    assert main(["plot", str(csv), "-o", png, "--axes", "2"]) == 2
+    assert "not all in the trace" in capsys.readouterr().err

@@ -95,3 +95,19 @@ def test_websocket_refuses_other_origins(client):
     with pytest.raises(WebSocketDisconnect), \
             client.websocket_connect("/m/1/ws", headers={"Origin": "http://evil.example"}) as ws:
         ws.receive_json()
+
+
+def test_operands_outside_the_frame_are_400_not_500(client):
+    """TMCM-6212 manual 3.1: a command carries an 8-bit instruction number, type and motor/bank and a
+    4-byte value. Operands that do not fit are refused with a message (no server error) and nothing
+    is sent."""
+    cases = [
+        ("/m/1/api/params/axis", {"axis": 0, "number": 4, "value": 2**40}, "32 bits"),
+        ("/m/1/api/params/store", {"kind": "global", "number": 4, "index": 2**40, "restore": False}, "0..255"),
+        ("/m/1/api/io/output", {"bank": 2, "port": 0, "value": 2**40}, "32 bits"),
+        ("/m/1/api/console", {"line": "300, 0, 0, 0"}, "0..255"),
+    ]
+    for path, body, words in cases:
+        r = client.post(path, json=body)
+        assert r.status_code == 400, (path, r.text)
+        assert words in r.json()["error"]

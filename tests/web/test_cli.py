@@ -105,3 +105,23 @@ def test_dashboard_with_unknown_module_is_a_one_line_error(capsys):
     assert main(["dashboard", "--to", "sim://TMCM-9999", "--web", "127.0.0.1:0"]) == 2
     err = capsys.readouterr().err
     assert "Traceback" not in err and "TMCM-9999" in err
+
+
+def test_dashboard_on_a_port_in_use_is_a_one_line_error(capsys):
+    """The page cannot be served where another program listens: one line naming the address."""
+    import socket
+
+    with socket.socket() as busy:
+        busy.bind(("127.0.0.1", 0))
+        busy.listen()
+        port = busy.getsockname()[1]
+        assert main(["dashboard", "--to", "sim://TMCM-6212", "--web", f"127.0.0.1:{port}"]) == 2
+    err = capsys.readouterr().err
+    assert f"127.0.0.1:{port}" in err and "in use" in err
+    assert "Traceback" not in err and "ERROR" not in err
+
+
+def test_dashboard_with_a_timeout_that_is_not_positive_is_refused(capsys):
+    """--timeout is how long to wait for each reply: 0 or less cannot be waited for."""
+    assert main(["dashboard", "--to", "sim://TMCM-6212", "--timeout", "-1", "--web", "127.0.0.1:0"]) == 2
+    assert "--timeout" in capsys.readouterr().err

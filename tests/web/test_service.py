@@ -190,3 +190,24 @@ def test_dashboard_drives_a_module_over_tcp_like_a_real_one():
         module.close()
     finally:
         server.stop()
+
+
+def test_live_charts_keep_sixty_seconds_at_twenty_samples_a_second_or_more():
+    """Issue 7: live charts of position and velocity, at least 20 updates per second, the last 60 s
+    kept. The poller's period and the sample history are checked on a clock the test advances."""
+    from opentmcl.web.service import Poller
+
+    module = opentmcl.connect("sim://PD86-1180")
+    now = [0.0]
+    dash = Dashboard(module, clock=lambda: now[0])
+    poller = Poller(dash)
+    try:
+        assert poller.period <= 1 / 20
+        for _ in range(int(70 / poller.period)):  # 70 s of samples
+            dash.sample_fast()
+            now[0] += poller.period
+        kept = list(dash.samples)
+        assert kept[-1].t - kept[0].t >= 60.0 - poller.period
+        assert kept[0].t > 0  # the oldest ones are dropped
+    finally:
+        module.close()

@@ -66,6 +66,8 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.url:
         raise CliError("give the module URL with --to (or set $OPENTMCL_URL)")
+    if not args.timeout > 0:
+        raise CliError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     host, port = parse_web(args.web)
     try:
         from ..web.server import DashboardStartError, start_dashboard

@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("file", metavar="PROGRAM_OR_SCENARIO", help=".tmc/.bin program, .csv trace, scenario file, or - (with --to: record only)")
     p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
-    p.add_argument("--axes", default="0", help="comma-separated axis numbers (default 0)")
+    p.add_argument("--axes", default=None, help="comma-separated axis numbers (default 0; for a .csv trace all of its axes)")
     p.add_argument("--channels", help="comma-separated panels: position, velocity, acceleration, load, "
                    "current, switches (default all the module has)")
     p.add_argument("-t", "--seconds", type=float, default=10.0, help="record at most this long (default 10)")
@@ -108,20 +108,27 @@ def _record_remote(args, axes, is_program: bool):
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..plot import DEFAULT_CHANNELS, Trace, TraceError, render
+    from ..plot import DEFAULT_CHANNELS, Trace, TraceError, channel_names, render
+    from ..plot.trace import check_duration
 
-    if not args.interval > 0 or not args.seconds >= 0:
-        raise CliError("--interval must be > 0 and --seconds >= 0")
+    try:
+        check_duration(args.seconds, args.interval)
+    except ValueError as exc:
+        raise CliError(f"--seconds/--interval: {exc}") from None
     if Path(args.output).suffix.lower() not in (".png", ".svg"):
         raise CliError(f"cannot write {args.output}: use a .png or .svg file name")
-    axes = _axes(args.axes)
-    channels = [c.strip() for c in args.channels.split(",") if c.strip()] if args.channels else DEFAULT_CHANNELS
+    axes = _axes(args.axes or "0")
+    channels = DEFAULT_CHANNELS
+    if args.channels is not None:
+        channels = [c.strip() for c in args.channels.split(",") if c.strip()]
+        if not channels:
+            raise CliError(f"--channels needs at least one of: {', '.join(channel_names())}")
     try:
         if Path(args.file).suffix.lower() == ".csv":
             trace = Trace.from_csv(args.file)
-            if args.axes != "0" and not set(axes) <= set(trace.axes):
-                raise CliError(f"axes {axes} not all in the trace (it has {trace.axes})")
-            if args.axes != "0":
+            if args.axes is not None:
+                if not set(axes) <= set(trace.axes):
+                    raise CliError(f"axes {axes} not all in the trace (it has {trace.axes})")
                 trace.axes = axes
         else:
             trace = _record(args, axes)
@@ -131,7 +138,9 @@ def run(args: argparse.Namespace) -> int:
     except TraceError as exc:
         raise CliError(str(exc)) from None
     except ImportError as exc:
-        raise CliError(f"plotting needs matplotlib (pip install 'opentmcl[plot]'): {exc}") from None
+        raise CliError(f"plotting needs matplotlib (a dependency of opentmcl; reinstall it): {exc}") from None
+    except OSError as exc:
+        raise CliError(f"cannot write {exc.filename or args.output}: {exc.strerror or exc}") from None
     print(f"wrote {args.output} ({len(trace)} samples, {trace.time[-1] if len(trace) else 0:.2f} s, "
           f"axes {', '.join(map(str, trace.axes))})")
     return 0

@@ -1,8 +1,9 @@
 """Render a trace with matplotlib (Agg backend, no display): one panel per channel, one line per axis.
 
 Units on the axes: position in µsteps, velocity in pps (or rpm), acceleration in pps²,
-time in s (TMCM-6212 manual 6.5 for pps and rpm). Switch states and the position reached
-flag share one panel, drawn as stacked 0/1 steps.
+time in s (TMCM-6212 manual 6.5 for pps and rpm); the stallGuard2 load value 0..1023 and the
+current scaling factor n = 0..31, i.e. (n+1)/32 of the run current CS (manual 4.1, AP 206/180).
+Switch states and the position reached flag share one panel, drawn as stacked 0/1 steps.
 """
 from __future__ import annotations
 
@@ -16,8 +17,8 @@ LABELS = {
     "position": "position [µsteps]",
     "velocity": "velocity [pps]",
     "acceleration": "acceleration [pps²]",
-    "load": "load value (AP 206)",
-    "current": "actual current (AP 180)",
+    "load": "load [0…1023]",
+    "current": "current [(n+1)/32 CS]",
 }
 
 

@@ -31,6 +31,7 @@ CHANNELS: dict[str, tuple[int | None, str]] = {
     "load": (206, ""),
     "current": (180, ""),
 }
+MAX_SAMPLES = 100_000  # a longer recording is refused (memory), e.g. 1000 s at 10 ms
 RECORDED = tuple(c for c, (num, _) in CHANNELS.items() if num is not None)
 SWITCHES = ("target_reached", "home_switch", "right_switch", "left_switch")
 
@@ -109,6 +110,8 @@ class Trace:
                     text = fh.read()
             except OSError as exc:
                 raise TraceError(f"cannot read {source}: {exc.strerror or exc}") from None
+            except UnicodeDecodeError:
+                raise TraceError(f"cannot read {source}: not a text (UTF-8) file") from None
         return _parse_csv(text)
 
 
@@ -217,11 +220,19 @@ class Sampler:
         return out
 
 
+def check_duration(seconds: float, interval: float) -> None:
+    """ValueError unless `interval` > 0, `seconds` finite >= 0 and at most MAX_SAMPLES samples."""
+    if not interval > 0 or not seconds >= 0 or math.isinf(seconds):
+        raise ValueError("interval must be > 0 and seconds a finite number >= 0")
+    if seconds / interval > MAX_SAMPLES:
+        raise ValueError(f"{seconds:g} s every {interval:g} s is more than {MAX_SAMPLES} samples; "
+                         "record less or sample less often")
+
+
 def record(module, axes=(0,), seconds: float = 10.0, interval: float = 0.01, *, until=None) -> Trace:
     """Sample `axes` of a host `Module` every `interval` seconds for `seconds` (module time: virtual
     for sim:// modules, the wall clock for real ones). `until(trace) -> bool` may end it early."""
-    if not interval > 0 or not seconds >= 0 or math.isinf(seconds):
-        raise ValueError("interval must be > 0 and seconds a finite number >= 0")
+    check_duration(seconds, interval)
     sampler = Sampler(module, list(axes))
     trace = Trace(sampler.axes, module=module.profile.name, microsteps=dict(sampler.microsteps))
     clock = module.client.transport.monotonic

@@ -104,6 +104,26 @@ def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=Non
     return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll)
 
 
+def _bind(host: str, port: int):
+    """The listening socket, bound here so a port in use is a clear DashboardStartError."""
+    import socket
+
+    where = f"cannot serve the dashboard on {host}:{port}"
+    try:
+        family, kind, proto, _, addr = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM,
+                                                          flags=socket.AI_PASSIVE)[0]
+    except socket.gaierror as exc:
+        raise DashboardStartError(f"{where}: {exc.strerror}") from None
+    sock = socket.socket(family, kind, proto)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.bind(addr)
+    except OSError as exc:
+        sock.close()
+        raise DashboardStartError(f"{where}: {exc.strerror or exc}") from None
+    return sock
+
+
 def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port: int = 8080, *,
                      on_stop=None, poll: bool = True) -> DashboardHandle:
     """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each."""
@@ -113,6 +133,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
 
     app = create_app(dashboards)
     warn_if_exposed(host)
+    sock = _bind(host, port)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
                             ws=_ws_implementation(), access_log=False)
     server = uvicorn.Server(config)
@@ -121,7 +142,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
 
     def serve() -> None:
         try:
-            server.run()
+            server.run(sockets=[sock])
         except BaseException as exc:  # SystemExit from uvicorn when the bind fails
             failure.append(exc)
 
@@ -133,6 +154,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     if not server.started:
         server.should_exit = True
         thread.join(timeout=2.0)
+        sock.close()
         raise DashboardStartError(f"cannot serve the dashboard on {host}:{port}"
                                   + (f": {failure[0]}" if failure and str(failure[0]) else
                                      " (address in use or not available)"))

@@ -108,6 +108,8 @@ class Dashboard:
             self.connected = False
             self.last_error = str(exc)
             raise DashboardError(str(exc)) from None
+        except ValueError as exc:  # an operand that does not fit the frame (8-bit type/motor, 32-bit value)
+            raise DashboardError(str(exc)) from None
 
     def _axis(self, number) -> int:
         if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number < self.profile.axes:
@@ -232,6 +234,8 @@ class Dashboard:
         except TmclError as exc:
             out.update(ok=False, status=None, text=str(exc))
             return out
+        except ValueError as exc:  # e.g. "300, 0, 0, 0": command must be 0..255
+            raise DashboardError(f"{text!r}: {exc}") from None
         if reply is None:
             out.update(ok=True, status=None, text="(no reply)")
         elif isinstance(reply, VersionReply):
