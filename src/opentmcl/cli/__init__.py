@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import pathlib
 import sys
 
 COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard"]
@@ -17,6 +18,16 @@ COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", 
 
 class CliError(Exception):
     """A user-facing error: printed as one line, exit status 2."""
+
+
+def same_file(a: str, b: str) -> bool:
+    """Do two paths name one file (so writing one would destroy the other)?"""
+    if a == "-" or b == "-":
+        return False
+    try:
+        return pathlib.Path(a).resolve() == pathlib.Path(b).resolve()
+    except OSError:
+        return False
 
 
 class _Parser(argparse.ArgumentParser):

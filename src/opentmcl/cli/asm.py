@@ -5,7 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from . import CliError
+from . import CliError, same_file
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -48,16 +48,6 @@ def _emit(target: str, text: str) -> None:
         raise CliError(f"cannot write {target}: {exc.strerror or exc}") from None
 
 
-def same_file(a: str, b: str) -> bool:
-    """Do two paths name one file (so writing one would destroy the other)?"""
-    if a == "-" or b == "-":
-        return False
-    try:
-        return Path(a).resolve() == Path(b).resolve()
-    except OSError:
-        return False
-
-
 def _check_outputs(source: str, outputs: list[str]) -> None:
     """House rule "loses nothing": no output may overwrite the source or another output."""
     named = [t for t in outputs if t and t != "-"]
@@ -70,7 +60,7 @@ def _check_outputs(source: str, outputs: list[str]) -> None:
 
 
 def _check_folder(target: str) -> None:
-    """A typo in an output path is an error, not a new folder (the atomic writer would create it)."""
+    """A typo in an output path is a one-line error, found before any output is written."""
     folder = Path(target).parent
     if not folder.is_dir():
         raise CliError(f"cannot write {target}: folder {folder} does not exist")

@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     if args.duration / args.interval > MAX_ROWS:
         raise CliError(f"--duration / --interval gives more than {MAX_ROWS} rows; use a longer --interval")
     if args.scenario or args.csv:
-        from .asm import same_file
+        from . import same_file
 
         if args.csv and args.scenario and same_file(args.csv, args.scenario):
             raise CliError(f"--csv {args.csv} would overwrite the scenario {args.scenario}")

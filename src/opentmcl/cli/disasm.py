@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         raise CliError(str(exc)) from None
     if args.output:
-        from .asm import same_file
+        from . import same_file
 
         for given in (args.binary, args.symbols):
             if given and same_file(args.output, given):

@@ -135,7 +135,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _check_csv(args: argparse.Namespace) -> None:
     """House rule "loses nothing": the --csv trace may not overwrite an input file."""
-    from .asm import same_file
+    from . import same_file
 
     for option, given in (("program", args.program), ("--eeprom", args.eeprom), ("--scenario", args.scenario)):
         if args.csv and given and same_file(args.csv, given):
