@@ -14,20 +14,6 @@ from opentmcl.web import start_dashboard
 from .conftest import CHROMIUM, CHROMIUM_ARGS
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "img"
-PROGRAM = """// Move motor 0 back and forth, count the moves in user variable 0
-    SAP 4, 0, 51200        // maximum positioning speed
-    SAP 5, 0, 51200        // maximum acceleration
-    SGP 0, 2, 0
-Loop:
-    MVP ABS, 0, 51200
-    WAIT POS, 0, 0
-    MVP ABS, 0, 0
-    WAIT POS, 0, 0
-    GGP 0, 2
-    CALC ADD, 1
-    AGP 0, 2
-    JA Loop
-"""
 
 
 def main() -> None:
@@ -45,7 +31,7 @@ def main() -> None:
             page = ctx.new_page()
             page.goto(handle.url)
             page.wait_for_selector("#axis-0")
-            page.fill("#editor", PROGRAM)
+            # the editor opens with the page's own example program (a fresh profile has none saved)
             page.click("#btn-download")
             page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')")
             page.click("#btn-run")

@@ -319,9 +319,13 @@ class AxisWorld:
             self.axis.error_flags |= SG_EXTENDED
             self.vm.interpreter.set_error_flag(fl.EPO)
             self.vm.interrupts.trigger(STALL + self.index)
-            search = self.vm.reference_search(self.axis)
-            if search.active:
-                search.abort()
+            self._end_search()
+
+    def _end_search(self) -> None:
+        """A stall or deviation stop ends a running reference search (docs/world.md)."""
+        search = self.vm.reference_search(self.axis)
+        if search.active:
+            search.abort()
 
     def _step_loss(self) -> None:
         d = self.heading()           # moving, or about to move
@@ -346,9 +350,7 @@ class AxisWorld:
                 self.axis.error_flags |= DEV_EXTENDED
                 self.vm.interpreter.set_error_flag(fl.EDV)
                 self.vm.interrupts.trigger(DEVIATION + self.index)
-            search = self.vm.reference_search(self.axis)
-            if search.active:
-                search.abort()
+            self._end_search()
 
     def _null_channel(self) -> None:
         """PD86-1180 7.2: p + 4 clears the encoder at the next null channel (once per round)."""

@@ -10,6 +10,7 @@ the rest of the axis state and the program status; the web layer reads the sampl
 """
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
@@ -95,21 +96,29 @@ class Dashboard:
             self.last_error = str(exc)
             return default
 
-    def _do(self, fn):
-        """Call fn() for a user action: a status error becomes DashboardError with the manual's text."""
+    @contextlib.contextmanager
+    def _user_action(self):
+        """Errors of a user action: a status error becomes DashboardError with the manual's text; a
+        lost link also marks the module unreachable; an operand that does not fit the frame (8-bit
+        type/motor, 32-bit value) is a DashboardError too."""
         try:
-            with self.lock:
-                out = fn()
-            self.connected = True
-            return out
+            yield
         except TmclStatusError as exc:
             raise DashboardError(str(exc)) from None
         except TmclError as exc:
             self.connected = False
             self.last_error = str(exc)
             raise DashboardError(str(exc)) from None
-        except ValueError as exc:  # an operand that does not fit the frame (8-bit type/motor, 32-bit value)
+        except ValueError as exc:
             raise DashboardError(str(exc)) from None
+
+    def _do(self, fn):
+        """Call fn() for a user action under the module lock (errors: `_user_action`)."""
+        with self._user_action():
+            with self.lock:
+                out = fn()
+            self.connected = True
+            return out
 
     def _axis(self, number) -> int:
         if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number < self.profile.axes:
@@ -381,14 +390,8 @@ class Dashboard:
         from ..host.debugger import Debugger
 
         self.cancel_run()
-        try:
+        with self._user_action():
             Debugger(self._loader()).step()  # not under self.lock, see _run_to_breakpoint
-        except TmclStatusError as exc:
-            raise DashboardError(str(exc)) from None
-        except TmclError as exc:
-            self.connected = False
-            self.last_error = str(exc)
-            raise DashboardError(str(exc)) from None
         return self.program_state()
 
     def reset(self) -> None:
