@@ -135,7 +135,7 @@ def test_stop_run_from_address_step_reset(w):
     w.vm.advance(5 * T)
     assert w.a == 1000 and w.state == 0 and w.pc == 3
     w.ok(131)
-    assert (w.state, w.pc, w.a, w.x, w.ok(135, 4)) == (3, 0, 0, 0, 0)
+    assert (w.state, w.pc, w.a, w.x, w.vm.flags) == (3, 0, 0, 0, 0)
     w.run()                             # after a reset the program starts at 0
     w.vm.advance(2 * T)                 # CALC ADD at T, JA at 2T
     assert w.a == 1

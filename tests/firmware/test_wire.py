@@ -53,19 +53,6 @@ def test_wrong_checksum_status_1(m6212):
     assert reply.status == 1 and reply.command == 6
 
 
-@pytest.mark.parametrize("opcode", [0, 58, 63, 72, 127, 140, 200, 255])
-def test_unknown_opcode_status_2(anymod, opcode):
-    """TMCM-6212 3.2.1 status code 2 "Invalid command": opcodes no manual defines."""
-    assert anymod(opcode).status == 2
-
-
-def test_opcode_the_module_lacks_status_6(m6212):
-    """TMCM-6212 3.4.1 lists no STAP (7) / RSAP (8), and no 139: status 6 "Command not available"."""
-    assert m6212(7, 4, 0).status == 6
-    assert m6212(8, 4, 0).status == 6
-    assert m6212(139).status == 6
-
-
 def test_wrong_type_status_3(anymod):
     """TMCM-6212 3.2.1 status 3 "Wrong type": an axis parameter number the module does not have."""
     assert anymod(5, 250, 0, 1).status == 3

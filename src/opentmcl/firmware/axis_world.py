@@ -110,10 +110,19 @@ class AxisWorld:
         return self.phys
 
     # --- state ------------------------------------------------------------------------------------
+    def driver_off(self) -> bool:
+        """AP167 (TOFF) = 0: "completely disables all driver transistors and the motor can
+        free-wheel" (TMCM-6212 4.1): the step counter runs on, the rotor does not follow it."""
+        return self.has(167) and self.p(167, 1) == 0
+
     def _follow(self) -> None:
-        """Bring the physical position up to the counter (unless steps are being lost)."""
+        """Bring the physical position up to the counter (unless steps are being lost or the
+        driver is off; then the stage stays and the frame offset follows the counter)."""
         counter = self.engine.position
-        if self.slipping:
+        if self.driver_off():
+            self.slipping = 0
+            self.offset = self.phys - counter
+        elif self.slipping:
             if self.heading() != self.slipping or not (self._blocked(self.slipping) or self._overloaded()):
                 self.slipping = 0          # stopped, reversed or the load fell: the rotor follows again
                 self.offset = self.phys - counter
@@ -168,6 +177,30 @@ class AxisWorld:
         if e.mode.value == "velocity":
             return _sign(e.target_velocity)
         return _sign(((e.target_position - e.position + 2**31) % 2**32) - 2**31)
+
+    def set_toff(self, value: int) -> None:
+        """SAP 167: the stage follows up to now under the old setting; after re-enabling it
+        continues from where it stands."""
+        self._follow()
+        self.axis.ram[167] = value
+        self._follow()
+
+    def speed(self) -> int:
+        """Speed of the rotor (stage) in the engine's units: 0 at rest, while steps are lost or
+        the driver is off; signed like the velocity (TMCM-6212 AP29, docs/world.md)."""
+        self._follow()
+        if self.slipping or self.driver_off():
+            return 0
+        return self.axis.from_engine(29, self.engine.velocity)
+
+    def absolute_encoder(self, top: int) -> int:
+        """AP215: the angle of the rotor within one round in 0..top (PD86-1180 5: "Absolute
+        value of the encoder. 0... 255"), from the physical position; AP209 writes and the
+        prescaler do not change it."""
+        self._follow()
+        cpr = self.spec.encoder_counts or (256 if self.vm.profile.engine == "tmc429" else 1024)
+        counts = (self.phys * cpr) // self._steps_per_round()
+        return (counts % cpr) * (top + 1) // cpr
 
     def relabel(self, counter: int) -> None:
         """Overwrite the position counter (AP1, reference point); the stage stays where it is."""
@@ -262,8 +295,9 @@ class AxisWorld:
             search.poll()
         else:
             self._limit_stops()
-        self._stall()
-        self._step_loss()
+        if not self.driver_off():
+            self._stall()
+            self._step_loss()
         self._deviation()
         self._null_channel()
 
@@ -375,7 +409,7 @@ class AxisWorld:
         if not self.vm.reference_search(self.axis).active and self._limit_due():
             return True
         e = self.engine
-        if not self.slipping and (self._blocked(self.heading()) or self._overloaded()):
+        if not self.slipping and not self.driver_off() and (self._blocked(self.heading()) or self._overloaded()):
             return True
         if not e.moving:
             return False
@@ -383,7 +417,8 @@ class AxisWorld:
         if dev and abs(e.position - self.encoder()) > dev:
             return True
         limit = self.p(181)
-        return bool(limit and abs(e.velocity) >= abs(self.axis.to_engine(181, limit)) and self.load_value() == 0)
+        return bool(limit and not self.driver_off() and abs(e.velocity) >= abs(self.axis.to_engine(181, limit))
+                    and self.load_value() == 0)
 
     # --- events -------------------------------------------------------------------------------------
     def interesting(self) -> bool:
@@ -398,7 +433,7 @@ class AxisWorld:
         self._static = bool(st.left or st.right or st.home or not prof.is_constant or prof.before
                             or st.ends != (None, None) or self.spec.torque_falloff_speed)
 
-    SIGNATURE_PARAMS = (6, 7, 12, 13, 14, 24, 25, 26, 140, 141, 149, 172, 174, 181, 182, 200, 202, 210, 212)
+    SIGNATURE_PARAMS = (6, 7, 12, 13, 14, 24, 25, 26, 140, 141, 149, 167, 172, 174, 181, 182, 200, 202, 210, 212)
 
     def _signature(self) -> tuple:
         """Everything the next world event depends on besides time (for the cache)."""
@@ -442,7 +477,8 @@ class AxisWorld:
             if self._due_streak < 4:   # a check that cannot resolve it must not stall time
                 return now + 1
         counters: list[int] = []
-        if not self.slipping:
+        off = self.driver_off()
+        if not self.slipping and not off:
             phys, off = self.phys, self.offset
             for name, sw in self.stage.switches().items():
                 if name not in self.forced:
@@ -458,7 +494,7 @@ class AxisWorld:
                 spr = self._steps_per_round()
                 base = phys - phys % spr
                 counters += [x - off for x in (base, base + spr) if x != phys]
-        elif self.p(212):
+        elif self.p(212):  # the stage stands: only the deviation limit can be crossed
             enc, lim = self.encoder(), self.p(212)
             counters += [enc + lim + 1, enc - lim - 1]
         if self.watch is not None:
@@ -475,7 +511,7 @@ class AxisWorld:
             t = self._next_time(self.load.profile)
             if t is not None and (best is None or t < best):
                 best = t
-        limit = self.p(181)
+        limit = 0 if off else self.p(181)
         if limit:                            # the speed reaching the stop-on-stall limit AP181
             t = e.time_at_speed(abs(self.axis.to_engine(181, limit)))
             if t is not None and t > now and (best is None or t < best):

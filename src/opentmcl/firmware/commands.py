@@ -3,6 +3,11 @@
 `execute()` answers one command with (status, value), special reply bytes,
 or None when no reply is due. Status codes follow the manuals: 2 invalid
 command, 3 wrong type, 4 invalid value, 5 EEPROM locked, 6 not available.
+One rule for opcodes (docs/assumptions.md): a number that is not in the
+module's own command set is an "Invalid command" (2), whatever another
+module does with it; "Command not available" (6) is a command the module
+has that cannot run in the present context (a control command met by a
+running program).
 """
 from __future__ import annotations
 
@@ -19,10 +24,9 @@ if TYPE_CHECKING:
 Result = tuple[int, int] | bytes | None
 Handler = Callable[["VirtualModule", int, int, int, bool], Result]
 
-KNOWN_OPCODES = frozenset([*range(1, 58), *range(64, 72), 80, *range(128, 140)])  # 80: CALL (PD28-1021)
 NO_SUPPRESS = frozenset({6, 10, 15})  # GP255 never suppresses GAP, GGP, GIO
 OK = int(Status.OK)
-_NOT_AVAILABLE, _INVALID_COMMAND = int(Status.NOT_AVAILABLE), int(Status.INVALID_COMMAND)
+_INVALID_COMMAND = int(Status.INVALID_COMMAND)
 
 
 def _axis(vm: VirtualModule, motor: int):
@@ -242,6 +246,14 @@ def cmd_vect(vm, type, motor, value, program):
     return OK, 0
 
 
+def cmd_calc(vm, type, motor, value, program):
+    """CALC in direct mode: the accumulator is untouched, the reply carries "the operand"
+    (TMCM-6212 3.6.14, reply example 02 01 64 13 FF FF EC 78 DC for CALC MUL, -5000)."""
+    if not 0 <= type <= 9:  # ADD .. LOAD
+        raise TmclStatus(3)
+    return OK, to_int32(value)
+
+
 def cmd_no_effect(vm, type, motor, value, program):
     """Program-flow and accumulator commands sent in direct mode: accepted,
     without touching the program's accumulator or flow (TMCM-6212 manual 7.6)."""
@@ -283,7 +295,7 @@ def cmd_139(vm, type, motor, value, program):
 
 HANDLERS: dict[int, Handler] = {
     1: cmd_ror, 2: cmd_rol, 3: cmd_mst, 4: cmd_mvp, 5: cmd_sap, 6: cmd_gap, 7: cmd_stap, 8: cmd_rsap,
-    9: cmd_sgp, 10: cmd_ggp, 11: cmd_stgp, 12: cmd_rsgp, 13: cmd_rfs, 14: cmd_sio, 15: cmd_gio,
+    9: cmd_sgp, 10: cmd_ggp, 11: cmd_stgp, 12: cmd_rsgp, 13: cmd_rfs, 14: cmd_sio, 15: cmd_gio, 19: cmd_calc,
     30: cmd_sco, 31: cmd_gco, 32: cmd_cco, 34: cmd_aap, 35: cmd_agp, 36: cmd_cle, 37: cmd_vect,
     25: cmd_ei, 26: cmd_di, 39: cmd_aco, 136: cmd_136, 137: cmd_137, 138: cmd_138, 139: cmd_139,
 }
@@ -297,7 +309,7 @@ def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, 
         if vm.download_mode and not program and command < 128:
             return vm.store_instruction(command, type, motor, value)
         if command not in vm.opcodes:
-            return (_NOT_AVAILABLE if command in KNOWN_OPCODES else _INVALID_COMMAND), 0
+            return _INVALID_COMMAND, 0
         vm.sync()
         if command in PROGRAM_CONTROL:
             return vm.program_control(command, type, value)

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 from ..protocol.frame import to_int32
 from ..protocol.status import Status
 from . import calc, flags, wait
-from .commands import KNOWN_OPCODES, execute
+from .commands import execute
 from .program import RESET, RUNNING, STEPPING, STOPPED
 from .status import TmclStatus
 
@@ -209,17 +209,15 @@ class Interpreter:
         vm.interrupts.reset()
 
     def status(self, type: int) -> int:
-        """135: 0 mode/wait/memory pointer, 1 mode/wait/program counter, 2 A, 3 X.
-        Types 0 and 1 pack the mode in bits 24-31, the wait flag in bits 16-23 and the
-        address in bits 0-15 (the manual is silent on the layout). Type 4 (OpenTMCL
-        extension, used by the debugger) returns the flags."""
+        """135: 0 mode/wait/memory pointer, 1 mode/wait/program counter, 2 A, 3 X; any
+        other type is status 3 (the table lists only these four). Types 0 and 1 pack the
+        mode in bits 24-31, the wait flag in bits 16-23 and the address in bits 0-15 (the
+        manual is silent on the layout)."""
         vm = self.vm
         if type == 2:
             return vm.accumulator
         if type == 3:
             return vm.x_register
-        if type == 4:
-            return vm.flags
         if type not in (0, 1):
             raise TmclStatus(3)
         address = vm.download_pointer if type == 0 else vm.program_counter
@@ -285,9 +283,10 @@ class Interpreter:
             if handler is not None and available:
                 if handler(self, type, motor, value):  # True: the handler set the PC itself
                     return
-            elif command >= 128 or not available:
-                known = command in KNOWN_OPCODES or command == CALL
-                self._fail(command, int(Status.NOT_AVAILABLE if known else Status.INVALID_COMMAND))
+            elif not available:  # not in this module's command set (commands.py)
+                self._fail(command, int(Status.INVALID_COMMAND))
+            elif command >= 128:  # a control command of this module, direct mode only (3.6.36)
+                self._fail(command, int(Status.NOT_AVAILABLE))
             else:
                 self._generic(command, type, motor, value)
         except TmclStatus as exc:

@@ -3,8 +3,9 @@ PD86-1180 manual 4.6.14-4.6.15).
 
 Bank 0 digital inputs, bank 1 analog inputs, bank 2 digital outputs. Port
 255 addresses all ports of a digital bank at once as a bit mask
-(PD86-1180: `SIO 255, 2, x`, value -1 copies the accumulator's low bits;
-`GIO 255, 0`). `SIO <n>, 0, <mask>` switches input pull-ups on modules whose
+(PD86-1180: `SIO 255, 2, x` with x in 0...255, value -1 copies the
+accumulator's low bits; `GIO 255, 0`); on a module whose manual prints no
+range for it the mask must fit the outputs (TMCM-6212: 0...15). `SIO <n>, 0, <mask>` switches input pull-ups on modules whose
 profile has pull-up ports in bank 0.
 
 "The ADIN lines can be read as digital or analogue inputs at the same time"
@@ -52,9 +53,10 @@ class IOBanks:
             outputs = self._bank_ports(bank, "output")
             if not outputs:
                 raise TmclStatus(3)
-            if value == -1:
-                value = self.vm.accumulator
-            if not 0 <= value <= 255:
+            top = self.all_ports_max(outputs)
+            if value == -1:  # PD86-1180 4.6.14: "the lower 8 bits of the accumulator are copied"
+                value = self.vm.accumulator & top
+            if not 0 <= value <= top:
                 raise TmclStatus(4)
             for key in outputs:
                 self.values[key] = (value >> key[1]) & 1
@@ -71,6 +73,12 @@ class IOBanks:
         if not p.min <= value <= p.max:
             raise TmclStatus(4)
         self.values[(bank, port)] = value
+
+    def all_ports_max(self, outputs: list[tuple[int, int]]) -> int:
+        """Largest value of `SIO 255, <bank>`: the profile's `sio_all_max` where the manual prints
+        a range (PD86-1180 4.6.14: 0...255), else one bit per output port (TMCM-6212: 0...15)."""
+        top = self.vm.profile.extra.get("sio_all_max")
+        return top if top is not None else (1 << (max(p for _, p in outputs) + 1)) - 1
 
     def get(self, port: int, bank: int) -> int:
         if port == ALL_PORTS:

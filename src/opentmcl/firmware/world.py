@@ -4,9 +4,11 @@ Hooks the VirtualModule calls:
 - `next_event()`: absolute tick of the next world event (switch edge, load step, input change,
   deviation limit, search target), computed in closed form with `engine.time_at_position`;
 - `service()`: called at every event tick after the engines were brought to `now`;
-- `read_axis(axis, number)` for numbers in `axis_numbers`: switch states AP9-11, actual current
-  AP180, load value AP206, driver flags AP208, encoder AP209;
-- `write_axis(axis, number, value)`: AP1 and AP209 writes keep the stage frame and the encoder.
+- `read_axis(axis, number)` for numbers in `axis_numbers`: switch states AP9-11, measured speed
+  AP29, actual current AP180, load value AP206, driver flags AP208, encoder AP209, absolute
+  encoder AP215;
+- `write_axis(axis, number, value)`: AP1 and AP209 writes keep the stage frame and the encoder;
+  AP167 = 0 (TOFF) lets the rotor free-wheel.
 
 The world persists across power cycles (`power_up` rebinds it to the new axes). Python API:
 `vm.world.axis(n)` -> AxisWorld (force_switch, set_load, physical_position, ...),
@@ -33,7 +35,7 @@ __all__ = ["AxisWorld", "World"]
 class World:
     """All axes' worlds plus the module's inputs, driven by a scenario."""
 
-    axis_numbers: frozenset[int] = frozenset({9, 10, 11, 180, 206, 208, 209})
+    axis_numbers: frozenset[int] = frozenset({9, 10, 11, 29, 180, 206, 208, 209, 215})
     """Axis parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
 
     def __init__(self, vm: VirtualModule, scenario=None) -> None:
@@ -186,6 +188,10 @@ class World:
             return aw.current.driver_status(aw)
         if number == 209:
             return aw.encoder()
+        if number == 29:
+            return aw.speed()
+        if number == 215:
+            return aw.absolute_encoder(axis.params[215].max)
         return None
 
     def write_axis(self, axis: Axis, number: int, value: int) -> bool:
@@ -198,5 +204,9 @@ class World:
         if number == 1:
             self.vm.sync()
             aw.relabel(value)
+            return True
+        if number == 167:
+            self.vm.sync()
+            aw.set_toff(value)
             return True
         return False

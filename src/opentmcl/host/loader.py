@@ -28,7 +28,7 @@ from .errors import TmclError, TmclStatusError
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
 MODES = {0: "stop", 1: "run", 2: "step", 3: "reset"}  # GP128 / 135 (TMCM-6212 manual 5.1)
-FLAGS_TYPE = 4  # 135 type 4: program flags (OpenTMCL extension; real modules answer status 3)
+FLAGS_TYPE = 4  # 135 type 4: program flags where a firmware offers them (the manuals list 0-3: status 3)
 
 
 class LoaderError(TmclError):
