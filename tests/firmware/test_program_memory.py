@@ -163,3 +163,11 @@ def test_no_auto_start_by_default():
     w.load("Loop: CALC ADD, 1\nJA Loop")
     w.vm.power_up()
     assert w.state == 0
+
+
+def test_135_accepts_only_the_types_of_its_table(w):
+    """3.6.36 Table 13, 135 "get application status": "0 - return mode, wait flag, memory pointer
+    1 - return mode, wait flag, program counter 2 - return accumulator 3 - return X register":
+    type 3 (the last one) answers 100, 4 and 255 are status 3 "Wrong type"."""
+    got = {t: w.vm.request(135, t).status for t in (0, 1, 2, 3, 4, 255)}
+    assert got == {0: 100, 1: 100, 2: 100, 3: 100, 4: 3, 255: 3}

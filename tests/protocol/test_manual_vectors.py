@@ -258,3 +258,51 @@ def test_1180_command_138_replies():
     from opentmcl.protocol.replies import target_reached_event
     assert Reply(2, 1, 100, 138, 1).encode()[:4] == bytes([2, 1, 100, 138])
     assert target_reached_event(2, 1, 1).encode()[:4] == bytes([2, 1, 128, 138])
+
+
+# --- printed reply frames, answered by the virtual modules ----------------------------------------
+# (module, section, request fields, setup, printed reply). The 6212 prints nine bytes with the
+# checksum; the 1180 eight bytes without it. Setup puts the module in the state the example
+# assumes (the value it reads).
+
+def _drive_adc(value):
+    return lambda vm: vm.world.set_input(1, 0, value)
+
+
+def _position(value):
+    return lambda vm: vm.request(5, 1, 0, value)
+
+
+REPLY_VECTORS = [
+    ("TMCM-6212", "3.6.13 GIO 0, 1 (Value=302)", (15, 0, 1, 0), _drive_adc(302), "02 01 64 0F 00 00 01 2E A5"),
+    ("TMCM-6212", "3.6.14 CALC MUL, -5000 (value=-5000)", (19, 2, 0, -5000), None, "02 01 64 13 FF FF EC 78 DC"),
+    ("TMCM-6212", "3.6.35 138 type 1, mask 5 (reply in direct mode)", (138, 1, 0, 5), None, "02 01 64 8A 00 00 00 05"),
+    ("PD86-1180", "4.6.6 GAP 1, 0 (position=711)", (6, 1, 0, 0), _position(711), "$02 $01 $64 $06 $00 $00 $02 $c7"),
+    ("PD86-1180", "4.6.10 GGP 66, 0 (Value=1)", (10, 66, 0, 0), None, "$02 $01 $64 $0a $00 $00 $00 $01"),
+    ("PD86-1180", "4.6.15 GIO 0, 1 (value 506)", (15, 0, 1, 0), _drive_adc(506), "$02 $01 $64 $0f $00 $00 $01 $fa"),
+    # printed with instruction $0a; GCO is 31 = $1f (see test_1180_reply_examples)
+    ("PD86-1180", "4.6.25 GCO 1, 0", (31, 1, 0, 0), None, "$02 $01 $64 $1f $00 $00 $00 $00"),
+    ("PD86-1180", "4.6.16 CALC MUL, -5000 (TMCM-6212 3.6.14 reply)", (19, 2, 0, -5000), None,
+     "$02 $01 $64 $13 $FF $FF $EC $78"),
+    ("PD28-1021", "CALC MUL, -5000 (TMCM-6212 3.6.14 reply, docs/assumptions.md)", (19, 2, 0, -5000), None,
+     "02 01 64 13 FF FF EC 78 DC"),
+]
+
+
+def test_printed_reply_frames_are_what_the_modules_answer():
+    """TMCM-6212 3.6.14 "Reply in Direct Mode: 100 - OK, the operand" and its printed reply
+    (02 01 64 13 FF FF EC 78 DC), and every other printed reply frame of the manuals (6212 3.6.13,
+    3.6.35; PD86-1180 4.6.6, 4.6.10, 4.6.15, 4.6.25): the request sent to a module at address 1
+    with host address 2 (the defaults) gets exactly the printed bytes."""
+    from opentmcl import VirtualModule
+    got, want = {}, {}
+    for module, section, (cmd, typ, motor, value), setup, printed in REPLY_VECTORS:
+        vm = VirtualModule(module, address=1)
+        if setup is not None:
+            setup(vm)
+        raw = vm.handle(Request(1, cmd, typ, motor, value).encode())
+        printed_bytes = hexbytes(printed)
+        got[section] = raw[:len(printed_bytes)]
+        want[section] = printed_bytes
+        assert raw[8] == checksum(raw[:8])
+    assert got == want

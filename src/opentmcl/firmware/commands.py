@@ -265,7 +265,8 @@ def cmd_138(vm, type, motor, value, program):
     if type not in (0, 1):
         raise TmclStatus(3)
     mask = value & ((1 << len(vm.axes)) - 1)
-    if value != mask:
+    # TMCM-6212 3.6.35: a bit vector of the motors; PD86-1180 4.6.37 (one motor): value "1"
+    if value != mask or (len(vm.axes) == 1 and mask != 1):
         raise TmclStatus(4)
     vm.event_mask = mask
     vm.event_permanent = mask if type == 1 else 0

@@ -24,6 +24,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     min = 0
     max = 7999774
     values = []                   # optional: the only allowed values (enumerations)
+    excluded = []                 # optional: values inside min..max the manual forbids
     access = "RWE"                # letters of the manual: R read, W write, E storable (STAP), A auto-stored
     default = 51200
     unit = "pps"
@@ -73,6 +74,7 @@ class Param:
     description: str = ""
     values: tuple[int, ...] = ()
     bank: int | None = None
+    excluded: tuple[int, ...] = ()
 
     @property
     def readable(self) -> bool:
@@ -94,7 +96,7 @@ class Param:
     def accepts(self, value: int) -> bool:
         if self.values:
             return value in self.values
-        return self.min <= value <= self.max
+        return self.min <= value <= self.max and value not in self.excluded
 
 
 @dataclass(frozen=True, slots=True)
@@ -157,6 +159,7 @@ def _param(d: dict) -> Param:
         number=d["number"], name=d["name"], title=d.get("title", d["name"]), min=d["min"], max=d["max"],
         access=d["access"], default=d.get("default", 0), unit=d.get("unit", ""),
         description=d.get("description", ""), values=tuple(d.get("values", ())), bank=d.get("bank"),
+        excluded=tuple(d.get("excluded", ())),
     )
 
 
