@@ -282,6 +282,7 @@ REPLY_VECTORS = [
     ("PD86-1180", "4.6.15 GIO 0, 1 (value 506)", (15, 0, 1, 0), _drive_adc(506), "$02 $01 $64 $0f $00 $00 $01 $fa"),
     # printed with instruction $0a; GCO is 31 = $1f (see test_1180_reply_examples)
     ("PD86-1180", "4.6.25 GCO 1, 0", (31, 1, 0, 0), None, "$02 $01 $64 $1f $00 $00 $00 $00"),
+    ("PD86-1180", "4.6.37 138 type 0, motor bit mask 1", (138, 0, 0, 1), None, "$02 $01 $64 $8a $00 $00 $00 $01"),
     ("PD86-1180", "4.6.16 CALC MUL, -5000 (TMCM-6212 3.6.14 reply)", (19, 2, 0, -5000), None,
      "$02 $01 $64 $13 $FF $FF $EC $78"),
     ("PD28-1021", "CALC MUL, -5000 (TMCM-6212 3.6.14 reply, docs/assumptions.md)", (19, 2, 0, -5000), None,
@@ -292,7 +293,7 @@ REPLY_VECTORS = [
 def test_printed_reply_frames_are_what_the_modules_answer():
     """TMCM-6212 3.6.14 "Reply in Direct Mode: 100 - OK, the operand" and its printed reply
     (02 01 64 13 FF FF EC 78 DC), and every other printed reply frame of the manuals (6212 3.6.13,
-    3.6.35; PD86-1180 4.6.6, 4.6.10, 4.6.15, 4.6.25): the request sent to a module at address 1
+    3.6.35; PD86-1180 4.6.6, 4.6.10, 4.6.15, 4.6.25, 4.6.37): the request sent to a module at address 1
     with host address 2 (the defaults) gets exactly the printed bytes."""
     from opentmcl import VirtualModule
     got, want = {}, {}
@@ -306,3 +307,24 @@ def test_printed_reply_frames_are_what_the_modules_answer():
         want[section] = printed_bytes
         assert raw[8] == checksum(raw[:8])
     assert got == want
+
+
+@pytest.mark.parametrize(("module", "mask", "printed"), [
+    ("TMCM-6212", 5, "02 01 80 8A 00 00 00 05"),          # 3.6.35 (status 80h), motors 0 and 2
+    ("PD86-1180", 1, "$02 $01 $80 $8a $00 $00 $00 $01"),  # 4.6.37 "$02 $01 128 138 ... Motor bit mask"
+])
+def test_printed_additional_reply_after_the_target_is_reached(module, mask, printed):
+    """TMCM-6212 3.6.35 / PD86-1180 4.6.37 "Additional reply ... after motor has reached target
+    position": after 138 and an MVP of each motor in the mask, the module sends the printed frame
+    once per motor with that motor's bit (docs/assumptions.md, Command 138)."""
+    from opentmcl import VirtualModule
+    vm = VirtualModule(module, address=1)
+    assert vm.request(138, 0, 0, mask).status == 100
+    motors = [m for m in range(6) if mask >> m & 1]
+    for m in motors:
+        vm.request(4, 0, m, 1000)
+    vm.advance(5.0)
+    events = vm.drain_events()
+    assert [e[:4] for e in events] == [hexbytes(printed)[:4]] * len(motors)
+    assert sorted(Reply.decode(e).value for e in events) == [1 << m for m in motors]
+    assert sum(Reply.decode(e).value for e in events) == int.from_bytes(hexbytes(printed)[4:8], "big")

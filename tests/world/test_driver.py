@@ -109,3 +109,19 @@ def test_1180_absolute_encoder_value_ignores_an_encoder_position_write(rig):
     r.vm.advance(10.0)
     r.sap(209, 12345)
     assert r.gap(209) == 12345 and r.gap(215) == 80
+
+
+def test_1180_toff_0_free_wheels_too(rig):
+    """PD86-1180 5 AP167 "Setting this parameter to zero completely disables all driver transistors
+    and the motor can free-wheel" (range "0 / 2… 15"): the counter moves, the stage and AP209 stay;
+    2, the first value after the gap, re-enables the driver from where the stage is."""
+    r = rig("PD86-1180", {})
+    r.sap(167, 0)
+    r.cmd(4, 0, 0, 3200)
+    r.vm.advance(10.0)
+    assert (r.gap(1), r.phys(), r.gap(209)) == (3200, 0, 0)
+    r.sap(167, 2)
+    r.cmd(4, 0, 0, 6400)
+    r.vm.advance(10.0)
+    assert (r.gap(1), r.phys()) == (6400, 3200)
+    assert r.gap(209) == 3200 * 256 // 3200 * 6400 // 512    # one round of 256 counts, prescaler 12.5
