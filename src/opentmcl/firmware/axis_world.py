@@ -186,8 +186,8 @@ class AxisWorld:
         self._follow()
 
     def speed(self) -> int:
-        """Speed of the rotor (stage) in the engine's units: 0 at rest, while steps are lost or
-        the driver is off; signed like the velocity (TMCM-6212 AP29, docs/world.md)."""
+        """Speed of the rotor (stage) in the unit of AP3: 0 at rest, while steps are lost or the
+        driver is off; signed like AP3 (TMCM-6212 AP29 "Speed measured by the motor driver")."""
         self._follow()
         if self.slipping or self.driver_off():
             return 0
