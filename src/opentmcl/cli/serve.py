@@ -115,24 +115,36 @@ def load_scenario(path: str | None):
 
 
 def build_modules(args) -> list:
+    """The modules of the bus. The n-th --address wins; a module without one keeps the address its
+    EEPROM file stores (GP66), else gets the next free address (docs/endpoints.md)."""
     from ..firmware.eeprom import EepromError
     from ..firmware.vm import VirtualModule
 
     names = args.module
-    addresses = assign_addresses(len(names), args.address)
-    for option in ("eeprom", "scenario"):
+    for option in ("address", "eeprom", "scenario"):
         if len(getattr(args, option)) > len(names):
             raise CliError(f"more --{option} options than --module options")
-    modules = []
-    for i, (name, address) in enumerate(zip(names, addresses, strict=True)):
+    modules, free = [], []
+    for i, name in enumerate(names):
+        address = args.address[i] if i < len(args.address) else None
         eeprom = args.eeprom[i] if i < len(args.eeprom) else None
         scenario = load_scenario(args.scenario[i] if i < len(args.scenario) else None)
         try:
-            modules.append(VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario))
+            vm = VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario)
         except KeyError as exc:
             raise CliError(str(exc.args[0]) if exc.args else f"unknown module {name!r}") from None
         except (EepromError, ValueError) as exc:  # also a scenario for another module
             raise CliError(str(exc)) from None
+        if address is None and vm.stored_global(0, 66) is None:
+            free.append(vm)
+        modules.append(vm)
+    taken = [vm.address for vm in modules if vm not in free]
+    for vm, address in zip(free, assign_addresses(len(free) + len(taken), taken)[len(taken):], strict=True):
+        vm.assign_address(address)
+    addresses = [vm.address for vm in modules]
+    if len(set(addresses)) != len(addresses):
+        raise CliError(f"module addresses must be distinct on one bus, got {addresses} "
+                       "(give --address to override an address stored in an EEPROM file)")
     return modules
 
 
@@ -157,7 +169,8 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         from ..server import vmapi
 
         for vm in modules:
-            vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+            if vm.stored_global(0, vmapi.GP_CAN_ID) is None:  # a CAN ID stored in the EEPROM stays
+                vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
     server = Server(modules)
     if tcp_spec is not None or args.host:
         host, port = parse_hostport(tcp_spec or DEFAULT_TCP)

@@ -115,6 +115,18 @@ class VirtualModule:
         self.interpreter.power_up()
 
     # --- addressing -------------------------------------------------------------
+    def assign_address(self, address: int) -> None:
+        """Serve at `address` from now on, as the constructor's `address` argument does (GP66 in RAM,
+        kept across resets; the EEPROM is not written)."""
+        if not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
+            raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
+        self._address_override = address
+        self.globals.ram[_ADDRESS] = address
+
+    def stored_global(self, bank: int, number: int) -> int | None:
+        """The value of a global parameter in the EEPROM (None when it is not stored there)."""
+        return self.eeprom.get_global(bank, number)
+
     @property
     def address(self) -> int:
         return self.globals.ram.get(_ADDRESS, 0)
