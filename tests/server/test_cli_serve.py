@@ -367,3 +367,59 @@ def test_two_stored_addresses_that_collide_are_a_one_line_error(capsys, tmp_path
                  "--eeprom", str(b), "--tcp", "127.0.0.1:0"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "distinct" in err
+
+
+def test_pty_of_one_module_is_usb_and_answers_any_address(serve):
+    """`serve --pty` with one module stands for its USB port (docs/endpoints.md): Trinamic's
+    TMCL firmware ignores the address byte on USB, so GGP 66 (manual 3.6.8) sent to address 0
+    or 9 is answered, from the module's own address 1."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--pty")
+    assert any(line.startswith("pty ") and line.endswith("(usb)") for line in p.lines), p.lines
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        for target in (0, 9, 1):
+            port.write(request(target, 10, 66, 0))
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+    assert p.stop()[0] == 0
+
+
+@pytest.mark.parametrize("interface", ["rs485", "rs232"])
+def test_pty_as_rs485_or_rs232_filters_by_address(serve, interface):
+    """`--interface rs485|rs232`: only frames for the module's address (GP66) are answered."""
+    import serial
+
+    p = serve("--module", "PD86-1180", "--pty", "--interface", interface)
+    with serial.Serial(p.endpoint("pty"), timeout=0.5) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""
+        port.timeout = 5
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+    assert p.stop()[0] == 0
+
+
+def test_pty_of_a_bus_is_rs485(serve):
+    """Several modules on one pty are an RS-485 bus (manual 3: several nodes on one bus): each
+    answers its own address, a frame for nobody stays unanswered."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--module", "PD28-1021", "--pty")
+    assert any(line.startswith("pty ") and line.endswith("(rs485)") for line in p.lines), p.lines
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        port.write(request(2, 10, 66, 0))
+        assert port.read(9) == reply(2, 2, 100, 10, 2)
+        port.timeout = 0.5
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""
+    assert p.stop()[0] == 0
+
+
+@pytest.mark.parametrize(("argv", "says"), [
+    (["--module", "TMCM-6212", "--module", "TMCM-6212", "--pty", "--interface", "usb"], "one module"),
+    (["--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--interface", "rs232"], "applies to --pty")])
+def test_bad_interface_use_is_a_one_line_error(capsys, argv, says):
+    """USB carries one module; --interface describes the pty only."""
+    assert main(["serve", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err

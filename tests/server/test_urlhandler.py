@@ -34,8 +34,8 @@ def test_several_modules_on_one_port():
 
 def test_read_times_out_with_fewer_bytes():
     """pyserial semantics: read() returns what arrived when the timeout expires."""
-    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=0.1) as port:
-        port.write(request(9, 10, 66, 0))  # nobody at address 9
+    with serial.serial_for_url("opentmcl://TMCM-6212?interface=rs485", timeout=0.1) as port:
+        port.write(request(9, 10, 66, 0))  # nobody at address 9 (on RS-485; USB would answer)
         assert port.read(9) == b""
 
 
@@ -138,3 +138,22 @@ def test_closed_port_raises():
         port.write(GGP_66)
     with pytest.raises(serial.PortNotOpenError):
         port.read(1)
+
+
+def test_one_module_port_is_usb_and_ignores_the_address_byte():
+    """An `opentmcl://` port to one module stands for its USB port (docs/endpoints.md): a frame
+    to address 0 (odemis' driver discovers modules so) gets the module's reply from address 1."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+@pytest.mark.parametrize(("url", "says"), [("opentmcl://TMCM-6212?interface=can", "usb, rs485, rs232"),
+                                           ("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=usb", "one module")])
+def test_bad_interface_in_the_url_is_refused(url, says):
+    """usb carries one module; only usb, rs485 and rs232 are serial interfaces; rs485 filters."""
+    with pytest.raises(serial.SerialException, match=says):
+        serial.serial_for_url(url)
+    with serial.serial_for_url("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=rs485", timeout=0.2) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""

@@ -1,6 +1,6 @@
 """`opentmcl serve`: host virtual modules in real time on TCP, a pty and/or CAN.
 
-    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH]]
+    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH] [--interface usb|rs485|rs232]]
                    [--can virtual:CH | udp_multicast:GROUP | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
 
 Several --module options put several modules on one bus; the n-th --address,
@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     p.add_argument("--max-clients", type=int, default=4, metavar="N", help="TCP clients at once (default 4)")
     p.add_argument("--pty", action="store_true", help="create a pseudo-terminal and print its path")
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
+    p.add_argument("--interface", choices=("usb", "rs485", "rs232"),
+                   help="with --pty: the link the port stands for; usb answers any address byte "
+                        "(default usb for one module, rs485 for several)")
     p.add_argument("--can", metavar="INTERFACE:CHANNEL",
                    help="serve on a python-can bus, e.g. virtual:opentmcl (this process), udp_multicast:239.74.163.2 "
                         "(other processes) or socketcan:vcan0")
@@ -159,6 +162,8 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         raise CliError("--max-clients must be at least 1")
     if args.link and not args.pty:
         args.pty = True
+    if args.interface and not args.pty:
+        raise CliError("--interface applies to --pty (TCP stands for a serial line: rs485/rs232)")
     tcp_spec = args.tcp
     if tcp_spec is None and not args.pty and not args.can:
         tcp_spec = DEFAULT_TCP
@@ -187,7 +192,10 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
     if args.pty:
         if sys.platform == "win32":
             raise CliError("--pty needs a POSIX system")
-        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace))
+        if args.interface == "usb" and len(modules) > 1:
+            raise CliError("--interface usb carries one module; use rs485 for a bus of several")
+        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
+                             interface=args.interface))
     if args.can:
         interface, sep, channel = args.can.partition(":")
         if not sep or not interface or not channel:
@@ -212,7 +220,7 @@ def describe(server) -> list[str]:
             lines.append(f"tcp {ep.url}")
         elif isinstance(ep, PtyServer):
             link = f" (link {ep.link})" if ep.link else ""
-            lines.append(f"pty {ep.path}{link}  ->  serial://{ep.path}")
+            lines.append(f"pty {ep.path}{link}  ->  serial://{ep.path}  ({ep.interface})")
         elif isinstance(ep, CanServer):
             for vm in server.modules:
                 lines.append(f"can {ep.url}?id={vmapi.global_param(vm, vmapi.GP_CAN_ID)}"

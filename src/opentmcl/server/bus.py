@@ -41,10 +41,22 @@ class Channel(Protocol):
     """An endpoint that can carry unsolicited replies back to its host."""
 
     interface: str
-    """"serial" (RS-232/RS-485/USB framing) or "can"."""
+    """The link the channel stands for: "serial", "rs232" or "rs485" (modules filter by address),
+    "usb" (the address byte is ignored, TMCL on USB) or "can"."""
 
     def deliver(self, vm, reply: bytes) -> None:
         """Send an unsolicited 9-byte reply of `vm` to the host."""
+
+
+USB = "usb"
+"""Channel.interface of a link that ignores the address byte (TMCL over USB)."""
+SERIAL_INTERFACES = ("usb", "rs485", "rs232")
+"""What a serial endpoint can stand for (`opentmcl serve --pty --interface`)."""
+
+
+def default_interface(modules) -> str:
+    """USB when the link carries one module, RS-485 for a bus of several (docs/endpoints.md)."""
+    return USB if len(modules) == 1 else "rs485"
 
 
 MIN_STEP = 0.002
@@ -116,6 +128,17 @@ class ModuleBus:
     def serial_frames(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes, str]]:
         """One 9-byte frame to every module, all in binary mode: [(module, reply, "binary")] for
         each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
+        if getattr(channel, "interface", None) == USB:
+            out = []
+            for vm in self.modules:
+                try:
+                    reply = self.serial_frame(vm, frame, channel)
+                except Exception:  # a module bug, as below
+                    logging.getLogger("opentmcl.server").exception("module failed on frame %s", frame.hex(" "))
+                    continue
+                if reply:
+                    out.append((vm, reply, "binary"))
+            return out
         out = []
         route = self._route
         for vm, key, handle in self._serial_handlers:
@@ -134,8 +157,9 @@ class ModuleBus:
 
     def serial_frame(self, vm, frame: bytes, channel: Channel | None = None) -> bytes:
         """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced."""
-        reply = self._handle(vm, frame, "serial")
-        if channel is not None and (reply or (frame and self._addressed(vm, frame[0]))):
+        usb = getattr(channel, "interface", None) == USB
+        reply = self._handle(vm, frame, USB if usb else "serial")
+        if channel is not None and (reply or usb or (frame and self._addressed(vm, frame[0]))):
             # A module that was addressed but stayed silent (reply suppressed)
             # still becomes reachable for its events through this channel.
             self._route[id(vm)] = channel

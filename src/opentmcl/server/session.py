@@ -44,12 +44,12 @@ def byte_time(baud: int) -> float:
 class SerialSession:
     """Frames a byte stream, talks to the bus, writes replies with pause and pacing."""
 
-    interface = "serial"
-
     def __init__(self, bus, write: Callable[[bytes], None], *, gap: float = DEFAULT_GAP,
                  pace_bytes: bool = False, clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], None] = time.sleep) -> None:
+                 sleep: Callable[[float], None] = time.sleep, interface: str = "serial") -> None:
         self.bus = bus
+        self.interface = interface
+        """The link this session stands for (bus.Channel.interface): "usb" ignores the address byte."""
         self._write = write
         self.stream = SerialStream(bus, gap)
         self.pace_bytes = pace_bytes

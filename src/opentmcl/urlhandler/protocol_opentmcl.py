@@ -3,9 +3,11 @@
     opentmcl://TMCM-6212                       one module at address 1
     opentmcl://TMCM-6212@1,TMCM-1180@2         two modules on one bus
     opentmcl://TMCM-6212?eeprom=/tmp/ee.json&gap=0.1&pace=1
+    opentmcl://TMCM-6212?interface=rs485       filter by address (default: usb for one module)
 
 Bytes written to the port are framed into 9-byte TMCL frames (TMCM-6212
-manual 3.1) and offered to every module on the bus; the modules' replies
+manual 3.1) and offered to every module on the bus (`interface=usb`, the default
+for a single module: whatever the address byte; rs485/rs232: by address); the modules' replies
 become readable after the telegram pause (global parameter 75, manual 5.1),
 and with ``pace=1`` at the RS485 baud rate (parameter 65). The modules run in
 real time: their virtual time follows the wall clock, advanced whenever the
@@ -32,7 +34,7 @@ import serial
 from serial.serialutil import PortNotOpenError, SerialException, Timeout
 
 from ..server import vmapi
-from ..server.bus import ModuleBus
+from ..server.bus import SERIAL_INTERFACES, USB, ModuleBus, default_interface
 from ..server.framer import DEFAULT_GAP
 from ..server.session import byte_time
 from ..server.stream import BINARY, SerialStream
@@ -66,7 +68,8 @@ def parse_url(url: str) -> dict:
     addresses = [a for _, a in modules]
     if len(set(addresses)) != len(addresses):
         raise ValueError(f"module addresses must be distinct on one bus: {addresses}")
-    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False}
+    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False,
+               "interface": default_interface(modules)}
     for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
         if key == "eeprom":
             options["eeprom"] = [v for v in value.split(",")]
@@ -79,8 +82,14 @@ def parse_url(url: str) -> dict:
                 raise ValueError(f"gap must be a positive number of seconds, got {value!r}")
         elif key == "pace":
             options["pace"] = value.lower() in ("1", "true", "yes", "on")
+        elif key == "interface":
+            if value not in SERIAL_INTERFACES:
+                raise ValueError(f"bad interface {value!r}; use one of {', '.join(SERIAL_INTERFACES)}")
+            if value == USB and len(modules) != 1:
+                raise ValueError("interface=usb carries one module; use rs485 for a bus of several")
+            options["interface"] = value
         else:
-            raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace)")
+            raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace, interface)")
     if len(options["eeprom"]) > len(modules):
         raise ValueError("more eeprom files than modules")
     return options
@@ -90,6 +99,7 @@ class Serial(serial.Serial):
     """A pyserial port whose other end is a bus of virtual modules."""
 
     interface = "serial"
+    """Replaced at open by the URL's `interface` (bus.Channel.interface)."""
 
     def open(self) -> None:
         if self._port is None:
@@ -115,6 +125,7 @@ class Serial(serial.Serial):
         self._bus = ModuleBus(modules)
         self._stream = SerialStream(self._bus, options["gap"])
         self._pace = options["pace"]
+        self.interface = options["interface"]
         self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
         self.is_open = True
 
