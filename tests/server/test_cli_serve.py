@@ -423,3 +423,18 @@ def test_bad_interface_use_is_a_one_line_error(capsys, argv, says):
     assert main(["serve", *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err
+
+
+def test_serve_pace_paces_requests_and_replies(serve):
+    """`serve --pty --pace` (docs/endpoints.md): TMCM-6212 manual 5.1 GP65 0 = 9600 baud, so a
+    GGP 66 round trip (9 + 9 bytes, 10 bit times each) takes at least 18.75 ms (lower bound)."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--pty", "--pace")
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        for _ in range(5):
+            start = time.monotonic()
+            port.write(GGP_66)
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+            assert time.monotonic() - start >= 18 * 10 / 9600
+    assert p.stop()[0] == 0

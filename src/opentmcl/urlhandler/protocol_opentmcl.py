@@ -9,8 +9,9 @@ Bytes written to the port are framed into 9-byte TMCL frames (TMCM-6212
 manual 3.1) and offered to every module on the bus (`interface=usb`, the default
 for a single module: whatever the address byte; rs485/rs232: by address); the modules' replies
 become readable after the telegram pause (global parameter 75, manual 5.1),
-and with ``pace=1`` at the RS485 baud rate (parameter 65). The modules run in
-real time: their virtual time follows the wall clock, advanced whenever the
+and with ``pace=1`` both directions take their wire time at the RS485 baud
+rate (parameter 65): written bytes reach the modules only after crossing the
+line. The modules run in real time: their virtual time follows the wall clock, advanced whenever the
 port is used, so a move started by a write has progressed by the next read.
 Unsolicited replies (command 138, manual 3.6.35) are readable like any other.
 Modules that have ASCII mode (command 139, PD28-1021 manual 3.4) read the
@@ -26,6 +27,7 @@ does - accepts it.
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 import urllib.parse
@@ -127,6 +129,8 @@ class Serial(serial.Serial):
         self._pace = options["pace"]
         self.interface = options["interface"]
         self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
+        self._tx: list[tuple[float, bytes]] = []  # pace=1: (time the bytes reach the modules, bytes)
+        self._tx_free = float("-inf")
         self.is_open = True
 
     def close(self) -> None:
@@ -147,9 +151,10 @@ class Serial(serial.Serial):
         """Baud rate and framing settings are accepted and ignored."""
 
     # -- data --------------------------------------------------------------
-    def _queue(self, vm, reply: bytes, pause: bool = True) -> None:
-        """Make `reply` readable after the telegram pause (binary replies only), paced at GP65 if asked."""
-        now = time.monotonic()
+    def _queue(self, vm, reply: bytes, pause: bool = True, at: float | None = None) -> None:
+        """Make `reply` readable after the telegram pause (binary replies only), paced at GP65 if asked;
+        `at` is when the request reached the module (default: now)."""
+        now = time.monotonic() if at is None else at
         start = now + (vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0)
         if self._rx:
             start = max(start, self._rx[-1][0])
@@ -162,7 +167,9 @@ class Serial(serial.Serial):
         self._queue(vm, reply)
 
     def _update(self) -> int:
-        """Advance the modules to now, collect events; return readable byte count."""
+        """Advance the modules to now, hand them the written bytes that have crossed the line,
+        collect events; return readable byte count."""
+        self._feed_arrived()
         for channel, vm, event in self._bus.poll():
             channel.deliver(vm, event)
         now = time.monotonic()
@@ -203,9 +210,25 @@ class Serial(serial.Serial):
             raise PortNotOpenError()
         data = bytes(data)
         with self._lock:
-            for vm, out, kind in self._stream.feed(data, time.monotonic(), self):
-                self._queue(vm, out, pause=kind == BINARY)
+            now = time.monotonic()
+            if self._pace and data:  # the bytes reach the modules once they crossed the line
+                per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self._bus.modules)
+                self._tx_free = max(self._tx_free, now) + len(data) * per_byte
+                self._tx.append((self._tx_free, data))
+                self._feed_arrived()
+            else:
+                self._feed(data, now)
         return len(data)
+
+    def _feed(self, data: bytes, at: float) -> None:
+        for vm, out, kind in self._stream.feed(data, at, self):
+            self._queue(vm, out, pause=kind == BINARY, at=at)
+
+    def _feed_arrived(self) -> None:
+        now = time.monotonic()
+        while self._tx and self._tx[0][0] <= now:
+            at, data = self._tx.pop(0)
+            self._feed(data, at)
 
     def reset_input_buffer(self) -> None:
         if not self.is_open:
@@ -215,17 +238,35 @@ class Serial(serial.Serial):
             self._rx.clear()
 
     def reset_output_buffer(self) -> None:
+        """Written bytes still on the (paced) line are discarded."""
         if not self.is_open:
             raise PortNotOpenError()
+        with self._lock:
+            self._feed_arrived()
+            self._tx.clear()
 
     @property
     def out_waiting(self) -> int:
-        return 0
+        """Written bytes still on the (paced) line."""
+        with self._lock:
+            self._feed_arrived()
+            if not self._tx:
+                return 0
+            per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self._bus.modules)
+            # bytes whose stop bit has not crossed the line yet (the line is busy until the last end)
+            return min(sum(len(data) for _, data in self._tx),
+                       math.ceil((self._tx[-1][0] - time.monotonic()) / per_byte - 1e-9))
 
     def flush(self) -> None:
-        """Writes are handled at once; nothing to wait for."""
+        """Wait until the written bytes have reached the modules (at once without pacing)."""
         if not self.is_open:
             raise PortNotOpenError()
+        with self._lock:
+            last = self._tx[-1][0] if self._tx else None
+        if last is not None:
+            time.sleep(max(0.0, last - time.monotonic()))
+        with self._lock:
+            self._feed_arrived()
 
     def fileno(self) -> int:
         raise SerialException("an opentmcl:// port has no file descriptor")
