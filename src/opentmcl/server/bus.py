@@ -91,6 +91,8 @@ class ModuleBus:
         # (module, its handle() for serial frames) looked up once: the per-frame path is hot.
         self._serial_handlers = [(vm, id(vm), partial(vm.handle, interface="serial")
                                   if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
+        self._usb_handlers = [(vm, id(vm), partial(vm.handle, interface=USB)
+                               if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:
@@ -128,20 +130,10 @@ class ModuleBus:
     def serial_frames(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes, str]]:
         """One 9-byte frame to every module, all in binary mode: [(module, reply, "binary")] for
         each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
-        if getattr(channel, "interface", None) == USB:
-            out = []
-            for vm in self.modules:
-                try:
-                    reply = self.serial_frame(vm, frame, channel)
-                except Exception:  # a module bug, as below
-                    logging.getLogger("opentmcl.server").exception("module failed on frame %s", frame.hex(" "))
-                    continue
-                if reply:
-                    out.append((vm, reply, "binary"))
-            return out
+        usb = getattr(channel, "interface", None) == USB
         out = []
         route = self._route
-        for vm, key, handle in self._serial_handlers:
+        for vm, key, handle in self._usb_handlers if usb else self._serial_handlers:
             try:
                 reply = handle(frame)
             except Exception:  # a module bug: bad input is answered with a status code
@@ -151,7 +143,7 @@ class ModuleBus:
                 out.append((vm, reply, "binary"))
                 if channel is not None:
                     route[key] = channel
-            elif channel is not None and self._addressed(vm, frame[0]):
+            elif channel is not None and (usb or self._addressed(vm, frame[0])):
                 route[key] = channel
         return out
 
