@@ -188,3 +188,31 @@ def test_1180_ror_rol_velocity_edges(m1180):
                    (2, 2047): 100, (2, 2048): 4, (2, -2047): 100, (2, -2048): 4}
     m1180.ok(1, 0, 0, -100)
     assert m1180.ok(6, 2, 0) == -100
+
+
+def test_sap_2_during_a_positioning_move_changes_no_motion(anymod):
+    """AP2 "Target speed": "The desired speed in velocity mode. Not valid in position mode"
+    (TMCM-6212 4.1, PD28-1021 5; PD86-1180 5: "set by hardware"). SAP 2 while MVP runs is
+    accepted, and the move goes on to its target: no rotation the host did not ask for."""
+    anymod.ok(4, 0, 0, 12345)
+    anymod.vm.advance(0.05)
+    assert anymod.ok(6, 3, 0) != 0
+    anymod.ok(5, 2, 0, 100)
+    anymod.vm.advance(120.0)
+    assert anymod.ok(6, 1, 0) == 12345
+    assert anymod.ok(6, 8, 0) == 1 and anymod.ok(6, 3, 0) == 0
+    anymod.ok(5, 2, 0, -100)                # at rest in position mode: still no motion
+    anymod.vm.advance(1.0)
+    assert anymod.ok(6, 1, 0) == 12345 and anymod.ok(6, 3, 0) == 0
+
+
+def test_sap_2_in_velocity_mode_sets_the_speed(anymod):
+    """AP2: "The desired speed in velocity mode" - after ROR, SAP 2 changes the speed (the last
+    valid value of the PD86-1180's 2047 range, and its negative: the other direction)."""
+    anymod.ok(1, 0, 0, 100)
+    anymod.ok(5, 2, 0, 2047)
+    anymod.vm.advance(30.0)
+    assert anymod.ok(6, 3, 0) == 2047
+    anymod.ok(5, 2, 0, -2047)
+    anymod.vm.advance(30.0)
+    assert anymod.ok(6, 3, 0) == -2047

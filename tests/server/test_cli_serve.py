@@ -300,3 +300,141 @@ def test_build_server_assigns_can_ids_in_ram(tmp_path):
         assert again.globals.get_raw(0, 71) == 1
     finally:
         again.close()
+
+
+def _stored(path, module="TMCM-6212", **globals_):
+    """An EEPROM file in which SGP (manual 5.1: bank-0 parameters 64..127 are stored at once)
+    left the given global parameters; GP66 last, as it changes the address."""
+    vm = VirtualModule(module, eeprom=path)
+    for number, value in sorted(globals_.items(), key=lambda kv: kv[0] == "gp66"):
+        assert vm.request(9, int(number[2:]), 0, value).status == 100
+    vm.close()
+    return path
+
+
+def test_eeprom_without_address_serves_at_the_stored_address(serve, tmp_path):
+    """TMCM-6212 manual 5.1 GP66 "serial address" and GP76 "serial host address" are stored by
+    SGP; `serve --eeprom FILE` without --address powers the module up with them, as the real
+    module does: GGP 66 to address 7 is answered from 7 to host 3; address 1 stays silent."""
+    ee = _stored(tmp_path / "ee.json", gp76=3, gp66=7)
+    p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--eeprom", str(ee))
+    assert any("at address 7" in line for line in p.lines), p.lines
+    with socket.create_connection(p.tcp_address(), timeout=5) as s:
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9, timeout=0.5) == b""
+        s.sendall(request(7, 10, 66, 0))
+        assert recv_exactly(s, 9) == reply(3, 7, 100, 10, 7)
+    assert p.stop()[0] == 0
+
+
+def test_explicit_address_wins_over_the_stored_one(serve, tmp_path):
+    """--address overrides the stored GP66 (in RAM; docs/endpoints.md); the other stored bus
+    parameters (host address GP76) still apply."""
+    ee = _stored(tmp_path / "ee.json", gp76=3, gp66=7)
+    p = serve("--module", "TMCM-6212", "--address", "4", "--tcp", "127.0.0.1:0", "--eeprom", str(ee))
+    with socket.create_connection(p.tcp_address(), timeout=5) as s:
+        s.sendall(request(4, 10, 66, 0))
+        assert recv_exactly(s, 9) == reply(3, 4, 100, 10, 4)
+    assert p.stop()[0] == 0
+    assert VirtualModule("TMCM-6212", eeprom=ee).address == 7      # the file is not rewritten
+
+
+def test_stored_addresses_and_can_ids_of_a_bus(tmp_path):
+    """Two modules whose EEPROM files store GP66 (5, 9) and the second one a CAN ID GP71 = 20:
+    a third module without a file gets the next free address (1), the stored CAN ID is kept
+    and only the others get their serial address as CAN ID (docs/assumptions.md)."""
+    from opentmcl.cli import build_parser
+    from opentmcl.cli.serve import build_server
+
+    a = _stored(tmp_path / "a.json", gp66=5)
+    b = _stored(tmp_path / "b.json", gp71=20, gp66=9)
+    args = build_parser().parse_args(["serve", "--module", "TMCM-6212", "--module", "TMCM-6212",
+                                      "--module", "TMCM-6212", "--eeprom", str(a), "--eeprom", str(b),
+                                      "--tcp", "127.0.0.1:0"])
+    server = build_server(args)
+    try:
+        assert [vm.address for vm in server.modules] == [5, 9, 1]
+        assert [vm.globals.get_raw(0, 71) for vm in server.modules] == [5, 20, 1]
+    finally:
+        server.stop()
+
+
+def test_two_stored_addresses_that_collide_are_a_one_line_error(capsys, tmp_path):
+    """Addresses on one bus must be distinct (manual 3: one bus, several nodes)."""
+    a = _stored(tmp_path / "a.json", gp66=5)
+    b = _stored(tmp_path / "b.json", gp66=5)
+    assert main(["serve", "--module", "TMCM-6212", "--module", "TMCM-6212", "--eeprom", str(a),
+                 "--eeprom", str(b), "--tcp", "127.0.0.1:0"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "distinct" in err
+
+
+def test_pty_of_one_module_is_usb_and_answers_any_address(serve):
+    """`serve --pty` with one module stands for its USB port (docs/endpoints.md): Trinamic's
+    TMCL firmware ignores the address byte on USB, so GGP 66 (manual 3.6.8) sent to address 0
+    or 9 is answered, from the module's own address 1."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--pty")
+    assert any(line.startswith("pty ") and line.endswith("(usb)") for line in p.lines), p.lines
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        for target in (0, 9, 1):
+            port.write(request(target, 10, 66, 0))
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+    assert p.stop()[0] == 0
+
+
+@pytest.mark.parametrize("interface", ["rs485", "rs232"])
+def test_pty_as_rs485_or_rs232_filters_by_address(serve, interface):
+    """`--interface rs485|rs232`: only frames for the module's address (GP66) are answered."""
+    import serial
+
+    p = serve("--module", "PD86-1180", "--pty", "--interface", interface)
+    with serial.Serial(p.endpoint("pty"), timeout=0.5) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""
+        port.timeout = 5
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+    assert p.stop()[0] == 0
+
+
+def test_pty_of_a_bus_is_rs485(serve):
+    """Several modules on one pty are an RS-485 bus (manual 3: several nodes on one bus): each
+    answers its own address, a frame for nobody stays unanswered."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--module", "PD28-1021", "--pty")
+    assert any(line.startswith("pty ") and line.endswith("(rs485)") for line in p.lines), p.lines
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        port.write(request(2, 10, 66, 0))
+        assert port.read(9) == reply(2, 2, 100, 10, 2)
+        port.timeout = 0.5
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""
+    assert p.stop()[0] == 0
+
+
+@pytest.mark.parametrize(("argv", "says"), [
+    (["--module", "TMCM-6212", "--module", "TMCM-6212", "--pty", "--interface", "usb"], "one module"),
+    (["--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--interface", "rs232"], "applies to --pty")])
+def test_bad_interface_use_is_a_one_line_error(capsys, argv, says):
+    """USB carries one module; --interface describes the pty only."""
+    assert main(["serve", *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and says in err
+
+
+def test_serve_pace_paces_requests_and_replies(serve):
+    """`serve --pty --pace` (docs/endpoints.md): TMCM-6212 manual 5.1 GP65 0 = 9600 baud, so a
+    GGP 66 round trip (9 + 9 bytes, 10 bit times each) takes at least 18.75 ms (lower bound)."""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--pty", "--pace")
+    with serial.Serial(p.endpoint("pty"), timeout=5) as port:
+        for _ in range(5):
+            start = time.monotonic()
+            port.write(GGP_66)
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+            assert time.monotonic() - start >= 18 * 10 / 9600
+    assert p.stop()[0] == 0

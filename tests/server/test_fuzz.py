@@ -141,7 +141,7 @@ def test_fuzz_tcp():
 
 def test_fuzz_pty():
     server = Server([VirtualModule("TMCM-6212", address=1)])
-    pty = server.add(PtyServer(server.bus, gap=GAP))
+    pty = server.add(PtyServer(server.bus, gap=GAP, interface="rs485"))  # frames for others ignored
     server.start()
     try:
         with serial.Serial(pty.path, timeout=5) as port:
@@ -168,7 +168,7 @@ def test_fuzz_pty():
 
 
 def test_fuzz_urlhandler():
-    with serial.serial_for_url(f"opentmcl://TMCM-6212?gap={GAP}", timeout=5) as port:
+    with serial.serial_for_url(f"opentmcl://TMCM-6212?gap={GAP}&interface=rs485", timeout=5) as port:
 
         @ENDPOINT_SETTINGS
         @given(stream=streams)
@@ -357,7 +357,7 @@ def ascii_check(vm, write, read_all, read_n):
 
 def test_fuzz_ascii_pty():
     server = Server([VirtualModule("PD28-1021", address=1)])
-    pty = server.add(PtyServer(server.bus, gap=GAP))
+    pty = server.add(PtyServer(server.bus, gap=GAP, interface="rs485"))  # frames for others ignored
     server.start()
     vm = server.modules[0]
     try:

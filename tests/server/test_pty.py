@@ -143,3 +143,50 @@ def test_a_client_that_never_reads_cannot_wedge_the_server(pty_server):
         port.timeout = 5
         port.write(GGP_66)
         assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+WIRE_9600 = 18 * 10 / 9600
+"""A request and its reply, nine bytes each, ten bit times per byte (8N1) at 9600 baud (GP65 = 0)."""
+
+
+def _round_trips(port, frame, expected, count):
+    """Seconds each of `count` request/reply round trips took (lower bounds are all a test uses)."""
+    times = []
+    for _ in range(count):
+        start = time.monotonic()
+        port.write(frame)
+        assert port.read(9) == expected
+        times.append(time.monotonic() - start)
+    return times
+
+
+def test_paced_pty_round_trip_takes_the_wire_time_of_both_directions():
+    """TMCM-6212 manual 5.1 GP65 "RS485 baud rate" 0 = 9600: with pacing a request reaches the
+    module only once its ninth byte crossed the line, and the reply takes its wire time too, so
+    every round trip takes at least 18 byte times (18.75 ms); only a lower bound is checked."""
+    server = Server([VirtualModule("TMCM-6212", address=1)])
+    pty = server.add(PtyServer(server.bus, gap=GAP, pace_bytes=True))
+    server.start()
+    try:
+        with serial.Serial(pty.path, 9600, timeout=5) as port:
+            times = _round_trips(port, GGP_66, reply(2, 1, 100, 10, 1), 10)
+    finally:
+        server.stop()
+    assert min(times) >= WIRE_9600
+
+
+def test_paced_rs485_bus_turn_around_adds_gp75():
+    """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent" (ms): on a paced RS-485
+    bus of two modules a round trip to module 2 with GP75 = 20 takes at least 18 byte times
+    + 20 ms."""
+    server = Server([VirtualModule("TMCM-6212", address=1), VirtualModule("PD86-1180", address=2)])
+    pty = server.add(PtyServer(server.bus, gap=GAP, pace_bytes=True))
+    server.start()
+    try:
+        with serial.Serial(pty.path, 9600, timeout=5) as port:
+            port.write(request(2, 9, 75, 0, 20))          # SGP 75, 0, 20
+            assert len(port.read(9)) == 9
+            times = _round_trips(port, request(2, 10, 66, 0), reply(2, 2, 100, 10, 2), 5)
+    finally:
+        server.stop()
+    assert min(times) >= WIRE_9600 + 0.020

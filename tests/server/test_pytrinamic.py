@@ -78,3 +78,26 @@ def test_pytrinamic_with_serial_for_url_port():
         exercise(interface, port.modules[0])
     finally:
         interface.close()
+
+
+def test_pytrinamic_target_velocity_setter_during_a_move(server):
+    """AP2 "Target speed": "The desired speed in velocity mode. Not valid in position mode"
+    (TMCM-6212 4.1). PyTrinamic's `target_velocity` setter writes SAP 2; during a positioning
+    move the motor still arrives at the MVP target and stops there (no rotation starts)."""
+    srv, tcp, _ = server
+    host, port = tcp.address
+    cm = ConnectionManager(f"--interface socket_serial_tmcl --port {host}:{port}")
+    with cm.connect() as interface:
+        module = MODULE_CLASSES[srv.modules[0].profile.name](interface)
+        motor = module.motors[0]
+        motor.set_axis_parameter(motor.AP.MaxVelocity, 20000)
+        motor.set_axis_parameter(motor.AP.MaxAcceleration, 200000)
+        module.move_to(0, 6000)
+        motor.target_velocity = 50000
+        deadline = time.monotonic() + 10
+        while not motor.get_position_reached() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert motor.get_axis_parameter(motor.AP.ActualPosition, signed=True) == 6000
+        time.sleep(0.1)
+        assert motor.get_axis_parameter(motor.AP.ActualVelocity, signed=True) == 0
+        assert motor.get_axis_parameter(motor.AP.ActualPosition, signed=True) == 6000

@@ -54,19 +54,79 @@ def test_telegram_pause_gp75_delays_the_reply():
 
 
 def test_byte_pacing_follows_gp65_baud_rate():
-    """Manual 5.1 GP65: 0 = 9600 baud (default), 7 = 115200. With pacing the nine reply
-    bytes leave one every 10 bit times (8N1)."""
+    """Manual 5.1 GP65: 0 = 9600 baud (default), 7 = 115200. With pacing the nine request bytes
+    take ten bit times each (8N1) before the module sees the request, and the nine reply bytes
+    leave one every ten bit times: a round trip of 18 byte times."""
     ft, writes, session = make(pace=True)
     session.receive(GGP_66)
     assert b"".join(w for _, w in writes) == reply(2, 1, 100, 10, 1)
     assert len(writes) == 9
-    assert ft.t == pytest.approx(9 * byte_time(9600))
+    assert writes[0][0] == pytest.approx(10 * byte_time(9600))    # the request's nine bytes, then one
+    assert ft.t == pytest.approx(18 * byte_time(9600))
     assert byte_time(9600) == pytest.approx(10 / 9600)
     session.receive(request(1, 9, 65, 0, 7))  # SGP 65, 0, 7 -> 115200 baud
     writes.clear()
     start = ft.t
     session.receive(GGP_66)
-    assert ft.t - start == pytest.approx(9 * 10 / 115200)
+    assert ft.t - start == pytest.approx(18 * 10 / 115200)
+
+
+def test_paced_request_reaches_the_module_after_its_last_byte():
+    """A request split over two reads (4 + 5 bytes, read at once) reaches the module when its
+    ninth byte has crossed the 9600-baud line: 9 byte times after the first read."""
+    ft, writes, session = make(pace=True)
+    assert session.receive(GGP_66[:4]) == 0
+    assert ft.t == pytest.approx(4 * byte_time(9600)) and writes == []
+    assert session.receive(GGP_66[4:]) == 1
+    assert writes[0][0] == pytest.approx(10 * byte_time(9600))
+
+
+def test_paced_telegram_pause_counts_from_the_last_request_byte():
+    """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent": the bus turn-around
+    starts when the request has arrived, so with pacing the first reply byte is through 9 byte
+    times + 15 ms + its own byte time after the request started."""
+    ft, writes, session = make(pace=True)
+    session.receive(request(1, 9, 75, 0, 15))  # SGP 75, 0, 15
+    writes.clear()
+    start = ft.t
+    session.receive(GGP_66)
+    assert writes[0][0] - start == pytest.approx(10 * byte_time(9600) + 0.015)
+    assert ft.t - start == pytest.approx(18 * byte_time(9600) + 0.015)
+
+
+def test_paced_ascii_line_arrives_at_the_baud_rate():
+    """PD28-1021 manual 3.4 ASCII mode: a command line `AGAP 1, 0<CR>` (10 bytes) crosses the
+    9600-baud line before the module echoes and answers; the echo and the reply text are
+    paced too (10 bit times per byte)."""
+    ft = FakeTime()
+    writes = []
+    vm = VirtualModule("PD28-1021", address=1)
+    assert vm.request(139).status == 100
+    bus = ModuleBus([vm], clock=ft.clock)
+    session = SerialSession(bus, lambda b: writes.append((ft.t, bytes(b))), gap=0.1,
+                            pace_bytes=True, clock=ft.clock, sleep=ft.sleep)
+    line = b"AGAP 1, 0\r"
+    session.receive(line)
+    out = b"".join(w for _, w in writes)
+    assert out.endswith(b"\r") and b"BA 100" in out
+    assert writes[0][0] == pytest.approx((len(line) + 1) * byte_time(9600))
+    assert ft.t == pytest.approx((len(line) + len(out)) * byte_time(9600))
+
+
+def test_paced_bus_reads_at_the_slowest_modules_rate():
+    """Two modules on one line, one at 9600 and one at 115200 baud (GP65 0 / 7): the request is
+    paced at 9600 (docs/assumptions.md), the 115200 module's reply at its own rate."""
+    ft = FakeTime()
+    writes = []
+    fast = VirtualModule("TMCM-6212", address=2)
+    assert fast.request(9, 65, 0, 7).status == 100
+    bus = ModuleBus([VirtualModule("TMCM-6212", address=1), fast], clock=ft.clock)
+    session = SerialSession(bus, lambda b: writes.append((ft.t, bytes(b))), gap=0.1,
+                            pace_bytes=True, clock=ft.clock, sleep=ft.sleep, interface="rs485")
+    session.receive(request(2, 10, 66, 0))
+    assert b"".join(w for _, w in writes) == reply(2, 2, 100, 10, 2)
+    assert writes[0][0] == pytest.approx(9 * byte_time(9600) + byte_time(115200))
+    assert ft.t == pytest.approx(9 * byte_time(9600) + 9 * byte_time(115200))
 
 
 def test_frames_for_other_addresses_produce_no_bytes():

@@ -34,8 +34,8 @@ def test_several_modules_on_one_port():
 
 def test_read_times_out_with_fewer_bytes():
     """pyserial semantics: read() returns what arrived when the timeout expires."""
-    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=0.1) as port:
-        port.write(request(9, 10, 66, 0))  # nobody at address 9
+    with serial.serial_for_url("opentmcl://TMCM-6212?interface=rs485", timeout=0.1) as port:
+        port.write(request(9, 10, 66, 0))  # nobody at address 9 (on RS-485; USB would answer)
         assert port.read(9) == b""
 
 
@@ -89,8 +89,9 @@ def test_telegram_pause_delays_readability(fake_time):
 
 @pytest.mark.parametrize(("gp65", "baud"), [(0, 9600), (7, 115200)])
 def test_pace_sends_reply_bytes_at_the_gp65_baud_rate(fake_time, gp65, baud):
-    """Manual 5.1 GP65 "RS485 baud rate" table: with ?pace=1 the reply bytes become readable one
-    per ten bit times (8N1) at that rate; the 3.6.8 GGP 66 reply (9 bytes) as the probe."""
+    """Manual 5.1 GP65 "RS485 baud rate" table: with ?pace=1 the request crosses the line first
+    (nine bytes), then the reply bytes become readable one per ten bit times (8N1) at that rate;
+    the 3.6.8 GGP 66 reply (9 bytes) as the probe."""
     byte = 10 / baud
     with serial.serial_for_url("opentmcl://TMCM-6212?pace=1", timeout=2) as port:
         port.write(request(1, 9, 65, 0, gp65))  # SGP 65, 0, gp65
@@ -98,7 +99,11 @@ def test_pace_sends_reply_bytes_at_the_gp65_baud_rate(fake_time, gp65, baud):
         port.read(9)
         port.write(GGP_66)
         assert port.in_waiting == 0
-        fake_time.t += 4.5 * byte
+        fake_time.t += 8.5 * byte
+        assert port.in_waiting == 0 and port.out_waiting == 1      # the request's last byte
+        fake_time.t += 1 * byte
+        assert port.in_waiting == 0 and port.out_waiting == 0
+        fake_time.t += 4 * byte
         assert port.in_waiting == 4
         fake_time.t += 5 * byte
         assert port.read(9) == reply(2, 1, 100, 10, 1)
@@ -138,3 +143,41 @@ def test_closed_port_raises():
         port.write(GGP_66)
     with pytest.raises(serial.PortNotOpenError):
         port.read(1)
+
+
+def test_one_module_port_is_usb_and_ignores_the_address_byte():
+    """An `opentmcl://` port to one module stands for its USB port (docs/endpoints.md): a frame
+    to address 0 (odemis' driver discovers modules so) gets the module's reply from address 1."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+@pytest.mark.parametrize(("url", "says"), [("opentmcl://TMCM-6212?interface=can", "usb, rs485, rs232"),
+                                           ("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=usb", "one module")])
+def test_bad_interface_in_the_url_is_refused(url, says):
+    """usb carries one module; only usb, rs485 and rs232 are serial interfaces; rs485 filters."""
+    with pytest.raises(serial.SerialException, match=says):
+        serial.serial_for_url(url)
+    with serial.serial_for_url("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=rs485", timeout=0.2) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""
+
+
+def test_paced_port_round_trip_takes_the_wire_time_of_both_directions():
+    """TMCM-6212 manual 5.1 GP65 0 = 9600 baud: with `pace=1` the written request reaches the
+    module only after its nine bytes crossed the line, the reply takes nine byte times too, so a
+    round trip takes at least 18 x 10 / 9600 s (lower bound only); `flush` waits until the
+    written bytes are through."""
+    import time
+
+    with serial.serial_for_url("opentmcl://TMCM-6212?pace=1", timeout=5) as port:
+        for _ in range(5):
+            start = time.monotonic()
+            port.write(GGP_66)
+            assert port.read(9) == reply(2, 1, 100, 10, 1)
+            assert time.monotonic() - start >= 18 * 10 / 9600
+        port.write(GGP_66)
+        port.flush()
+        assert port.out_waiting == 0
+        assert port.read(9) == reply(2, 1, 100, 10, 1)

@@ -188,15 +188,34 @@ def test_1180_three_switch_mode(rig):
     """PD86-1180 manual 7.1: "In mode 3 (three-switch mode), the right stop switch is searched
     first to distinguish the left stop switch from the reference switch by the order of
     activation when moving left (reference switch and left limit switch share the same
-    electrical function)" - the first REFL activation moving left is the reference switch."""
+    electrical function)" - the first REFL activation moving left is the reference switch;
+    manual 5 AP193: "3 search right stop switch, then search left stop switch from both sides",
+    so the origin is the middle of the reference switch (4500..5500), not its upper edge."""
     sc = {"axis": {"0": {"left": {"position": -20000}, "right": {"position": 30000},
                          "home": {"position": 5000, "width": 1000}}}}
     r = _run(rig, "TMCM-1180", 3, sc)
     log = r.vm.reference_search(r.vm.axes[0]).log
     assert log[:2] == [("seek", "right", 1), ("found", "right", 30000)]
     assert ("found", "left", 5500) in log           # REFL = the home switch, met from the right
-    assert r.phys() == 5500
-    assert r.gap(196) == 24499       # 29999.5 - 5500.5
+    assert log[-3:-1] == [("leave", "left", 4499), ("enter", "left", 4500)]   # its far side
+    assert r.phys() == 5000
+    assert r.gap(1) == 0 and r.gap(197) == 5000
+    assert r.gap(196) == 25000       # 29999.5 - 5000, rounded half to even
+
+
+@pytest.mark.parametrize("hysteresis", [0, 1, 100, 101])
+def test_1180_three_switch_mode_with_switch_hysteresis(rig, hysteresis):
+    """PD86-1180 manual 7.1: "the switch is re-entered in left direction, setting the reference
+    point to the center of the two switching points" - with a switch hysteresis h each side's
+    two switching points are h + 1 microsteps apart, and the origin is the mean of both centres
+    (symmetric: the middle of the switch whatever h)."""
+    sc = {"axis": {"0": {"left": {"position": -20000}, "right": {"position": 30000},
+                         "home": {"position": 5000, "width": 1000, "hysteresis": hysteresis}}}}
+    r = _run(rig, "TMCM-1180", 3, sc)
+    log = r.vm.reference_search(r.vm.axes[0]).log
+    upper = [x for what, sw, x in log if sw == "left" and what in ("leave", "enter")][:2]
+    assert upper == [5500 + hysteresis + 1, 5500]
+    assert r.phys() == 5000
 
 
 def test_1180_plus_128_inverts_the_reference_input(rig):
@@ -303,3 +322,57 @@ def test_shutdown_pin_ends_a_running_search(rig):
     r.vm.advance(0.5)
     assert r.gap(3) == 0
     assert r.cmd(13, 2) == 0
+
+
+# --- after the search: the origin is set on the target too (issue 10, section 4) ---------------
+SWITCHES = {"axis": {"0": {"left": {"position": -20000}, "right": {"position": 30000}}}}
+MODULES = ["TMCM-6212", "TMCM-1021", "TMCM-1180"]
+
+
+@pytest.mark.parametrize("module", MODULES)
+def test_target_and_actual_agree_after_a_search(rig, module):
+    """TMCM-6212 manual 4.1 AP8 "Position reached flag": "This flag is always set when target
+    position and actual position are equal" - after a search both are 0, so AP8 reads 1."""
+    r = rig(module, SWITCHES)
+    r.sap(193, 1)
+    r.search()
+    assert r.gap(1) == 0
+    assert r.gap(0) == 0
+    assert r.gap(8) == 1
+
+
+@pytest.mark.parametrize("module", MODULES)
+def test_mvp_rel_after_a_cancelled_move_and_a_search(rig, module):
+    """TMCM-6212 manual 3.6.4 MVP: "Starting a relative movement by means of an offset to the
+    actual position"; AP127 = 0 "last target position". A move cancelled by MST, then a
+    search, then MVP REL 1000: the motor goes to 1000 in the new coordinates (1000 microsteps
+    right of the origin), not to the old target + 1000."""
+    r = rig(module, SWITCHES)
+    r.sap(193, 1)
+    r.cmd(4, 0, 0, 25000)          # MVP ABS 25000 ...
+    r.vm.advance(0.3)
+    r.cmd(3)                       # ... cancelled by MST
+    r.vm.advance(2)
+    assert r.gap(0) == 25000 and 0 < r.gap(1) < 25000
+    r.search()
+    r.cmd(4, 1, 0, 1000)           # MVP REL 1000
+    r.vm.advance(5)
+    assert r.gap(1) == 1000 and r.gap(0) == 1000 and r.gap(8) == 1
+    assert r.phys() == -20000 + 1000
+
+
+@pytest.mark.parametrize("module", MODULES)
+def test_wait_pos_after_wait_rfs_returns(rig, module):
+    """TMCM-6212 manual 3.6.20 WAIT POS: "Wait until the target position of the motor ... has
+    been reached"; after WAIT RFS target and actual position are both the origin, so a WAIT POS
+    with no timeout continues at once (here: the program reaches its last instruction)."""
+    r = rig(module, SWITCHES)
+    r.cmd(4, 0, 0, 25000)
+    r.vm.advance(0.3)
+    r.cmd(3)
+    r.vm.advance(2)
+    w = Wire(r.vm)
+    w.load("SAP 193, 0, 1\nRFS START, 0\nWAIT RFS, 0, 0\nWAIT POS, 0, 0\nSAP 1, 0, 777\nSTOP")
+    w.run()
+    r.vm.advance(60)
+    assert r.gap(1) == 777

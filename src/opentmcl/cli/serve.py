@@ -1,6 +1,6 @@
 """`opentmcl serve`: host virtual modules in real time on TCP, a pty and/or CAN.
 
-    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH]]
+    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH] [--interface usb|rs485|rs232]]
                    [--can virtual:CH | udp_multicast:GROUP | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
 
 Several --module options put several modules on one bus; the n-th --address,
@@ -34,6 +34,9 @@ def register(subparsers) -> None:
     p.add_argument("--max-clients", type=int, default=4, metavar="N", help="TCP clients at once (default 4)")
     p.add_argument("--pty", action="store_true", help="create a pseudo-terminal and print its path")
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
+    p.add_argument("--interface", choices=("usb", "rs485", "rs232"),
+                   help="with --pty: the link the port stands for; usb answers any address byte "
+                        "(default usb for one module, rs485 for several)")
     p.add_argument("--can", metavar="INTERFACE:CHANNEL",
                    help="serve on a python-can bus, e.g. virtual:opentmcl (this process), udp_multicast:239.74.163.2 "
                         "(other processes) or socketcan:vcan0")
@@ -115,24 +118,36 @@ def load_scenario(path: str | None):
 
 
 def build_modules(args) -> list:
+    """The modules of the bus. The n-th --address wins; a module without one keeps the address its
+    EEPROM file stores (GP66), else gets the next free address (docs/endpoints.md)."""
     from ..firmware.eeprom import EepromError
     from ..firmware.vm import VirtualModule
 
     names = args.module
-    addresses = assign_addresses(len(names), args.address)
-    for option in ("eeprom", "scenario"):
+    for option in ("address", "eeprom", "scenario"):
         if len(getattr(args, option)) > len(names):
             raise CliError(f"more --{option} options than --module options")
-    modules = []
-    for i, (name, address) in enumerate(zip(names, addresses, strict=True)):
+    modules, free = [], []
+    for i, name in enumerate(names):
+        address = args.address[i] if i < len(args.address) else None
         eeprom = args.eeprom[i] if i < len(args.eeprom) else None
         scenario = load_scenario(args.scenario[i] if i < len(args.scenario) else None)
         try:
-            modules.append(VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario))
+            vm = VirtualModule(name, address=address, eeprom=eeprom, scenario=scenario)
         except KeyError as exc:
             raise CliError(str(exc.args[0]) if exc.args else f"unknown module {name!r}") from None
         except (EepromError, ValueError) as exc:  # also a scenario for another module
             raise CliError(str(exc)) from None
+        if address is None and vm.stored_global(0, 66) is None:
+            free.append(vm)
+        modules.append(vm)
+    taken = [vm.address for vm in modules if vm not in free]
+    for vm, address in zip(free, assign_addresses(len(free) + len(taken), taken)[len(taken):], strict=True):
+        vm.assign_address(address)
+    addresses = [vm.address for vm in modules]
+    if len(set(addresses)) != len(addresses):
+        raise CliError(f"module addresses must be distinct on one bus, got {addresses} "
+                       "(give --address to override an address stored in an EEPROM file)")
     return modules
 
 
@@ -147,6 +162,8 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         raise CliError("--max-clients must be at least 1")
     if args.link and not args.pty:
         args.pty = True
+    if args.interface and not args.pty:
+        raise CliError("--interface applies to --pty (TCP stands for a serial line: rs485/rs232)")
     tcp_spec = args.tcp
     if tcp_spec is None and not args.pty and not args.can:
         tcp_spec = DEFAULT_TCP
@@ -157,7 +174,8 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         from ..server import vmapi
 
         for vm in modules:
-            vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+            if vm.stored_global(0, vmapi.GP_CAN_ID) is None:  # a CAN ID stored in the EEPROM stays
+                vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
     server = Server(modules)
     if tcp_spec is not None or args.host:
         host, port = parse_hostport(tcp_spec or DEFAULT_TCP)
@@ -174,7 +192,10 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
     if args.pty:
         if sys.platform == "win32":
             raise CliError("--pty needs a POSIX system")
-        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace))
+        if args.interface == "usb" and len(modules) > 1:
+            raise CliError("--interface usb carries one module; use rs485 for a bus of several")
+        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
+                             interface=args.interface))
     if args.can:
         interface, sep, channel = args.can.partition(":")
         if not sep or not interface or not channel:
@@ -199,7 +220,7 @@ def describe(server) -> list[str]:
             lines.append(f"tcp {ep.url}")
         elif isinstance(ep, PtyServer):
             link = f" (link {ep.link})" if ep.link else ""
-            lines.append(f"pty {ep.path}{link}  ->  serial://{ep.path}")
+            lines.append(f"pty {ep.path}{link}  ->  serial://{ep.path}  ({ep.interface})")
         elif isinstance(ep, CanServer):
             for vm in server.modules:
                 lines.append(f"can {ep.url}?id={vmapi.global_param(vm, vmapi.GP_CAN_ID)}"

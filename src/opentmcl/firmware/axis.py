@@ -139,7 +139,10 @@ class Axis:
         elif number == 1:
             self.engine.set_position(to_int32(value))
         elif number == 2:
-            self.rotate(value)
+            # "The desired speed in velocity mode. Not valid in position mode" (TMCM-6212 4.1):
+            # in position mode (a move running or done, power-up) the write changes no motion.
+            if self.engine.mode is not Mode.POSITION:
+                self.rotate(value)
         elif number == 3:  # actual speed writable (PD86-1180 5: TMC429 hold mode); else a rotation
             self.error_flags = 0
             hold = getattr(self.engine, "hold", None)

@@ -215,13 +215,16 @@ class ReferenceSearch:
             ax.ram[197] = self.pos
         self.aw.relabel(0)
         self.aw.set_encoder(0)
+        # The origin is set on the target too: AP8 reads 1 ("always set when target position and
+        # actual position are equal", TMCM-6212 4.1) and MVP REL counts from 0 (docs/world.md).
+        self._command(ax.engine.move_to, 0)
+        ax.last_target = 0              # TMCM-6212 AP127 = 0: MVP REL from the "last target position"
         return 0
 
     # --- the modes ------------------------------------------------------------------------------------
     def _program(self) -> Steps:
         mode = self.mode
         base = mode & 0x3F
-        three_switch = self.aw.has(141)           # PD86-1180 numbering (mode 3 = three-switch mode)
         if mode & 128 and 1 <= base <= 4 and 64 + base in getattr(self.axis.params.get(193), "values", ()):
             base += 4       # TMCM-6212 6.1.5-6.1.8: 129..132 are modes 5..8 with an inverted home switch
         left, right, d = LEFT, RIGHT, -1
@@ -231,13 +234,16 @@ class ReferenceSearch:
         if base == 1:
             found = yield from self.seek(left, d)
             ref = yield from self.edge(left, found)
-        elif base == 2 or (base == 3 and three_switch):
+        elif base == 2:
             found = yield from self.seek(right, -d)
             far = yield from self.edge(right, found)
             found = yield from self.seek(left, d)
             ref = yield from self.edge(left, found)
             ax.ram[196] = round(abs(far - ref))
         elif base == 3:
+            # PD86-1180 AP193 row: "search right stop switch, then search left stop switch from both
+            # sides"; in three-switch wiring (7.1) the first REFL met moving left is the reference
+            # switch, so its middle is the origin. TMCM-6212 6.1.3: "the middle of the left end switch".
             found = yield from self.seek(right, -d)
             far = yield from self.edge(right, found)
             found = yield from self.seek(left, d)

@@ -115,6 +115,18 @@ class VirtualModule:
         self.interpreter.power_up()
 
     # --- addressing -------------------------------------------------------------
+    def assign_address(self, address: int) -> None:
+        """Serve at `address` from now on, as the constructor's `address` argument does (GP66 in RAM,
+        kept across resets; the EEPROM is not written)."""
+        if not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
+            raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
+        self._address_override = address
+        self.globals.ram[_ADDRESS] = address
+
+    def stored_global(self, bank: int, number: int) -> int | None:
+        """The value of a global parameter in the EEPROM (None when it is not stored there)."""
+        return self.eeprom.get_global(bank, number)
+
     @property
     def address(self) -> int:
         return self.globals.ram.get(_ADDRESS, 0)
@@ -134,17 +146,21 @@ class VirtualModule:
     # --- wire interface -------------------------------------------------------
     def handle(self, frame: bytes, *, interface: str = "serial") -> bytes:
         """Process one 9-byte request; return the reply bytes (b"" when no reply is due).
-        `interface` ("serial" or "can") selects the heartbeat the request restarts (GP68 / GP82)."""
+
+        `interface` is the link the frame came over: "serial" (or "rs232", "rs485": the module
+        answers only its address GP66 / secondary address GP87), "usb" (the address byte is
+        ignored, the reply carries the module's own address) or "can". CAN requests restart the
+        CAN heartbeat GP82, the others the serial heartbeat GP68 (docs/endpoints.md)."""
         if len(frame) != FRAME_LEN:
             return b""
         target, command, type_, motor, value, check = _REQUEST.unpack(frame)
         ram = self.globals.ram
         address = ram.get(_ADDRESS, 0)  # replies come from the address the request went to, even after SGP 66
-        if target != address and (target != ram.get(_SECONDARY, 0) or not target):
+        if target != address and (target != ram.get(_SECONDARY, 0) or not target) and interface != "usb":
             return b""
         if sum(frame[:8]) & 0xFF != check:
             return self._reply(_WRONG_CHECKSUM, command, 0, address)
-        self.touch(interface)
+        self.touch("can" if interface == "can" else "serial")
         out = execute(self, command, type_, motor, value, program=False)
         if out is None:  # no reply (command 137)
             return b""

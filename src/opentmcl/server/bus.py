@@ -41,10 +41,22 @@ class Channel(Protocol):
     """An endpoint that can carry unsolicited replies back to its host."""
 
     interface: str
-    """"serial" (RS-232/RS-485/USB framing) or "can"."""
+    """The link the channel stands for: "serial", "rs232" or "rs485" (modules filter by address),
+    "usb" (the address byte is ignored, TMCL on USB) or "can"."""
 
     def deliver(self, vm, reply: bytes) -> None:
         """Send an unsolicited 9-byte reply of `vm` to the host."""
+
+
+USB = "usb"
+"""Channel.interface of a link that ignores the address byte (TMCL over USB)."""
+SERIAL_INTERFACES = ("usb", "rs485", "rs232")
+"""What a serial endpoint can stand for (`opentmcl serve --pty --interface`)."""
+
+
+def default_interface(modules) -> str:
+    """USB when the link carries one module, RS-485 for a bus of several (docs/endpoints.md)."""
+    return USB if len(modules) == 1 else "rs485"
 
 
 MIN_STEP = 0.002
@@ -79,6 +91,8 @@ class ModuleBus:
         # (module, its handle() for serial frames) looked up once: the per-frame path is hot.
         self._serial_handlers = [(vm, id(vm), partial(vm.handle, interface="serial")
                                   if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
+        self._usb_handlers = [(vm, id(vm), partial(vm.handle, interface=USB)
+                               if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:
@@ -116,9 +130,10 @@ class ModuleBus:
     def serial_frames(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes, str]]:
         """One 9-byte frame to every module, all in binary mode: [(module, reply, "binary")] for
         each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
+        usb = getattr(channel, "interface", None) == USB
         out = []
         route = self._route
-        for vm, key, handle in self._serial_handlers:
+        for vm, key, handle in self._usb_handlers if usb else self._serial_handlers:
             try:
                 reply = handle(frame)
             except Exception:  # a module bug: bad input is answered with a status code
@@ -128,14 +143,15 @@ class ModuleBus:
                 out.append((vm, reply, "binary"))
                 if channel is not None:
                     route[key] = channel
-            elif channel is not None and self._addressed(vm, frame[0]):
+            elif channel is not None and (usb or self._addressed(vm, frame[0])):
                 route[key] = channel
         return out
 
     def serial_frame(self, vm, frame: bytes, channel: Channel | None = None) -> bytes:
         """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced."""
-        reply = self._handle(vm, frame, "serial")
-        if channel is not None and (reply or (frame and self._addressed(vm, frame[0]))):
+        usb = getattr(channel, "interface", None) == USB
+        reply = self._handle(vm, frame, USB if usb else "serial")
+        if channel is not None and (reply or usb or (frame and self._addressed(vm, frame[0]))):
             # A module that was addressed but stayed silent (reply suppressed)
             # still becomes reachable for its events through this channel.
             self._route[id(vm)] = channel

@@ -18,6 +18,7 @@ import threading
 import time
 from pathlib import Path
 
+from .bus import SERIAL_INTERFACES, USB, default_interface
 from .framer import DEFAULT_GAP
 from .session import SerialSession
 
@@ -27,10 +28,16 @@ POLL = 0.2
 class PtyServer:
     """Serve the bus on a new pseudo-terminal; `path` is the slave device."""
 
-    interface = "serial"
-
     def __init__(self, bus, *, link: str | os.PathLike | None = None, gap: float = DEFAULT_GAP,
-                 pace_bytes: bool = False) -> None:
+                 pace_bytes: bool = False, interface: str | None = None) -> None:
+        if interface is None:
+            interface = default_interface(bus.modules)
+        if interface not in SERIAL_INTERFACES:
+            raise ValueError(f"interface must be one of {', '.join(SERIAL_INTERFACES)}, got {interface!r}")
+        if interface == USB and len(bus.modules) != 1:
+            raise ValueError("a USB link carries one module; use rs485 for a bus of several")
+        self.interface = interface
+        """What the port stands for: "usb" (any address byte is answered), "rs485" or "rs232"."""
         self.bus = bus
         self.link = Path(link) if link is not None else None
         self.gap = gap
@@ -58,7 +65,8 @@ class PtyServer:
             os.close(slave)
             raise
         self.master, self.slave = master, slave
-        self.session = SerialSession(self.bus, self._write, gap=self.gap, pace_bytes=self.pace_bytes)
+        self.session = SerialSession(self.bus, self._write, gap=self.gap, pace_bytes=self.pace_bytes,
+                                     interface=self.interface)
         self._thread = threading.Thread(target=self._loop, name="opentmcl-pty", daemon=True)
         self._thread.start()
 

@@ -7,8 +7,11 @@ and writes the replies back, as a module on an RS-485 line does:
 - it waits the telegram pause time (global parameter 75) before a reply
   ("Pause time before the reply via RS485 is sent", manual 5.1); the manual
   gives no unit, we use milliseconds (docs/assumptions.md);
-- with `pace_bytes`, it sends the reply one byte at a time at the module's
-  RS485 baud rate (global parameter 65), ten bit times per byte (8N1);
+- with `pace_bytes`, received bytes reach the modules only once they have crossed
+  the line at the RS485 baud rate (global parameter 65, ten bit times per byte,
+  8N1; the slowest module's rate on a bus), binary frames and ASCII text alike,
+  and the reply is sent one byte at a time at the module's rate: a paced
+  round trip takes at least the wire time of request and reply, plus GP75;
 - unsolicited replies (command 138) arrive through `deliver` and are written
   the same way;
 - ASCII echo and reply text (PD28-1021 manual 3.4) is written at once, with
@@ -44,12 +47,12 @@ def byte_time(baud: int) -> float:
 class SerialSession:
     """Frames a byte stream, talks to the bus, writes replies with pause and pacing."""
 
-    interface = "serial"
-
     def __init__(self, bus, write: Callable[[bytes], None], *, gap: float = DEFAULT_GAP,
                  pace_bytes: bool = False, clock: Callable[[], float] = time.monotonic,
-                 sleep: Callable[[float], None] = time.sleep) -> None:
+                 sleep: Callable[[float], None] = time.sleep, interface: str = "serial") -> None:
         self.bus = bus
+        self.interface = interface
+        """The link this session stands for (bus.Channel.interface): "usb" ignores the address byte."""
         self._write = write
         self.stream = SerialStream(bus, gap)
         self.pace_bytes = pace_bytes
@@ -61,6 +64,7 @@ class SerialSession:
         """Bytes handled so far (replies written): for diagnostics and tests."""
         self.closed = False
         self._busy = 0.0  # seconds spent inside `receive`, left out of the line clock
+        self._rx_free = float("-inf")  # with pacing: when the last received byte is off the line
 
     @property
     def framer(self):
@@ -75,13 +79,25 @@ class SerialSession:
         """
         before = self.stream.frames
         start = self._clock()
-        outputs = self.stream.feed(data, start - self._busy if now is None else now, self)
+        if self.pace_bytes and data:
+            self._wait_on_the_line(len(data), start)
+        outputs = self.stream.feed(data, self._clock() - self._busy if now is None else now, self)
         for vm, out, kind in outputs:
             self.send_reply(vm, out, pause=kind == BINARY)
         self.bytes_received += len(data)
         if now is None:
             self._busy += self._clock() - start
         return self.stream.frames - before
+
+    def _wait_on_the_line(self, count: int, now: float) -> None:
+        """Pacing: sleep until `count` bytes read at `now` have crossed the line (they follow
+        the bytes received before, at the slowest baud rate of the modules on the bus)."""
+        with self.bus.lock:
+            per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self.bus.modules)
+        self._rx_free = max(self._rx_free, now) + count * per_byte
+        wait = self._rx_free - self._clock()
+        if wait > 0:
+            self._sleep(wait)
 
     def deliver(self, vm, reply: bytes) -> None:
         """An unsolicited reply (command 138 event) for the host on this link."""
@@ -111,11 +127,11 @@ class SerialSession:
                 self._write(reply)
                 return
             start = self._clock()
-            for i in range(len(reply)):
-                self._write(reply[i:i + 1])
+            for i in range(len(reply)):  # a byte is there once its stop bit has crossed the line
                 wait = start + (i + 1) * per_byte - self._clock()
                 if wait > 0:
                     self._sleep(wait)
+                self._write(reply[i:i + 1])
 
     def close(self) -> None:
         self.closed = True

@@ -3,12 +3,15 @@
     opentmcl://TMCM-6212                       one module at address 1
     opentmcl://TMCM-6212@1,TMCM-1180@2         two modules on one bus
     opentmcl://TMCM-6212?eeprom=/tmp/ee.json&gap=0.1&pace=1
+    opentmcl://TMCM-6212?interface=rs485       filter by address (default: usb for one module)
 
 Bytes written to the port are framed into 9-byte TMCL frames (TMCM-6212
-manual 3.1) and offered to every module on the bus; the modules' replies
+manual 3.1) and offered to every module on the bus (`interface=usb`, the default
+for a single module: whatever the address byte; rs485/rs232: by address); the modules' replies
 become readable after the telegram pause (global parameter 75, manual 5.1),
-and with ``pace=1`` at the RS485 baud rate (parameter 65). The modules run in
-real time: their virtual time follows the wall clock, advanced whenever the
+and with ``pace=1`` both directions take their wire time at the RS485 baud
+rate (parameter 65): written bytes reach the modules only after crossing the
+line. The modules run in real time: their virtual time follows the wall clock, advanced whenever the
 port is used, so a move started by a write has progressed by the next read.
 Unsolicited replies (command 138, manual 3.6.35) are readable like any other.
 Modules that have ASCII mode (command 139, PD28-1021 manual 3.4) read the
@@ -24,6 +27,7 @@ does - accepts it.
 """
 from __future__ import annotations
 
+import math
 import threading
 import time
 import urllib.parse
@@ -32,7 +36,7 @@ import serial
 from serial.serialutil import PortNotOpenError, SerialException, Timeout
 
 from ..server import vmapi
-from ..server.bus import ModuleBus
+from ..server.bus import SERIAL_INTERFACES, USB, ModuleBus, default_interface
 from ..server.framer import DEFAULT_GAP
 from ..server.session import byte_time
 from ..server.stream import BINARY, SerialStream
@@ -66,7 +70,8 @@ def parse_url(url: str) -> dict:
     addresses = [a for _, a in modules]
     if len(set(addresses)) != len(addresses):
         raise ValueError(f"module addresses must be distinct on one bus: {addresses}")
-    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False}
+    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False,
+               "interface": default_interface(modules)}
     for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
         if key == "eeprom":
             options["eeprom"] = [v for v in value.split(",")]
@@ -79,8 +84,14 @@ def parse_url(url: str) -> dict:
                 raise ValueError(f"gap must be a positive number of seconds, got {value!r}")
         elif key == "pace":
             options["pace"] = value.lower() in ("1", "true", "yes", "on")
+        elif key == "interface":
+            if value not in SERIAL_INTERFACES:
+                raise ValueError(f"bad interface {value!r}; use one of {', '.join(SERIAL_INTERFACES)}")
+            if value == USB and len(modules) != 1:
+                raise ValueError("interface=usb carries one module; use rs485 for a bus of several")
+            options["interface"] = value
         else:
-            raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace)")
+            raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace, interface)")
     if len(options["eeprom"]) > len(modules):
         raise ValueError("more eeprom files than modules")
     return options
@@ -90,6 +101,7 @@ class Serial(serial.Serial):
     """A pyserial port whose other end is a bus of virtual modules."""
 
     interface = "serial"
+    """Replaced at open by the URL's `interface` (bus.Channel.interface)."""
 
     def open(self) -> None:
         if self._port is None:
@@ -115,7 +127,10 @@ class Serial(serial.Serial):
         self._bus = ModuleBus(modules)
         self._stream = SerialStream(self._bus, options["gap"])
         self._pace = options["pace"]
+        self.interface = options["interface"]
         self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
+        self._tx: list[tuple[float, bytes]] = []  # pace=1: (time the bytes reach the modules, bytes)
+        self._tx_free = float("-inf")
         self.is_open = True
 
     def close(self) -> None:
@@ -136,9 +151,10 @@ class Serial(serial.Serial):
         """Baud rate and framing settings are accepted and ignored."""
 
     # -- data --------------------------------------------------------------
-    def _queue(self, vm, reply: bytes, pause: bool = True) -> None:
-        """Make `reply` readable after the telegram pause (binary replies only), paced at GP65 if asked."""
-        now = time.monotonic()
+    def _queue(self, vm, reply: bytes, pause: bool = True, at: float | None = None) -> None:
+        """Make `reply` readable after the telegram pause (binary replies only), paced at GP65 if asked;
+        `at` is when the request reached the module (default: now)."""
+        now = time.monotonic() if at is None else at
         start = now + (vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0)
         if self._rx:
             start = max(start, self._rx[-1][0])
@@ -151,7 +167,9 @@ class Serial(serial.Serial):
         self._queue(vm, reply)
 
     def _update(self) -> int:
-        """Advance the modules to now, collect events; return readable byte count."""
+        """Advance the modules to now, hand them the written bytes that have crossed the line,
+        collect events; return readable byte count."""
+        self._feed_arrived()
         for channel, vm, event in self._bus.poll():
             channel.deliver(vm, event)
         now = time.monotonic()
@@ -192,9 +210,25 @@ class Serial(serial.Serial):
             raise PortNotOpenError()
         data = bytes(data)
         with self._lock:
-            for vm, out, kind in self._stream.feed(data, time.monotonic(), self):
-                self._queue(vm, out, pause=kind == BINARY)
+            now = time.monotonic()
+            if self._pace and data:  # the bytes reach the modules once they crossed the line
+                per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self._bus.modules)
+                self._tx_free = max(self._tx_free, now) + len(data) * per_byte
+                self._tx.append((self._tx_free, data))
+                self._feed_arrived()
+            else:
+                self._feed(data, now)
         return len(data)
+
+    def _feed(self, data: bytes, at: float) -> None:
+        for vm, out, kind in self._stream.feed(data, at, self):
+            self._queue(vm, out, pause=kind == BINARY, at=at)
+
+    def _feed_arrived(self) -> None:
+        now = time.monotonic()
+        while self._tx and self._tx[0][0] <= now:
+            at, data = self._tx.pop(0)
+            self._feed(data, at)
 
     def reset_input_buffer(self) -> None:
         if not self.is_open:
@@ -204,17 +238,35 @@ class Serial(serial.Serial):
             self._rx.clear()
 
     def reset_output_buffer(self) -> None:
+        """Written bytes still on the (paced) line are discarded."""
         if not self.is_open:
             raise PortNotOpenError()
+        with self._lock:
+            self._feed_arrived()
+            self._tx.clear()
 
     @property
     def out_waiting(self) -> int:
-        return 0
+        """Written bytes still on the (paced) line."""
+        with self._lock:
+            self._feed_arrived()
+            if not self._tx:
+                return 0
+            per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self._bus.modules)
+            # bytes whose stop bit has not crossed the line yet (the line is busy until the last end)
+            return min(sum(len(data) for _, data in self._tx),
+                       math.ceil((self._tx[-1][0] - time.monotonic()) / per_byte - 1e-9))
 
     def flush(self) -> None:
-        """Writes are handled at once; nothing to wait for."""
+        """Wait until the written bytes have reached the modules (at once without pacing)."""
         if not self.is_open:
             raise PortNotOpenError()
+        with self._lock:
+            last = self._tx[-1][0] if self._tx else None
+        if last is not None:
+            time.sleep(max(0.0, last - time.monotonic()))
+        with self._lock:
+            self._feed_arrived()
 
     def fileno(self) -> int:
         raise SerialException("an opentmcl:// port has no file descriptor")
