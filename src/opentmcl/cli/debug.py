@@ -238,6 +238,11 @@ def _ctrl_c():
 
 def _number(text: str, usage: str, minimum: int | None = None) -> int:
     """An integer argument (decimal or 0x...), else ValueError with the command's usage."""
+    from ..limits import LITERAL_DIGITS_MAX
+
+    digits = text.strip().lstrip("+-")
+    if len(digits) > LITERAL_DIGITS_MAX + 2:
+        raise ValueError(f"number of {len(digits)} characters is too long; usage: {usage}")
     try:
         value = int(text.strip(), 0)
     except ValueError:
@@ -249,9 +254,12 @@ def _number(text: str, usage: str, minimum: int | None = None) -> int:
 
 def _command_lines(path: str) -> list[str]:
     """The -x FILE, read whole before the first command runs: a bad file is a one-line error."""
+    from ..limits import TEXT_MAX, InputTooLarge, read_text
+
     try:
-        with open(path, encoding="utf-8") as fh:
-            return fh.read().splitlines()
+        return read_text(path, TEXT_MAX, "debugger command file").splitlines()
+    except InputTooLarge as exc:
+        raise CliError(f"{path}: {exc}") from None
     except OSError as exc:
         raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:

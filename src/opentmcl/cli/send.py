@@ -38,11 +38,16 @@ def parse(text: str) -> tuple[int, int, int, int]:
     Mnemonic forms go through the assembler (symbolic names, expressions such as ``51200*2``);
     control commands are written as up to four numbers.
     """
+    from ..limits import LiteralTooLong
     from ..protocol.opcodes import parse_number
 
     parts = [p.strip() for p in text.replace(",", " ").split()]
-    if parts and parse_number(parts[0]) is not None:  # numeric form for control commands
-        nums = [parse_number(p) for p in parts]
+    try:
+        numeric = bool(parts) and parse_number(parts[0]) is not None
+        nums = [parse_number(p) for p in parts] if numeric else []
+    except LiteralTooLong as exc:
+        raise CliError(str(exc)) from None
+    if numeric:  # numeric form for control commands
         if len(nums) > 4 or any(n is None for n in nums):
             raise CliError(f"{text!r}: expected COMMAND, TYPE, MOTOR, VALUE as numbers")
         return tuple((nums + [0, 0, 0])[:4])  # type: ignore[return-value]

@@ -149,8 +149,12 @@ def run_file(chip: TMC4210, path: str | Path) -> None:
 
 
 def _read(p: Path) -> str:
+    from ...limits import TEXT_MAX, InputTooLarge, read_text
+
     try:
-        return p.read_text(encoding="utf-8")
+        return read_text(p, TEXT_MAX, "trace script")
+    except InputTooLarge as exc:
+        raise ScriptError(f"{p}: {exc}") from None
     except UnicodeDecodeError:
         raise ScriptError(f"{p}: not a UTF-8 text file") from None
     except OSError as exc:
