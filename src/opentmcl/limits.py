@@ -50,6 +50,11 @@ def read_text(path: str | os.PathLike, cap: int, what: str = "file", errors: str
     return read_bytes(path, cap, what, stdin=stdin).decode("utf-8", errors=errors)
 
 
+def shown(text: str, n: int = 60) -> str:
+    """`text` for an error message: repr, cut to about n characters."""
+    return repr(text) if len(text) <= n else repr(text[:n]) + f"... ({len(text)} characters)"
+
+
 def check_literal(digits: str) -> None:
     """LiteralTooLong if a literal's digit string (no sign, no prefix) is longer than the cap."""
     if len(digits) > LITERAL_DIGITS_MAX:
