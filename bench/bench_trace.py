@@ -110,9 +110,9 @@ def plot(rows: int) -> dict[str, float]:
 
 
 def measure(quick: bool = False) -> dict[str, float]:
-    """Full run: 10000 rows of the world trace (100 virtual s), 2000 samples of the plot trace;
+    """Full run: 5000 rows of the world trace (50 virtual s), 1000 samples of the plot trace;
     quick: 500 and 150."""
-    return {**world(500 if quick else 10_000), **plot(150 if quick else 2_000)}
+    return {**world(500 if quick else 5_000), **plot(150 if quick else 1_000)}
 
 
 if __name__ == "__main__":

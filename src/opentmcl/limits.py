@@ -15,6 +15,7 @@ IMAGE_MAX = 1 * MIB          # binary program images (.bin): 131072 records, 21x
 TEXT_MAX = 4 * MIB           # program sources (each file), EEPROM images, scenarios, scripts, label tables
 CSV_MAX = 256 * MIB          # CSV traces for `plot` (read line by line)
 LINE_MAX = 64 * KIB          # one line of a CSV trace
+COMMAND_LINE_MAX = 4 * KIB   # one debugger command read from a pipe or file on stdin
 LITERAL_DIGITS_MAX = 32      # digits of a number literal after sign and prefix: every 32-bit value in binary
 
 

@@ -83,12 +83,14 @@ def test_disasm_of_endless_file_stdin_and_fifo_is_refused(d):
 
 
 def test_load_run_debug_refuse_endless_programs_and_command_files(d):
-    """The program file of `load`, `run`, `debug` (.tmc and .bin) and debug's -x FILE."""
+    """The program file of `load`, `run`, `debug` (.tmc and .bin), debug's -x FILE and its stdin."""
     refused(cli("load", "zero.bin", "--to", SIM, cwd=d), "zero.bin", "1 MiB")
     refused(cli("load", "zero.tmc", "--to", SIM, "-m", "TMCM-6212", cwd=d), "zero.tmc", "4 MiB")
     refused(cli("run", "zero.bin", "-t", "0.1", cwd=d), "zero.bin", "1 MiB")
     refused(cli("debug", "zero.tmc", cwd=d), "zero.tmc", "4 MiB")
     refused(cli("debug", "ok.tmc", "-x", "zero.dbg", cwd=d), "zero.dbg", "4 MiB")
+    with open("/dev/zero", "rb") as zero:   # commands on stdin that is not a terminal: lines are bounded
+        refused(cli("debug", "ok.tmc", cwd=d, stdin=zero), "longer than 4096 characters")
 
 
 def test_eeprom_and_scenario_files_are_bounded(d):

@@ -44,8 +44,9 @@ def test_assembler_5000_digits_is_a_short_asm_error():
 
 
 def test_ascii_parser_refuses_long_literals_with_a_status():
-    """PD86-1180 manual 4.5 (ASCII mode): a command is answered with a status; a literal that is too
-    long is AsciiError with status 4 (invalid value), the 32-digit edge is accepted."""
+    """PD86-1180 manual 4.5.2: "After executing the command the module sends back a reply ... the
+    status code as a decimal number". A literal that is too long is AsciiError with status 4
+    (invalid value); the 32-digit edge is accepted."""
     cmd = codec.parse_command("AMVP ABS, 0, " + "".join(LONGEST["binary"]))
     assert cmd.value == -1
     for text in ("AMVP ABS, 0, " + HUGE, "AMVP ABS, 0, 0" + LONGEST["decimal"][1], "ASAP 4, " + HUGE + ", 1"):

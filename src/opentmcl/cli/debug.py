@@ -49,6 +49,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+class BoundedLines:
+    """The shell's stdin when it is not a terminal (a pipe, a file, /dev/zero): lines of at most
+    COMMAND_LINE_MAX characters, so an endless line is a one-line error instead of a growing read."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+
+    def readline(self) -> str:
+        from ..limits import COMMAND_LINE_MAX
+
+        line = self.stream.readline(COMMAND_LINE_MAX + 1)
+        if len(line) > COMMAND_LINE_MAX:
+            raise CliError(f"a debugger command line on stdin is longer than {COMMAND_LINE_MAX} characters")
+        return line
+
+
 class DebugShell(cmd.Cmd):
     prompt = "(tmcl) "
     intro = "OpenTMCL debugger - type help for the commands, quit to leave."
@@ -287,7 +303,7 @@ def run(args: argparse.Namespace) -> int:
                            watches=parse_watches(specs))
         except (TmclError, DebugError) as exc:
             raise CliError(str(exc)) from None
-        shell = DebugShell(dbg)
+        shell = DebugShell(dbg, stdin=None if sys.stdin.isatty() else BoundedLines(sys.stdin))
         print(f"loaded {len(program.instructions)} instructions from {program.filename}, verified")
         for line in commands:
             if shell.onecmd(line.strip()):

@@ -10,8 +10,8 @@ actual motor current (180, "smartEnergy actual current"); the names are those of
 TMCM-6212 manual 4.1 / PD86-1180 manual 5. Velocities are stored in pps: on TMC429
 modules (PD86-1180) the internal velocity is converted with the pulse divisor
 (axis parameter 154, PD86-1180 manual 5). Acceleration is derived from velocity.
-Samples are kept in compact columns (opentmcl.columns): one hour at 10 ms of one axis takes
-about 10 MB (`python bench/run.py`, bench_trace).
+Samples are kept in compact columns (opentmcl.columns): one hour at 10 ms of six axes takes
+about 35 MB (`python bench/run.py`, "memory plot trace").
 """
 from __future__ import annotations
 
