@@ -2,12 +2,20 @@
 write a temporary file in the same folder, fsync it, rename it over the target. A process killed at
 any point leaves the old file or the new one, never a torn one. The folder must exist (a typo in
 a path is an error, not a new folder tree); the file gets the mode a plain open() would give it
-(an existing file keeps its mode)."""
+(an existing file keeps its mode).
+
+The temporary file is `.NAME.XXXXXXXX.tmp` (tempfile.mkstemp's 8 random characters) and its writer
+holds an flock on it until the rename: `remove_stale(path)` deletes those a killed writer left,
+and never one whose writer is still alive."""
 from __future__ import annotations
 
+import fcntl
 import os
+import re
 import tempfile
 from pathlib import Path
+
+_RANDOM = r"[a-z0-9_]{8}"   # tempfile's name alphabet
 
 
 def _read_umask() -> int:
@@ -30,15 +38,56 @@ def write_atomic(path: str | os.PathLike, data: bytes) -> None:
         mode = 0o666 & ~_UMASK
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
     try:
+        fcntl.flock(fd, fcntl.LOCK_EX)   # "a writer is alive" for remove_stale
         os.chmod(tmp, mode)
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
             fh.flush()
             os.fsync(fh.fileno())
-        os.replace(tmp, target)
+            os.replace(tmp, target)      # still locked: renamed before the lock goes
     except BaseException:
         try:
             os.unlink(tmp)
         except OSError:
             pass
         raise
+
+
+def stale_pattern(path: str | os.PathLike) -> re.Pattern[str]:
+    """Names of the temporary files `write_atomic(path, ...)` creates."""
+    return re.compile(rf"\.{re.escape(Path(path).name)}\.{_RANDOM}\.tmp")
+
+
+def remove_stale(path: str | os.PathLike) -> list[Path]:
+    """Delete the temporary files of `path` that a killed writer left next to it (same folder,
+    our own name pattern, no writer holding its lock); returns those deleted."""
+    target = Path(path)
+    pattern = stale_pattern(target)
+    try:
+        names = os.listdir(target.parent)
+    except OSError:
+        return []
+    removed = []
+    for name in names:
+        if not pattern.fullmatch(name):
+            continue
+        tmp = target.parent / name
+        try:
+            fd = os.open(tmp, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+        except OSError:
+            continue                      # gone already, a symlink, or not ours to open
+        try:
+            if not os.path.isfile(tmp) or os.path.islink(tmp):
+                continue
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                continue                  # a live writer holds it
+            if os.fstat(fd).st_ino == os.lstat(tmp).st_ino:
+                os.unlink(tmp)
+                removed.append(tmp)
+        except OSError:
+            pass
+        finally:
+            os.close(fd)
+    return removed

@@ -8,23 +8,61 @@
 A row is a dict: ``time`` (virtual seconds) and, per axis n, ``pos<n>`` (AP1), ``vel<n>`` (AP3),
 ``left<n>``/``right<n>``/``home<n>`` (AP11/AP10/AP9, logical states), ``load<n>`` (AP206),
 ``current<n>`` (AP180, 0..31), ``encoder<n>`` (AP209) and ``stage<n>`` (the physical position
-of the slider in the world). Values a module does not have are empty.
+of the slider in the world). Values a module does not have are empty. Rows are kept as compact
+columns (opentmcl.columns, about 140 bytes per row of a TMCM-6212) and built as dicts only when
+read; at most MAX_ROWS rows (TraceFull beyond).
 """
 from __future__ import annotations
 
 import csv
 import io
 import os
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
+
+from .columns import Column
 
 FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("load", 206),
           ("current", 180), ("encoder", 209))
+MAX_ROWS = 1_000_000   # about 2.8 hours at 10 ms; `run` takes at most this many looks
+
+
+class TraceFull(ValueError):
+    """A trace that already holds max_rows rows."""
+
+
+class _Rows(Sequence):
+    """The rows of a Trace as dicts, made on demand from its columns."""
+
+    def __init__(self, trace: Trace) -> None:
+        self._t = trace
+
+    def __len__(self) -> int:
+        return len(self._t._data[0]) if self._t._data else 0
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        names, data = self._t._names, self._t._data
+        if not data:
+            raise IndexError("trace row index out of range")
+        return {n: c[i] for n, c in zip(names, data, strict=True)}
 
 
 class Trace:
-    def __init__(self, axes: Iterable[int] | None = None) -> None:
+    def __init__(self, axes: Iterable[int] | None = None, *, max_rows: int = MAX_ROWS) -> None:
         self.axes = None if axes is None else list(axes)
-        self.rows: list[dict[str, float | int | None]] = []
+        self.max_rows = max_rows
+        self._names: list[str] = []
+        self._data: list[Column] = []
+
+    @property
+    def rows(self) -> _Rows:
+        """The recorded rows (a read-only sequence of dicts)."""
+        return _Rows(self)
+
+    def nbytes(self) -> int:
+        """Bytes held by the values (column arrays)."""
+        return sum(c.nbytes() for c in self._data)
 
     def _axes(self, vm) -> list[int]:
         n = len(vm.axes)
@@ -56,14 +94,26 @@ class Trace:
                     row[f"{name}{a}"] = None
             world = getattr(vm, "world", None)
             row[f"stage{a}"] = world.axis(a).physical_position if world is not None else None
-        self.rows.append(row)
+        self._append(row)
         return row
 
-    def record(self, vm, seconds: float, interval: float) -> list[dict]:
+    def _append(self, row: dict) -> None:
+        if not self._data:
+            self._names, self._data = list(row), [Column() for _ in row]
+        elif list(row) != self._names:
+            raise ValueError("a trace row must have the columns of the first row")
+        if len(self._data[0]) >= self.max_rows:
+            raise TraceFull(f"the trace holds {self.max_rows} rows already (the limit)")
+        for col, v in zip(self._data, row.values(), strict=True):
+            col.append(v)
+
+    def record(self, vm, seconds: float, interval: float) -> _Rows:
         """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
         if interval <= 0 or seconds < 0:
             raise ValueError("interval must be > 0 and seconds >= 0")
         steps = round(seconds / interval)
+        if len(self.rows) + steps + 1 > self.max_rows:
+            raise TraceFull(f"{steps + 1} more rows would pass the limit of {self.max_rows} rows")
         self.sample(vm)
         for _ in range(steps):
             vm.advance(interval)
@@ -72,12 +122,11 @@ class Trace:
 
     def to_csv(self, target: str | os.PathLike | None = None) -> str:
         """The rows as CSV text; written to `target` when given."""
-        cols = list(self.rows[0]) if self.rows else ["time"]
         buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-        w.writeheader()
-        for row in self.rows:
-            w.writerow({k: "" if v is None else v for k, v in row.items()})
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(self._names or ["time"])
+        for row in zip(*self._data, strict=True):
+            w.writerow(["" if v is None else v for v in row])
         text = buf.getvalue()
         if target is not None:
             with open(target, "w", encoding="utf-8", newline="") as f:

@@ -30,6 +30,34 @@ def same_file(a: str, b: str) -> bool:
         return False
 
 
+def int_arg(text: str) -> int:
+    """argparse type: an int of at most LITERAL_DIGITS_MAX digits (decimal, or 0x/0b with base 0
+    rules), so a 5000-digit argument is a short usage error, not int()'s digit-limit message."""
+    from ..limits import LiteralTooLong, check_literal
+
+    t = text.strip().lstrip("+-")
+    try:
+        check_literal(t[2:] if t[:2].lower() in ("0x", "0b", "0o") else t)
+        return int(text, 0) if t[:2].lower() in ("0x", "0b", "0o") else int(text, 10)
+    except LiteralTooLong as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text[:40]!r}") from None
+
+
+def float_arg(text: str) -> float:
+    """argparse type: a finite float written in at most 64 characters."""
+    value = None
+    if len(text) <= 64:
+        try:
+            value = float(text)
+        except ValueError:
+            pass
+    if value is None or value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"not a finite number of at most 64 characters: {text[:40]!r}")
+    return value
+
+
 class _Parser(argparse.ArgumentParser):
     """argparse with the house rule for usage errors: one line, exit status 2 (not the usage block)."""
 

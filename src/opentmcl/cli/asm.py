@@ -26,11 +26,15 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _defines(items: list[str]) -> dict[str, int]:
+    from ..limits import LiteralTooLong
     from ..protocol.opcodes import parse_number
     out = {}
     for item in items:
         name, sep, value = item.partition("=")
-        num = parse_number(value) if sep else None
+        try:
+            num = parse_number(value) if sep else None
+        except LiteralTooLong as exc:
+            raise CliError(f"bad --define {name.strip()[:40]}: {exc}") from None
         if not name.strip().isidentifier() or num is None:
             raise CliError(f"bad --define {item!r}; expected NAME=NUMBER")
         out[name.strip()] = num

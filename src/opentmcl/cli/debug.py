@@ -49,6 +49,22 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+class BoundedLines:
+    """The shell's stdin when it is not a terminal (a pipe, a file, /dev/zero): lines of at most
+    COMMAND_LINE_MAX characters, so an endless line is a one-line error instead of a growing read."""
+
+    def __init__(self, stream) -> None:
+        self.stream = stream
+
+    def readline(self) -> str:
+        from ..limits import COMMAND_LINE_MAX
+
+        line = self.stream.readline(COMMAND_LINE_MAX + 1)
+        if len(line) > COMMAND_LINE_MAX:
+            raise CliError(f"a debugger command line on stdin is longer than {COMMAND_LINE_MAX} characters")
+        return line
+
+
 class DebugShell(cmd.Cmd):
     prompt = "(tmcl) "
     intro = "OpenTMCL debugger - type help for the commands, quit to leave."
@@ -238,6 +254,11 @@ def _ctrl_c():
 
 def _number(text: str, usage: str, minimum: int | None = None) -> int:
     """An integer argument (decimal or 0x...), else ValueError with the command's usage."""
+    from ..limits import LITERAL_DIGITS_MAX
+
+    digits = text.strip().lstrip("+-")
+    if len(digits) > LITERAL_DIGITS_MAX + 2:
+        raise ValueError(f"number of {len(digits)} characters is too long; usage: {usage}")
     try:
         value = int(text.strip(), 0)
     except ValueError:
@@ -249,9 +270,12 @@ def _number(text: str, usage: str, minimum: int | None = None) -> int:
 
 def _command_lines(path: str) -> list[str]:
     """The -x FILE, read whole before the first command runs: a bad file is a one-line error."""
+    from ..limits import TEXT_MAX, InputTooLarge, read_text
+
     try:
-        with open(path, encoding="utf-8") as fh:
-            return fh.read().splitlines()
+        return read_text(path, TEXT_MAX, "debugger command file").splitlines()
+    except InputTooLarge as exc:
+        raise CliError(f"{path}: {exc}") from None
     except OSError as exc:
         raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
@@ -279,7 +303,7 @@ def run(args: argparse.Namespace) -> int:
                            watches=parse_watches(specs))
         except (TmclError, DebugError) as exc:
             raise CliError(str(exc)) from None
-        shell = DebugShell(dbg)
+        shell = DebugShell(dbg, stdin=None if sys.stdin.isatty() else BoundedLines(sys.stdin))
         print(f"loaded {len(program.instructions)} instructions from {program.filename}, verified")
         for line in commands:
             if shell.onecmd(line.strip()):

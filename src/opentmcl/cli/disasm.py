@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 from pathlib import Path
 
 from . import CliError
@@ -23,8 +22,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _read_symbols(path: str) -> dict[str, int]:
+    from ..limits import TEXT_MAX, InputTooLarge, read_text
+
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        text = read_text(path, TEXT_MAX, "label table")
+    except InputTooLarge as exc:
+        raise CliError(f"{path}: {exc}") from None
     except OSError as exc:
         raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
     except UnicodeDecodeError:
@@ -45,9 +48,12 @@ def _read_symbols(path: str) -> dict[str, int]:
 def run(args: argparse.Namespace) -> int:
     from ..lang.binfile import BinFileError
     from ..lang.disassembler import disassemble
+    from ..limits import IMAGE_MAX, InputTooLarge, read_bytes
 
     try:
-        data = sys.stdin.buffer.read() if args.binary == "-" else Path(args.binary).read_bytes()
+        data = read_bytes(args.binary, IMAGE_MAX, "binary program image", stdin=True)
+    except InputTooLarge as exc:
+        raise CliError(f"{args.binary}: {exc}") from None
     except OSError as exc:
         raise CliError(f"cannot read {args.binary}: {exc.strerror or exc}") from None
     labels = _read_symbols(args.symbols) if args.symbols else None

@@ -32,12 +32,12 @@ def read_program(path: str, module: str | None, include: list[str] | None = None
     """Assemble a .tmc file (for `module`, to be loaded at address `origin`) or read a .bin file
     (loaded as it is: its jump addresses are those it was assembled with); CliError on any problem."""
     from ..lang.assembler import AsmError, assemble_file
-    from ..lang.binfile import BinFileError, decode
+    from ..lang.binfile import BinFileError, read
 
     p = Path(path)
     if p.suffix.lower() == ".bin":
         try:
-            code = decode(p.read_bytes())
+            code = read(p)
         except OSError as exc:
             raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
         except BinFileError as exc:

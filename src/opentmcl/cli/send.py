@@ -32,19 +32,30 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
+def shown(text: str) -> str:
+    from ..limits import shown as cut
+
+    return cut(text)
+
+
 def parse(text: str) -> tuple[int, int, int, int]:
     """(command, type, motor, value) of one instruction; CliError if it cannot be read.
 
     Mnemonic forms go through the assembler (symbolic names, expressions such as ``51200*2``);
     control commands are written as up to four numbers.
     """
+    from ..limits import LiteralTooLong
     from ..protocol.opcodes import parse_number
 
     parts = [p.strip() for p in text.replace(",", " ").split()]
-    if parts and parse_number(parts[0]) is not None:  # numeric form for control commands
-        nums = [parse_number(p) for p in parts]
+    try:
+        numeric = bool(parts) and parse_number(parts[0]) is not None
+        nums = [parse_number(p) for p in parts] if numeric else []
+    except LiteralTooLong as exc:
+        raise CliError(str(exc)) from None
+    if numeric:  # numeric form for control commands
         if len(nums) > 4 or any(n is None for n in nums):
-            raise CliError(f"{text!r}: expected COMMAND, TYPE, MOTOR, VALUE as numbers")
+            raise CliError(f"{shown(text)}: expected COMMAND, TYPE, MOTOR, VALUE as numbers")
         return tuple((nums + [0, 0, 0])[:4])  # type: ignore[return-value]
     return _parse_mnemonic(text)
 
@@ -59,13 +70,13 @@ def _parse_mnemonic(text: str) -> tuple[int, int, int, int]:
         except (OperandError, UnknownCommand) as exc:
             raise CliError(str(exc)) from None
     if "\n" in text:
-        raise CliError(f"{text!r}: one instruction per argument")
+        raise CliError(f"{shown(text)}: one instruction per argument")
     try:
         program = assemble(text, filename="<send>", append_stop=False)
     except AsmError as exc:
-        raise CliError(f"{text!r}: {exc.message}") from None
+        raise CliError(f"{shown(text)}: {exc.message}") from None
     if len(program.instructions) != 1:
-        raise CliError(f"{text!r}: expected one instruction")
+        raise CliError(f"{shown(text)}: expected one instruction")
     ins = program.instructions[0]
     return ins.command, ins.type, ins.motor, ins.value
 

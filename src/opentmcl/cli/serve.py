@@ -60,7 +60,7 @@ def _address(text: str) -> int:
     try:
         value = int(text, 0)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+        raise argparse.ArgumentTypeError(f"not a number: {text[:40]!r}") from None
     if not 1 <= value <= 255:
         raise argparse.ArgumentTypeError("module address must be 1..255 (manual 5.1, parameter 66)")
     return value

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from . import CliError
+from . import CliError, float_arg, int_arg
 
 
 def register(subparsers) -> None:
@@ -23,28 +23,28 @@ def register(subparsers) -> None:
     p.set_defaults(func=lambda args: _help(p))
 
     pm = sub.add_parser("pmulpdiv", help="PMUL/PDIV for an A_MAX (datasheet 6.1.9.2)")
-    pm.add_argument("-a", dest="a_max", type=int, required=True, help="A_MAX 0..2047")
-    pm.add_argument("-r", dest="ramp_div", type=int, required=True, help="RAMP_DIV 0..13")
-    pm.add_argument("-p", dest="pulse_div", type=int, required=True, help="PULSE_DIV 0..13")
-    pm.add_argument("-pr", "--p-reduction", dest="p_reduction", type=float, default=0.0,
+    pm.add_argument("-a", dest="a_max", type=int_arg, required=True, help="A_MAX 0..2047")
+    pm.add_argument("-r", dest="ramp_div", type=int_arg, required=True, help="RAMP_DIV 0..13")
+    pm.add_argument("-p", dest="pulse_div", type=int_arg, required=True, help="PULSE_DIV 0..13")
+    pm.add_argument("-pr", "--p-reduction", dest="p_reduction", type=float_arg, default=0.0,
                     help="reduction of p, 0.00 .. 0.10 (default 0)")
     pm.set_defaults(func=cmd_pmulpdiv)
 
     cv = sub.add_parser("convert", help="register values <-> Hz and Hz/s (datasheet 6.1.12)")
     g = cv.add_mutually_exclusive_group()
-    g.add_argument("-v", "--velocity", type=int, help="velocity register value (-2047..2047)")
-    g.add_argument("--hz", type=float, help="step rate in Hz")
+    g.add_argument("-v", "--velocity", type=int_arg, help="velocity register value (-2047..2047)")
+    g.add_argument("--hz", type=float_arg, help="step rate in Hz")
     h = cv.add_mutually_exclusive_group()
-    h.add_argument("-a", "--a-max", type=int, help="A_MAX register value (0..2047)")
-    h.add_argument("--hz-per-s", type=float, help="change of step rate in Hz/s")
-    cv.add_argument("-p", "--pulse-div", type=int, required=True)
-    cv.add_argument("-r", "--ramp-div", type=int, default=None)
-    cv.add_argument("--f-clk", type=float, default=16e6, help="clock frequency in Hz (default 16 MHz)")
+    h.add_argument("-a", "--a-max", type=int_arg, help="A_MAX register value (0..2047)")
+    h.add_argument("--hz-per-s", type=float_arg, help="change of step rate in Hz/s")
+    cv.add_argument("-p", "--pulse-div", type=int_arg, required=True)
+    cv.add_argument("-r", "--ramp-div", type=int_arg, default=None)
+    cv.add_argument("--f-clk", type=float_arg, default=16e6, help="clock frequency in Hz (default 16 MHz)")
     cv.set_defaults(func=cmd_convert)
 
     tr = sub.add_parser("trace", help="run a datagram script and print every datagram, decoded")
     tr.add_argument("script", help="text script (see docs/tmc4210.md) or Python file with main(chip)")
-    tr.add_argument("--f-clk", type=float, default=16e6, help="clock frequency in Hz (default 16 MHz)")
+    tr.add_argument("--f-clk", type=float_arg, default=16e6, help="clock frequency in Hz (default 16 MHz)")
     tr.set_defaults(func=cmd_trace)
 
 

@@ -13,7 +13,8 @@ import json
 import os
 from pathlib import Path
 
-from ..atomicfile import write_atomic
+from ..atomicfile import remove_stale, write_atomic
+from ..limits import TEXT_MAX, InputTooLarge, read_text
 
 FORMAT = "opentmcl-eeprom"
 VERSION = 1
@@ -55,6 +56,8 @@ class Eeprom:
         self.data = _empty()
         self.dirty = False
         self.deferred = False
+        if self.path is not None:
+            remove_stale(self.path)   # temp files of a writer killed mid-write (atomicfile)
         if self.path is not None and self.path.exists():
             self.data = self._read(self.path)
         elif self.path is not None:  # a new file: fail now, not at the first store
@@ -66,8 +69,9 @@ class Eeprom:
 
     def _read(self, path: Path) -> dict:
         try:
-            raw = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raw = json.loads(read_text(path, TEXT_MAX, "EEPROM image"))
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError, InputTooLarge,
+                RecursionError) as exc:   # RecursionError: nesting too deep for json
             raise EepromError(f"cannot read EEPROM file {path}: {exc}") from None
         if not isinstance(raw, dict) or raw.get("format") != FORMAT:
             raise EepromError(f"{path} is not an OpenTMCL EEPROM file")

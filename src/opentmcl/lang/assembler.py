@@ -26,6 +26,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..limits import TEXT_MAX, InputTooLarge, LiteralTooLong, read_text
 from ..protocol import opcodes
 from ..protocol.frame import to_int32
 from ..protocol.opcodes import MOTOR, TYPE, VALUE, Command
@@ -188,7 +189,10 @@ class _ExprParser:
             self.i += 1
             return e
         if kind == "num":
-            return _Expr("num", col, value=opcodes.parse_number(tok))
+            try:
+                return _Expr("num", col, value=opcodes.parse_number(tok))
+            except LiteralTooLong as exc:
+                self.err(col, str(exc))
         if kind == "name":
             return _Expr("name", col, name=tok)
         self.err(col, f"unexpected {tok!r} in expression")
@@ -325,11 +329,12 @@ def _read_file(path: Path, display: str, st: _State, where: _Where | None, depth
         return
     st.included.add(key)
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
+        text = read_text(path, TEXT_MAX, "program source", errors="replace")
+    except (OSError, InputTooLarge) as exc:
+        why = str(exc) if isinstance(exc, InputTooLarge) else exc.strerror or str(exc)
         if where:
-            _fail(where, 1, f"cannot read include file {display}: {exc.strerror or exc}")
-        raise AsmError(display, 0, 0, f"cannot read file: {exc.strerror or exc}") from None
+            _fail(where, 1, f"cannot read include file {display}: {why}")
+        raise AsmError(display, 0, 0, f"cannot read file: {why}") from None
     _read_text(text, display, path, st, depth)
 
 
@@ -599,7 +604,9 @@ def assemble_file(path: str | os.PathLike, *, include_path: Iterable[str | os.Pa
     """Assemble a source file; AsmError (line 0) if it cannot be read."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8", errors="replace")
+        text = read_text(p, TEXT_MAX, "program source", errors="replace")
+    except InputTooLarge as exc:
+        raise AsmError(str(p), 0, 0, str(exc)) from None
     except OSError as exc:
         raise AsmError(str(p), 0, 0, f"cannot read file: {exc.strerror or exc}") from None
     return assemble(text, filename=str(p), include_path=include_path, module=module,

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 import os
 import struct
-from pathlib import Path
 from typing import NamedTuple
 
 from ..atomicfile import write_atomic
+from ..limits import IMAGE_MAX, InputTooLarge, read_bytes
 from ..protocol.frame import checksum, to_int32
 
 RECORD_LEN = 8
@@ -61,7 +61,11 @@ def decode(data: bytes, *, verify: bool = True) -> list[Instruction]:
 
 
 def read(path: str | os.PathLike) -> list[Instruction]:
-    return decode(Path(path).read_bytes())
+    """The instructions of a binary file; BinFileError also for a file over IMAGE_MAX bytes."""
+    try:
+        return decode(read_bytes(path, IMAGE_MAX, "binary program image"))
+    except InputTooLarge as exc:
+        raise BinFileError(str(exc)) from None
 
 
 def write(path: str | os.PathLike, program: list[Instruction] | tuple[Instruction, ...]) -> None:

@@ -13,6 +13,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..limits import TEXT_MAX, InputTooLarge, read_bytes
 from .stage import Load, Profile, Stage, Switch, home_switch, left_switch, right_switch
 
 if sys.version_info >= (3, 11):
@@ -246,7 +247,9 @@ def load_scenario(source) -> Scenario:
         raise ScenarioError(f"a scenario is a file path or a dict, not {type(source).__name__}")
     path = Path(source)
     try:
-        text = path.read_bytes()
+        text = read_bytes(path, TEXT_MAX, "scenario file")
+    except InputTooLarge as exc:
+        raise ScenarioError(f"cannot read scenario {path}: {exc}") from None
     except OSError as exc:
         raise ScenarioError(f"cannot read scenario {path}: {exc.strerror or exc}") from None
     if path.suffix.lower() in (".yaml", ".yml"):
@@ -254,11 +257,15 @@ def load_scenario(source) -> Scenario:
 
         try:
             data = yaml.safe_load(text)
-        except yaml.YAMLError as exc:
-            raise ScenarioError(f"{path}: {exc}") from None
+        except yaml.YAMLError as exc:   # PyYAML's message spans lines: one line here
+            raise ScenarioError(f"{path}: {' '.join(str(exc).split())}") from None
+        except RecursionError:
+            raise ScenarioError(f"{path}: nested too deeply") from None
     else:
         try:
             data = tomllib.loads(text.decode("utf-8"))
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise ScenarioError(f"{path}: {exc}") from None
+        except RecursionError:
+            raise ScenarioError(f"{path}: nested too deeply") from None
     return parse_scenario(data if data is not None else {})

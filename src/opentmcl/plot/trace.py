@@ -10,6 +10,8 @@ actual motor current (180, "smartEnergy actual current"); the names are those of
 TMCM-6212 manual 4.1 / PD86-1180 manual 5. Velocities are stored in pps: on TMC429
 modules (PD86-1180) the internal velocity is converted with the pulse divisor
 (axis parameter 154, PD86-1180 manual 5). Acceleration is derived from velocity.
+Samples are kept in compact columns (opentmcl.columns): one hour at 10 ms of six axes takes
+about 35 MB (`python bench/run.py`, "memory plot trace").
 """
 from __future__ import annotations
 
@@ -17,7 +19,11 @@ import csv
 import io
 import math
 import os
+from array import array
 from dataclasses import dataclass, field
+
+from ..columns import Column
+from ..limits import CSV_MAX, LINE_MAX, size_text
 
 # channel -> (axis parameter number, unit). position/velocity are always recorded.
 CHANNELS: dict[str, tuple[int | None, str]] = {
@@ -31,7 +37,7 @@ CHANNELS: dict[str, tuple[int | None, str]] = {
     "load": (206, ""),
     "current": (180, ""),
 }
-MAX_SAMPLES = 100_000  # a longer recording is refused (memory), e.g. 1000 s at 10 ms
+MAX_SAMPLES = 400_000  # a longer recording or CSV trace is refused (memory): 4000 s at 10 ms
 RECORDED = tuple(c for c, (num, _) in CHANNELS.items() if num is not None)
 SWITCHES = ("target_reached", "home_switch", "right_switch", "left_switch")
 
@@ -46,8 +52,8 @@ class Trace:
     A channel the module does not have holds None."""
 
     axes: list[int]
-    time: list[float] = field(default_factory=list)
-    data: dict[tuple[int, str], list[float | None]] = field(default_factory=dict)
+    time: array = field(default_factory=lambda: array("d"))
+    data: dict[tuple[int, str], Column] = field(default_factory=dict)
     module: str = ""
     microsteps: dict[int, tuple[int, int]] = field(default_factory=dict)  # axis -> (usteps/fullstep, fullsteps/rev)
 
@@ -58,17 +64,22 @@ class Trace:
         self.time.append(float(t))
         for ax in self.axes:
             for ch in RECORDED:
-                self.data.setdefault((ax, ch), []).append(values.get((ax, ch)))
+                self.data.setdefault((ax, ch), Column()).append(values.get((ax, ch)))
+
+    def nbytes(self) -> int:
+        """Bytes held by the samples (column arrays)."""
+        return self.time.buffer_info()[1] * self.time.itemsize + sum(c.nbytes() for c in self.data.values())
 
     def column(self, axis: int, channel: str) -> list[float | None]:
         """The values of one channel; acceleration is the difference quotient of velocity."""
         if axis not in self.axes:
             raise TraceError(f"axis {axis} is not in this trace (axes {self.axes})")
         if channel == "acceleration":
-            return derivative(self.time, self.column(axis, "velocity"))
+            return derivative(list(self.time), self.column(axis, "velocity"))
         if channel not in CHANNELS:
             raise TraceError(f"unknown channel {channel!r}; channels: {', '.join(CHANNELS)}")
-        return list(self.data.get((axis, channel), [None] * len(self.time)))
+        col = self.data.get((axis, channel))
+        return col.tolist() if col is not None else [None] * len(self.time)
 
     def has(self, axis: int, channel: str) -> bool:
         if channel == "acceleration":
@@ -84,14 +95,9 @@ class Trace:
     def to_csv(self, target: str | os.PathLike | io.TextIOBase) -> None:
         """Columns ``time_s`` then ``<channel>_<axis>`` for every recorded channel."""
         header = ["time_s"] + [f"{ch}_{ax}" for ax in self.axes for ch in RECORDED]
-        rows = []
-        for i, t in enumerate(self.time):
-            row = [f"{t:.6f}"]
-            for ax in self.axes:
-                for ch in RECORDED:
-                    v = self.data[(ax, ch)][i]
-                    row.append("" if v is None else _fmt(v))
-            rows.append(row)
+        cols = [self.data[(ax, ch)] for ax in self.axes for ch in RECORDED]
+        rows = ([f"{t:.6f}"] + ["" if v is None else _fmt(v) for v in values]
+                for t, *values in zip(self.time, *cols, strict=True))   # streamed, not a list
         meta = [f"# module={self.module}"] + [f"# microsteps_{ax}={u},{f}" for ax, (u, f) in self.microsteps.items()]
         if isinstance(target, io.TextIOBase):
             _write(target, meta, header, rows)
@@ -101,18 +107,29 @@ class Trace:
 
     @classmethod
     def from_csv(cls, source: str | os.PathLike | io.TextIOBase) -> Trace:
-        """Read a trace written by `to_csv` (or any CSV with ``time_s`` and ``position_N`` columns)."""
+        """Read a trace written by `to_csv` (or any CSV with ``time_s`` and ``position_N`` columns).
+        Read line by line: at most CSV_MAX bytes, LINE_MAX per line and MAX_SAMPLES rows."""
         if isinstance(source, io.TextIOBase):
-            text = source.read()
-        else:
-            try:
-                with open(source, encoding="utf-8") as fh:
-                    text = fh.read()
-            except OSError as exc:
-                raise TraceError(f"cannot read {source}: {exc.strerror or exc}") from None
-            except UnicodeDecodeError:
-                raise TraceError(f"cannot read {source}: not a text (UTF-8) file") from None
-        return _parse_csv(text)
+            return _parse_csv(_lines(source, "the trace"))
+        try:
+            with open(source, encoding="utf-8", newline="") as fh:
+                return _parse_csv(_lines(fh, str(source)))
+        except OSError as exc:
+            raise TraceError(f"cannot read {source}: {exc.strerror or exc}") from None
+        except UnicodeDecodeError:
+            raise TraceError(f"cannot read {source}: not a text (UTF-8) file") from None
+
+
+def _lines(fh, name: str):
+    """The lines of a text file, each at most LINE_MAX characters, CSV_MAX in all."""
+    total = 0
+    while line := fh.readline(LINE_MAX + 1):
+        total += len(line)
+        if len(line) > LINE_MAX:
+            raise TraceError(f"cannot read {name}: a line longer than {size_text(LINE_MAX)}")
+        if total > CSV_MAX:
+            raise TraceError(f"cannot read {name}: larger than the {size_text(CSV_MAX)} limit")
+        yield line.rstrip("\r\n")
 
 
 def _fmt(v: float) -> str:
@@ -127,26 +144,21 @@ def _write(fh, meta, header, rows) -> None:
     w.writerows(rows)
 
 
-def _parse_csv(text: str) -> Trace:
-    module, micro = "", {}
-    lines = []
-    for line in text.splitlines():
-        if line.startswith("#"):
-            key, _, value = line[1:].strip().partition("=")
-            if key == "module":
-                module = value
-            elif key.startswith("microsteps_"):
-                try:
-                    u, f = (int(x) for x in value.split(","))
-                    micro[int(key.split("_")[1])] = (u, f)
-                except ValueError:
-                    raise TraceError(f"bad trace metadata line {line!r}") from None
-        elif line.strip():
-            lines.append(line)
-    rows = list(csv.reader(lines))
-    if not rows or not rows[0] or rows[0][0] != "time_s":
+def _parse_csv(lines) -> Trace:
+    meta: dict[str, str] = {}
+
+    def data_lines():
+        for line in lines:
+            if line.startswith("#"):
+                key, _, value = line[1:].strip().partition("=")
+                meta[key] = value
+            elif line.strip():
+                yield line
+
+    rows = csv.reader(data_lines())
+    header = next(rows, None)
+    if not header or header[0] != "time_s":
         raise TraceError("not a trace: the first column must be time_s")
-    header = rows[0]
     columns: dict[tuple[int, str], int] = {}
     for i, name in enumerate(header[1:], start=1):
         ch, _, ax = name.rpartition("_")
@@ -156,16 +168,26 @@ def _parse_csv(text: str) -> Trace:
     axes = sorted({ax for ax, _ in columns})
     if not axes:
         raise TraceError("the trace has no axis columns")
-    trace = Trace(axes, module=module, microsteps=micro)
-    for n, row in enumerate(rows[1:], start=2):
+    trace = Trace(axes)
+    for n, row in enumerate(rows, start=2):
         if len(row) != len(header):
             raise TraceError(f"trace row {n} has {len(row)} fields, expected {len(header)}")
+        if len(trace) >= MAX_SAMPLES:
+            raise TraceError(f"the trace has more than {MAX_SAMPLES} samples (the limit)")
         try:
             t = float(row[0])
             values = {key: (float(row[i]) if row[i] != "" else None) for key, i in columns.items()}
         except ValueError:
             raise TraceError(f"trace row {n}: not a number") from None
         trace.add(t, values)
+    trace.module = meta.get("module", "")
+    for key, value in meta.items():
+        if key.startswith("microsteps_"):
+            try:
+                u, f = (int(x) for x in value.split(","))
+                trace.microsteps[int(key.split("_")[1])] = (u, f)
+            except ValueError:
+                raise TraceError(f"bad trace metadata line {'# ' + key + '=' + value!r}") from None
     return trace
 
 

@@ -25,6 +25,7 @@ import re
 from dataclasses import dataclass
 from enum import Enum
 
+from ..limits import LiteralTooLong, check_literal
 from .frame import Request, to_int32
 from .opcodes import (
     ENTER_ASCII_MODE,
@@ -162,7 +163,7 @@ def parse_command(line: str) -> AsciiCommand:
     fields = {TYPE: 0, MOTOR: 0, VALUE: 0}
     for name, text_op in zip(form, operands, strict=True):
         num = lookup_symbol(cmd, text_op) if name == TYPE else None
-        if num is None and name == TYPE and parse_number(text_op) is None:
+        if num is None and name == TYPE and _number_or_none(text_op, name) is None:
             raise AsciiError(f"unknown type {text_op!r} for {mnemonic}; expected {cmd.usage()}",
                              Status.WRONG_TYPE)
         if num is None:
@@ -174,8 +175,15 @@ def parse_command(line: str) -> AsciiCommand:
     return AsciiCommand(address, mnemonic, cmd.number, fields[TYPE], fields[MOTOR], fields[VALUE])
 
 
+def _number_or_none(text: str, what: str) -> int | None:
+    try:
+        return parse_number(text)
+    except LiteralTooLong as exc:
+        raise AsciiError(f"{what}: {exc}", Status.INVALID_VALUE) from None
+
+
 def _number(text: str, what: str) -> int:
-    num = parse_number(text)
+    num = _number_or_none(text, what)
     if num is None:
         raise AsciiError(f"{what} must be a number, got {text!r}", Status.INVALID_VALUE)
     if not -(1 << 31) <= num <= 0xFFFFFFFF:
@@ -205,5 +213,10 @@ def parse_reply(line: str) -> AsciiReply:
     if not m:
         raise AsciiError(f"not an ASCII reply line: {line!r}")
     value_text = m.group(4).replace("\u2212", "-").replace("\u2013", "-").replace(" ", "")
+    try:
+        check_literal(m.group(3).lstrip("+-"))
+        check_literal(value_text.lstrip("+-"))
+    except LiteralTooLong as exc:
+        raise AsciiError(f"not an ASCII reply line: {exc}") from None
     return AsciiReply(letter_address(m.group(1)), letter_address(m.group(2)), int(m.group(3)),
                       to_int32(int(value_text)))

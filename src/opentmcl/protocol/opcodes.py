@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 from types import MappingProxyType
 
+from ..limits import LiteralTooLong, check_literal
 from .frame import to_int32
 
 TYPE, MOTOR, VALUE = "type", "motor", "value"
@@ -341,7 +342,8 @@ _NUMBER = re.compile(r"([+-]?)\s*(?:0[xX]([0-9A-Fa-f]+)|\$([0-9A-Fa-f]+)|0[bB]([
 
 
 def parse_number(text: str) -> int | None:
-    """An integer literal: decimal (optionally signed), 0x/$ hex, 0b binary. None if not a literal.
+    """An integer literal: decimal (optionally signed), 0x/$ hex, 0b binary. None if not a literal;
+    LiteralTooLong (a ValueError) for more than 32 digits (opentmcl.limits).
 
     A typographic minus or dash (as printed in the manuals) counts as '-'."""
     m = _NUMBER.match(text.strip().replace("\u2212", "-").replace("\u2013", "-"))
@@ -349,6 +351,7 @@ def parse_number(text: str) -> int | None:
         return None
     sign = -1 if m.group(1) == "-" else 1
     hex_a, hex_b, binary, decimal = m.group(2, 3, 4, 5)
+    check_literal(hex_a or hex_b or binary or decimal)
     if decimal is not None:
         return sign * int(decimal, 10)
     if binary is not None:
@@ -416,7 +419,10 @@ def parse_instruction(text: str, labels: Mapping[str, int] | None = None) -> tup
     for name, op in zip(form, operands, strict=True):
         num = lookup_symbol(cmd, op) if name == TYPE else None
         if num is None:
-            num = parse_number(op)
+            try:
+                num = parse_number(op)
+            except LiteralTooLong as exc:
+                raise OperandError(f"{name} operand: {exc}") from None
         if num is None and labels is not None:
             num = labels.get(op)
         if num is None:

@@ -31,8 +31,15 @@ class ScriptError(ValueError):
 
 
 def parse_int(text: str) -> int:
-    """$1A, 0x1A, %1010 or decimal (datasheet 2.1 notations)."""
+    """$1A, 0x1A, %1010 or decimal (datasheet 2.1 notations), at most 32 digits (opentmcl.limits)."""
+    from ...limits import LiteralTooLong, check_literal, shown
+
     t = text.strip().replace("_", "")
+    digits = t.lstrip("+-")
+    try:
+        check_literal(digits[2:] if digits[:2].lower() == "0x" else digits[1:] if digits[:1] in "$%" else digits)
+    except LiteralTooLong as exc:
+        raise ScriptError(str(exc)) from None
     try:
         if t.startswith("$"):
             return int(t[1:], 16)
@@ -42,7 +49,7 @@ def parse_int(text: str) -> int:
             return int(t[1:], 2)
         return int(t, 10)
     except ValueError:
-        raise ScriptError(f"not a number: {text!r}") from None
+        raise ScriptError(f"not a number: {shown(text)}") from None
 
 
 _OPS = {"==": operator.eq, "!=": operator.ne, ">=": operator.ge, "<=": operator.le,
@@ -149,8 +156,12 @@ def run_file(chip: TMC4210, path: str | Path) -> None:
 
 
 def _read(p: Path) -> str:
+    from ...limits import TEXT_MAX, InputTooLarge, read_text
+
     try:
-        return p.read_text(encoding="utf-8")
+        return read_text(p, TEXT_MAX, "trace script")
+    except InputTooLarge as exc:
+        raise ScriptError(f"{p}: {exc}") from None
     except UnicodeDecodeError:
         raise ScriptError(f"{p}: not a UTF-8 text file") from None
     except OSError as exc:

@@ -1,0 +1,74 @@
+"""Compact columns for traces: one `array` per quantity instead of a Python object per value.
+
+A column starts as signed 8-bit and widens (16, 32, 64 bit, then double) when a value does not
+fit, so a switch costs 1 byte per sample, a 32-bit position 4 and a float 8. None (a value the
+module does not have) is stored as the type's smallest value (-128, -32768, ...) in an integer
+column and as NaN in a float column; a real value equal to that sentinel widens the column.
+Values read back as int from integer columns and as float from float columns.
+"""
+from __future__ import annotations
+
+import math
+from array import array
+from collections.abc import Iterable, Iterator
+
+_INTS = ("b", "h", "i", "q")
+_LIMITS = {code: 1 << (array(code).itemsize * 8 - 1) for code in _INTS}   # 2**(bits-1)
+
+
+class Column:
+    """A growing sequence of int / float / None values."""
+
+    __slots__ = ("_a",)
+
+    def __init__(self, values: Iterable[float | int | None] = ()) -> None:
+        self._a = array("b")
+        for v in values:
+            self.append(v)
+
+    @property
+    def typecode(self) -> str:
+        return self._a.typecode
+
+    def _fits(self, v: int) -> bool:
+        half = _LIMITS[self._a.typecode]
+        return -half < v < half            # -half is the None sentinel
+
+    def _widen(self, code: str) -> None:
+        old, none = self._a, -_LIMITS[self._a.typecode]
+        new_none = math.nan if code == "d" else -_LIMITS[code]
+        self._a = array(code, (new_none if x == none else x for x in old))
+
+    def append(self, v: float | int | None) -> None:
+        a = self._a
+        if v is None:
+            a.append(math.nan if a.typecode == "d" else -_LIMITS[a.typecode])
+            return
+        if a.typecode != "d":
+            if isinstance(v, float) or not -_LIMITS["q"] < v < _LIMITS["q"]:
+                self._widen("d")
+            else:
+                while not self._fits(v):
+                    self._widen(_INTS[_INTS.index(self._a.typecode) + 1])
+        self._a.append(v)
+
+    def _get(self, x):
+        if self._a.typecode == "d":
+            return None if x != x else x
+        return None if x == -_LIMITS[self._a.typecode] else x
+
+    def __len__(self) -> int:
+        return len(self._a)
+
+    def __getitem__(self, i: int) -> float | int | None:
+        return self._get(self._a[i])
+
+    def __iter__(self) -> Iterator[float | int | None]:
+        get = self._get
+        return (get(x) for x in self._a)
+
+    def tolist(self) -> list[float | int | None]:
+        return list(self)
+
+    def nbytes(self) -> int:
+        return self._a.buffer_info()[1] * self._a.itemsize
