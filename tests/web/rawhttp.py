@@ -34,11 +34,11 @@ def send_raw(port: int, data: bytes, *, timeout: float = 10.0) -> Reply:
     """Send `data` as it is on a new connection to 127.0.0.1:`port`; the response."""
     with socket.create_connection(("127.0.0.1", port), timeout=timeout) as sock:
         sock.sendall(data)
-        return read_reply(sock)
+        return read_reply(sock, data.split(b" ", 1)[0].decode("latin-1"))
 
 
-def read_reply(sock: socket.socket) -> Reply:
-    response = http.client.HTTPResponse(sock)
+def read_reply(sock: socket.socket, method: str = "GET") -> Reply:
+    response = http.client.HTTPResponse(sock, method=method)
     response.begin()
     body = b"" if response.status == 101 else response.read()
     return Reply(response.status, response.headers, body)
