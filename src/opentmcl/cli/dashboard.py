@@ -4,7 +4,8 @@
     opentmcl dashboard --to tcp://127.0.0.1:2323
     opentmcl dashboard --to sim://TMCM-6212          # a virtual module in this process, on the wall clock
 
-Open the printed URL in a browser. For modules served by `opentmcl serve`, `serve --web` gives the
+Open the printed URL in a browser. The page answers only under loopback names unless
+--allow-host NAME adds one (for a LAN; a token printed at start-up is then required). For modules served by `opentmcl serve`, `serve --web` gives the
 same page without a second process. Ctrl-C stops it. See docs/dashboard.md.
 """
 from __future__ import annotations

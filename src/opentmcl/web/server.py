@@ -18,8 +18,9 @@ WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's de
 
 
 class DashboardHandle:
-    """A running dashboard: `url` (the page to open), `dashboards` (one service per module, the
-    first also as `dashboard`), `module_url(address)`, `stop()`."""
+    """A running dashboard: `url` (the root), `open_url` (with ?token= when one is required),
+    `token`, `dashboards` (one service per module, the first also as `dashboard`),
+    `module_url(address)`, `stop()`."""
 
     def __init__(self, dashboards: list[Dashboard], server, thread: threading.Thread, pollers: list[Poller],
                  on_stop=None, token: str | None = None, allowed_hosts: tuple[str, ...] = ()):
