@@ -255,3 +255,19 @@ def test_no_host_header_is_refused(port):
         while chunk := sock.recv(4096):
             data += chunk
     assert data.startswith(b"HTTP/1.1 403") and b"Host" in data
+
+
+def test_a_request_whose_body_never_completes_does_nothing(port):
+    """A POST to program/run (manual 3.6.36 command 129) with the page's headers whose body stops
+    short of its Content-Length before the client leaves: no answer, the program does not run."""
+    downloaded(port)
+    head = (f"POST /m/1/api/program/run HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\nX-OpenTMCL: 1\r\n"
+            "Content-Type: application/json\r\nContent-Length: 100\r\n\r\n{").encode()
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as sock:
+        sock.sendall(head)
+        sock.shutdown(socket.SHUT_WR)
+        data = b""
+        while chunk := sock.recv(4096):
+            data += chunk
+    assert not data.startswith(b"HTTP/1.1 200"), data[:200]
+    assert program_state(port)["mode_name"] != "run"

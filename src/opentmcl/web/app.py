@@ -97,7 +97,8 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
     """The Starlette app for one `Dashboard` or several (one per module, distinct addresses).
 
     `allowed_hosts`: Host names accepted besides the loopback ones (the bound address, --allow-host);
-    `token`: required on every request when given; `max_body`: the largest request body in bytes."""
+    `token`: required on every request when given; `max_body`: the largest request body in bytes.
+    (Starlette's TestClient sends Host "testserver": give it base_url="http://127.0.0.1".)"""
     if isinstance(dashboards, Dashboard):
         dashboards = [dashboards]
     by_address: dict[int, Dashboard] = {}

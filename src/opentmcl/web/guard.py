@@ -29,6 +29,7 @@ TOKEN_HEADER = "x-opentmcl-token"
 SUBPROTOCOL = "opentmcl"
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
 SAFE_METHODS = ("GET", "HEAD")
+GONE = object()  # read_body(): the client disconnected
 
 
 def host_name(name: str) -> str:
@@ -91,6 +92,8 @@ class Guard:
                 return
             if scope["method"] not in SAFE_METHODS:
                 body = await self.read_body(receive)
+                if body is GONE:
+                    return  # the client left before its body was complete: nothing to act on
                 if body is None:
                     await self.refuse(scope, receive, send, 413, self.too_large())
                     return
@@ -138,13 +141,13 @@ class Guard:
         response.set_cookie(cookie_name(scope), self.token, httponly=True, samesite="strict", path="/")
         await response(scope, receive, send)
 
-    async def read_body(self, receive) -> bytes | None:
-        """The whole body, or None as soon as it passes the limit (the rest is never read)."""
+    async def read_body(self, receive) -> bytes | object | None:
+        """The whole body, None as soon as it passes the limit (the rest is never read), or GONE."""
         chunks, size = [], 0
         while True:
             message = await receive()
             if message["type"] != "http.request":
-                return b"".join(chunks)  # disconnected: the route sees an empty body
+                return GONE
             chunk = message.get("body", b"")
             size += len(chunk)
             if size > self.max_body:
