@@ -118,3 +118,21 @@ def test_allow_host_accepts_names_and_addresses():
 
     assert check_allowed_hosts(["MyBox.lan", "192.168.1.20", "fe80::1", "[fd00::2]"]) == \
         ("mybox.lan", "192.168.1.20", "fe80::1", "fd00::2")
+
+
+def test_serve_web_with_allow_host_requires_the_printed_token():
+    """`opentmcl serve --web ... --allow-host NAME` prints the dashboard URL with its token; the
+    overview (TMCM-6212 manual 3.6.36 command 136, "6212V105") needs it."""
+    proc, url, _ = start_cli(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0",
+                              "--allow-host", NAME], "dashboard http")
+    try:
+        also = next(proc.stdout)
+        parts = urllib.parse.urlsplit(url)
+        token = urllib.parse.parse_qs(parts.query)["token"][0]
+        host = f"{NAME}:{parts.port}"
+        assert request(parts.port, "GET", "/m/1/api/overview", host=host).status == 403
+        ov = get_json(parts.port, "/m/1/api/overview", host=host, headers={"X-OpenTMCL-Token": token})
+        assert ov["version"] == "6212V105"
+    finally:
+        stop_cli(proc)
+    assert proc.returncode == 0 and also.strip() == f"also at http://{NAME}:{parts.port}/?token={token}"
