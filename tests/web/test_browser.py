@@ -257,3 +257,33 @@ def test_a_rebound_name_cannot_use_the_dashboard(browser, served):
         assert served.dashboard.module.axes[0].target_position != 6666
     finally:
         page.close()
+
+
+def test_the_page_works_on_a_lan_name_with_the_token(browser):
+    """--allow-host for a LAN (docs/dashboard.md): the page opened once with the printed ?token= URL
+    keeps the token in its cookie; the console (manual 3.6.4 MVP ABS) and the live WebSocket work
+    under the allowed name, and the same name without the token is refused."""
+    import opentmcl
+    from opentmcl.web import start_dashboard
+
+    module = opentmcl.connect("sim://TMCM-6212?clock=real")
+    t = module.client.transport
+    name = "box.opentmcl.test"
+    with start_dashboard(module, "127.0.0.1", 0, vm=t.module, vm_lock=t.lock, on_stop=module.close,
+                         allow_hosts=[name]) as handle:
+        page = browser.new_page()
+        errors: list[str] = []
+        page.on("pageerror", lambda exc: errors.append(str(exc)))
+        try:
+            assert page.goto(f"http://{name}:{handle.port}/m/1/").status == 403
+            page.goto(f"http://{name}:{handle.port}/?token={handle.token}")
+            page.wait_for_selector("#axis-0")
+            assert page.url == f"http://{name}:{handle.port}/m/1/"  # the token left the address bar
+            move_from_console(page, 2400)
+            page.wait_for_function("document.getElementById('ov-connection').textContent === 'connected'",
+                                   timeout=TIMEOUT_MS)
+            assert handle.dashboard.module.axes[0].target_position == 2400
+        finally:
+            page.close()
+            page.context.clear_cookies()
+    assert not errors, f"JavaScript errors on the page: {errors}"
