@@ -13,7 +13,9 @@ CHROMIUM = os.environ.get("OPENTMCL_CHROMIUM", "/usr/bin/chromium")
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--disable-dev-shm-usage"]
+                 "--disable-dev-shm-usage",
+                 # names that resolve to loopback, as a rebound or another local site's name would
+                 "--host-resolver-rules=MAP *.opentmcl.test 127.0.0.1"]
 
 
 @pytest.fixture

@@ -14,7 +14,8 @@ def client():
     module = opentmcl.connect("sim://TMCM-6212")
     transport = module.client.transport
     dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    with TestClient(create_app(dash)) as c:
+    # The dashboard page's own requests: a loopback Host and the X-OpenTMCL header (guard.py).
+    with TestClient(create_app(dash), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
         c.dash = dash
         yield c
     module.close()
@@ -74,7 +75,7 @@ def test_program_endpoints(client):
 def test_websocket_streams_samples_and_state(client):
     client.dash.sample_fast()
     client.dash.sample_slow()
-    with client.websocket_connect("/m/1/ws") as ws:
+    with client.websocket_connect("ws://127.0.0.1/m/1/ws", subprotocols=["opentmcl"]) as ws:
         hello = ws.receive_json()
         assert hello["type"] == "hello" and hello["overview"]["module"] == "TMCM-6212"
         kinds = {ws.receive_json()["type"] for _ in range(2)}
@@ -90,10 +91,12 @@ def test_posts_must_be_json_so_other_sites_cannot_forge_them(client):
 
 
 def test_websocket_refuses_other_origins(client):
+    from starlette.testclient import WebSocketDenialResponse
     from starlette.websockets import WebSocketDisconnect
 
-    with pytest.raises(WebSocketDisconnect), \
-            client.websocket_connect("/m/1/ws", headers={"Origin": "http://evil.example"}) as ws:
+    with pytest.raises((WebSocketDisconnect, WebSocketDenialResponse)), \
+            client.websocket_connect("ws://127.0.0.1/m/1/ws", headers={"Origin": "http://evil.example"},
+                                     subprotocols=["opentmcl"]) as ws:
         ws.receive_json()
 
 

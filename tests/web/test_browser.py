@@ -162,3 +162,128 @@ def test_bus_with_two_modules_has_a_selector(browser, served_bus):
     finally:
         page.close()
     assert not errors, f"JavaScript errors on the page: {errors}"
+
+
+def test_the_page_sends_the_header_and_the_subprotocol(page, served):
+    """The page's own requests carry what the guard asks for (docs/dashboard.md "Threat model"):
+    X-OpenTMCL: 1 on a POST, and a console command (manual 3.6.4 MVP ABS) goes through."""
+    with page.expect_request("**/api/console") as info:
+        page.fill("#console-input", "MVP ABS, 0, 3200")
+        page.press("#console-input", "Enter")
+    assert info.value.headers.get("x-opentmcl") == "1"
+    page.wait_for_function("document.getElementById('console-log').textContent.includes('status 100')",
+                           timeout=TIMEOUT_MS)
+    assert served.dashboard.module.axes[0].target_position == 3200
+    page.wait_for_function("document.getElementById('ov-connection').textContent === 'connected'",
+                           timeout=TIMEOUT_MS)  # the WebSocket opened with the subprotocol
+
+
+LOOP = "    CALC LOAD, 0\nLoop:\n    CALC ADD, 1\n    JA Loop\n"
+
+
+def evil_site(dashboard: str):
+    """Another web site (its own origin, evil.opentmcl.test:PORT) whose page tries to drive the
+    dashboard: a form that POSTs to program/run, a no-cors fetch and a fetch with the header."""
+    import http.server
+    import threading
+
+    html = f"""<!doctype html><title>evil</title>
+<form id="f" method="POST" action="{dashboard}m/1/api/program/run"><input name="x" value="1"></form>
+<script>
+window.results = {{}};
+const body = JSON.stringify({{line: "MVP ABS, 0, 5555"}});
+fetch("{dashboard}m/1/api/console", {{method: "POST", mode: "no-cors", body,
+      headers: {{"Content-Type": "text/plain"}}}}).then(r => results.nocors = r.type, () => results.nocors = "error");
+fetch("{dashboard}m/1/api/console", {{method: "POST", body,
+      headers: {{"Content-Type": "application/json", "X-OpenTMCL": "1"}}}})
+  .then(r => results.cors = r.status, () => results.cors = "blocked");
+</script>""".encode()
+
+    class Handler(http.server.BaseHTTPRequestHandler):
+        def do_GET(self):
+            self.send_response(200)
+            self.send_header("Content-Type", "text/html")
+            self.send_header("Content-Length", str(len(html)))
+            self.end_headers()
+            self.wfile.write(html)
+
+        def log_message(self, *args):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    return server
+
+
+def test_a_page_on_another_origin_cannot_post(browser, served):
+    """Issue 11 problem 1: a page on another site submits a form to program/run (manual 3.6.36
+    command 129) and fetches the console with MVP ABS (3.6.4). The form gets 403, the fetches are
+    refused (the one with the header never passes the CORS preflight); the program does not run
+    and the motor's target stays."""
+    served.dashboard.download(LOOP)
+    evil = evil_site(served.url)
+    page = browser.new_page()
+    try:
+        page.goto(f"http://evil.opentmcl.test:{evil.server_address[1]}/")
+        page.wait_for_function("window.results.nocors !== undefined && window.results.cors !== undefined",
+                               timeout=TIMEOUT_MS)
+        assert page.evaluate("window.results.cors") == "blocked"
+        with page.expect_navigation() as nav:
+            page.evaluate("document.getElementById('f').submit()")
+        assert nav.value.status == 403
+        assert "Origin" in page.inner_text("body")
+        assert served.dashboard.program_state()["mode_name"] != "run"
+        assert served.dashboard.module.axes[0].target_position != 5555
+    finally:
+        page.close()
+        evil.shutdown()
+        evil.server_close()
+
+
+def test_a_rebound_name_cannot_use_the_dashboard(browser, served):
+    """Issue 11 problem 2, DNS rebinding: rebind.opentmcl.test resolves to 127.0.0.1, so a page under
+    that name is same-origin with the dashboard for the browser. The page, the global parameters
+    (manual 3.6.8 GGP) and a console MVP ABS (3.6.4) are all refused with 403."""
+    port = served.port
+    page = browser.new_page()
+    try:
+        response = page.goto(f"http://rebind.opentmcl.test:{port}/m/1/")
+        assert response.status == 403 and "Host" in page.inner_text("body")
+        statuses = page.evaluate("""async () => [
+            (await fetch('/m/1/api/params/global')).status,
+            (await fetch('/m/1/api/console', {method: 'POST', body: JSON.stringify({line: 'MVP ABS, 0, 6666'}),
+                          headers: {'Content-Type': 'application/json', 'X-OpenTMCL': '1'}})).status]""")
+        assert statuses == [403, 403]
+        assert served.dashboard.module.axes[0].target_position != 6666
+    finally:
+        page.close()
+
+
+def test_the_page_works_on_a_lan_name_with_the_token(browser):
+    """--allow-host for a LAN (docs/dashboard.md): the page opened once with the printed ?token= URL
+    keeps the token in its cookie; the console (manual 3.6.4 MVP ABS) and the live WebSocket work
+    under the allowed name, and the same name without the token is refused."""
+    import opentmcl
+    from opentmcl.web import start_dashboard
+
+    module = opentmcl.connect("sim://TMCM-6212?clock=real")
+    t = module.client.transport
+    name = "box.opentmcl.test"
+    with start_dashboard(module, "127.0.0.1", 0, vm=t.module, vm_lock=t.lock, on_stop=module.close,
+                         allow_hosts=[name]) as handle:
+        page = browser.new_page()
+        errors: list[str] = []
+        page.on("pageerror", lambda exc: errors.append(str(exc)))
+        try:
+            assert page.goto(f"http://{name}:{handle.port}/m/1/").status == 403
+            page.goto(f"http://{name}:{handle.port}/?token={handle.token}")
+            page.wait_for_selector("#axis-0")
+            assert page.url == f"http://{name}:{handle.port}/m/1/"  # the token left the address bar
+            move_from_console(page, 2400)
+            page.wait_for_function("document.getElementById('ov-connection').textContent === 'connected'",
+                                   timeout=TIMEOUT_MS)
+            assert handle.dashboard.module.axes[0].target_position == 2400
+        finally:
+            page.close()
+            page.context.clear_cookies()
+    assert not errors, f"JavaScript errors on the page: {errors}"

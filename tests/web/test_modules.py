@@ -19,7 +19,8 @@ def client():
     clock = FakeClock()
     bus = ModuleBus([VirtualModule("TMCM-6212", address=1), VirtualModule("PD86-1180", address=2)], clock=clock)
     dashboards, close = bus_dashboards(bus)
-    with TestClient(create_app(dashboards)) as c:
+    # The page's own requests: a loopback Host and the X-OpenTMCL header (web/guard.py).
+    with TestClient(create_app(dashboards), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
         c.clock = clock
         c.dashboards = dashboards
         yield c
@@ -62,7 +63,7 @@ def test_console_move_reaches_only_the_addressed_module(client):
 def test_websocket_of_each_module(client):
     """Manual 3.6.36 / 4.6.39 command 136: each module's live connection greets with its own overview."""
     for address, name in ((1, "TMCM-6212"), (2, "PD86-1180")):
-        with client.websocket_connect(f"/m/{address}/ws") as ws:
+        with client.websocket_connect(f"ws://127.0.0.1/m/{address}/ws", subprotocols=["opentmcl"]) as ws:
             hello = ws.receive_json()
             assert hello["type"] == "hello" and hello["overview"]["module"] == name
 

@@ -4,7 +4,8 @@
     opentmcl dashboard --to tcp://127.0.0.1:2323
     opentmcl dashboard --to sim://TMCM-6212          # a virtual module in this process, on the wall clock
 
-Open the printed URL in a browser. For modules served by `opentmcl serve`, `serve --web` gives the
+Open the printed URL in a browser. The page answers only under loopback names unless
+--allow-host NAME adds one (for a LAN; a token printed at start-up is then required). For modules served by `opentmcl serve`, `serve --web` gives the
 same page without a second process. Ctrl-C stops it. See docs/dashboard.md.
 """
 from __future__ import annotations
@@ -29,7 +30,35 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for each reply (default 2)")
     p.add_argument("--web", default=DEFAULT_WEB, metavar="HOST:PORT",
                    help=f"where to serve the page (default {DEFAULT_WEB}; loopback unless you say otherwise)")
+    add_allow_host(p)
     p.set_defaults(func=run)
+
+
+def add_allow_host(p: argparse.ArgumentParser) -> None:
+    """--allow-host, shared with `opentmcl serve --web`."""
+    p.add_argument("--allow-host", action="append", default=[], metavar="NAME",
+                   help="also accept the dashboard under this host name or address (repeat for several; "
+                        "for a LAN: a token printed at start-up is then required, see docs/dashboard.md)")
+
+
+def allowed_hosts(names: list[str]) -> tuple[str, ...]:
+    from ..web.server import check_allowed_hosts
+
+    try:
+        return check_allowed_hosts(names)
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
+
+
+def print_urls(handle, prefix: str, suffix: str = "") -> None:
+    """The URL(s) to open; with a token, say that it is needed."""
+    first, *others = handle.urls_to_open()
+    print(f"{prefix}{first}{suffix}", flush=True)
+    for url in others:
+        print(f"    also at {url}", flush=True)
+    if handle.token:
+        print("    (the token is required: open one of these URLs once, scripts send the header "
+              "X-OpenTMCL-Token)", flush=True)
 
 
 def sim_url_real_time(url: str) -> str:
@@ -69,6 +98,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.timeout > 0:
         raise CliError(f"--timeout must be a number of seconds > 0, got {args.timeout:g}")
     host, port = parse_web(args.web)
+    hosts = allowed_hosts(args.allow_host)
     try:
         from ..web.server import DashboardStartError, start_dashboard
     except ImportError as exc:
@@ -83,11 +113,12 @@ def run(args: argparse.Namespace) -> int:
     vm = transport.module if isinstance(transport, InProcessTransport) else None
     lock = transport.lock if vm is not None else None
     try:
-        handle = start_dashboard(module, host, port, vm=vm, vm_lock=lock, url=args.url, on_stop=module.close)
+        handle = start_dashboard(module, host, port, vm=vm, vm_lock=lock, url=args.url, on_stop=module.close,
+                                 allow_hosts=hosts)
     except DashboardStartError as exc:
         module.close()
         raise CliError(str(exc)) from None
-    print(f"OpenTMCL dashboard for {module.profile.name} at {args.url}: {handle.url}", flush=True)
+    print_urls(handle, f"OpenTMCL dashboard for {module.profile.name} at {args.url}: ")
     print("Press Ctrl-C to stop.", flush=True)
     try:
         wait_for_signal()

@@ -51,6 +51,9 @@ def register(subparsers) -> None:
     p.add_argument("--web", metavar="HOST:PORT",
                    help="also serve the browser dashboard of every module, e.g. 127.0.0.1:8080 "
                         "(each module at /m/ADDRESS/, a selector on the page)")
+    from .dashboard import add_allow_host
+
+    add_allow_host(p)
     p.set_defaults(func=run)
 
 
@@ -229,6 +232,8 @@ def describe(server) -> list[str]:
 
 
 def run(args) -> int:
+    if getattr(args, "allow_host", None) and not getattr(args, "web", None):
+        raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
     try:
         server = build_server(args)
         server.start()
@@ -251,15 +256,16 @@ def run(args) -> int:
     web = None
     try:
         if getattr(args, "web", None):
-            web = _start_web(server, args.web)
+            web = _start_web(server, args.web, getattr(args, "allow_host", []))
         print("OpenTMCL serving in real time:", flush=True)
         for line in describe(server):
             print(f"  {line}", flush=True)
         if web is not None:
-            if len(web.dashboards) == 1:
-                print(f"  dashboard {web.url}", flush=True)
-            else:
-                print(f"  dashboard {web.url} ({len(web.dashboards)} modules, choose on the page):", flush=True)
+            from .dashboard import print_urls
+
+            many = len(web.dashboards) > 1
+            print_urls(web, "  dashboard ", f" ({len(web.dashboards)} modules, choose on the page):" if many else "")
+            if many:
                 for d in web.dashboards:
                     print(f"    {d.profile.name} at address {d.module.address}: {web.module_url(d.module.address)}",
                           flush=True)
@@ -276,14 +282,17 @@ def run(args) -> int:
     return 0
 
 
-def _start_web(server, spec: str):
-    """The dashboard (opentmcl.web) for every served module on HOST:PORT."""
+def _start_web(server, spec: str, allow_host: list[str]):
+    """The dashboard (opentmcl.web) for every served module on HOST:PORT (--allow-host names too)."""
+    from .dashboard import allowed_hosts
+
     host, port = parse_hostport(spec)
+    hosts = allowed_hosts(allow_host)
     try:
         from ..web.server import DashboardStartError, start_dashboard_for_bus
     except ImportError as exc:
         raise CliError(f"--web needs starlette, uvicorn and websockets (dependencies of opentmcl; reinstall it): {exc}") from None
     try:
-        return start_dashboard_for_bus(server.bus, host or "127.0.0.1", port)
+        return start_dashboard_for_bus(server.bus, host or "127.0.0.1", port, allow_hosts=hosts)
     except DashboardStartError as exc:
         raise CliError(str(exc)) from None

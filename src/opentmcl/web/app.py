@@ -17,6 +17,8 @@ so one page serves every module). An unknown address is a 404 with {"error": ...
     POST /api/io/output, /api/io/force
     POST /api/program/{assemble,download,run,stop,step,reset,breakpoints}; GET /api/program
     WS   /ws                       {"type": "samples"} 25 times a second, {"type": "state"} on change
+
+Every request passes `guard.Guard` first (Host allow-list, token, Origin, X-OpenTMCL header, body limit).
 """
 from __future__ import annotations
 
@@ -29,12 +31,14 @@ from importlib import resources
 
 from starlette.applications import Starlette
 from starlette.concurrency import run_in_threadpool
+from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, RedirectResponse, Response
 from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from .guard import MAX_BODY, SUBPROTOCOL, Guard
 from .service import FAST_HZ, Dashboard, DashboardError
 
 log = logging.getLogger("opentmcl.web")
@@ -62,6 +66,11 @@ async def _body(request: Request) -> dict:
     return data
 
 
+def _one_line(text: str, limit: int = 200) -> str:
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
 def _int(data: dict, key: str, *, optional: bool = False) -> int | None:
     value = data.get(key)
     if value is None and optional:
@@ -83,8 +92,13 @@ def _str(data: dict, key: str) -> str:
     return value
 
 
-def create_app(dashboards: Dashboard | Sequence[Dashboard]) -> Starlette:
-    """The Starlette app for one `Dashboard` or several (one per module, distinct addresses)."""
+def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Sequence[str] = (),
+               token: str | None = None, max_body: int = MAX_BODY) -> Starlette:
+    """The Starlette app for one `Dashboard` or several (one per module, distinct addresses).
+
+    `allowed_hosts`: Host names accepted besides the loopback ones (the bound address, --allow-host);
+    `token`: required on every request when given; `max_body`: the largest request body in bytes.
+    (Starlette's TestClient sends Host "testserver": give it base_url="http://127.0.0.1".)"""
     if isinstance(dashboards, Dashboard):
         dashboards = [dashboards]
     by_address: dict[int, Dashboard] = {}
@@ -117,7 +131,8 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard]) -> Starlette:
         Route("/m/{address}/{rest:path}", unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
         Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
     ]
-    return Starlette(routes=routes)
+    guard = Middleware(Guard, allowed_hosts=allowed_hosts, token=token, max_body=max_body)
+    return Starlette(routes=routes, middleware=[guard])
 
 
 def _module_routes(d: Dashboard) -> list:
@@ -129,6 +144,10 @@ def _module_routes(d: Dashboard) -> list:
                 result = await handler(request)
             except (BadRequest, DashboardError) as exc:
                 return JSONResponse({"error": str(exc)}, status_code=400)
+            except ValueError as exc:  # e.g. a number literal too long to convert: still the input's fault
+                return JSONResponse({"error": _one_line(f"bad request: {exc}")}, status_code=400)
+            except RecursionError:
+                return JSONResponse({"error": "bad request: input nested too deeply"}, status_code=400)
             return JSONResponse(result if result is not None else {"ok": True})
         return endpoint
 
@@ -208,12 +227,7 @@ def _module_routes(d: Dashboard) -> list:
                 [s.line if s is not None and s.file == "<editor>" else None for s in d.program.source]}
 
     async def ws(websocket: WebSocket) -> None:
-        origin = websocket.headers.get("origin")
-        host = websocket.headers.get("host", "")
-        if origin is not None and origin.split("://", 1)[-1] != host:
-            await websocket.close(1008)  # another site's page: no live data for it
-            return
-        await websocket.accept()
+        await websocket.accept(subprotocol=SUBPROTOCOL)  # Guard checked Origin and the subprotocol
         gone = asyncio.Event()
 
         async def reader() -> None:

@@ -14,14 +14,19 @@ import time
 
 from .service import Dashboard, Poller
 
+WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's default is 16 MiB
+
 
 class DashboardHandle:
-    """A running dashboard: `url` (the page to open), `dashboards` (one service per module, the
-    first also as `dashboard`), `module_url(address)`, `stop()`."""
+    """A running dashboard: `url` (the root), `open_url` (with ?token= when one is required),
+    `token`, `dashboards` (one service per module, the first also as `dashboard`),
+    `module_url(address)`, `stop()`."""
 
     def __init__(self, dashboards: list[Dashboard], server, thread: threading.Thread, pollers: list[Poller],
-                 on_stop=None):
+                 on_stop=None, token: str | None = None, allowed_hosts: tuple[str, ...] = ()):
         self.dashboards = list(dashboards)
+        self.token = token  # required on every request when set (LAN use); None on loopback
+        self.allowed_hosts = tuple(allowed_hosts)
         self._server = server
         self._thread = thread
         self._pollers = list(pollers)
@@ -44,6 +49,17 @@ class DashboardHandle:
         """The root: it redirects to the first module's page, which offers the others."""
         host = f"[{self.host}]" if ":" in self.host else self.host
         return f"http://{host}:{self.port}/"
+
+    @property
+    def open_url(self) -> str:
+        """The URL to open in a browser: `url`, with ?token=... when a token is required."""
+        return self.url + (f"?token={self.token}" if self.token else "")
+
+    def urls_to_open(self) -> list[str]:
+        """`open_url` and the same page under every --allow-host name."""
+        query = f"?token={self.token}" if self.token else ""
+        names = [f"[{h}]" if ":" in h and not h.startswith("[") else h for h in self.allowed_hosts]
+        return [self.open_url] + [f"http://{h}:{self.port}/{query}" for h in names]
 
     def module_url(self, address: int) -> str:
         """The page of the module at `address`."""
@@ -82,26 +98,49 @@ class DashboardStartError(OSError):
 
 
 def warn_if_exposed(host: str, err=None) -> None:
-    """Anyone who can open the page can move the motors: say so when it is not loopback-only."""
+    """Anyone who has the token can move the motors: say so when it is not loopback-only."""
     import sys
 
     from ..server.tcp import is_loopback
 
     if not is_loopback(host):
         print(f"opentmcl: warning: the dashboard on {host} is reachable from the network; "
-              "anyone who can open it can move the motors", file=err or sys.stderr)
+              "anyone who has its token can move the motors", file=err or sys.stderr)
+
+
+def check_allowed_hosts(names) -> tuple[str, ...]:
+    """--allow-host values: host names or IP addresses (IPv6 with or without brackets), no scheme,
+    port or path; ValueError with a one-line message otherwise."""
+    import ipaddress
+    import re
+
+    out = []
+    for name in names:
+        text = str(name).strip().lower()
+        bare = text[1:-1] if text.startswith("[") and text.endswith("]") else text
+        try:
+            ok = ipaddress.ip_address(bare).version == 6 or bare == text
+        except ValueError:
+            ok = bare == text and re.fullmatch(r"[a-z0-9_]([a-z0-9_.-]*[a-z0-9_])?\.?", text) is not None
+        if not ok:
+            raise ValueError(f"--allow-host {name!r}: give a host name or IP address, without scheme or port")
+        out.append(bare)
+    return tuple(out)
 
 
 def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=None, vm_lock=None,
-                    url: str = "", on_stop=None, poll: bool = True) -> DashboardHandle:
+                    url: str = "", on_stop=None, poll: bool = True, allow_hosts=(),
+                    token: str | None = None) -> DashboardHandle:
     """Serve the dashboard for a host `Module` at http://host:port/m/ADDRESS/ (the root redirects
     there) from a daemon thread.
 
     `vm`/`vm_lock`: the in-process VirtualModule behind `module` and the lock that guards it, for
     the virtual-only features (forcing inputs). `port` 0 picks a free port (see `handle.port`).
+    `allow_hosts` and `token`: see `serve_dashboards`.
     """
     dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
-    return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll)
+    return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll, allow_hosts=allow_hosts,
+                            token=token)
 
 
 def _bind(host: str, port: int):
@@ -125,17 +164,27 @@ def _bind(host: str, port: int):
 
 
 def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port: int = 8080, *,
-                     on_stop=None, poll: bool = True) -> DashboardHandle:
-    """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each."""
+                     on_stop=None, poll: bool = True, allow_hosts=(), token: str | None = None) -> DashboardHandle:
+    """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each.
+
+    Requests must name a loopback host, `host` or one of `allow_hosts` (guard.py). A token is
+    required when `allow_hosts` is given or `host` is not loopback (a new random one unless `token`
+    is given; `handle.token`, `handle.open_url`); `token` also forces one on loopback.
+    """
     import uvicorn
 
+    from ..server.tcp import is_loopback
     from .app import create_app
+    from .guard import new_token
 
-    app = create_app(dashboards)
+    allow_hosts = check_allowed_hosts(allow_hosts)
+    if token is None and (allow_hosts or not is_loopback(host)):
+        token = new_token()
+    app = create_app(dashboards, allowed_hosts=(host, *allow_hosts), token=token)
     warn_if_exposed(host)
     sock = _bind(host, port)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
-                            ws=_ws_implementation(), access_log=False)
+                            ws=_ws_implementation(), access_log=False, ws_max_size=WS_MAX_SIZE)
     server = uvicorn.Server(config)
     server.install_signal_handlers = lambda: None  # older uvicorn; the caller owns the signals
     failure: list[BaseException] = []
@@ -162,7 +211,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     if poll:
         for poller in pollers:
             poller.start()
-    return DashboardHandle(dashboards, server, thread, pollers, on_stop)
+    return DashboardHandle(dashboards, server, thread, pollers, on_stop, token, allow_hosts)
 
 
 def bus_dashboards(bus, *, address: int | None = None, timeout: float = 2.0) -> tuple[list[Dashboard], object]:
@@ -199,13 +248,13 @@ def bus_dashboards(bus, *, address: int | None = None, timeout: float = 2.0) -> 
 
 
 def start_dashboard_for_bus(bus, host: str = "127.0.0.1", port: int = 8080, *, address: int | None = None,
-                            timeout: float = 2.0) -> DashboardHandle:
+                            timeout: float = 2.0, allow_hosts=(), token: str | None = None) -> DashboardHandle:
     """Dashboard for every module of a running server's `ModuleBus` (or only the one at `address`),
     each at /m/ADDRESS/. Requests go through the bus like any client's; the bus lock guards the
     in-process modules."""
     dashboards, close = bus_dashboards(bus, address=address, timeout=timeout)
     try:
-        return serve_dashboards(dashboards, host, port, on_stop=close)
+        return serve_dashboards(dashboards, host, port, on_stop=close, allow_hosts=allow_hosts, token=token)
     except BaseException:
         close()
         raise

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import re
 import threading
 import time
 from collections import deque
@@ -33,6 +34,34 @@ CARD_PARAMS = {"target_position": 0, "position": 1, "velocity": 3, "target_reach
 STAP, RSAP, STGP, RSGP = 7, 8, 11, 12
 USER_BANK = 2
 VARIABLE_COMMANDS = {9, 10, 11, 12, 35}  # SGP, GGP, STGP, RSGP, AGP with bank 2 name a user variable
+
+
+def _short(text: str, limit: int = 200) -> str:
+    """One line of at most `limit` characters (an error must not echo a megabyte of input)."""
+    text = " ".join(text.split())
+    return text if len(text) <= limit else text[:limit] + "..."
+
+
+_INCLUDE_RE = re.compile(r"\s*#\s*include\b(.*)", re.IGNORECASE)
+
+
+def _file_include(source: str) -> int | None:
+    """The first line whose #include names a path (a separator, "..", "~") instead of a bundled
+    file: the page must not read files on the dashboard's machine. Names are read as the
+    assembler reads them ("name", <name> or up to a // comment)."""
+    for number, line in enumerate(source.removeprefix("\ufeff").splitlines(), 1):
+        m = _INCLUDE_RE.match(line)
+        if not m:
+            continue
+        arg = m.group(1).strip()
+        if arg[:1] in ('"', "<"):
+            end = arg.find('"' if arg[0] == '"' else ">", 1)
+            name = arg[1:end] if end > 0 else arg[1:]
+        else:
+            name = arg.split("//")[0]
+        if any(mark in name for mark in ("/", "\\", "..", "~", "\0")):
+            return number
+    return None
 
 
 class DashboardError(ValueError):
@@ -232,7 +261,9 @@ class Dashboard:
         try:
             command, type_, motor, value = parse(text)
         except CliError as exc:
-            raise DashboardError(str(exc)) from None
+            raise DashboardError(_short(str(exc))) from None
+        except ValueError as exc:  # a number the parser cannot convert (e.g. 5000 digits)
+            raise DashboardError(_short(f"{_short(text, 40)}: {exc}")) from None
         out = {"line": text, "request": [command, type_, motor, value]}
         try:
             with self.lock:
@@ -244,7 +275,7 @@ class Dashboard:
             out.update(ok=False, status=None, text=str(exc))
             return out
         except ValueError as exc:  # e.g. "300, 0, 0, 0": command must be 0..255
-            raise DashboardError(f"{text!r}: {exc}") from None
+            raise DashboardError(_short(f"{_short(text, 40)!r}: {exc}")) from None
         if reply is None:
             out.update(ok=True, status=None, text="(no reply)")
         elif isinstance(reply, VersionReply):
@@ -302,6 +333,10 @@ class Dashboard:
         """Assemble for this module; errors come back with line and column for inline display."""
         from ..lang import AsmError, assemble
 
+        where = _file_include(source)
+        if where is not None:
+            return {"ok": False, "errors": [{"line": where, "column": 1, "message":
+                    "the dashboard includes only the bundled files (#include <tmcm6212.inc>), not paths"}]}
         try:
             prog = assemble(source, filename="<editor>", module=self.profile.name)
         except AsmError as exc:

@@ -12,9 +12,11 @@ const el = (tag, attrs = {}, ...kids) => {
   return e;
 };
 
+// Every POST carries X-OpenTMCL: 1, a header a cross-site form cannot send (docs/dashboard.md).
 async function api(path, body) {
   const opts = body === undefined ? {} :
-    {method: "POST", headers: {"Content-Type": "application/json"}, body: JSON.stringify(body)};
+    {method: "POST", headers: {"Content-Type": "application/json", "X-OpenTMCL": "1"},
+     body: JSON.stringify(body)};
   const r = await fetch(path, opts);
   let data = {};
   try { data = await r.json(); } catch (_) { /* not JSON */ }
@@ -103,7 +105,7 @@ function onState(st) {
 function connect() {
   const url = new URL("ws", location.href);
   url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
-  const ws = new WebSocket(url);
+  const ws = new WebSocket(url, "opentmcl");  // the server refuses an upgrade without it
   ws.onopen = () => { D.wsOpen = true; setConnection(); };
   ws.onclose = () => { D.wsOpen = false; setConnection(); setTimeout(connect, 1000); };
   ws.onmessage = ev => {
