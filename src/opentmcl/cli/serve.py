@@ -96,10 +96,13 @@ def assign_addresses(count: int, given: list[int]) -> list[int]:
         while candidate in out:
             candidate += 1
         out.append(candidate)
-    if len(set(out)) != len(out):
-        raise CliError(f"module addresses must be distinct on one bus, got {out}")
-    if max(out) > 255:
+    from ..modules.addresses import address_error
+
+    if max(out) > 255 and len(set(out)) == len(out):
         raise CliError("too many modules for the address range 1..255")
+    problem = address_error(out)
+    if problem:
+        raise CliError(problem)
     return out
 
 

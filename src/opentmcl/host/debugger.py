@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from ..protocol.opcodes import format_instruction
-from .errors import TmclStatusError
+from .errors import TmclStatusError, TmclValueError, check_timeout
 from .loader import MODES, AppStatus, Loader
 
 INSTRUCTION_SECONDS = 0.0001  # one TMCL instruction of the virtual modules (100 µs)
@@ -32,7 +32,7 @@ FLAG_NAMES = ((0x100, "ZE"), (0x200, "EQ"), (0x400, "GT"), (0x800, "LT"),
               (1, "ETO"), (2, "EAL"), (4, "EDV"), (8, "EPO"), (16, "ESD"))
 
 
-class DebugError(ValueError):
+class DebugError(TmclValueError):
     """A debugger command the user got wrong (unknown label, bad watch expression, ...)."""
 
 
@@ -211,6 +211,8 @@ class Debugger:
         """Continue: to the next breakpoint by stepping, or freely (129) until the program stops
         (`on_start` is called once the program runs freely). When `interrupted()` turns true
         the program is stopped (128) and its status returned."""
+        if max_seconds is not None:
+            check_timeout(max_seconds, "max_seconds")
         if self.breakpoints:
             return self.run_to(self.breakpoints)
         self.loader.run()

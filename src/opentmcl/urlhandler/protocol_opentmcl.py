@@ -31,6 +31,7 @@ import urllib.parse
 import serial
 from serial.serialutil import PortNotOpenError, SerialException, Timeout
 
+from ..modules.addresses import address_error
 from ..server import vmapi
 from ..server.bus import ModuleBus
 from ..server.framer import DEFAULT_GAP
@@ -60,12 +61,10 @@ def parse_url(url: str) -> dict:
                 raise ValueError(f"bad module address {addr!r} in {url!r}") from None
         else:
             address = 1 + i
-        if not 1 <= address <= 255:
-            raise ValueError(f"module address {address} out of range 1..255")
         modules.append((name.strip(), address))
-    addresses = [a for _, a in modules]
-    if len(set(addresses)) != len(addresses):
-        raise ValueError(f"module addresses must be distinct on one bus: {addresses}")
+    problem = address_error([a for _, a in modules])
+    if problem:
+        raise ValueError(problem)
     options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False}
     for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
         if key == "eeprom":
