@@ -12,17 +12,19 @@ import sys
 import pytest
 
 import opentmcl
-from opentmcl.host import Client, units
+from opentmcl.host import Client, profile_for_version, units
 from opentmcl.host.errors import (
     AxisNumberError,
     TmclConnectionError,
     TmclError,
     TmclTypeError,
     TmclValueError,
+    UnknownAttributeError,
     UnknownParameterError,
 )
 from opentmcl.host.loader import Loader, LoaderError
 from opentmcl.host.transports.inprocess import InProcessTransport, RealClock, VirtualClock
+from opentmcl.host.transports.serial import SerialTransport
 from opentmcl.host.transports.tcp import TcpTransport
 
 
@@ -162,17 +164,43 @@ def test_units_raise_typed_errors():
 
 
 def test_loader_and_debugger_arguments(m):
-    from opentmcl.host.debugger import DebugError, Debugger
+    from opentmcl.host.debugger import DebugError, Debugger, parse_watch
 
     refused(lambda: Loader(object()), TmclTypeError, TypeError)
     refused(lambda: Loader(m, address=256), TmclValueError, ValueError)
-    with pytest.raises(LoaderError):
-        Loader(m).download([(1, 2, 3, "x")])
-    with pytest.raises(LoaderError):
-        Loader(m).download(5)
+    refused(lambda: Loader(m).read(0, "2"), TmclTypeError, TypeError)
+    refused(lambda: Loader(m).read_one("0"), TmclTypeError, TypeError)
+    for program in ([(1, 2, 3, "x")], 5, b"\x01\x02\x03"):  # a binary image is 8-byte records
+        with pytest.raises(LoaderError):
+            Loader(m).download(program)
     debugger = Debugger(Loader(m))
     refused(lambda: debugger.address("no_label"), DebugError, ValueError)
+    refused(lambda: debugger.address(5), TmclTypeError, TypeError)
+    refused(lambda: debugger.step("1"), TmclTypeError, TypeError)
+    refused(lambda: debugger.run_to({1}, max_steps="9"), TmclTypeError, TypeError)
     refused(lambda: debugger.cont(max_seconds=math.nan), TmclValueError, ValueError)
+    refused(lambda: parse_watch("var256"), DebugError, ValueError)  # user variables are bytes (3.1)
+    refused(lambda: parse_watch(5), TmclTypeError, TypeError)
+
+
+def test_attribute_access_to_parameters(m):
+    """``axis.params.NAME``: an unknown name is an AttributeError (hasattr works) and a TmclError."""
+    assert m.axes[0].params.actual_position == 0               # GAP 1, 0 (manual 3.6.6)
+    refused(lambda: m.axes[0].params.no_such_parameter, UnknownAttributeError, AttributeError)
+    refused(lambda: m.globals.no_such_parameter, UnknownAttributeError, AttributeError)
+    assert not hasattr(m.axes[0].params, "no_such_parameter")
+    refused(lambda: setattr(m.axes[0].params, "max_positioning_speed", "fast"), TmclTypeError, TypeError)
+
+
+def test_constructors_and_transports(m):
+    refused(lambda: Client(None), TmclTypeError, TypeError)
+    refused(lambda: Client(m.client.transport, address="1"), TmclTypeError, TypeError)
+    refused(lambda: Client(m.client.transport, host_address=256), TmclValueError, ValueError)
+    refused(lambda: InProcessTransport([]), TmclValueError, ValueError)
+    refused(lambda: InProcessTransport(m.client.transport.modules, clock="wall"), TmclValueError, ValueError)
+    refused(lambda: SerialTransport(None), TmclTypeError, TypeError)
+    refused(lambda: profile_for_version(6212), TmclTypeError, TypeError)
+    refused(lambda: m.get_global(66, bank="0"), TmclTypeError, TypeError)
 
 
 SERVE_DUPLICATE = "module addresses must be distinct on one bus, got [1, 1]"

@@ -22,6 +22,7 @@ from .errors import (
     TmclTimeout,
     TmclTypeError,
     TmclValueError,
+    UnknownAttributeError,
     UnknownParameterError,
 )
 from .module import Axis, Module, profile_for_version
@@ -30,6 +31,6 @@ from .transport import Transport
 __all__ = [
     "SCHEMES", "Axis", "AxisNumberError", "Client", "Module", "TmclArgumentError", "TmclConnectionError",
     "TmclError", "TmclAddressError", "TmclProtocolError", "TmclStatusError", "TmclTimeout", "TmclTypeError",
-    "TmclValueError", "Transport", "UnknownParameterError", "VersionReply", "connect",
+    "TmclValueError", "Transport", "UnknownAttributeError", "UnknownParameterError", "VersionReply", "connect",
     "open_bus", "open_transport", "profile_for_version",
 ]

@@ -20,6 +20,7 @@ from .errors import (
     TmclProtocolError,
     TmclStatusError,
     TmclTimeout,
+    TmclTypeError,
     TmclValueError,
     check_int,
     check_seconds,
@@ -90,6 +91,8 @@ class Client:
 
     def __init__(self, transport: Transport, *, address: int = 1, host_address: int = 2,
                  timeout: float = 5.0):
+        if not isinstance(transport, Transport):
+            raise TmclTypeError(f"transport must be a Transport, got {type(transport).__name__}")
         self.transport = transport
         self.address = _check_byte("address", address)
         self.host_address = _check_byte("host_address", host_address)

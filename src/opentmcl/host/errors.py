@@ -89,6 +89,11 @@ class UnknownParameterError(TmclArgumentError, KeyError):
         return str(self.args[0]) if self.args else ""
 
 
+class UnknownAttributeError(UnknownParameterError, AttributeError):
+    """``axis.params.NAME`` for a name the profile does not define (an AttributeError too, so that
+    hasattr() and getattr() with a default work)."""
+
+
 class AxisNumberError(UnknownParameterError, IndexError):
     """An axis number the module does not have (``module.axes[6]`` on a six-axis module)."""
 

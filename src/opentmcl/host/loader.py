@@ -20,10 +20,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..lang.binfile import Instruction, decode
+from ..lang.binfile import BinFileError, Instruction, decode
 from ..protocol.frame import Reply, to_int32
 from .client import Client, check_address
-from .errors import TmclError, TmclStatusError, TmclTypeError, check_timeout
+from .errors import TmclError, TmclStatusError, TmclTypeError, check_int, check_timeout
 
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
@@ -66,7 +66,10 @@ class AppStatus:
 def instructions_of(program) -> list[Instruction]:
     """The instructions of a Program, a binary image or a sequence of 4-tuples."""
     if isinstance(program, (bytes, bytearray, memoryview)):
-        return decode(bytes(program))
+        try:
+            return decode(bytes(program))
+        except BinFileError as exc:
+            raise LoaderError(f"not a TMCL binary image: {exc}") from None
     items = getattr(program, "instructions", program)
     out = []
     try:
@@ -131,11 +134,13 @@ class Loader:
 
     def read(self, start: int, count: int) -> list[Instruction]:
         """`count` instructions of program memory from `start` (command 134)."""
+        check_int(start, "start")
+        check_int(count, "count")
         return [self.read_one(start + i) for i in range(count)]
 
     def read_one(self, address: int) -> Instruction:
         """One program memory location (command 134, special reply)."""
-        reply = self.client.request(READ_PROGRAM_MEMORY, 0, 0, to_int32(address), address=self.address,
+        reply = self.client.request(READ_PROGRAM_MEMORY, 0, 0, to_int32(check_int(address, "address")), address=self.address,
                                     timeout=self.timeout)
         return Instruction(reply.command, reply.type, reply.motor, reply.value)
 

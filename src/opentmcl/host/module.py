@@ -30,6 +30,7 @@ from .errors import (
     TmclError,
     TmclTypeError,
     TmclValueError,
+    UnknownAttributeError,
     UnknownParameterError,
     check_int,
     check_timeout,
@@ -88,6 +89,8 @@ def profile_for_version(version: str) -> ModuleProfile:
     The string is the module number, "V" and the version digits (e.g. "6212V105", PD86-1180 manual
     4.6.39 "1180V1.30"); the module number before the "V" selects the profile.
     """
+    if not isinstance(version, str):
+        raise TmclTypeError(f"firmware version must be a string, got {version!r}")
     kind = version.strip().upper().partition("V")[0]
     exact = None
     for name in module_names():
@@ -116,13 +119,13 @@ class _Params:
         try:
             return self._get(name)
         except UnknownParameterError as exc:
-            raise AttributeError(str(exc)) from None
+            raise UnknownAttributeError(str(exc)) from None
 
     def __setattr__(self, name: str, value: int) -> None:
         try:
             self._set(name, value)
         except UnknownParameterError as exc:
-            raise AttributeError(str(exc)) from None
+            raise UnknownAttributeError(str(exc)) from None
 
     def __dir__(self) -> list[str]:
         return sorted(self._names())
@@ -416,6 +419,8 @@ class Module:
 
     def _gp(self, name: str | int, bank: int | None) -> tuple[int, int]:
         """(number, bank): a name implies its bank; a number goes to `bank` (default 0) unchanged."""
+        if bank is not None:
+            check_int(bank, "bank")
         number = _raw_number("global parameter", name)
         if number is not None:
             return number, _raw_number("bank", 0 if bank is None else bank)
