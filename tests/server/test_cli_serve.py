@@ -321,8 +321,8 @@ def test_idle_clients_are_dropped_so_a_fifth_client_is_served(serve):
     """Issue 11 problem 3: four connections that send nothing held every slot of the default
     `--max-clients 4` for ever. With `--idle-timeout` they are dropped and a fifth client gets its
     reply to the manual 3.6.8 example (GGP 66, 0 -> 02 01 64 0A 00 00 00 01 72); the refusal and
-    every drop are logged on stderr."""
-    p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "1.5")
+    every drop are logged on stderr. (Old code: no --idle-timeout, the four held on for ever.)"""
+    p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "3")
     address = p.tcp_address()
     idle = [socket.create_connection(address, timeout=5) for _ in range(4)]
     try:
@@ -330,7 +330,7 @@ def test_idle_clients_are_dropped_so_a_fifth_client_is_served(serve):
             s.sendall(GGP_66)
             assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
         with socket.create_connection(address, timeout=5) as fifth:
-            assert wait_eof(fifth, 1.0)  # refused while all four slots are held (< the idle timeout)
+            assert wait_eof(fifth, 30)  # closed; the log below tells refused from dropped
         assert all(wait_eof(s, 30) for s in idle)
         with socket.create_connection(address, timeout=5) as fifth:
             fifth.sendall(GGP_66)
@@ -340,20 +340,20 @@ def test_idle_clients_are_dropped_so_a_fifth_client_is_served(serve):
             s.close()
     code, _, err = p.stop()
     assert code == 0
-    lines = err.splitlines()
+    lines = err.splitlines()  # the fifth was refused, not accepted and dropped as idle:
     refused = [line for line in lines if "refused" in line]
     assert len(refused) == 1 and re.match(r"opentmcl serve: TCP client 127\.0\.0\.1:\d+ refused: 4 clients", refused[0])
-    assert sum("dropped: nothing received for 1.5 s" in line for line in lines) == 4
+    assert sum("dropped: nothing received for 3 s" in line for line in lines) == 4
 
 
 def test_without_idle_timeout_idle_clients_keep_their_slots(serve):
-    """`--idle-timeout 0` switches the drop off (docs/endpoints.md): after several times the
-    1.5 s used above, the idle client still holds the only slot and a second one is refused."""
+    """`--idle-timeout 0` switches the drop off (docs/endpoints.md): after longer than the 3 s
+    used above, the idle client still holds the only slot and a second one is refused."""
     p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "0", "--max-clients", "1")
     with socket.create_connection(p.tcp_address(), timeout=5) as held:
         held.sendall(GGP_66)
         assert recv_exactly(held, 9) == reply(2, 1, 100, 10, 1)
-        assert not wait_eof(held, 4.0)
+        assert not wait_eof(held, 5.0)
         with socket.create_connection(p.tcp_address(), timeout=5) as other:
             assert wait_eof(other, 5)
     assert p.stop()[0] == 0
@@ -398,7 +398,7 @@ def flood(sock, chunk, total):
     sock.setblocking(False)
     try:
         while sent < total:
-            readable, writable, _ = select.select([sock], [sock], [], 5)
+            readable, writable, _ = select.select([sock], [sock], [], 30)
             if not readable and not writable:
                 raise AssertionError("server neither reads nor writes")
             if readable:
