@@ -13,7 +13,9 @@ port is used, so a move started by a write has progressed by the next read.
 Unsolicited replies (command 138, manual 3.6.35) are readable like any other.
 Modules that have ASCII mode (command 139, PD28-1021 manual 3.4) read the
 written bytes as text lines while in it, as on the other serial endpoints.
-No thread is started; closing the port flushes the EEPROM files.
+No thread is started; closing the port flushes the EEPROM files. Replies
+nobody reads are kept up to `RX_BUFFER` bytes (a terminal's input buffer) and
+then dropped, as on the pty endpoint.
 
 The baud rate, parity etc. set on the port are accepted and ignored.
 
@@ -40,6 +42,8 @@ from ..server.stream import BINARY, SerialStream
 
 SCHEME = "opentmcl"
 POLL = 0.002
+RX_BUFFER = 4096
+"""Bytes of unread replies kept; more are dropped (the size of a Linux tty input buffer)."""
 
 
 def parse_url(url: str) -> dict:
@@ -115,6 +119,8 @@ class Serial(serial.Serial):
         self._stream = SerialStream(self._bus, options["gap"])
         self._pace = options["pace"]
         self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
+        self.dropped = 0
+        """Reply bytes dropped because `RX_BUFFER` unread bytes were waiting."""
         self.is_open = True
 
     def close(self) -> None:
@@ -142,6 +148,10 @@ class Serial(serial.Serial):
         if self._rx:
             start = max(start, self._rx[-1][0])
         per_byte = byte_time(vmapi.baud_rate(vm)) if self._pace else 0.0
+        room = RX_BUFFER - len(self._rx)
+        if room < len(reply):
+            self.dropped += len(reply) - max(room, 0)
+            reply = reply[:max(room, 0)]
         for i, b in enumerate(reply):
             self._rx.append((start + (i + 1) * per_byte, b))
 
