@@ -437,4 +437,168 @@ def test_serve_pace_paces_requests_and_replies(serve):
             port.write(GGP_66)
             assert port.read(9) == reply(2, 1, 100, 10, 1)
             assert time.monotonic() - start >= 18 * 10 / 9600
+
+
+def wait_eof(sock, timeout):
+    """True once the server closed `sock` (recv gives b"") within `timeout` seconds."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        sock.settimeout(max(0.01, deadline - time.monotonic()))
+        try:
+            if sock.recv(64) == b"":
+                return True
+        except TimeoutError:
+            return False
+        except ConnectionResetError:
+            return True
+    return False
+
+
+def test_idle_clients_are_dropped_so_a_fifth_client_is_served(serve):
+    """Issue 11 problem 3: four connections that send nothing held every slot of the default
+    `--max-clients 4` for ever. With `--idle-timeout` they are dropped and a fifth client gets its
+    reply to the manual 3.6.8 example (GGP 66, 0 -> 02 01 64 0A 00 00 00 01 72); the refusal and
+    every drop are logged on stderr. (Old code: no --idle-timeout, the four held on for ever.)"""
+    p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "3")
+    address = p.tcp_address()
+    idle = [socket.create_connection(address, timeout=5) for _ in range(4)]
+    try:
+        for s in idle:  # served once, then silent
+            s.sendall(GGP_66)
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        with socket.create_connection(address, timeout=5) as fifth:
+            assert wait_eof(fifth, 30)  # closed; the log below tells refused from dropped
+        assert all(wait_eof(s, 30) for s in idle)
+        with socket.create_connection(address, timeout=5) as fifth:
+            fifth.sendall(GGP_66)
+            assert recv_exactly(fifth, 9) == reply(2, 1, 100, 10, 1)
+    finally:
+        for s in idle:
+            s.close()
+    code, _, err = p.stop()
+    assert code == 0
+    lines = err.splitlines()  # the fifth was refused, not accepted and dropped as idle:
+    refused = [line for line in lines if "refused" in line]
+    assert len(refused) == 1 and re.match(r"opentmcl serve: TCP client 127\.0\.0\.1:\d+ refused: 4 clients", refused[0])
+    assert sum("dropped: nothing received for 3 s" in line for line in lines) == 4
+
+
+def test_without_idle_timeout_idle_clients_keep_their_slots(serve):
+    """`--idle-timeout 0` switches the drop off (docs/endpoints.md): after longer than the 3 s
+    used above, the idle client still holds the only slot and a second one is refused."""
+    p = serve("--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "0", "--max-clients", "1")
+    with socket.create_connection(p.tcp_address(), timeout=5) as held:
+        held.sendall(GGP_66)
+        assert recv_exactly(held, 9) == reply(2, 1, 100, 10, 1)
+        assert not wait_eof(held, 5.0)
+        with socket.create_connection(p.tcp_address(), timeout=5) as other:
+            assert wait_eof(other, 5)
+    assert p.stop()[0] == 0
+
+
+@pytest.mark.parametrize("seconds", ["-1", "nan", "inf", "-inf"])
+def test_bad_idle_timeout_is_a_one_line_error(capsys, seconds):
+    """The idle timeout is 0 (none) or a positive, finite number of seconds (docs/endpoints.md)."""
+    assert main(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", f"--idle-timeout={seconds}"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--idle-timeout must be 0 (none) or a positive, finite number" in err
+
+
+def test_default_idle_timeout_is_finite():
+    """Issue 11 deliverable: an idle timeout with a sensible default (300 s, docs/endpoints.md), so
+    that a plain `opentmcl serve` cannot be locked out for ever."""
+    import argparse
+
+    from opentmcl.cli.serve import build_server, register
+
+    parser = argparse.ArgumentParser()
+    register(parser.add_subparsers())
+    args = parser.parse_args(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0"])
+    server = build_server(args)
+    (tcp,) = server.endpoints
+    assert tcp.idle_timeout == 300.0
+
+
+def peak_rss_kb(pid):
+    """VmHWM (peak resident set) of a process, in kB, from /proc (Linux)."""
+    with open(f"/proc/{pid}/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1])
+    raise AssertionError("no VmHWM")
+
+
+def flood(sock, chunk, total):
+    """Send `total` bytes of `chunk` repeated while reading (and discarding) what comes back;
+    return the number of bytes received."""
+    sent = received = 0
+    sock.setblocking(False)
+    try:
+        while sent < total:
+            readable, writable, _ = select.select([sock], [sock], [], 30)
+            if not readable and not writable:
+                raise AssertionError("server neither reads nor writes")
+            if readable:
+                data = sock.recv(65536)
+                if not data:
+                    raise AssertionError("server closed the connection during the flood")
+                received += len(data)
+            if writable:
+                sent += sock.send(chunk)
+    finally:
+        sock.setblocking(True)
+    return received
+
+
+FLOOD = 4 * 1024 * 1024
+
+
+def read_until_tail(sock, tail, timeout):
+    """Read (and discard) until the bytes received so far end with `tail`; False on time-out."""
+    deadline = time.monotonic() + timeout
+    last = b""
+    while time.monotonic() < deadline:
+        sock.settimeout(max(0.01, deadline - time.monotonic()))
+        try:
+            data = sock.recv(65536)
+        except TimeoutError:
+            return False
+        if not data:
+            return False
+        last = (last + data)[-len(tail):]
+        if last == tail:
+            return True
+    return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/PID/status")
+@pytest.mark.parametrize("ascii_mode", [False, True], ids=["binary", "ascii"])
+def test_garbage_forever_keeps_the_server_bounded(serve, ascii_mode):
+    """Issue 11 "Per-connection buffers stay bounded": 4 MB of garbage (binary mode: frames for
+    no module, manual 3.1 frames found by counting nine bytes; ASCII mode, PD28-1021 manual 3.4:
+    one line addressed to module 1 that never ends with <CR>) grow the server's peak memory by less
+    than half of that (measured: under 100 kB), and the client is still served afterwards."""
+    p = serve("--module", "PD28-1021", "--tcp", "127.0.0.1:0")
+    with socket.create_connection(p.tcp_address(), timeout=5) as s:
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        if ascii_mode:
+            s.sendall(request(1, 139))  # "The ASCII command line interface is entered by ... 139"
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 139, 0)
+            s.sendall(b"A")
+        before = peak_rss_kb(p.proc.pid)
+        flood(s, (b"X" if ascii_mode else b"\xee") * 65536, FLOOD)
+        growth_kb = peak_rss_kb(p.proc.pid) - before
+        assert growth_kb < FLOOD // 2048, f"peak memory grew by {growth_kb} kB"  # < half the flood
+        if ascii_mode:
+            s.sendall(b"\rABIN\r")  # <CR> ends the over-long line (an error status), BIN leaves ASCII
+            assert read_until_tail(s, b"BA 100 0\r", 60)  # BIN answered with status 100 (3.4.1)
+        # The garbage still queued in the socket buffers is read first; a host that gets no reply
+        # retries after a pause, which ends any partial frame (docs/assumptions.md, framer).
+        deadline = time.monotonic() + 60
+        answer = b""
+        while answer != reply(2, 1, 100, 10, 1) and time.monotonic() < deadline:
+            s.sendall(GGP_66)
+            answer = recv_exactly(s, 9, timeout=0.5)
+        assert answer == reply(2, 1, 100, 10, 1)
     assert p.stop()[0] == 0

@@ -226,10 +226,11 @@ def test_a_module_bug_does_not_kill_the_endpoint():
         server.stop()
 
 
-def test_a_client_that_never_reads_is_dropped_and_others_are_served(tcp_server):
+def test_a_client_that_never_reads_is_dropped_and_others_are_served(tcp_server, caplog):
     """Safety (docs/endpoints.md): a client whose replies pile up unread for the send time-out is
-    disconnected instead of blocking the server; another client is then answered (manual 3.6.8
-    GGP 66 example as the probe)."""
+    disconnected (and logged) instead of blocking the server; another client is then answered
+    (manual 3.6.8 GGP 66 example as the probe)."""
+    caplog.set_level("WARNING", logger="opentmcl.server")
     _, tcp = tcp_server
     lazy = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     lazy.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)   # fills quickly
@@ -253,6 +254,63 @@ def test_a_client_that_never_reads_is_dropped_and_others_are_served(tcp_server):
                          if sessions else "still connected")
     finally:
         lazy.close()
+    assert any("does not read its replies" in r.getMessage() for r in caplog.records)
     with connect(tcp) as other:
         other.sendall(GGP_66)
         assert recv_exactly(other, 9) == reply(2, 1, 100, 10, 1)
+
+
+def test_accepted_sockets_use_tcp_keepalive(tcp_server):
+    """Issue 11 problem 3: a half-open connection from a host that vanished must not hold a slot for
+    ever. The accepted socket has SO_KEEPALIVE on and, where the platform has the options, probes
+    after 60 s of silence every 10 s, 5 times (docs/endpoints.md)."""
+    _, tcp = tcp_server
+    with connect(tcp) as s:
+        s.sendall(GGP_66)
+        assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        with tcp._lock:
+            (conn,) = tcp._clients
+        assert conn.getsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE) != 0
+        for name, value in (("TCP_KEEPIDLE", 60), ("TCP_KEEPINTVL", 10), ("TCP_KEEPCNT", 5)):
+            if hasattr(socket, name):
+                assert conn.getsockopt(socket.IPPROTO_TCP, getattr(socket, name)) == value
+
+
+def test_refused_clients_are_logged_without_flooding_the_log(tcp_server, caplog, monkeypatch):
+    """Issue 11 "a log line when a client is refused": with both slots of max_clients=2 held, each
+    further client is refused; a burst within the log interval gives one line, the next line
+    counts the refusals it left out."""
+    import opentmcl.server.tcp as tcp_module
+
+    caplog.set_level("WARNING", logger="opentmcl.server")
+    monkeypatch.setattr(tcp_module, "REFUSED_LOG_EVERY", 3600.0)  # the whole burst is within it
+    _, tcp = tcp_server
+    with connect(tcp) as a, connect(tcp) as b:
+        for s in (a, b):
+            s.sendall(GGP_66)
+            assert recv_exactly(s, 9) == reply(2, 1, 100, 10, 1)
+        for _ in range(5):
+            with connect(tcp) as c:
+                c.settimeout(5)
+                assert c.recv(9) == b""
+        monkeypatch.setattr(tcp_module, "REFUSED_LOG_EVERY", 0.0)  # the interval is over
+        with connect(tcp) as c:
+            c.settimeout(5)
+            assert c.recv(9) == b""
+        deadline = time.monotonic() + 5
+        while tcp.rejected < 6 and time.monotonic() < deadline:
+            time.sleep(0.01)
+    lines = [r.getMessage() for r in caplog.records if "refused" in r.getMessage()]
+    assert tcp.rejected == 6 and len(lines) == 2
+    assert lines[0].startswith("TCP client 127.0.0.1:") and "2 clients connected" in lines[0]
+    assert lines[1].endswith("(4 more refused since the last line)")
+
+
+def test_idle_timeout_must_be_finite_and_not_negative():
+    """docs/endpoints.md: 0 means no idle timeout; otherwise a positive, finite number of seconds."""
+    bus = Server([VirtualModule("TMCM-6212", address=1)]).bus
+    for bad in (-1, -0.001, float("nan"), float("inf"), "5", None, True):
+        with pytest.raises(ValueError):
+            TcpServer(bus, "127.0.0.1", 0, idle_timeout=bad)
+    assert TcpServer(bus, "127.0.0.1", 0, idle_timeout=0).idle_timeout == 0
+    assert TcpServer(bus, "127.0.0.1", 0, idle_timeout=0.001).idle_timeout == 0.001

@@ -181,3 +181,24 @@ def test_paced_port_round_trip_takes_the_wire_time_of_both_directions():
         port.flush()
         assert port.out_waiting == 0
         assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+def test_unread_replies_are_bounded_like_a_terminal_buffer():
+    """Issue 11 "per-connection buffers stay bounded", for the in-process port: 10000 manual 3.6.8
+    GGP 66 requests written without reading leave at most RX_BUFFER (4096) reply bytes waiting, as
+    a tty's input buffer would; the rest is dropped and counted, and after the host flushes its
+    input the next request is answered."""
+    from opentmcl.urlhandler.protocol_opentmcl import RX_BUFFER
+
+    port = serial.serial_for_url("opentmcl://TMCM-6212", timeout=1)
+    try:
+        for _ in range(100):
+            port.write(GGP_66 * 100)
+        assert port.in_waiting == RX_BUFFER == 4096
+        assert port.dropped == 10000 * 9 - 4096
+        assert port.read(9) == reply(2, 1, 100, 10, 1)  # the oldest replies are kept whole
+        port.reset_input_buffer()
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+    finally:
+        port.close()

@@ -1,6 +1,7 @@
 """`opentmcl serve`: host virtual modules in real time on TCP, a pty and/or CAN.
 
-    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--pty [--link PATH] [--interface usb|rs485|rs232]]
+    opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--idle-timeout 300]
+                   [--pty [--link PATH] [--interface usb|rs485|rs232]]
                    [--can virtual:CH | udp_multicast:GROUP | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
 
 Several --module options put several modules on one bus; the n-th --address,
@@ -32,6 +33,8 @@ def register(subparsers) -> None:
     p.add_argument("--host", metavar="ADDR",
                    help="bind TCP to this address instead of loopback (reachable from the network!)")
     p.add_argument("--max-clients", type=int, default=4, metavar="N", help="TCP clients at once (default 4)")
+    p.add_argument("--idle-timeout", type=float, default=300.0, metavar="SECONDS",
+                   help="drop a TCP client that sends nothing for SECONDS (default 300; 0: never)")
     p.add_argument("--pty", action="store_true", help="create a pseudo-terminal and print its path")
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
     p.add_argument("--interface", choices=("usb", "rs485", "rs232"),
@@ -99,10 +102,13 @@ def assign_addresses(count: int, given: list[int]) -> list[int]:
         while candidate in out:
             candidate += 1
         out.append(candidate)
-    if len(set(out)) != len(out):
-        raise CliError(f"module addresses must be distinct on one bus, got {out}")
-    if max(out) > 255:
+    from ..modules.addresses import address_error
+
+    if max(out) > 255 and len(set(out)) == len(out):
         raise CliError("too many modules for the address range 1..255")
+    problem = address_error(out)
+    if problem:
+        raise CliError(problem)
     return out
 
 
@@ -163,6 +169,13 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         raise CliError(f"--gap must be a positive number of seconds, got {args.gap}")
     if args.max_clients < 1:
         raise CliError("--max-clients must be at least 1")
+    from ..server.tcp import check_idle_timeout
+
+    try:
+        check_idle_timeout(args.idle_timeout)
+    except ValueError:
+        raise CliError(f"--idle-timeout must be 0 (none) or a positive, finite number of seconds, "
+                       f"got {args.idle_timeout}") from None
     if args.link and not args.pty:
         args.pty = True
     if args.interface and not args.pty:
@@ -191,7 +204,7 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
             print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
                   "anyone who can connect can move the motors", file=err)
         server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
-                             pace_bytes=args.pace))
+                             pace_bytes=args.pace, idle_timeout=args.idle_timeout))
     if args.pty:
         if sys.platform == "win32":
             raise CliError("--pty needs a POSIX system")
@@ -231,9 +244,28 @@ def describe(server) -> list[str]:
     return lines
 
 
+def _log_to_stderr():
+    """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl serve: ...`` lines."""
+    import logging
+
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("opentmcl serve: %(message)s"))
+    logger = logging.getLogger("opentmcl.server")
+    logger.addHandler(handler)
+    return logger, handler
+
+
 def run(args) -> int:
     if getattr(args, "allow_host", None) and not getattr(args, "web", None):
         raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
+    logger, handler = _log_to_stderr()
+    try:
+        return _run(args)
+    finally:
+        logger.removeHandler(handler)
+
+
+def _run(args) -> int:
     try:
         server = build_server(args)
         server.start()

@@ -12,19 +12,25 @@ from __future__ import annotations
 from .client import Client, VersionReply
 from .connect import SCHEMES, connect, open_bus, open_transport
 from .errors import (
+    AxisNumberError,
     TmclAddressError,
+    TmclArgumentError,
     TmclConnectionError,
     TmclError,
     TmclProtocolError,
     TmclStatusError,
     TmclTimeout,
+    TmclTypeError,
+    TmclValueError,
+    UnknownAttributeError,
     UnknownParameterError,
 )
 from .module import Axis, Module, profile_for_version
 from .transport import Transport
 
 __all__ = [
-    "SCHEMES", "Axis", "Client", "Module", "TmclConnectionError", "TmclError", "TmclAddressError", "TmclProtocolError",
-    "TmclStatusError", "TmclTimeout", "Transport", "UnknownParameterError", "VersionReply", "connect",
+    "SCHEMES", "Axis", "AxisNumberError", "Client", "Module", "TmclArgumentError", "TmclConnectionError",
+    "TmclError", "TmclAddressError", "TmclProtocolError", "TmclStatusError", "TmclTimeout", "TmclTypeError",
+    "TmclValueError", "Transport", "UnknownAttributeError", "UnknownParameterError", "VersionReply", "connect",
     "open_bus", "open_transport", "profile_for_version",
 ]

@@ -12,10 +12,21 @@ import threading
 from dataclasses import dataclass
 from typing import ClassVar
 
-from ..protocol.frame import FRAME_LEN, Reply, Request, checksum, to_int32
+from ..protocol.frame import FRAME_LEN, FrameError, Reply, Request, checksum, to_int32
 from ..protocol.replies import MemoryReply
 from ..protocol.status import Status, is_success
-from .errors import TmclAddressError, TmclProtocolError, TmclStatusError, TmclTimeout, describe_request
+from .errors import (
+    TmclAddressError,
+    TmclProtocolError,
+    TmclStatusError,
+    TmclTimeout,
+    TmclTypeError,
+    TmclValueError,
+    check_int,
+    check_seconds,
+    check_timeout,
+    describe_request,
+)
 from .transport import Transport
 
 READ_PROGRAM_MEMORY = 134  # control command with a special reply format (manual 3.6.36)
@@ -53,19 +64,22 @@ def _is_event(frame: bytes) -> bool:
 
 
 def _check_byte(name: str, value: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise TypeError(f"{name} must be an int, got {type(value).__name__}")
+    check_int(value, name)
     if not 0 <= value <= 255:
-        raise ValueError(f"{name} must be 0..255, got {value}")
+        raise TmclValueError(f"{name} must be 0..255, got {value}")
     return value
 
 
 def _check_value(value: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise TypeError(f"value must be an int, got {type(value).__name__}")
+    check_int(value, "value")
     if not -(2**31) <= value <= 2**32 - 1:
-        raise ValueError(f"value {value} does not fit in 32 bits")
+        raise TmclValueError(f"value {value} does not fit in 32 bits")
     return to_int32(value)
+
+
+def check_address(value: int) -> int:
+    """A module address: an int 0..255 (the address byte of the frame, manual 3.1)."""
+    return _check_byte("address", value)
 
 
 class Client:
@@ -77,10 +91,12 @@ class Client:
 
     def __init__(self, transport: Transport, *, address: int = 1, host_address: int = 2,
                  timeout: float = 5.0):
+        if not isinstance(transport, Transport):
+            raise TmclTypeError(f"transport must be a Transport, got {type(transport).__name__}")
         self.transport = transport
         self.address = _check_byte("address", address)
         self.host_address = _check_byte("host_address", host_address)
-        self.timeout = float(timeout)
+        self.timeout = check_timeout(timeout)
         self.stray_replies = 0  # replies received that matched no request (counted, then dropped)
         self._events: dict[int, int] = {}  # module address -> OR of motor masks not yet consumed
         self._lock = threading.RLock()
@@ -100,7 +116,7 @@ class Client:
         req = Request(_check_byte("address", self.address if address is None else address),
                       _check_byte("command", command), _check_byte("type", type),
                       _check_byte("motor", motor), _check_value(value))
-        timeout = self.timeout if timeout is None else float(timeout)
+        timeout = self.timeout if timeout is None else check_timeout(timeout)
         with self._lock:
             self._send(req)
             if req.command in NO_REPLY:
@@ -121,7 +137,10 @@ class Client:
 
     def send_raw(self, frame: bytes, *, timeout: float | None = None) -> Reply | VersionReply | None:
         """Send a ready-made 9-byte request frame (its checksum is not checked) and return the reply."""
-        req = Request.decode(bytes(frame), verify=False)
+        try:
+            req = Request.decode(bytes(frame), verify=False)
+        except (FrameError, TypeError, ValueError) as exc:
+            raise TmclValueError(f"not a 9-byte request frame: {exc}") from None
         return self.request(req.command, req.type, req.motor, req.value, address=req.address,
                             timeout=timeout)
 
@@ -250,11 +269,12 @@ class Client:
 
         Request the event first (command 138, e.g. `Module.request_position_reached_event`).
         """
-        if not isinstance(mask, int) or isinstance(mask, bool) or not 0 < mask <= 0xFFFFFFFF:
-            raise ValueError(f"motor mask must be a non-zero 32-bit bit vector, got {mask!r}")
+        check_int(mask, "motor mask")
+        if not 0 < mask <= 0xFFFFFFFF:
+            raise TmclValueError(f"motor mask must be a non-zero 32-bit bit vector, got {mask!r}")
         address = self.address if address is None else _check_byte("address", address)
         key = self._event_key(address)
-        timeout = self.timeout if timeout is None else float(timeout)
+        timeout = self.timeout if timeout is None else check_timeout(timeout)
         deadline = self.transport.monotonic() + timeout
         while True:
             with self._lock:
@@ -287,8 +307,9 @@ class Client:
         return Module(self, address, profile)
 
     def sleep(self, seconds: float) -> None:
-        """Let `seconds` pass on the transport's clock (virtual time for in-process modules)."""
-        self.transport.sleep(seconds)
+        """Let `seconds` (finite, >= 0) pass on the transport's clock (virtual time for in-process
+        modules)."""
+        self.transport.sleep(check_seconds(seconds))
 
     def close(self) -> None:
         self.transport.close()

@@ -14,8 +14,8 @@ import importlib
 import urllib.parse
 
 from ..modules.profile import ModuleProfile
-from .client import Client
-from .errors import TmclConnectionError, TmclError
+from .client import Client, check_address
+from .errors import TmclConnectionError, TmclError, check_timeout
 from .module import Module
 from .transport import Transport
 
@@ -87,8 +87,11 @@ def _default_address(url: str) -> int:
 def open_bus(url: str, *, address: int | None = None, timeout: float = 5.0, host_address: int = 2) -> Client:
     """A `Client` on the bus at `url`; `address` is its default module address (default 1, or the
     address a sim:// URL sets)."""
+    check_timeout(timeout)
     if address is None:
         address = _default_address(url)
+    else:
+        check_address(address)
     return Client(open_transport(url, address=address), address=address, timeout=timeout,
                   host_address=host_address)
 

@@ -20,7 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 from ..protocol.opcodes import format_instruction
-from .errors import TmclStatusError
+from .errors import TmclStatusError, TmclTypeError, TmclValueError, check_int, check_timeout
 from .loader import MODES, AppStatus, Loader
 
 INSTRUCTION_SECONDS = 0.0001  # one TMCL instruction of the virtual modules (100 µs)
@@ -32,7 +32,7 @@ FLAG_NAMES = ((0x100, "ZE"), (0x200, "EQ"), (0x400, "GT"), (0x800, "LT"),
               (1, "ETO"), (2, "EAL"), (4, "EDV"), (8, "EPO"), (16, "ESD"))
 
 
-class DebugError(ValueError):
+class DebugError(TmclValueError):
     """A debugger command the user got wrong (unknown label, bad watch expression, ...)."""
 
 
@@ -84,6 +84,8 @@ def _flags(ld: Loader) -> str:
 
 def parse_watch(spec: str) -> Watch:
     """One watch expression (see the module docstring); DebugError if it cannot be read."""
+    if not isinstance(spec, str):
+        raise TmclTypeError(f"a watch expression is a string, got {spec!r}")
     text = spec.strip().lower()
     if any(int(n) > 255 for n in re.findall(r"\d+", text)):  # type and motor/bank are bytes (manual 3.1)
         raise DebugError(f"cannot watch {spec!r}: numbers must be 0..255")
@@ -107,6 +109,8 @@ def parse_watch(spec: str) -> Watch:
 def parse_watches(specs: str | Sequence[str]) -> list[Watch]:
     if isinstance(specs, str):
         specs = [s for s in re.split(r"[,\s]+", specs) if s]
+    elif not isinstance(specs, Sequence):
+        raise TmclTypeError(f"watch expressions are a string or a sequence of strings, got {specs!r}")
     return [parse_watch(s) for s in specs]
 
 
@@ -132,6 +136,8 @@ class Debugger:
     # --- addresses ----------------------------------------------------------------------------
     def address(self, text: str) -> int:
         """A label name or a number."""
+        if not isinstance(text, str):
+            raise TmclTypeError(f"an address is a label or a number as text, got {text!r}")
         t = text.strip()
         if t in self.labels:
             return self.labels[t]
@@ -184,6 +190,7 @@ class Debugger:
 
     def step(self, count: int = 1) -> AppStatus:
         """Execute `count` instructions (130), each waited out if it is a WAIT."""
+        check_int(count, "count")
         st = self.status()
         for _ in range(max(1, count)):
             self.loader.step()
@@ -196,6 +203,8 @@ class Debugger:
     def run_to(self, stops: set[int], *, max_steps: int | None = None) -> AppStatus:
         """Single-step until the PC is in `stops` (before that instruction runs) or the program
         stops; the instruction at the current PC is always executed first."""
+        if max_steps is not None:
+            check_int(max_steps, "max_steps")
         steps = 0
         while True:
             st = self.step()
@@ -211,6 +220,8 @@ class Debugger:
         """Continue: to the next breakpoint by stepping, or freely (129) until the program stops
         (`on_start` is called once the program runs freely). When `interrupted()` turns true
         the program is stopped (128) and its status returned."""
+        if max_seconds is not None:
+            check_timeout(max_seconds, "max_seconds")
         if self.breakpoints:
             return self.run_to(self.breakpoints)
         self.loader.run()

@@ -7,8 +7,16 @@ time (`TmclTimeout`), a transport that cannot be opened or broke
 (`TmclConnectionError`), bytes that are not a valid reply
 (`TmclProtocolError`) and a parameter name the module profile does not know
 (`UnknownParameterError`).
+
+An argument the library refuses before anything is sent is a `TmclArgumentError`,
+which also keeps the built-in class that plain Python code would raise:
+`TmclValueError` (ValueError: out of range, not finite), `TmclTypeError`
+(TypeError: not an int, not a number) and `AxisNumberError` (IndexError and
+KeyError: ``module.axes[6]`` on a six-axis module). The message is one line.
 """
 from __future__ import annotations
+
+import math
 
 from ..protocol.frame import Reply, Request
 from ..protocol.opcodes import format_instruction
@@ -62,8 +70,54 @@ class TmclProtocolError(TmclError):
     """Bytes were received that are not a valid reply (e.g. wrong checksum)."""
 
 
-class UnknownParameterError(TmclError, KeyError):
+class TmclArgumentError(TmclError):
+    """An argument refused by the library before anything was sent."""
+
+
+class TmclValueError(TmclArgumentError, ValueError):
+    """An argument of the right type but out of range (e.g. a value beyond 32 bits, timeout=-1)."""
+
+
+class TmclTypeError(TmclArgumentError, TypeError):
+    """An argument of the wrong type (e.g. a float where the frame carries an integer)."""
+
+
+class UnknownParameterError(TmclArgumentError, KeyError):
     """A parameter, port or module name that the module profile does not define."""
 
     def __str__(self) -> str:  # KeyError would quote the message
         return str(self.args[0]) if self.args else ""
+
+
+class UnknownAttributeError(UnknownParameterError, AttributeError):
+    """``axis.params.NAME`` for a name the profile does not define (an AttributeError too, so that
+    hasattr() and getattr() with a default work)."""
+
+
+class AxisNumberError(UnknownParameterError, IndexError):
+    """An axis number the module does not have (``module.axes[6]`` on a six-axis module)."""
+
+
+def check_timeout(value, name: str = "timeout") -> float:
+    """`value` as float seconds: a finite number > 0; TmclTypeError / TmclValueError otherwise."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TmclTypeError(f"{name} must be a number of seconds, got {value!r}")
+    if not 0 < value < math.inf:  # also NaN
+        raise TmclValueError(f"{name} must be a positive, finite number of seconds, got {value!r}")
+    return float(value)
+
+
+def check_seconds(value, name: str = "seconds") -> float:
+    """`value` as float seconds: a finite number >= 0 (a sleep of 0 is allowed)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise TmclTypeError(f"{name} must be a number of seconds, got {value!r}")
+    if not 0 <= value < math.inf:
+        raise TmclValueError(f"{name} must be a finite number of seconds >= 0, got {value!r}")
+    return float(value)
+
+
+def check_int(value, name: str) -> int:
+    """`value` if it is an int (not a bool); TmclTypeError otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise TmclTypeError(f"{name} must be an int, got {type(value).__name__} {value!r}")
+    return value

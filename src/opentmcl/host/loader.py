@@ -20,10 +20,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from ..lang.binfile import Instruction, decode
+from ..lang.binfile import BinFileError, Instruction, decode
 from ..protocol.frame import Reply, to_int32
-from .client import Client
-from .errors import TmclError, TmclStatusError
+from .client import Client, check_address
+from .errors import TmclError, TmclStatusError, TmclTypeError, check_int, check_timeout
 
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
@@ -66,13 +66,24 @@ class AppStatus:
 def instructions_of(program) -> list[Instruction]:
     """The instructions of a Program, a binary image or a sequence of 4-tuples."""
     if isinstance(program, (bytes, bytearray, memoryview)):
-        return decode(bytes(program))
+        try:
+            return decode(bytes(program))
+        except BinFileError as exc:
+            raise LoaderError(f"not a TMCL binary image: {exc}") from None
     items = getattr(program, "instructions", program)
     out = []
+    try:
+        items = list(items)
+    except TypeError:
+        raise LoaderError(f"not a program (a Program, a binary image or 4-tuples): {program!r}") from None
     for ins in items:
-        if len(ins) != 4:
-            raise LoaderError(f"not an instruction (command, type, motor, value): {ins!r}")
-        out.append(Instruction(*(int(x) for x in ins)))
+        try:
+            fields = [x for x in ins] if not isinstance(ins, (str, bytes)) else None
+        except TypeError:
+            fields = None
+        if fields is None or len(fields) != 4 or any(isinstance(x, bool) or not isinstance(x, int) for x in fields):
+            raise LoaderError(f"not an instruction (command, type, motor, value as ints): {ins!r}")
+        out.append(Instruction(*fields))
     return out
 
 
@@ -82,10 +93,10 @@ class Loader:
     def __init__(self, target, address: int | None = None, *, timeout: float | None = None):
         client = getattr(target, "client", target)
         if not isinstance(client, Client):
-            raise TypeError(f"Loader needs a Client or Module, got {type(target).__name__}")
+            raise TmclTypeError(f"Loader needs a Client or Module, got {type(target).__name__}")
         self.client = client
-        self.address = address if address is not None else getattr(target, "address", client.address)
-        self.timeout = client.timeout if timeout is None else float(timeout)
+        self.address = check_address(address) if address is not None else getattr(target, "address", client.address)
+        self.timeout = client.timeout if timeout is None else check_timeout(timeout)
 
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0) -> Reply:
         return self.client.request(command, type, motor, value, address=self.address, timeout=self.timeout)
@@ -123,11 +134,13 @@ class Loader:
 
     def read(self, start: int, count: int) -> list[Instruction]:
         """`count` instructions of program memory from `start` (command 134)."""
+        check_int(start, "start")
+        check_int(count, "count")
         return [self.read_one(start + i) for i in range(count)]
 
     def read_one(self, address: int) -> Instruction:
         """One program memory location (command 134, special reply)."""
-        reply = self.client.request(READ_PROGRAM_MEMORY, 0, 0, to_int32(address), address=self.address,
+        reply = self.client.request(READ_PROGRAM_MEMORY, 0, 0, to_int32(check_int(address, "address")), address=self.address,
                                     timeout=self.timeout)
         return Instruction(reply.command, reply.type, reply.motor, reply.value)
 
@@ -165,6 +178,8 @@ class Loader:
 
     def wait_stopped(self, timeout: float, poll: float = 0.01) -> AppStatus:
         """Poll 135 until the program is no longer running (STOP reached) or `timeout` passes."""
+        timeout = check_timeout(timeout)
+        poll = check_timeout(poll, "poll interval")
         waited = 0.0
         while True:
             st = self.status()

@@ -18,8 +18,23 @@ from collections.abc import Iterator
 from ..modules.profile import IOPort, ModuleProfile, Param, load_profile, module_names
 from ..protocol.frame import Reply
 from . import units
-from .client import GET_FIRMWARE_VERSION, REQUEST_TARGET_POSITION_REACHED_EVENT, Client, VersionReply
-from .errors import TmclError, UnknownParameterError
+from .client import (
+    GET_FIRMWARE_VERSION,
+    REQUEST_TARGET_POSITION_REACHED_EVENT,
+    Client,
+    VersionReply,
+    check_address,
+)
+from .errors import (
+    AxisNumberError,
+    TmclError,
+    TmclTypeError,
+    TmclValueError,
+    UnknownAttributeError,
+    UnknownParameterError,
+    check_int,
+    check_timeout,
+)
 
 # Command numbers (TMCM-6212 manual 3.4.1, 3.6.36).
 ROR, ROL, MST, MVP, SAP, GAP, STAP, RSAP = 1, 2, 3, 4, 5, 6, 7, 8
@@ -52,7 +67,7 @@ def _raw_number(kind: str, key) -> int | None:
 
 def _find(kind: str, key: str | int, params: list[Param], lookup) -> Param:
     if isinstance(key, bool) or not isinstance(key, (int, str)):
-        raise TypeError(f"{kind} must be a name or a number, got {key!r}")
+        raise TmclTypeError(f"{kind} must be a name or a number, got {key!r}")
     try:
         return lookup(key)
     except KeyError:
@@ -74,6 +89,8 @@ def profile_for_version(version: str) -> ModuleProfile:
     The string is the module number, "V" and the version digits (e.g. "6212V105", PD86-1180 manual
     4.6.39 "1180V1.30"); the module number before the "V" selects the profile.
     """
+    if not isinstance(version, str):
+        raise TmclTypeError(f"firmware version must be a string, got {version!r}")
     kind = version.strip().upper().partition("V")[0]
     exact = None
     for name in module_names():
@@ -102,16 +119,39 @@ class _Params:
         try:
             return self._get(name)
         except UnknownParameterError as exc:
-            raise AttributeError(str(exc)) from None
+            raise UnknownAttributeError(str(exc)) from None
 
     def __setattr__(self, name: str, value: int) -> None:
         try:
             self._set(name, value)
         except UnknownParameterError as exc:
-            raise AttributeError(str(exc)) from None
+            raise UnknownAttributeError(str(exc)) from None
 
     def __dir__(self) -> list[str]:
         return sorted(self._names())
+
+
+class AxisList(list):
+    """`Module.axes`: a list whose bad index is an `AxisNumberError` (an IndexError and a
+    TmclError) naming the axes the module has."""
+
+    def __init__(self, axes, module_name: str):
+        super().__init__(axes)
+        self._module_name = module_name
+
+    def __getitem__(self, index):
+        if isinstance(index, slice):
+            return super().__getitem__(index)
+        if isinstance(index, bool) or not isinstance(index, int):
+            raise TmclTypeError(f"axis index must be an int, got {type(index).__name__} {index!r}")
+        try:
+            return super().__getitem__(index)
+        except IndexError:
+            raise AxisNumberError(f"{self._module_name} has axes 0..{len(self) - 1}, not {index}") from None
+
+
+def _check_poll(poll) -> float:
+    return check_timeout(poll, "poll interval")
 
 
 class Axis:
@@ -181,6 +221,7 @@ class Axis:
     # --- motion -------------------------------------------------------------------
     def rotate(self, velocity: int) -> None:
         """ROR <axis>, v for v >= 0, else ROL <axis>, -v (manual 3.6.1, 3.6.2)."""
+        check_int(velocity, "velocity")
         if velocity >= 0:
             self._req(ROR, 0, velocity)
         else:
@@ -197,6 +238,8 @@ class Axis:
         self._req(MST)
 
     def _move(self, type: int, value: int, wait: bool, timeout: float | None) -> None:
+        if timeout is not None:
+            check_timeout(timeout)
         if wait:
             self.module.request_position_reached_event(1 << self.number)
         self._req(MVP, type, value)
@@ -224,6 +267,9 @@ class Axis:
     def reference_search(self, *, wait: bool = False, timeout: float | None = None,
                          poll: float = POLL_INTERVAL) -> None:
         """RFS START, <axis> (manual 3.6.11); with `wait`, poll RFS STATUS until it reports 0."""
+        if timeout is not None:
+            check_timeout(timeout)
+        _check_poll(poll)
         self._req(RFS, RFS_START)
         if wait:
             self.module._poll(lambda: not self.reference_search_active(), timeout, poll,
@@ -301,7 +347,9 @@ class Module:
     def __init__(self, client: Client, address: int | None = None,
                  profile: ModuleProfile | str | None = None):
         self.client = client
-        self.address = client.address if address is None else address
+        self.address = client.address if address is None else check_address(address)
+        if profile is not None and not isinstance(profile, (str, ModuleProfile)):
+            raise TmclTypeError(f"profile must be a module name or a ModuleProfile, got {profile!r}")
         if isinstance(profile, str):
             try:
                 profile = load_profile(profile)
@@ -342,15 +390,14 @@ class Module:
     @property
     def axes(self) -> list[Axis]:
         if self._axes is None:
-            self._axes = [Axis(self, i) for i in range(self.profile.axes)]
+            self._axes = AxisList((Axis(self, i) for i in range(self.profile.axes)), self.profile.name)
         return self._axes
 
     def axis(self, number: int) -> Axis:
         axes = self.axes
         if isinstance(number, int) and not isinstance(number, bool) and 0 <= number < len(axes):
             return axes[number]
-        raise UnknownParameterError(f"{self.profile.name} has axes 0..{self.profile.axes - 1}, "
-                                    f"not {number!r}")
+        raise AxisNumberError(f"{self.profile.name} has axes 0..{self.profile.axes - 1}, not {number!r}")
 
     def __getitem__(self, number: int) -> Axis:
         return self.axis(number)
@@ -372,6 +419,8 @@ class Module:
 
     def _gp(self, name: str | int, bank: int | None) -> tuple[int, int]:
         """(number, bank): a name implies its bank; a number goes to `bank` (default 0) unchanged."""
+        if bank is not None:
+            check_int(bank, "bank")
         number = _raw_number("global parameter", name)
         if number is not None:
             return number, _raw_number("bank", 0 if bank is None else bank)
@@ -447,7 +496,8 @@ class Module:
     def set_output(self, port: int | str, value: int) -> None:
         """SIO <port>, <output bank>, <value> (bank 2)."""
         p = self._port(port, "output")
-        self.request(SIO, p.port, p.bank, int(value))
+        value = int(value) if isinstance(value, bool) else check_int(value, "output value")
+        self.request(SIO, p.port, p.bank, value)
 
     def get_io(self, port: int, bank: int) -> int:
         """GIO <port>, <bank> with raw numbers."""
@@ -480,7 +530,8 @@ class Module:
         from .errors import TmclTimeout
 
         transport = self.client.transport
-        timeout = MOTION_TIMEOUT if timeout is None else timeout
+        timeout = MOTION_TIMEOUT if timeout is None else check_timeout(timeout)
+        _check_poll(poll)
         deadline = transport.monotonic() + timeout
         while not done():
             if transport.monotonic() >= deadline:
@@ -511,7 +562,12 @@ class Module:
         self.request(ENTER_DOWNLOAD_MODE, 0, 0, start)
         count = 0
         try:
-            for command, type, motor, value in instructions:
+            for instruction in instructions:
+                try:
+                    command, type, motor, value = instruction
+                except (TypeError, ValueError):
+                    raise TmclValueError(f"instruction {count} is not (command, type, motor, value): "
+                                         f"{instruction!r}") from None
                 self.request(command, type, motor, value)
                 count += 1
         finally:

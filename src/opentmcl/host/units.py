@@ -13,48 +13,76 @@
 
 Conversions to physical units return floats; conversions to module units return
 the nearest integer (halves away from zero), as the module takes only integers.
+A bad argument (not a number, not finite, out of range) is a `TmclValueError` or
+`TmclTypeError` (also a ValueError / TypeError) with a one-line message.
 """
 from __future__ import annotations
 
+import functools
+import math
+
 from ..motion import units as exact
+from .errors import TmclArgumentError, TmclTypeError, TmclValueError
 
 F_CLK = exact.F_CLK  # Hz, the clock of the TMCM-1180 / TMCM-6212 motion controllers
 
 DIVISORS = range(0, 14)  # pulse_div / ramp_div (axis parameters 154 / 153): 0 .. 13
 
 
+def _typed(func):
+    """Turn the argument errors of the exact layer into TmclValueError / TmclTypeError."""
+    @functools.wraps(func)
+    def wrapper(*args, **kwargs):
+        try:
+            return func(*args, **kwargs)
+        except TmclArgumentError:
+            raise
+        except TypeError as exc:
+            raise TmclTypeError(f"{func.__name__}: {exc}") from None
+        except (ValueError, OverflowError, ZeroDivisionError) as exc:
+            raise TmclValueError(f"{func.__name__}: {exc}") from None
+    return wrapper
+
+
 def _round(x: float) -> int:
     """Nearest integer, halves away from zero (as the motion layer rounds)."""
+    if not math.isfinite(x):
+        raise TmclValueError(f"the result must be finite, got {x}")
     r = int(abs(x) + 0.5)
     return r if x >= 0 else -r
 
 
 def _int_in(name: str, value: int, allowed: range) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value not in allowed:
-        raise ValueError(f"{name} must be an integer {allowed.start}..{allowed.stop - 1}, got {value!r}")
+        raise TmclValueError(f"{name} must be an integer {allowed.start}..{allowed.stop - 1}, got {value!r}")
     return value
 
 
+@_typed
 def microsteps_per_fullstep(microstep_resolution: int) -> int:
     """Axis parameter 140 code -> microsteps per full step (TMCM-6212 manual 4.1, parameter 140)."""
     return exact.microsteps_per_fullstep(microstep_resolution)
 
 
+@_typed
 def pps_to_rps(pps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> float:
     """Microsteps per second -> rounds per second (TMCM-6212 manual 6.5)."""
     return float(exact.pps_to_rps(pps, microstep_resolution, fullstep_resolution))
 
 
+@_typed
 def rps_to_pps(rps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> int:
     """Rounds per second -> microsteps per second, rounded to an integer (TMCM-6212 manual 6.5)."""
     return exact.round_half_away(exact.rps_to_pps(rps, microstep_resolution, fullstep_resolution))
 
 
+@_typed
 def pps_to_rpm(pps: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> float:
     """Microsteps per second -> rounds per minute (``v_rpm = v_rps * 60``, TMCM-6212 manual 6.5)."""
     return float(exact.pps_to_rpm(pps, microstep_resolution, fullstep_resolution))
 
 
+@_typed
 def rpm_to_pps(rpm: float, microstep_resolution: int = 8, fullstep_resolution: int = 200) -> int:
     """Rounds per minute -> microsteps per second, rounded to an integer."""
     return exact.round_half_away(exact.rpm_to_pps(rpm, microstep_resolution, fullstep_resolution))
@@ -62,18 +90,21 @@ def rpm_to_pps(rpm: float, microstep_resolution: int = 8, fullstep_resolution: i
 
 # ---------------------------------------------------------------- TMC429 / TMC4210 (TMCM-1180)
 
+@_typed
 def tmc429_velocity_to_pps(velocity: int, pulse_div: int, f_clk: int = F_CLK) -> float:
     """Internal velocity (0..2047) -> microsteps per second (TMC4210 datasheet 6.1.12.1)."""
     _int_in("pulse_div", pulse_div, DIVISORS)
     return f_clk * velocity / (2 ** pulse_div * 2048 * 32)
 
 
+@_typed
 def pps_to_tmc429_velocity(pps: float, pulse_div: int, f_clk: int = F_CLK) -> int:
     """Microsteps per second -> internal velocity, rounded (inverse of `tmc429_velocity_to_pps`)."""
     _int_in("pulse_div", pulse_div, DIVISORS)
     return _round(pps * 2 ** pulse_div * 2048 * 32 / f_clk)
 
 
+@_typed
 def tmc429_accel_to_pps2(a_max: int, pulse_div: int, ramp_div: int, f_clk: int = F_CLK) -> float:
     """Internal acceleration A_MAX (0..2047) -> microsteps per second² (TMC4210 datasheet 6.1.12.1)."""
     _int_in("pulse_div", pulse_div, DIVISORS)
@@ -81,6 +112,7 @@ def tmc429_accel_to_pps2(a_max: int, pulse_div: int, ramp_div: int, f_clk: int =
     return f_clk * f_clk * a_max / 2 ** (pulse_div + ramp_div + 29)
 
 
+@_typed
 def pps2_to_tmc429_accel(pps2: float, pulse_div: int, ramp_div: int, f_clk: int = F_CLK) -> int:
     """Microsteps per second² -> internal A_MAX, rounded (inverse of `tmc429_accel_to_pps2`)."""
     _int_in("pulse_div", pulse_div, DIVISORS)
@@ -90,6 +122,7 @@ def pps2_to_tmc429_accel(pps2: float, pulse_div: int, ramp_div: int, f_clk: int 
 
 # ---------------------------------------------------------------- TMC5130 (TMCM-6212, unit mode 0)
 
+@_typed
 def tmc5130_velocity_to_pps(velocity: int, f_clk: int = F_CLK) -> float:
     """Internal VMAX-style velocity -> microsteps per second (``v * f_CLK / 2**24``)."""
     if f_clk == F_CLK:
@@ -97,12 +130,14 @@ def tmc5130_velocity_to_pps(velocity: int, f_clk: int = F_CLK) -> float:
     return velocity * f_clk / 2**24
 
 
+@_typed
 def pps_to_tmc5130_velocity(pps: float, f_clk: int = F_CLK) -> int:
     if f_clk == F_CLK:
         return exact.internal_velocity_from_pps(pps)
     return _round(pps * 2**24 / f_clk)
 
 
+@_typed
 def tmc5130_accel_to_pps2(accel: int, f_clk: int = F_CLK) -> float:
     """Internal AMAX-style acceleration -> microsteps per second² (``a * f_CLK**2 / 2**41``)."""
     if f_clk == F_CLK:
@@ -110,6 +145,7 @@ def tmc5130_accel_to_pps2(accel: int, f_clk: int = F_CLK) -> float:
     return accel * f_clk * f_clk / 2**41
 
 
+@_typed
 def pps2_to_tmc5130_accel(pps2: float, f_clk: int = F_CLK) -> int:
     if f_clk == F_CLK:
         return exact.internal_acceleration_from_pps2(pps2)

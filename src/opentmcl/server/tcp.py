@@ -7,16 +7,21 @@ all clients share the bus and its lock.
 
 Safety (docs/endpoints.md): binds to loopback unless the caller asks for
 another address; at most `max_clients` clients at once (a further client is
-accepted and closed at once); received bytes are only ever parsed as frames.
+accepted, closed at once and logged); a client that sends nothing for
+`idle_timeout` seconds is dropped, and TCP keepalive finds peers that
+vanished; received bytes are only ever parsed as frames, so what a client
+holds in memory is one partial frame or ASCII line.
 """
 from __future__ import annotations
 
 import ipaddress
 import logging
+import math
 import socket
 import struct
 import sys
 import threading
+import time
 
 from .framer import DEFAULT_GAP
 from .session import SerialSession
@@ -24,8 +29,51 @@ from .session import SerialSession
 log = logging.getLogger("opentmcl.server")
 
 DEFAULT_MAX_CLIENTS = 4
+DEFAULT_IDLE_TIMEOUT = 300.0
+"""Seconds a client may send nothing before it is dropped (0: never)."""
 POLL = 0.2
 SEND_BUFFER = 64 * 1024
+KEEPALIVE = (("TCP_KEEPIDLE", 60), ("TCP_KEEPINTVL", 10), ("TCP_KEEPCNT", 5))
+"""Probe after 60 s of silence, every 10 s, give up after 5: a vanished peer is found in ~110 s."""
+REFUSED_LOG_EVERY = 1.0
+"""At most one "refused" log line per this many seconds (a connect storm must not flood the log)."""
+
+
+def check_idle_timeout(seconds) -> float:
+    """`seconds` as a float: 0 (no idle timeout) or a finite positive number; ValueError otherwise."""
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)):
+        raise ValueError(f"idle timeout must be a number of seconds, got {seconds!r}")
+    if seconds != 0 and not 0 < seconds < math.inf:  # also NaN
+        raise ValueError(f"idle timeout must be 0 (none) or a positive, finite number of seconds, got {seconds!r}")
+    return float(seconds)
+
+
+def set_keepalive(conn: socket.socket) -> None:
+    """Turn on TCP keepalive with the `KEEPALIVE` timing where the platform has the options."""
+    try:
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    except OSError:
+        return
+    for name, value in KEEPALIVE:
+        if name == "TCP_KEEPIDLE" and not hasattr(socket, name):
+            name = "TCP_KEEPALIVE"  # macOS spells the idle time so
+        option = getattr(socket, name, None)
+        if option is None:
+            continue
+        try:
+            conn.setsockopt(socket.IPPROTO_TCP, option, value)
+        except OSError:
+            pass
+
+
+def peer_name(conn: socket.socket) -> str:
+    """``HOST:PORT`` of the other end, or "?" once it is gone."""
+    try:
+        peer = conn.getpeername()
+    except OSError:
+        return "?"
+    host, port = peer[0], peer[1]
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
 def is_loopback(host: str) -> bool:
@@ -64,9 +112,10 @@ class TcpServer:
 
     def __init__(self, bus, host: str = "127.0.0.1", port: int = 2323, *,
                  max_clients: int = DEFAULT_MAX_CLIENTS, gap: float = DEFAULT_GAP,
-                 pace_bytes: bool = False) -> None:
+                 pace_bytes: bool = False, idle_timeout: float = DEFAULT_IDLE_TIMEOUT) -> None:
         if max_clients < 1:
             raise ValueError("max_clients must be at least 1")
+        self.idle_timeout = check_idle_timeout(idle_timeout)
         self.bus = bus
         self.host = host
         self.port = port
@@ -77,8 +126,14 @@ class TcpServer:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self._clients: dict[socket.socket, SerialSession] = {}
+        self._peers: dict[socket.socket, str] = {}
         self._lock = threading.Lock()
         self.rejected = 0
+        """Clients refused because `max_clients` were connected."""
+        self.dropped_idle = 0
+        """Clients dropped because they sent nothing for `idle_timeout` seconds."""
+        self._refused_logged = -math.inf
+        self._refused_quiet = 0  # refusals not logged since the last line
 
     @property
     def address(self) -> tuple[str, int]:
@@ -132,6 +187,8 @@ class TcpServer:
                 full = len(self._clients) >= self.max_clients
             if full or self._stop.is_set():
                 self.rejected += 1
+                if full:
+                    self._log_refused(peer_name(conn))
                 conn.close()
                 continue
             try:
@@ -139,6 +196,7 @@ class TcpServer:
             except OSError:  # the client is already gone
                 conn.close()
                 continue
+            set_keepalive(conn)
             try:  # replies are 9 bytes: a small send buffer bounds memory and finds idle readers soon
                 conn.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, SEND_BUFFER)
             except OSError:
@@ -148,34 +206,58 @@ class TcpServer:
                                     gap=self.gap, pace_bytes=self.pace_bytes)
             with self._lock:
                 self._clients[conn] = session
+                self._peers[conn] = peer_name(conn)
             self._spawn(self._client_loop, "opentmcl-tcp-client", conn, session)
+
+    def _log_refused(self, peer: str) -> None:
+        now = time.monotonic()
+        if now - self._refused_logged < REFUSED_LOG_EVERY:
+            self._refused_quiet += 1
+            return
+        more = f" ({self._refused_quiet} more refused since the last line)" if self._refused_quiet else ""
+        log.warning("TCP client %s refused: %d clients connected, the maximum (--max-clients)%s",
+                    peer, self.max_clients, more)
+        self._refused_logged, self._refused_quiet = now, 0
 
     def _send(self, conn: socket.socket, data: bytes) -> None:
         # The send time-out (POLL, bound_blocking) bounds sendall: a client whose
         # receive buffer stays full that long is not reading and is dropped.
         try:
             conn.sendall(data)
+        except (BlockingIOError, TimeoutError):
+            self._drop(conn, "dropped: it does not read its replies")
         except OSError:
             self._drop(conn)
 
     def _client_loop(self, conn: socket.socket, session: SerialSession) -> None:
+        idle = self.idle_timeout
+        last = time.monotonic()
+        reason = None
         try:
             while not self._stop.is_set() and not session.closed:
                 try:
                     data = conn.recv(4096)
                 except (TimeoutError, BlockingIOError, InterruptedError):
+                    if idle and time.monotonic() - last >= idle:
+                        self.dropped_idle += 1
+                        reason = f"dropped: nothing received for {idle:g} s (--idle-timeout)"
+                        break
                     continue
                 except OSError:
                     break
                 if not data:
                     break
+                last = time.monotonic()
                 session.receive(data)
         finally:
-            self._drop(conn)
+            self._drop(conn, reason)
 
-    def _drop(self, conn: socket.socket) -> None:
+    def _drop(self, conn: socket.socket, reason: str | None = None) -> None:
         with self._lock:
             session = self._clients.pop(conn, None)
+            peer = self._peers.pop(conn, "?")
+        if session is not None and reason:
+            log.warning("TCP client %s %s", peer, reason)
         if session is not None:
             session.close()
         try:

@@ -16,7 +16,9 @@ port is used, so a move started by a write has progressed by the next read.
 Unsolicited replies (command 138, manual 3.6.35) are readable like any other.
 Modules that have ASCII mode (command 139, PD28-1021 manual 3.4) read the
 written bytes as text lines while in it, as on the other serial endpoints.
-No thread is started; closing the port flushes the EEPROM files.
+No thread is started; closing the port flushes the EEPROM files. Replies
+nobody reads are kept up to `RX_BUFFER` bytes (a terminal's input buffer) and
+then dropped, as on the pty endpoint.
 
 The baud rate, parity etc. set on the port are accepted and ignored.
 
@@ -35,6 +37,7 @@ import urllib.parse
 import serial
 from serial.serialutil import PortNotOpenError, SerialException, Timeout
 
+from ..modules.addresses import address_error
 from ..server import vmapi
 from ..server.bus import SERIAL_INTERFACES, USB, ModuleBus, default_interface
 from ..server.framer import DEFAULT_GAP
@@ -43,6 +46,8 @@ from ..server.stream import BINARY, SerialStream
 
 SCHEME = "opentmcl"
 POLL = 0.002
+RX_BUFFER = 4096
+"""Bytes of unread replies kept; more are dropped (the size of a Linux tty input buffer)."""
 
 
 def parse_url(url: str) -> dict:
@@ -64,12 +69,10 @@ def parse_url(url: str) -> dict:
                 raise ValueError(f"bad module address {addr!r} in {url!r}") from None
         else:
             address = 1 + i
-        if not 1 <= address <= 255:
-            raise ValueError(f"module address {address} out of range 1..255")
         modules.append((name.strip(), address))
-    addresses = [a for _, a in modules]
-    if len(set(addresses)) != len(addresses):
-        raise ValueError(f"module addresses must be distinct on one bus: {addresses}")
+    problem = address_error([a for _, a in modules])
+    if problem:
+        raise ValueError(problem)
     options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False,
                "interface": default_interface(modules)}
     for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
@@ -131,6 +134,8 @@ class Serial(serial.Serial):
         self._rx: list[tuple[float, int]] = []  # (time the byte becomes readable, byte)
         self._tx: list[tuple[float, bytes]] = []  # pace=1: (time the bytes reach the modules, bytes)
         self._tx_free = float("-inf")
+        self.dropped = 0
+        """Reply bytes dropped because `RX_BUFFER` unread bytes were waiting."""
         self.is_open = True
 
     def close(self) -> None:
@@ -159,6 +164,10 @@ class Serial(serial.Serial):
         if self._rx:
             start = max(start, self._rx[-1][0])
         per_byte = byte_time(vmapi.baud_rate(vm)) if self._pace else 0.0
+        room = RX_BUFFER - len(self._rx)
+        if room < len(reply):
+            self.dropped += len(reply) - max(room, 0)
+            reply = reply[:max(room, 0)]
         for i, b in enumerate(reply):
             self._rx.append((start + (i + 1) * per_byte, b))
 

@@ -134,11 +134,11 @@ class Dashboard:
             yield
         except TmclStatusError as exc:
             raise DashboardError(str(exc)) from None
+        except ValueError as exc:  # before TmclError: TmclValueError is both, the link is fine
+            raise DashboardError(str(exc)) from None
         except TmclError as exc:
             self.connected = False
             self.last_error = str(exc)
-            raise DashboardError(str(exc)) from None
-        except ValueError as exc:
             raise DashboardError(str(exc)) from None
 
     def _do(self, fn):
@@ -271,11 +271,11 @@ class Dashboard:
         except TmclStatusError as exc:
             out.update(ok=False, status=exc.status, text=f"status {exc.status}: {message(exc.status)}")
             return out
+        except ValueError as exc:  # e.g. "300, 0, 0, 0": command must be 0..255 (a TmclValueError)
+            raise DashboardError(f"{text!r}: {exc}") from None
         except TmclError as exc:
             out.update(ok=False, status=None, text=str(exc))
             return out
-        except ValueError as exc:  # e.g. "300, 0, 0, 0": command must be 0..255
-            raise DashboardError(_short(f"{_short(text, 40)!r}: {exc}")) from None
         if reply is None:
             out.update(ok=True, status=None, text="(no reply)")
         elif isinstance(reply, VersionReply):

@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 import urllib.parse
 
-from ..errors import TmclConnectionError, TmclProtocolError, TmclTimeout
+from ..errors import TmclConnectionError, TmclProtocolError, TmclTimeout, check_int
 from ..transport import Transport, url_query
 
 DEFAULT_ID = 1
@@ -31,7 +31,7 @@ class CanTransport(Transport):
         import can
 
         for name, value in (("id", can_id), ("reply_id", reply_id)):
-            if not 0 <= value <= 0x7FF:
+            if not 0 <= check_int(value, f"CAN {name}") <= 0x7FF:
                 raise TmclConnectionError(f"CAN {name} must be 0..2047 (manual 5.1), got {value}")
         self.interface, self.channel = interface, channel
         self.can_id, self.reply_id = can_id, reply_id

@@ -25,7 +25,8 @@ import time
 import urllib.parse
 from collections.abc import Callable, Iterable
 
-from ..errors import TmclConnectionError, TmclTimeout
+from ...modules.addresses import address_error
+from ..errors import TmclConnectionError, TmclTimeout, TmclValueError, check_timeout
 from ..transport import Transport, url_query
 
 
@@ -49,9 +50,7 @@ class VirtualClock(Clock):
     """Virtual time that advances only while the host waits."""
 
     def __init__(self, step: float = 0.001):
-        if not step > 0:
-            raise ValueError("virtual clock step must be > 0")
-        self.step = float(step)
+        self.step = check_timeout(step, "virtual clock step")
 
     def wait(self, transport, ready, timeout):
         left = max(0.0, float(timeout))
@@ -84,7 +83,7 @@ class RealClock(Clock):
     """The modules follow the wall clock, advanced lazily at each access."""
 
     def __init__(self, poll: float = 0.002):
-        self.poll = poll
+        self.poll = check_timeout(poll, "real clock poll interval")
         self._last: float | None = None
 
     def sync(self, transport):
@@ -122,7 +121,7 @@ def make_clock(clock: str | Clock) -> Clock:
     try:
         return CLOCKS[clock]()
     except (KeyError, TypeError):
-        raise ValueError(f"unknown clock policy {clock!r}; use one of {', '.join(CLOCKS)}") from None
+        raise TmclValueError(f"unknown clock policy {clock!r}; use one of {', '.join(CLOCKS)}") from None
 
 
 class InProcessTransport(Transport):
@@ -135,7 +134,7 @@ class InProcessTransport(Transport):
             modules = [modules]
         self.modules = list(modules)
         if not self.modules:
-            raise ValueError("InProcessTransport needs at least one module")
+            raise TmclValueError("InProcessTransport needs at least one module")
         self.clock = make_clock(clock)
         self.elapsed = 0.0  # virtual seconds advanced through this transport
         self._rx = bytearray()
@@ -222,9 +221,10 @@ def _parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
                 raise TmclConnectionError(f"bad module address {addr!r} in sim:// URL") from None
         else:
             address = default_address + i
-        if not 0 <= address <= 255:
-            raise TmclConnectionError(f"module address {address} out of range 0..255")
         out.append((name.strip(), address))
+    problem = address_error([address for _, address in out])  # the rule of `opentmcl serve`
+    if problem:
+        raise TmclConnectionError(f"sim://: {problem}")
     return out
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import urllib.parse
 
-from ..errors import TmclConnectionError
+from ..errors import TmclConnectionError, TmclTypeError
 from ..transport import StreamTransport, url_query
 
 DEFAULT_BAUD = 9600
@@ -24,6 +24,8 @@ class SerialTransport(StreamTransport):
     def __init__(self, port: str, baud: int = DEFAULT_BAUD) -> None:
         import serial
 
+        if not isinstance(port, str):
+            raise TmclTypeError(f"serial port must be a name or path, got {port!r}")
         if port.lower().startswith("opentmcl://"):
             from ...urlhandler import register
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import socket
 import urllib.parse
 
-from ..errors import TmclConnectionError
+from ..errors import TmclConnectionError, check_timeout
 from ..transport import StreamTransport, url_query
 
 DEFAULT_CONNECT_TIMEOUT = 5.0
@@ -20,6 +20,7 @@ class TcpTransport(StreamTransport):
     """A connected TCP socket; `recv` returns exactly n bytes or raises `TmclTimeout`."""
 
     def __init__(self, host: str, port: int, connect_timeout: float = DEFAULT_CONNECT_TIMEOUT) -> None:
+        connect_timeout = check_timeout(connect_timeout, "connect_timeout")
         super().__init__()
         self.host, self.port = host, port
         self.name = f"tcp://{host}:{port}"
@@ -83,6 +84,7 @@ def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
         connect_timeout = float(query.get("connect_timeout", DEFAULT_CONNECT_TIMEOUT))
     except ValueError:
         raise TmclConnectionError(f"bad connect_timeout in {url.geturl()!r}") from None
-    if not 0 < connect_timeout < float("inf"):
-        raise TmclConnectionError(f"connect_timeout must be a positive number of seconds, got {connect_timeout}")
+    if not 0 < connect_timeout < float("inf"):  # also NaN
+        raise TmclConnectionError(f"connect_timeout must be a positive, finite number of seconds, "
+                                  f"got {connect_timeout}")
     return TcpTransport(url.hostname, port, connect_timeout)
