@@ -30,11 +30,12 @@ class PtyServer:
     interface = "serial"
 
     def __init__(self, bus, *, link: str | os.PathLike | None = None, gap: float = DEFAULT_GAP,
-                 pace_bytes: bool = False) -> None:
+                 pace_bytes: bool = False, session=SerialSession) -> None:
         self.bus = bus
         self.link = Path(link) if link is not None else None
         self.gap = gap
         self.pace_bytes = pace_bytes
+        self._session_class = session  # what handles the received bytes (the proxy passes its own)
         self.master: int | None = None
         self.slave: int | None = None
         self.path = ""
@@ -58,7 +59,7 @@ class PtyServer:
             os.close(slave)
             raise
         self.master, self.slave = master, slave
-        self.session = SerialSession(self.bus, self._write, gap=self.gap, pace_bytes=self.pace_bytes)
+        self.session = self._session_class(self.bus, self._write, gap=self.gap, pace_bytes=self.pace_bytes)
         self._thread = threading.Thread(target=self._loop, name="opentmcl-pty", daemon=True)
         self._thread.start()
 

@@ -64,7 +64,7 @@ class TcpServer:
 
     def __init__(self, bus, host: str = "127.0.0.1", port: int = 2323, *,
                  max_clients: int = DEFAULT_MAX_CLIENTS, gap: float = DEFAULT_GAP,
-                 pace_bytes: bool = False) -> None:
+                 pace_bytes: bool = False, session=SerialSession) -> None:
         if max_clients < 1:
             raise ValueError("max_clients must be at least 1")
         self.bus = bus
@@ -73,6 +73,7 @@ class TcpServer:
         self.max_clients = max_clients
         self.gap = gap
         self.pace_bytes = pace_bytes
+        self._session_class = session  # what handles the received bytes (the proxy passes its own)
         self._sock: socket.socket | None = None
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
@@ -144,7 +145,7 @@ class TcpServer:
             except OSError:
                 pass
             bound_blocking(conn, POLL)
-            session = SerialSession(self.bus, lambda data, c=conn: self._send(c, data),
+            session = self._session_class(self.bus, lambda data, c=conn: self._send(c, data),
                                     gap=self.gap, pace_bytes=self.pace_bytes)
             with self._lock:
                 self._clients[conn] = session
