@@ -19,7 +19,7 @@ import os
 from dataclasses import dataclass, field
 
 from ..motion import CLOCK_HZ
-from ..protocol.frame import FRAME_LEN, Request
+from ..protocol.frame import FRAME_LEN
 from ..protocol.opcodes import format_instruction
 from ..protocol.status import Status, message
 from .format import Capture, read_capture

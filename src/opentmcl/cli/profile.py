@@ -82,10 +82,10 @@ def run_show(args) -> int:
 
 
 def run_probe(args) -> int:
+    from ..atomicfile import write_atomic
     from ..host.connect import open_bus
     from ..host.errors import TmclError
     from ..host.probe import ProbeError, probe, skeleton
-    from ..atomicfile import write_atomic
 
     if not 0 < args.timeout <= 60 or not 0 < args.max_seconds < float("inf"):
         raise CliError("--timeout must be 0..60 s and --max-seconds a positive number")

@@ -16,6 +16,8 @@ GAP, GGP, GIO, VERSION = 6, 10, 15, 136
 GLOBAL_BANKS = (0, 2, 3)
 IO_BANKS = (0, 1, 2)
 NUMBERS = range(256)
+PORTS = range(255)
+"""Port 255 reads a whole bank as a bit mask (PD86-1180 manual 4.6.14): not a port of its own."""
 MAX_AXES = 16
 
 
@@ -79,7 +81,7 @@ def probe(client, *, max_seconds: float = 300.0, progress=lambda text: None) -> 
         result.globals.update(found)
         progress(f"bank {bank}: {len(found)} global parameters")
     for bank in IO_BANKS:
-        found = {(bank, p): v for p in NUMBERS if (v := ask.read(GIO, p, bank)) is not None}
+        found = {(bank, p): v for p in PORTS if (v := ask.read(GIO, p, bank)) is not None}
         result.io.update(found)
         progress(f"I/O bank {bank}: {len(found)} ports")
     progress(f"done: {ask.requests} read requests")
@@ -125,7 +127,8 @@ def skeleton(result: ProbeResult, url: str) -> str:
     lines = [f"# Profile skeleton probed from {url} on {when} by opentmcl profile probe.",
              "# UNVERIFIED: only reading commands were used; ranges, access letters and units of parameters",
              "# the base profile does not know are placeholders. Check them against the module's manual.",
-             "# Every probed value that equals the base profile's default is listed as a comment."]
+             "# Writable parameters whose probed value differs from the base default override it; every other
+# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
     axis0 = result.axis.get(0, {})
     if base is not None:
         lines += [f'extends = "{base.name}"', "", "[module]", f'name = "{base.name}-probed"',
@@ -148,7 +151,7 @@ def skeleton(result: ProbeResult, url: str) -> str:
         if p is None:
             body += _table("axis_parameter", {"number": number, "name": f"axis_parameter_{number}", **_UNKNOWN,
                                               "default": value})
-        elif p.default != value and p.min <= value <= p.max:
+        elif p.writable and p.default != value and p.min <= value <= p.max:
             body += _table("axis_parameter", {"number": number, "default": value})
         else:
             comments.append(f"# GAP {number}, 0 = {value}  ({p.name})")
@@ -160,7 +163,7 @@ def skeleton(result: ProbeResult, url: str) -> str:
             body += _table("global_parameter", {"bank": bank, "number": number,
                                                 "name": f"global_parameter_{bank}_{number}", **_UNKNOWN,
                                                 "default": value})
-        elif p.default != value and p.min <= value <= p.max:
+        elif p.writable and p.default != value and p.min <= value <= p.max:
             body += _table("global_parameter", {"bank": bank, "number": number, "default": value})
         else:
             comments.append(f"# GGP {number}, {bank} = {value}  ({p.name})")
