@@ -10,7 +10,8 @@ follows ASCII mode from a successful command 139 to a ``BIN`` line (PD28-1021 ma
 from __future__ import annotations
 
 from ..protocol.frame import FRAME_LEN, checksum, to_int32
-from ..protocol.opcodes import COMMANDS, ENTER_ASCII_MODE, GET_FIRMWARE_VERSION, REQUEST_TARGET_REACHED_EVENT
+from ..protocol.opcodes import (COMMANDS, ENTER_ASCII_MODE, GET_FIRMWARE_VERSION, READ_PROGRAM_MEMORY,
+                                REQUEST_TARGET_REACHED_EVENT)
 from ..protocol.status import Status, message
 
 HOST, MODULE = "host", "module"
@@ -126,6 +127,12 @@ class Decoder:
                        latency=round(t - oldest["t"], 6), address=oldest["address"])
             if self.identity is None:
                 self.identity = {"address": oldest["address"], "firmware_version": rec["version"]}
+            return rec
+        if oldest is not None and oldest["command"] == READ_PROGRAM_MEMORY:
+            self._pending.pop(0)  # special reply format: the stored instruction (docs/assumptions.md)
+            rec = self._record(t, MODULE, "memory", frame)
+            rec.update(reply_address=frame[0], address=oldest["address"], request=oldest["n"],
+                       latency=round(t - oldest["t"], 6), checksum_ok=checksum(frame[:8]) == frame[8])
             return rec
         reply_address, module_address, status, command, value = _fields(frame)
         event = status == Status.POSITION_REACHED_EVENT and command == REQUEST_TARGET_REACHED_EVENT

@@ -154,13 +154,12 @@ class Proxy:
         self.upstream.send(data)
 
     def _from_module(self, data: bytes) -> None:
-        t = time.monotonic()
+        if self.writer is not None:  # queued first: the host may answer before send() returns
+            self._queue.put((time.monotonic(), MODULE, bytes(data)))
         with self._lock:
             sessions = list(self._sessions)
         for session in sessions:
             session.send(data)
-        if self.writer is not None:
-            self._queue.put((t, MODULE, bytes(data)))
 
     def _attach(self, session: ProxySession) -> None:
         with self._lock:

@@ -136,7 +136,7 @@ def _status_value(status: int, value) -> str:
 class _Replayer:
     def __init__(self, cap: Capture, vm, address: int, tol: Tolerance, report: ReplayReport) -> None:
         self.cap, self.vm, self.address, self.tol, self.report = cap, vm, address, tol, report
-        self.replies = {r["request"]: r for r in cap.frames if r["kind"] in ("reply", "version") and "request" in r}
+        self.replies = {r["request"]: r for r in cap.frames if r["kind"] in ("reply", "version", "memory") and "request" in r}
         self.expected_events = [r for r in cap.frames if r["kind"] == "event" and r.get("address") == address]
         self.virtual_events: list[tuple[float, bytes]] = []
         self.windows: dict[int, list] = {}
@@ -214,7 +214,7 @@ class _Replayer:
         if not raw:
             self.diverge(rec, name, "reply", captured["raw"], "none")
             return
-        if captured["kind"] == "version" or rec["command"] == 134:
+        if captured["kind"] in ("version", "memory") or rec["command"] == 134:
             if captured["bytes"] != raw:
                 self.diverge(rec, name, "reply", captured["raw"], raw.hex(" "))
             return

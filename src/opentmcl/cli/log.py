@@ -46,6 +46,8 @@ def row(rec: dict) -> str:
         text = f"{rec['status']} {rec.get('status_text', '')}  {rec.get('mnemonic', rec.get('command'))} = {rec['value']}"
     elif kind == "version":
         text = f"version {rec['version']!r}"
+    elif kind == "memory":
+        text = f"program memory {rec['raw']}"
     elif kind == "ascii":
         text = repr(rec.get("text", ""))
     else:
