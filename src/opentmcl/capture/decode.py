@@ -10,8 +10,13 @@ follows ASCII mode from a successful command 139 to a ``BIN`` line (PD28-1021 ma
 from __future__ import annotations
 
 from ..protocol.frame import FRAME_LEN, checksum, to_int32
-from ..protocol.opcodes import (COMMANDS, ENTER_ASCII_MODE, GET_FIRMWARE_VERSION, READ_PROGRAM_MEMORY,
-                                REQUEST_TARGET_REACHED_EVENT)
+from ..protocol.opcodes import (
+    COMMANDS,
+    ENTER_ASCII_MODE,
+    GET_FIRMWARE_VERSION,
+    READ_PROGRAM_MEMORY,
+    REQUEST_TARGET_REACHED_EVENT,
+)
 from ..protocol.status import Status, message
 
 HOST, MODULE = "host", "module"

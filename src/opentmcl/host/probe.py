@@ -127,8 +127,8 @@ def skeleton(result: ProbeResult, url: str) -> str:
     lines = [f"# Profile skeleton probed from {url} on {when} by opentmcl profile probe.",
              "# UNVERIFIED: only reading commands were used; ranges, access letters and units of parameters",
              "# the base profile does not know are placeholders. Check them against the module's manual.",
-             "# Writable parameters whose probed value differs from the base default override it; every other
-# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
+             "# Writable parameters whose probed value differs from the base default override it; every other",
+             "# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
     axis0 = result.axis.get(0, {})
     if base is not None:
         lines += [f'extends = "{base.name}"', "", "[module]", f'name = "{base.name}-probed"',

@@ -156,9 +156,10 @@ def _is_int(value) -> bool:
 
 
 def _check_entry(table: str, i: int, entry, seen: dict) -> list[str]:
-    path = f"{table}[{i}]"
     if not isinstance(entry, dict):
-        return [f"{path}: expected a table"]
+        return [f"{table}[{i}]: expected a table"]
+    key = _key(table, entry)  # entries are named by their key: the index of a merged table means little
+    path = f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key))}]" if key else f"{table}[{i}]"
     errors = [f"{path}.{f}: missing" for f in _REQUIRED[table] if f not in entry]
     for f in _INT_FIELDS:
         if f in entry and not _is_int(entry[f]):
@@ -175,12 +176,11 @@ def _check_entry(table: str, i: int, entry, seen: dict) -> list[str]:
         errors.append(f"{path}: min {entry['min']} is greater than max {entry['max']}")
     if "access" in entry and (not entry["access"] or set(entry["access"]) - set("RWEA")):
         errors.append(f"{path}.access: letters R, W, E, A only, got {entry['access']!r}")
-    if table != "interrupt" and "default" in entry and "min" in entry and not entry.get("values"):
+    if table != "interrupt" and "default" in entry and entry["min"] <= entry["max"] and not entry.get("values"):
         if not entry["min"] <= entry["default"] <= entry["max"]:
             errors.append(f"{path}.default: {entry['default']} outside min..max {entry['min']}..{entry['max']}")
     if table == "io" and entry["kind"] not in ("digital", "analog", "output"):
         errors.append(f"{path}.kind: must be digital, analog or output, got {entry['kind']!r}")
-    key = _key(table, entry)
     if key in seen:
         errors.append(f"{path}: same {'/'.join(_TABLES[table])} {list(key)} as {table}[{seen[key]}]")
     seen[key] = i
