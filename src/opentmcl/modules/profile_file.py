@@ -159,7 +159,7 @@ def _check_entry(table: str, i: int, entry, seen: dict) -> list[str]:
     if not isinstance(entry, dict):
         return [f"{table}[{i}]: expected a table"]
     key = _key(table, entry)  # entries are named by their key: the index of a merged table means little
-    path = f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key))}]" if key else f"{table}[{i}]"
+    path = f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key, strict=True))}]" if key else f"{table}[{i}]"
     errors = [f"{path}.{f}: missing" for f in _REQUIRED[table] if f not in entry]
     for f in _INT_FIELDS:
         if f in entry and not _is_int(entry[f]):
