@@ -11,7 +11,9 @@ Prints, for the virtual module core:
 - the engines alone (bench_sixpoint.py, bench_tmc429.py);
 - round trips through TCP and the pseudo-terminal next to a bare echo server on the same transport
   (target: ours >= 50 % of echo), and our client against PyTrinamic on the same module (target >= 1)
-  (bench_endpoints.py).
+  (bench_endpoints.py);
+- the round-trip time `opentmcl proxy` adds on loopback, next to a direct connection to the same served
+  module in the same run (target: < 1 ms added; bench_proxy.py).
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # for tests.mot
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_endpoints  # noqa: E402
+import bench_proxy  # noqa: E402
 import bench_sixpoint  # noqa: E402
 import bench_tmc429  # noqa: E402
 from opentmcl import VirtualModule  # noqa: E402
@@ -98,7 +101,7 @@ def main(argv: list[str] | None = None) -> dict:
     results["6212 six axes, short fast moves, virtual s per wall s"] = bench_6212_short(300 * scale)
     results["PD86-1180 pulse_div=ramp_div=0, virtual s per wall s (target >= 100)"] = bench_1180(20 * scale)
     for label, measure in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure),
-                           ("endpoints", bench_endpoints.measure)):
+                           ("endpoints", bench_endpoints.measure), ("proxy", bench_proxy.measure)):
         for key, value in measure(quick=args.quick).items():
             results[f"{label} {key}"] = value
     results["in-process round trips per s (target >= 50000)"] = bench_round_trips(int(200000 * scale))
