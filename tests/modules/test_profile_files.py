@@ -161,3 +161,24 @@ def test_serve_module_file(derived):
         assert data[1:] == b"1181V100"
     bad = cli("serve", "--module", str(Path(derived).with_name("missing.toml")))
     assert bad.returncode == 2 and "cannot read" in bad.stderr
+
+
+def test_example_profiles_are_valid_and_marked_unverified():
+    """docs/profiles.md worked example: a module the manuals do not cover, derived from its sibling."""
+    examples = sorted((Path(__file__).resolve().parents[2] / "examples" / "profiles").glob("*.toml"))
+    assert examples
+    for path in examples:
+        assert "UNVERIFIED" in path.read_text()
+        done = cli("profile", "check", str(path))
+        assert done.returncode == 0, done.stderr
+    vm = VirtualModule(str(examples[0]))
+    assert vm.handle(Request(1, 136, 0, 0, 0).encode())[1:] == b"1160V445"
+
+
+def test_plot_takes_a_profile_file(derived, tmp_path):
+    """`opentmcl plot --module FILE` (it asked the host library for the profile by name before)."""
+    program = tmp_path / "p.tmc"
+    program.write_text("MVP ABS, 0, 1000\nWAIT POS, 0, 0\nSTOP\n")
+    done = cli("plot", str(program), "--module", str(derived), "-o", str(tmp_path / "p.png"))
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "p.png").stat().st_size > 0
