@@ -85,3 +85,20 @@ def test_ascii_mode_after_139_until_bin():
     (again,) = d.feed(0.05, HOST, GGP_66)
     assert (line["kind"], line["text"], text["kind"], bin_line["text"]) == ("ascii", "AGAP 1, 0\r", "ascii", "ABIN\r")
     assert again["kind"] == "request"
+
+
+def test_long_ascii_text_is_split_into_bounded_records():
+    """PD28-1021 manual 3.4: text lines end with <CR>; a flood without one must not grow a record
+    beyond the reader's line cap (docs/capture.md)."""
+    import json
+
+    from opentmcl.capture import MAX_LINE_BYTES
+    from opentmcl.capture.decode import MAX_TEXT
+
+    d = decoder()
+    d.ascii[HOST] = d.ascii[MODULE] = True
+    recs = d.feed(0.0, HOST, b"\x01" * (3 * MAX_TEXT)) + d.feed(0.0, MODULE, b"\x02" * (5 * MAX_TEXT + 1))
+    assert [len(bytes.fromhex(r["raw"])) for r in recs] == [MAX_TEXT] * 3 + [MAX_TEXT] * 5 + [1]
+    assert all(len(json.dumps({"record": "frame", **r})) < MAX_LINE_BYTES for r in recs)
+    (line,) = d.feed(0.0, HOST, b"AGAP 1, 0\r")
+    assert line["text"] == "AGAP 1, 0\r"

@@ -72,3 +72,16 @@ def test_missing_file_and_log_show_of_a_bad_file(tmp_path):
     assert done.returncode == 2 and "cannot read" in done.stderr and "Traceback" not in done.stderr
     done = cli("log", "show", str(write(tmp_path / "c.jsonl", HEADER, FRAME)), "--command", "NOPE")
     assert done.returncode == 2 and "unknown TMCL mnemonic" in done.stderr
+
+
+def test_writer_stops_capturing_at_the_cap_and_the_file_stays_readable(tmp_path):
+    """docs/capture.md: a capture never grows past what `read_capture` reads."""
+    path = tmp_path / "w.jsonl"
+    writer = fmt.CaptureWriter(path, target="sim://x", gap=0.1, tool="t")
+    writer.limit = writer.size + 3 * (len(json.dumps({"record": "frame", **FRAME}, separators=(",", ":"))) + 1)
+    for i in range(10):
+        writer.write({"record": "frame", **FRAME, "n": i})
+    writer.close(1.0)
+    lines = [json.loads(x) for x in path.read_text().splitlines()]
+    assert [r["record"] for r in lines] == ["header", "frame", "frame", "frame", "truncated", "end"]
+    assert len(read_capture(path).frames) == 3 and lines[-1]["frames"] == 3

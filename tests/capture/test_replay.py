@@ -132,3 +132,17 @@ def test_api_helper_and_unknown_module(tmp_path):
         replay(path)
     done = cli("replay", str(path), "--module", "TMCM-9999")
     assert done.returncode == 2 and "unknown module" in done.stderr
+
+
+def test_eeprom_file_gives_the_replayed_module_its_stored_state(tmp_path):
+    """PD86-1180 manual 4.6.7 (STAP): a stored axis parameter is restored at power-up; a capture of a
+    module with max_current stored as 77 agrees only with a twin that powers up from that EEPROM."""
+    eeprom = tmp_path / "module.eeprom"
+    vm = VirtualModule("PD86-1180", address=1, eeprom=eeprom)
+    assert vm.request(5, 6, 0, 77).status == 100 and vm.request(7, 6, 0, 0).status == 100
+    vm.close()
+    path = record(tmp_path / "c.jsonl", [(0.1, (6, 6, 0, 0))], name="PD86-1180")
+    edit(path, lambda r: r.get("kind") == "reply", value=77)  # what the module with that EEPROM said
+    assert replay(path, "PD86-1180").parameters == ["max_current"]
+    done = cli("replay", str(path), "--module", "PD86-1180", "--eeprom", str(eeprom))
+    assert done.returncode == 0, done.stdout + done.stderr

@@ -20,6 +20,9 @@ from ..protocol.opcodes import (
 from ..protocol.status import Status, message
 
 HOST, MODULE = "host", "module"
+MAX_TEXT = 256
+"""Most bytes of ASCII text in one record (a record line stays far below the reader's 4096-byte cap;
+the module itself keeps 128 characters of a line)."""
 _AXIS = {5: "SAP", 6: "GAP", 7: "STAP", 8: "RSAP"}
 _GLOBAL = {9: "SGP", 10: "GGP", 11: "STGP", 12: "RSGP"}
 _IO = {14: "SIO", 15: "GIO"}
@@ -163,20 +166,28 @@ class Decoder:
         """ASCII text: host bytes as lines up to <CR>; module bytes as they come."""
         stream = self._streams[direction]
         if direction == MODULE:
-            chunk = data[pos:]
-            rec = self._record(t, direction, "ascii", chunk)
-            rec["text"] = chunk.decode("latin-1")
-            out.append(rec)
+            for start in range(pos, len(data), MAX_TEXT):
+                chunk = data[start:start + MAX_TEXT]
+                rec = self._record(t, direction, "ascii", chunk)
+                rec["text"] = chunk.decode("latin-1")
+                out.append(rec)
             return len(data)
         end = data.find(b"\r", pos)
         if end < 0:
             stream.buf += data[pos:]
+            while len(stream.buf) >= MAX_TEXT:  # no <CR> for this long: record it, keep memory bounded
+                piece = bytes(stream.buf[:MAX_TEXT])
+                del stream.buf[:MAX_TEXT]
+                rec = self._record(t, direction, "ascii", piece)
+                rec["text"] = piece.decode("latin-1")
+                out.append(rec)
             return len(data)
         line = bytes(stream.buf) + data[pos:end + 1]
         stream.buf.clear()
-        rec = self._record(t, direction, "ascii", line)
-        rec["text"] = line.decode("latin-1")
-        out.append(rec)
+        for start in range(0, len(line), MAX_TEXT):
+            rec = self._record(t, direction, "ascii", line[start:start + MAX_TEXT])
+            rec["text"] = line[start:start + MAX_TEXT].decode("latin-1")
+            out.append(rec)
         words = line.decode("latin-1").strip().upper().replace(" ", "")
         if words[1:] == "BIN":  # address character + BIN: back to binary frames
             self.ascii[HOST] = False

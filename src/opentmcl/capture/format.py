@@ -31,19 +31,32 @@ class CaptureWriter:
         self._fh = open(path, "w", encoding="utf-8")  # noqa: SIM115 - closed by close()
         self._lock = threading.Lock()
         self.frames = 0
+        self.size = 0
+        self.limit = MAX_CAPTURE_BYTES - 2 * MAX_LINE_BYTES  # room for the end records
+        self.truncated = False
         self.write({"record": "header", "format": FORMAT, "version": VERSION, "tool": tool, "target": target,
                     "start": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds"),
                     "gap": gap})
 
     def write(self, record: dict) -> None:
-        line = json.dumps(record, ensure_ascii=True, separators=(",", ":"))
+        """Append one record; past the size cap, frames are dropped and one `truncated` record says so
+        (the relay goes on; a file is never written larger than `read_capture` reads)."""
+        line = json.dumps(record, ensure_ascii=True, separators=(",", ":")) + "\n"
         with self._lock:
             if self._fh is None:
                 return
             if record.get("record") == "frame":
+                if self.size + len(line) > self.limit:
+                    if not self.truncated:
+                        self.truncated = True
+                        note = {"record": "truncated", "t": record.get("t"), "frames": self.frames}
+                        self._fh.write(json.dumps(note, separators=(",", ":")) + "\n")
+                        self._fh.flush()
+                    return
                 self.frames += 1
-            self._fh.write(line + "\n")
+            self._fh.write(line)
             self._fh.flush()
+            self.size += len(line)
 
     def close(self, t: float) -> None:
         self.write({"record": "end", "t": round(t, 6), "frames": self.frames})

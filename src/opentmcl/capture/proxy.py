@@ -12,6 +12,7 @@ thread decodes the queue (`Decoder`) and appends the records to the capture file
 """
 from __future__ import annotations
 
+import logging
 import queue
 import threading
 import time
@@ -140,6 +141,7 @@ class Proxy:
         self._lock = threading.Lock()
         self.endpoints: list = []
         self.upstream = open_upstream(target, self._from_module)
+        self.upstream.error = None
         self._profiles: dict[int, object] = {}
         self.decoder = Decoder(self._profile_for, gap)
         self.writer = CaptureWriter(log, target=target, gap=gap, tool=f"opentmcl {__version__}") if log else None
@@ -151,7 +153,10 @@ class Proxy:
     def from_host(self, data: bytes) -> None:
         if self.writer is not None:  # queued first: a virtual module answers inside send()
             self._queue.put((time.monotonic(), HOST, bytes(data)))
-        self.upstream.send(data)
+        try:
+            self.upstream.send(data)
+        except TmclConnectionError as exc:  # the module's link broke: `opentmcl proxy` ends with it
+            self.upstream.error = str(exc)
 
     def _from_module(self, data: bytes) -> None:
         if self.writer is not None:  # queued first: the host may answer before send() returns
@@ -222,10 +227,13 @@ class Proxy:
                 return
             t, direction, data = item
             self.chunks += 1
-            for rec in self.decoder.feed(t - self.t0, direction, data):
-                self.writer.write({"record": "frame", **rec})
-                if rec["kind"] == "version":
-                    self._identify(rec)
+            try:
+                for rec in self.decoder.feed(t - self.t0, direction, data):
+                    self.writer.write({"record": "frame", **rec})
+                    if rec["kind"] == "version":
+                        self._identify(rec)
+            except Exception:  # a decoder bug must not stop the capture (the relay never depends on it)
+                logging.getLogger("opentmcl.capture").exception("cannot decode %s", data.hex(" "))
 
     def _identify(self, rec: dict) -> None:
         from ..modules.profile import load_profile, module_names

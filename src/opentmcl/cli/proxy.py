@@ -90,7 +90,12 @@ def run(args) -> int:
         if args.log:
             print(f"  capture {args.log}", flush=True)
         print("Press Ctrl-C to stop.", flush=True)
+        warned = False
         while not stop.wait(0.2):
+            if not warned and proxy.writer is not None and proxy.writer.truncated:
+                warned = True
+                print(f"opentmcl proxy: warning: {args.log} reached its size limit; relaying goes on, "
+                      "capturing stopped", file=sys.stderr, flush=True)
             error = getattr(proxy.upstream, "error", None)
             if error:
                 print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
