@@ -34,6 +34,9 @@ def test_reads_header_frames_and_identity(tmp_path):
     (json.dumps({**HEADER, "version": 2}).encode() + b"\n", "format version 2"),
     (json.dumps(HEADER).encode() + b"\n" + json.dumps({**FRAME, "raw": "zz"}).encode() + b"\n", "'raw' is not hex"),
     (json.dumps(HEADER).encode() + b"\n" + json.dumps({**FRAME, "t": "x"}).encode() + b"\n", "valid 't'"),
+    (json.dumps(HEADER).encode() + b"\n" + json.dumps({**FRAME, "command": None}).encode() + b"\n",
+     "request record without an integer 'command'"),
+    (json.dumps(HEADER).encode() + b"\n" + json.dumps({**FRAME, "dir": "up"}).encode() + b"\n", "'dir' must be"),
 ])
 def test_bad_files_are_one_line_errors(tmp_path, content, message):
     path = tmp_path / "bad.jsonl"

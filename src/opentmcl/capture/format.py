@@ -106,6 +106,12 @@ def _lines(path: str):
 
 
 _FRAME_KEYS = {"t": (int, float), "dir": str, "kind": str, "raw": str}
+_KIND_KEYS = {  # the decoded fields replay and `log show` rely on, per kind (all integers)
+    "request": ("address", "command", "type", "motor", "value"),
+    "reply": ("address", "status", "command", "value"),
+    "event": ("address", "status", "command", "value"),
+    "version": ("address",), "memory": ("address",),
+}
 
 
 def read_capture(path: str | os.PathLike) -> Capture:
@@ -134,6 +140,13 @@ def read_capture(path: str | os.PathLike) -> Capture:
             for key, types in _FRAME_KEYS.items():
                 if not isinstance(rec.get(key), types) or isinstance(rec.get(key), bool):
                     raise CaptureError(f"{path}:{number}: frame record without a valid {key!r}")
+            for key in _KIND_KEYS.get(rec["kind"], ()):
+                if type(rec.get(key)) is not int:
+                    raise CaptureError(f"{path}:{number}: {rec['kind']} record without an integer {key!r}")
+            if "request" in rec and type(rec["request"]) is not int:
+                raise CaptureError(f"{path}:{number}: 'request' is not a record number")
+            if rec["dir"] not in ("host", "module"):
+                raise CaptureError(f"{path}:{number}: 'dir' must be \"host\" or \"module\"")
             try:
                 rec["bytes"] = bytes.fromhex(rec["raw"])
             except ValueError:

@@ -45,7 +45,7 @@ def row(rec: dict) -> str:
     elif kind in ("reply", "event"):
         text = f"{rec['status']} {rec.get('status_text', '')}  {rec.get('mnemonic', rec.get('command'))} = {rec['value']}"
     elif kind == "version":
-        text = f"version {rec['version']!r}"
+        text = f"version {rec.get('version')!r}"
     elif kind == "memory":
         text = f"program memory {rec['raw']}"
     elif kind == "ascii":
