@@ -276,8 +276,10 @@ class _Replayer:
 
 
 def first_address(cap: Capture) -> int | None:
+    """The address of the first request that got a reply, else of the first request."""
+    answered = {r.get("request") for r in cap.frames if r["kind"] != "request"}
     for rec in cap.frames:
-        if rec["kind"] == "request" and rec["n"] in {r.get("request") for r in cap.frames if r["kind"] != "request"}:
+        if rec["kind"] == "request" and rec["n"] in answered:
             return rec["address"]
     for rec in cap.frames:
         if rec["kind"] == "request":
