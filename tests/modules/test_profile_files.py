@@ -182,3 +182,20 @@ def test_plot_takes_a_profile_file(derived, tmp_path):
     done = cli("plot", str(program), "--module", str(derived), "-o", str(tmp_path / "p.png"))
     assert done.returncode == 0, done.stderr
     assert (tmp_path / "p.png").stat().st_size > 0
+
+
+def test_a_scenario_for_the_parent_fits_the_derived_module(tmp_path):
+    """A derived profile accepts its parent's scenarios (docs/profiles.md): the stage scenario of the
+    TMCM-6212 example capture replays against a file that extends TMCM-6212 with a new name."""
+    root = Path(__file__).resolve().parents[2]
+    child = tmp_path / "child.toml"
+    child.write_text('extends = "TMCM-6212"\n[module]\nname = "MY-6212"\n')
+    grandchild = tmp_path / "grandchild.toml"
+    grandchild.write_text('extends = "child.toml"\n[module]\nname = "MY-6212-B"\n')
+    done = cli("replay", str(root / "examples" / "captures" / "tmcm6212_program_reference_events.jsonl"),
+               "--module", str(grandchild), "--scenario", str(root / "examples" / "scenarios" / "tmcm6212_stage.toml"))
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert load_profile(str(grandchild)).extra["based_on"] == ["MY-6212", "TMCM-6212"]
+    other = cli("replay", str(root / "examples" / "captures" / "bus_ascii_two_modules.jsonl"),
+                "--module", str(grandchild), "--scenario", str(root / "examples" / "scenarios" / "pd28_1021_home.toml"))
+    assert other.returncode == 2 and "the scenario is for TMCM-1021, not MY-6212-B" in other.stderr

@@ -214,4 +214,8 @@ def resolve(path: str | Path, builtin, _depth: int = 0) -> dict:
         raise ProfileError(errors)
     if not data.get("module", {}).get("aliases"):
         merged["module"]["aliases"] = []  # a derived module does not answer to its parent's aliases
+    parent_module = base.get("module", {})
+    # The chain of modules this one derives from (ModuleProfile.extra["based_on"]): a scenario
+    # written for the parent fits the derived module too (firmware/world.py).
+    merged["module"]["based_on"] = [parent_module.get("name"), *parent_module.get("based_on", [])]
     return merged
