@@ -115,6 +115,9 @@ def test_requests_to_other_addresses_are_skipped(tmp_path):
 def test_bad_tolerances(spec, tmp_path):
     with pytest.raises(ReplayError):
         Tolerance.parse([spec])
+    key, _, value = spec.partition("=")
+    with pytest.raises(ReplayError):
+        replay(record(tmp_path / "d.jsonl", MOVE), "TMCM-6212", tolerance={key: value})
     done = cli("replay", str(record(tmp_path / "c.jsonl", MOVE)), "-m", "TMCM-6212", "--tolerance", spec)
     assert done.returncode == 2 and len(done.stderr.splitlines()) == 1
 
@@ -146,3 +149,21 @@ def test_eeprom_file_gives_the_replayed_module_its_stored_state(tmp_path):
     assert replay(path, "PD86-1180").parameters == ["max_current"]
     done = cli("replay", str(path), "--module", "PD86-1180", "--eeprom", str(eeprom))
     assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_replayed_module_follows_a_new_address(tmp_path):
+    """TMCM-6212 manual 3.6.7 example: SGP 66, 0, 3 gives the module address 3; the next requests go
+    to address 3 and must be replayed, not skipped."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    decoder = Decoder(lambda a: vm.profile)
+    out = [HEADER]
+    for t, (address, fields) in enumerate([(1, (9, 66, 0, 3)), (3, (6, 6, 0, 0)), (1, (6, 6, 0, 0))]):
+        frame = Request(address, *fields).encode()
+        out += [{"record": "frame", **r} for r in decoder.feed(t, HOST, frame)]
+        out += [{"record": "frame", **r} for r in decoder.feed(t + 0.001, MODULE, vm.handle(frame))]
+    path = tmp_path / "c.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in out))
+    report = replay(path, "TMCM-6212")
+    assert report.ok and report.compared == 2 and report.skipped == 1
+    edit(path, lambda r: r.get("kind") == "reply" and r.get("address") == 3, value=1)
+    assert replay(path, "TMCM-6212").parameters == ["max_current"]
