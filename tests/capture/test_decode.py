@@ -7,7 +7,7 @@ from opentmcl.modules.profile import load_profile
 # TMCM-6212 manual 3.6.8 example: GGP 66, 0 -> 01 0A 42 00 00 00 00 00 4D
 GGP_66 = bytes.fromhex("010A4200000000004D")
 # its reply: host 2, module 1, status 100, command 10, value 1
-GGP_66_REPLY = bytes.fromhex("0201640A000000017A")
+GGP_66_REPLY = bytes.fromhex("0201640A0000000172")
 
 
 def decoder():
@@ -23,7 +23,7 @@ def test_request_and_reply_are_paired_with_names_and_latency():
     (rep,) = d.feed(1.0025, MODULE, GGP_66_REPLY)
     assert (req["mnemonic"], req["type"], req["motor"], req["parameter"]) == ("GGP", 66, 0, "serial_address")
     assert req["checksum_ok"] is True and req["raw"] == "01 0a 42 00 00 00 00 00 4d"
-    assert rep["request"] == req["n"] and rep["latency"] == 0.0025 and rep["value"] == 1
+    assert rep["request"] == req["n"] and rep["latency"] == 0.0025 and rep["value"] == 1 and rep["checksum_ok"]
     assert rep["status_text"] == "Successfully executed, no error" and rep["parameter"] == "serial_address"
 
 

@@ -84,7 +84,7 @@ def test_late_event_reply_reaches_the_host_and_the_capture(tmp_path):
 @pytest.mark.parametrize("args, message", [
     (["--to", "sim://TMCM-6212"], "give --pty"),
     (["--to", "nope://x", "--pty"], "unknown URL scheme"),
-    (["--to", "can://virtual/x?id=1", "--pty"], "can:// is not supported"),
+    (["--to", "can://nosuchinterface/x?id=1", "--pty"], "cannot open CAN bus"),
     (["--to", "sim://TMCM-6212", "--tcp", "10.1.2.3:5000"], "refusing to bind"),
     (["--to", "sim://TMCM-6212", "--pty", "--log", "/nonexistent/dir/c.jsonl"], "cannot write"),
     (["--to", "sim://TMCM-9999", "--pty"], "unknown module"),
@@ -104,3 +104,32 @@ def test_proxy_ends_with_one_line_when_the_module_goes_away(tmp_path):
     code, out, err = proxy.stop()
     assert code == 1 and "connection closed" in err and len(err.splitlines()) == 1
     assert read_capture(tmp_path / "c.jsonl").header["target"] == srv.endpoint("tcp")
+
+
+def test_can_module_behind_a_serial_host_link(tmp_path):
+    """TMCM-6212 manual 3.1/3.2: on CAN the address byte and checksum are left out; the proxy is a
+    gateway there: GGP 66 (manual 3.6.8 example) and the version string (136 type 0) come back as
+    the serial frames a host expects, and a late 138 event passes too."""
+    import uuid
+
+    from opentmcl.server import CanServer
+
+    channel = f"opentmcl-proxy-{uuid.uuid4().hex[:12]}"
+    srv = Server([VirtualModule("TMCM-6212", address=1)])
+    srv.add(CanServer(srv.bus, "virtual", channel))
+    srv.start()
+    proxy = Proxy(f"can://virtual/{channel}?id=1&reply_id=2", log=str(tmp_path / "c.jsonl"))
+    front = proxy.listen(TcpServer(proxy, "127.0.0.1", 0, session=ProxySession))
+    proxy.start()
+    try:
+        got = talk(front.address, [bytes.fromhex("010A4200000000004D"), frame(136, 0), frame(138, 0, 0, 1),
+                                   frame(4, 1, 0, 300)], 5 * 9)
+    finally:
+        proxy.stop()
+        srv.stop()
+    assert got[:9] == bytes.fromhex("0201640A0000000172") and got[9:18] == b"\x026212V105"
+    assert got[36 + 2] == 128 and got[36 + 7] == 1
+    cap = read_capture(tmp_path / "c.jsonl")
+    assert [r["kind"] for r in cap.frames] == ["request", "reply", "request", "version", "request", "reply",
+                                               "request", "reply", "event"]
+    assert cap.identities[0]["module"] == "TMCM-6212"

@@ -4,7 +4,7 @@
     server = proxy.listen(PtyServer(proxy, link="/tmp/ttyTMCL"))   # the endpoints of `opentmcl serve`
     proxy.start(); ...; proxy.stop()
 
-Host bytes go to the module (the target URL) as they arrive and module bytes go back to every
+Host bytes go to the module (the target URL; for can:// see `CanUpstream`) as they arrive and module bytes go back to every
 connected host as they arrive: nothing is framed, held back or rewritten on the relay path, so
 several addresses on one RS-485 line, late command-138 event replies, ASCII mode and garbage pass
 as they are. Each chunk is queued with its arrival time (time.monotonic) and direction; a writer
@@ -115,8 +115,65 @@ class SimUpstream:
         self.server.stop()
 
 
+class CanUpstream:
+    """A module on CAN behind a serial-framed host link: a gateway, the one place that reframes.
+
+    CAN carries no serial byte stream (TMCM-6212 manual 3.1/3.2: the address byte and the checksum
+    are left out, the CAN ID is the address), so host frames are cut at nine bytes and sent as
+    eight data bytes (command, type, motor, value, checksum) to the URL's `id`; a 7-byte reply on
+    `reply_id` goes back as a serial reply with `reply_id` as its reply address and the checksum
+    added; an 8-byte reply (136 type 0) as `reply_id` + the eight characters. The capture records
+    the serial side, which is what the host saw."""
+
+    def __init__(self, transport, on_bytes, gap: float = 0.1) -> None:
+        from ..server.framer import SerialFramer
+
+        self.transport = transport
+        self.on_bytes = on_bytes
+        self.framer = SerialFramer(gap)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.error: str | None = None
+
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._loop, name="opentmcl-proxy-can", daemon=True)
+        self._thread.start()
+
+    def send(self, data: bytes) -> None:
+        for frame in self.framer.feed(data, time.monotonic()):
+            self.transport.send(frame[1:])
+
+    def _loop(self) -> None:
+        from ..protocol.frame import checksum
+
+        bus, reply_id = self.transport._bus, self.transport.reply_id
+        while not self._stop.is_set():
+            try:
+                msg = bus.recv(0.2)
+            except Exception as exc:  # python-can's errors (the adapter went away)
+                self.error = f"{self.transport.name}: receive failed: {exc}"
+                return
+            if msg is None or msg.is_error_frame or msg.is_remote_frame or msg.arbitration_id != reply_id:
+                continue
+            data = bytes(msg.data)
+            raw = bytes([reply_id & 0xFF]) + data
+            if len(data) == 7:
+                self.on_bytes(raw + bytes([checksum(raw)]))
+            elif len(data) == 8:  # 136 type 0: the version string, no checksum (PD86-1180 4.6.39)
+                self.on_bytes(raw)
+
+    def profile_for(self, address: int):
+        return None
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+        self.transport.close()
+
+
 def open_upstream(url: str, on_bytes):
-    """The link to the module behind `url` (serial://, tcp://, sim://); TmclConnectionError if not."""
+    """The link to the module behind `url` (serial://, tcp://, sim://, can://); TmclConnectionError if not."""
     from ..host.connect import _split, open_transport
 
     scheme = _split(url, None).scheme
@@ -126,8 +183,7 @@ def open_upstream(url: str, on_bytes):
         except (KeyError, ValueError) as exc:
             raise TmclConnectionError(f"cannot open {url}: {exc.args[0] if exc.args else exc}") from None
     if scheme == "can":
-        raise TmclConnectionError("the proxy relays serial byte streams (serial://, tcp://, sim://); "
-                                  "can:// is not supported")
+        return CanUpstream(open_transport(url), on_bytes)
     return StreamUpstream(open_transport(url), on_bytes)
 
 

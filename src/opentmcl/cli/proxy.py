@@ -2,7 +2,8 @@
 
     opentmcl proxy --to URL (--pty [--link PATH] | --tcp [HOST:]PORT) [--log FILE]
 
-URL is the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT or sim://NAME. The host
+URL is the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT, sim://NAME or
+can://INTERFACE/CHANNEL?id=N (a gateway: frames are converted, docs/capture.md). The host
 program opens the pty (or connects to the TCP port) exactly as it would a served module
 (`opentmcl serve`). Bytes pass unchanged; --log writes the decoded traffic as JSON Lines
 (docs/capture.md). Ctrl-C or SIGTERM stops it and closes the capture file.
@@ -20,7 +21,8 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("proxy", help="relay a host program's traffic to a module and capture it",
                               description=__doc__.split("\n\n")[0])
     p.add_argument("--to", required=True, metavar="URL",
-                   help="the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT or sim://NAME")
+                   help="the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT, sim://NAME or "
+                        "can://INTERFACE/CHANNEL?id=N")
     p.add_argument("--pty", action="store_true", help="listen on a new pseudo-terminal and print its path")
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
     p.add_argument("--tcp", metavar="[HOST:]PORT", help="listen on TCP (loopback unless --host)")
