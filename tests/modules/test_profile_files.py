@@ -45,6 +45,8 @@ access = "RW"
 [remove]
 axis_parameter = [206]
 global_parameter = [[0, 81]]
+io = [[1, 1]]
+interrupt = [15]
 '''.replace("OPCODES", str(sorted(load_profile("PD86-1180").opcodes - {7})))
 
 
@@ -70,6 +72,15 @@ def test_extends_overrides_adds_and_removes(derived):
     assert vm.request(7, 0, 0).status == 6  # STAP is not in the opcode list: 6 "Command not available"
     assert vm.profile.axis_parameter(6).title == base.axis_parameter(6).title  # inherited fields stay
     assert (2, 5) in vm.profile.io
+    # PD86-1180 manual 4.6.15 (GIO): the removed analog input answers like a port the module lacks
+    assert vm.request(15, 1, 1).status == base_gio_missing_status(base) and (1, 1) in base.io
+    assert 15 not in vm.profile.interrupts and 15 in base.interrupts
+
+
+def base_gio_missing_status(base) -> int:
+    """The status the PD86-1180 twin gives for a GIO port it does not have (bank 1, port 7)."""
+    assert (1, 7) not in base.io
+    return VirtualModule("PD86-1180").request(15, 7, 1).status
 
 
 def test_extends_another_file_relative_to_it_and_a_path_object(derived, tmp_path):
