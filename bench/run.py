@@ -14,6 +14,8 @@ Prints, for the virtual module core:
   (bench_endpoints.py);
 - memory of the world and plot traces in MB per hour of recording at 10 ms, compact columns next to
   the old dict-per-row / list-per-channel layouts (target < 100 MB; bench_trace.py).
+- the round-trip time `opentmcl proxy` adds on loopback, next to a direct connection to the same served
+  module in the same run (target: < 1 ms added; bench_proxy.py).
 """
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # for tests.mot
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_endpoints  # noqa: E402
+import bench_proxy  # noqa: E402
 import bench_sixpoint  # noqa: E402
 import bench_tmc429  # noqa: E402
 import bench_trace  # noqa: E402
@@ -101,7 +104,8 @@ def main(argv: list[str] | None = None) -> dict:
     results["6212 six axes, short fast moves, virtual s per wall s"] = bench_6212_short(300 * scale)
     results["PD86-1180 pulse_div=ramp_div=0, virtual s per wall s (target >= 100)"] = bench_1180(20 * scale)
     for label, measure in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure),
-                           ("endpoints", bench_endpoints.measure), ("memory", bench_trace.measure)):
+                           ("endpoints", bench_endpoints.measure), ("memory", bench_trace.measure),
+                           ("proxy", bench_proxy.measure)):
         for key, value in measure(quick=args.quick).items():
             results[f"{label} {key}"] = value
     results["in-process round trips per s (target >= 50000)"] = bench_round_trips(int(200000 * scale))

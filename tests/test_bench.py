@@ -14,7 +14,8 @@ def test_bench_quick_runs_and_reports_every_figure():
                          text=True, timeout=300, check=True).stdout
     for label in ("6212 six axes, 10-revolution moves", "PD86-1180 pulse_div=ramp_div=0",
                   "TMC429 fast vs per-tick speed-up", "in-process round trips per s",
-                  "memory world trace MB per hour at 10 ms", "memory plot trace MB per hour at 10 ms"):
+                  "memory world trace MB per hour at 10 ms", "memory plot trace MB per hour at 10 ms",
+                  "proxy added by the proxy, ms"):
         assert label in out
     figures = [float(line.rsplit(None, 1)[-1].replace(",", "")) for line in out.splitlines() if line.strip()]
     assert figures and all(f > 0 for f in figures)

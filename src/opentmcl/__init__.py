@@ -1,7 +1,7 @@
 """OpenTMCL: an open implementation of the Trinamic TMCL motion-control system."""
 __version__ = "0.1.0"
 
-__all__ = ["VirtualModule", "__version__"]
+__all__ = ["VirtualModule", "__version__", "replay"]
 
 
 def __getattr__(name):
@@ -11,4 +11,7 @@ def __getattr__(name):
     if name == "connect":
         from .host import connect
         return connect
+    if name == "replay":
+        from .capture import replay
+        return replay
     raise AttributeError(name)

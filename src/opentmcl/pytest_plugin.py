@@ -130,3 +130,22 @@ def tmcl_module(request):
         yield module
     finally:
         module.close()
+
+
+@pytest.fixture
+def tmcl_replay():
+    """Keep captures as regression tests (docs/capture.md): ``tmcl_replay("run.jsonl", "PD86-1180")``
+    replays a capture against a fresh virtual module and fails the test listing every divergence.
+    Takes the arguments of `opentmcl.replay` and returns its report."""
+    from .capture import CaptureError, ReplayError, replay
+
+    def check(capture, module=None, **kwargs):
+        try:
+            report = replay(capture, module, **kwargs)
+        except (CaptureError, ReplayError) as exc:
+            pytest.fail(f"tmcl_replay: {exc}", pytrace=False)
+        if not report.ok:
+            pytest.fail(report.text(), pytrace=False)
+        return report
+
+    return check

@@ -13,7 +13,8 @@ import os
 import pathlib
 import sys
 
-COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard"]
+COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard",
+            "proxy", "log", "replay", "profile"]
 
 
 class CliError(Exception):

@@ -24,8 +24,9 @@ DEFAULT_TCP = "127.0.0.1:2323"
 def register(subparsers) -> None:
     p = subparsers.add_parser("serve", help="host virtual modules on TCP, a pty or CAN in real time",
                               description=__doc__.split("\n\n")[0])
-    p.add_argument("--module", "-m", action="append", required=True, metavar="NAME",
-                   help="module type, e.g. TMCM-6212 (repeat for several modules on one bus)")
+    p.add_argument("--module", "-m", action="append", required=True, metavar="NAME|FILE",
+                   help="module type, e.g. TMCM-6212, or a profile file (docs/profiles.md); "
+                        "repeat for several modules on one bus")
     p.add_argument("--address", "-a", action="append", type=_address, default=[], metavar="N",
                    help="RS485 module address (global parameter 66) of the n-th module")
     p.add_argument("--tcp", nargs="?", const=DEFAULT_TCP, metavar="[HOST:]PORT",

@@ -44,7 +44,8 @@ class World:
         if self.scenario.module is not None:
             from ..modules.profile import load_profile
             try:
-                same = load_profile(self.scenario.module).name == vm.profile.name
+                same = load_profile(self.scenario.module).name in (vm.profile.name,
+                                                                    *vm.profile.extra.get("based_on", ()))
             except KeyError:
                 same = False
             if not same:

@@ -50,6 +50,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
 """
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import dataclass, field
 from functools import cache
@@ -192,22 +193,55 @@ def _normalise(name: str) -> str:
 
 
 @cache
+def _builtin_raw(fname: str) -> dict:
+    text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
+    return tomllib.loads(text)
+
+
+@cache
 def _all() -> dict[str, ModuleProfile]:
     out: dict[str, ModuleProfile] = {}
     for fname in _FILES.values():
-        text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
-        prof = parse_profile(tomllib.loads(text))
+        prof = parse_profile(_builtin_raw(fname))
         for key in (prof.name, *prof.aliases):
             out[_normalise(key)] = prof
     return out
 
 
+def builtin_raw(name: str) -> dict:
+    """The raw TOML dict of a built-in profile by name or alias (KeyError if unknown)."""
+    prof = load_profile(name)
+    return _builtin_raw(_FILES[prof.name])
+
+
+def raw_profile(name_or_path: str) -> dict:
+    """The resolved raw dict of a built-in name or a profile file (`extends` applied, checked)."""
+    from .profile_file import ProfileError, looks_like_path, resolve, validate
+
+    if not looks_like_path(str(name_or_path)):
+        return builtin_raw(name_or_path)
+    data = resolve(name_or_path, builtin_raw)
+    errors = validate(data)
+    if errors:
+        raise ProfileError([f"{name_or_path}: {e}" for e in errors])
+    return data
+
+
 def load_profile(name: str) -> ModuleProfile:
-    """Profile by module name or alias ("TMCM-6212", "PD28-1021", "TMCM-1021", "PD86-1180", "TMCM-1180")."""
+    """Profile by module name or alias ("TMCM-6212", "PD28-1021", "TMCM-1021", "PD86-1180", "TMCM-1180"),
+    or by the path of a profile file (ending in .toml or containing a path separator; docs/profiles.md).
+    A bad file raises profile_file.ProfileError (a ValueError) with one line per problem."""
+    from .profile_file import looks_like_path
+
+    if isinstance(name, os.PathLike):
+        name = os.fspath(name)
+    if isinstance(name, str) and looks_like_path(name):
+        return parse_profile(raw_profile(name))
     try:
         return _all()[_normalise(name)]
     except KeyError:
-        raise KeyError(f"unknown module {name!r}; known: {', '.join(sorted(_FILES))}") from None
+        raise KeyError(f"unknown module {name!r}; known: {', '.join(sorted(_FILES))} "
+                       "or a profile file NAME.toml") from None
 
 
 def module_names() -> list[str]:

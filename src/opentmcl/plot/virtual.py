@@ -45,7 +45,7 @@ def run_virtual(program=None, *, module: str = "TMCM-6212", axes=(0,), seconds: 
         vm = VirtualModule(module, address=address, scenario=scenario)
     client = Client(InProcessTransport(vm, clock="virtual"), address=vm.address)
     try:
-        m = client.module(vm.address, vm.profile.name)
+        m = client.module(vm.address, vm.profile)
         loader = None
         if program is not None:
             loader = Loader(m)

@@ -29,19 +29,21 @@ class PtyServer:
     """Serve the bus on a new pseudo-terminal; `path` is the slave device."""
 
     def __init__(self, bus, *, link: str | os.PathLike | None = None, gap: float = DEFAULT_GAP,
-                 pace_bytes: bool = False, interface: str | None = None) -> None:
-        if interface is None:
-            interface = default_interface(bus.modules)
-        if interface not in SERIAL_INTERFACES:
-            raise ValueError(f"interface must be one of {', '.join(SERIAL_INTERFACES)}, got {interface!r}")
-        if interface == USB and len(bus.modules) != 1:
-            raise ValueError("a USB link carries one module; use rs485 for a bus of several")
+                 pace_bytes: bool = False, interface: str | None = None, session=SerialSession) -> None:
+        if session is SerialSession:  # the proxy's own session relays bytes and filters nothing
+            if interface is None:
+                interface = default_interface(bus.modules)
+            if interface not in SERIAL_INTERFACES:
+                raise ValueError(f"interface must be one of {', '.join(SERIAL_INTERFACES)}, got {interface!r}")
+            if interface == USB and len(bus.modules) != 1:
+                raise ValueError("a USB link carries one module; use rs485 for a bus of several")
         self.interface = interface
         """What the port stands for: "usb" (any address byte is answered), "rs485" or "rs232"."""
         self.bus = bus
         self.link = Path(link) if link is not None else None
         self.gap = gap
         self.pace_bytes = pace_bytes
+        self._session_class = session  # what handles the received bytes (the proxy passes its own)
         self.master: int | None = None
         self.slave: int | None = None
         self.path = ""
@@ -65,8 +67,9 @@ class PtyServer:
             os.close(slave)
             raise
         self.master, self.slave = master, slave
-        self.session = SerialSession(self.bus, self._write, gap=self.gap, pace_bytes=self.pace_bytes,
-                                     interface=self.interface)
+        extra = {"interface": self.interface} if self._session_class is SerialSession else {}
+        self.session = self._session_class(self.bus, self._write, gap=self.gap, pace_bytes=self.pace_bytes,
+                                           **extra)
         self._thread = threading.Thread(target=self._loop, name="opentmcl-pty", daemon=True)
         self._thread.start()
 

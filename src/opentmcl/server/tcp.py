@@ -112,7 +112,8 @@ class TcpServer:
 
     def __init__(self, bus, host: str = "127.0.0.1", port: int = 2323, *,
                  max_clients: int = DEFAULT_MAX_CLIENTS, gap: float = DEFAULT_GAP,
-                 pace_bytes: bool = False, idle_timeout: float = DEFAULT_IDLE_TIMEOUT) -> None:
+                 pace_bytes: bool = False, idle_timeout: float = DEFAULT_IDLE_TIMEOUT,
+                 session=SerialSession) -> None:
         if max_clients < 1:
             raise ValueError("max_clients must be at least 1")
         self.idle_timeout = check_idle_timeout(idle_timeout)
@@ -122,6 +123,7 @@ class TcpServer:
         self.max_clients = max_clients
         self.gap = gap
         self.pace_bytes = pace_bytes
+        self._session_class = session  # what handles the received bytes (the proxy passes its own)
         self._sock: socket.socket | None = None
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
@@ -202,7 +204,7 @@ class TcpServer:
             except OSError:
                 pass
             bound_blocking(conn, POLL)
-            session = SerialSession(self.bus, lambda data, c=conn: self._send(c, data),
+            session = self._session_class(self.bus, lambda data, c=conn: self._send(c, data),
                                     gap=self.gap, pace_bytes=self.pace_bytes)
             with self._lock:
                 self._clients[conn] = session

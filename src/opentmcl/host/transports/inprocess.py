@@ -235,14 +235,16 @@ def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
         default_address = int(query.get("address", "1"), 0)
     except ValueError:
         raise TmclConnectionError(f"bad address {query['address']!r} in sim:// URL") from None
-    specs = _parse_modules(url.netloc or url.path.lstrip("/"), default_address)
+    # A profile file is a path: sim:///abs/module.toml or sim://relative/module.toml (docs/profiles.md).
+    spec = url.netloc + url.path if ".toml" in url.path.lower() else (url.netloc or url.path.lstrip("/"))
+    specs = _parse_modules(spec, default_address)
     # The only place where the host layer touches the firmware layer (DESIGN.md "Layers").
     vm_class = importlib.import_module("opentmcl.firmware.vm").VirtualModule
     modules = []
     for name, address in specs:
         try:
             modules.append(vm_class(name, address=address))
-        except KeyError as exc:
+        except (KeyError, ValueError) as exc:  # ValueError: a bad profile file
             raise TmclConnectionError(f"sim://: {exc.args[0] if exc.args else exc}") from None
     clock_name = query.get("clock", "virtual")
     try:

@@ -1,0 +1,12 @@
+"""Capture real TMCL traffic, read it back, replay it against a virtual module (docs/capture.md).
+
+    from opentmcl.capture import read_capture, replay
+    report = replay("run.jsonl", module="TMCM-6212", tolerance=["position=10"])
+    print(report.text()); assert report.ok
+"""
+from .decode import Decoder
+from .format import MAX_CAPTURE_BYTES, MAX_LINE_BYTES, Capture, CaptureError, read_capture
+from .replay import Divergence, ReplayError, ReplayReport, Tolerance, assert_replays, replay
+
+__all__ = ["MAX_CAPTURE_BYTES", "MAX_LINE_BYTES", "Capture", "CaptureError", "Decoder", "Divergence",
+           "ReplayError", "ReplayReport", "Tolerance", "assert_replays", "read_capture", "replay"]

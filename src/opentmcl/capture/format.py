@@ -1,0 +1,159 @@
+"""The capture file: JSON Lines, one header record, then one record per frame (docs/capture.md).
+
+Writing is line by line with a flush, so a proxy that is killed leaves a readable file. Reading is
+bounded: a file larger than `MAX_CAPTURE_BYTES` or a line longer than `MAX_LINE_BYTES` is refused
+with a one-line `CaptureError` naming the file and line.
+"""
+from __future__ import annotations
+
+import datetime
+import json
+import os
+import threading
+from dataclasses import dataclass, field
+
+FORMAT = "opentmcl-capture"
+VERSION = 1
+MAX_CAPTURE_BYTES = 64 * 1024 * 1024
+"""Largest capture file read (about 200,000 round trips)."""
+MAX_LINE_BYTES = 4096
+"""Longest record line read (a frame record is about 300 bytes)."""
+
+
+class CaptureError(ValueError):
+    """A capture file that cannot be read: one line, with the file and line number."""
+
+
+class CaptureWriter:
+    """Appends records to a JSON Lines file; thread-safe; `close()` writes the end record."""
+
+    def __init__(self, path: str | os.PathLike, *, target: str, gap: float, tool: str) -> None:
+        self._fh = open(path, "w", encoding="utf-8")  # noqa: SIM115 - closed by close()
+        self._lock = threading.Lock()
+        self.frames = 0
+        self.size = 0
+        self.limit = MAX_CAPTURE_BYTES - 2 * MAX_LINE_BYTES  # room for the end records
+        self.truncated = False
+        self.write({"record": "header", "format": FORMAT, "version": VERSION, "tool": tool, "target": target,
+                    "start": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds"),
+                    "gap": gap})
+
+    def write(self, record: dict) -> None:
+        """Append one record; past the size cap, frames are dropped and one `truncated` record says so
+        (the relay goes on; a file is never written larger than `read_capture` reads)."""
+        line = json.dumps(record, ensure_ascii=True, separators=(",", ":")) + "\n"
+        with self._lock:
+            if self._fh is None:
+                return
+            if record.get("record") == "frame":
+                if self.size + len(line) > self.limit:
+                    if not self.truncated:
+                        self.truncated = True
+                        note = {"record": "truncated", "t": record.get("t"), "frames": self.frames}
+                        self._fh.write(json.dumps(note, separators=(",", ":")) + "\n")
+                        self._fh.flush()
+                    return
+                self.frames += 1
+            self._fh.write(line)
+            self._fh.flush()
+            self.size += len(line)
+
+    def close(self, t: float) -> None:
+        self.write({"record": "end", "t": round(t, 6), "frames": self.frames})
+        with self._lock:
+            if self._fh is not None:
+                self._fh.close()
+                self._fh = None
+
+
+@dataclass
+class Capture:
+    """A capture read back: its header, the frame records in order, the identities seen."""
+
+    path: str
+    header: dict
+    frames: list[dict] = field(default_factory=list)
+    identities: list[dict] = field(default_factory=list)
+
+    def module_name(self) -> str | None:
+        """The built-in module the host identified (command 136), if any."""
+        for ident in self.identities:
+            if ident.get("module"):
+                return ident["module"]
+        return None
+
+
+def _lines(path: str):
+    try:
+        size = os.path.getsize(path)
+    except OSError as exc:
+        raise CaptureError(f"{path}: cannot read: {exc.strerror or exc}") from None
+    if size > MAX_CAPTURE_BYTES:
+        raise CaptureError(f"{path}: {size} bytes, larger than the {MAX_CAPTURE_BYTES} bytes a capture may have")
+    try:
+        with open(path, "rb") as fh:
+            number = 0
+            while True:
+                line = fh.readline(MAX_LINE_BYTES + 1)
+                if not line:
+                    return
+                number += 1
+                if len(line) > MAX_LINE_BYTES:
+                    raise CaptureError(f"{path}:{number}: line longer than {MAX_LINE_BYTES} bytes")
+                yield number, line
+    except OSError as exc:
+        raise CaptureError(f"{path}: cannot read: {exc.strerror or exc}") from None
+
+
+_FRAME_KEYS = {"t": (int, float), "dir": str, "kind": str, "raw": str}
+_KIND_KEYS = {  # the decoded fields replay and `log show` rely on, per kind (all integers)
+    "request": ("address", "command", "type", "motor", "value"),
+    "reply": ("address", "status", "command", "value"),
+    "event": ("address", "status", "command", "value"),
+    "version": ("address",), "memory": ("address",),
+}
+
+
+def read_capture(path: str | os.PathLike) -> Capture:
+    """Read and check a capture file; CaptureError (one line) if it is not one."""
+    path = os.fspath(path)
+    capture: Capture | None = None
+    for number, line in _lines(path):
+        if not line.strip():
+            continue
+        try:
+            rec = json.loads(line)
+        except (ValueError, UnicodeDecodeError):
+            raise CaptureError(f"{path}:{number}: not a JSON record") from None
+        if not isinstance(rec, dict):
+            raise CaptureError(f"{path}:{number}: not a JSON object")
+        kind = rec.get("record")
+        if capture is None:
+            if kind != "header" or rec.get("format") != FORMAT:
+                raise CaptureError(f"{path}:{number}: not an {FORMAT} file (the first record must be its header)")
+            if rec.get("version") != VERSION:
+                raise CaptureError(f"{path}:{number}: capture format version {rec.get('version')!r}, "
+                                   f"this tool reads version {VERSION}")
+            capture = Capture(path, rec)
+            continue
+        if kind == "frame":
+            for key, types in _FRAME_KEYS.items():
+                if not isinstance(rec.get(key), types) or isinstance(rec.get(key), bool):
+                    raise CaptureError(f"{path}:{number}: frame record without a valid {key!r}")
+            for key in _KIND_KEYS.get(rec["kind"], ()):
+                if type(rec.get(key)) is not int:
+                    raise CaptureError(f"{path}:{number}: {rec['kind']} record without an integer {key!r}")
+            if "request" in rec and type(rec["request"]) is not int:
+                raise CaptureError(f"{path}:{number}: 'request' is not a record number")
+            if rec["dir"] not in ("host", "module"):
+                raise CaptureError(f"{path}:{number}: 'dir' must be \"host\" or \"module\"")
+            try:
+                rec["bytes"] = bytes.fromhex(rec["raw"])
+            except ValueError:
+                raise CaptureError(f"{path}:{number}: 'raw' is not hex") from None
+            capture.frames.append(rec)
+        elif kind == "identity":
+            capture.identities.append(rec)
+    if capture is None:
+        raise CaptureError(f"{path}: empty, not a capture file")
+    return capture

@@ -1,0 +1,110 @@
+"""`opentmcl proxy`: sit between a host program and a module, relay every byte, capture the traffic.
+
+    opentmcl proxy --to URL (--pty [--link PATH] | --tcp [HOST:]PORT) [--log FILE]
+
+URL is the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT, sim://NAME or
+can://INTERFACE/CHANNEL?id=N (a gateway: frames are converted, docs/capture.md). The host
+program opens the pty (or connects to the TCP port) exactly as it would a served module
+(`opentmcl serve`). Bytes pass unchanged; --log writes the decoded traffic as JSON Lines
+(docs/capture.md). Ctrl-C or SIGTERM stops it and closes the capture file.
+"""
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+
+from . import CliError
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser("proxy", help="relay a host program's traffic to a module and capture it",
+                              description=__doc__.split("\n\n")[0])
+    p.add_argument("--to", required=True, metavar="URL",
+                   help="the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT, sim://NAME or "
+                        "can://INTERFACE/CHANNEL?id=N")
+    p.add_argument("--pty", action="store_true", help="listen on a new pseudo-terminal and print its path")
+    p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
+    p.add_argument("--tcp", metavar="[HOST:]PORT", help="listen on TCP (loopback unless --host)")
+    p.add_argument("--host", metavar="ADDR", help="bind TCP to this address instead of loopback")
+    p.add_argument("--max-clients", type=int, default=4, metavar="N", help="TCP clients at once (default 4)")
+    p.add_argument("--log", metavar="FILE", help="write the capture (JSON Lines) to FILE")
+    p.add_argument("--gap", type=float, default=0.1, metavar="SECONDS",
+                   help="silence after which the decoder drops a partial frame as garbage (default 0.1)")
+    p.set_defaults(func=run)
+
+
+def build_proxy(args):
+    from ..capture.proxy import Proxy, ProxySession
+    from ..host.errors import TmclConnectionError
+    from ..server import PtyServer, TcpServer
+    from ..server.tcp import is_loopback
+    from .serve import parse_hostport
+
+    if args.link:
+        args.pty = True
+    if not args.pty and not args.tcp:
+        raise CliError("give --pty (a pseudo-terminal) or --tcp [HOST:]PORT to listen on")
+    if not 0 < args.gap < float("inf"):
+        raise CliError(f"--gap must be a positive number of seconds, got {args.gap}")
+    if args.max_clients < 1:
+        raise CliError("--max-clients must be at least 1")
+    if args.pty and sys.platform == "win32":
+        raise CliError("--pty needs a POSIX system")
+    tcp = None
+    if args.tcp:
+        host, port = parse_hostport(args.tcp)
+        host = args.host or host or "127.0.0.1"
+        if not is_loopback(host) and not args.host:
+            raise CliError(f"refusing to bind TCP to {host}: give --host {host} to listen beyond loopback")
+        tcp = (host, port)
+    try:
+        proxy = Proxy(args.to, log=args.log, gap=args.gap)
+    except TmclConnectionError as exc:
+        raise CliError(str(exc)) from None
+    except OSError as exc:
+        raise CliError(f"cannot write {args.log}: {exc.strerror or exc}") from None
+    if tcp is not None:
+        proxy.listen(TcpServer(proxy, tcp[0], tcp[1], max_clients=args.max_clients, session=ProxySession))
+    if args.pty:
+        proxy.listen(PtyServer(proxy, link=args.link, session=ProxySession))
+    return proxy
+
+
+def run(args) -> int:
+    from ..server import PtyServer, TcpServer
+
+    proxy = build_proxy(args)
+    try:
+        proxy.start()
+    except OSError as exc:
+        raise CliError(f"cannot start proxy: {exc}") from None
+    stop = threading.Event()
+    previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        print(f"OpenTMCL proxy to {args.to}:", flush=True)
+        for ep in proxy.endpoints:
+            if isinstance(ep, TcpServer):
+                print(f"  tcp {ep.url}", flush=True)
+            elif isinstance(ep, PtyServer):
+                link = f" (link {ep.link})" if ep.link else ""
+                print(f"  pty {ep.path}{link}  ->  serial://{ep.path}", flush=True)
+        if args.log:
+            print(f"  capture {args.log}", flush=True)
+        print("Press Ctrl-C to stop.", flush=True)
+        warned = False
+        while not stop.wait(0.2):
+            if not warned and proxy.writer is not None and proxy.writer.truncated:
+                warned = True
+                print(f"opentmcl proxy: warning: {args.log} reached its size limit; relaying goes on, "
+                      "capturing stopped", file=sys.stderr, flush=True)
+            error = getattr(proxy.upstream, "error", None)
+            if error:
+                print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
+                return 1
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        proxy.stop()
+    print("stopped; capture closed" if args.log else "stopped", flush=True)
+    return 0

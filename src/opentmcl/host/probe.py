@@ -1,0 +1,189 @@
+"""Ask a module which parameters and ports it has, with reading commands only (docs/profiles.md).
+
+Only GAP (6), GGP (10), GIO (15) and command 136 are sent: the module is never written to. A
+number exists when the module answers status 100; "wrong type" (3) or "invalid value" (4) means it
+does not. Axes are counted by reading axis parameter 1 on motor 0, 1, ... until one is refused.
+Every request has a time-out and the whole probe a deadline, so it always ends.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+from .errors import TmclError, TmclStatusError, TmclTimeout
+
+GAP, GGP, GIO, VERSION = 6, 10, 15, 136
+GLOBAL_BANKS = (0, 2, 3)
+IO_BANKS = (0, 1, 2)
+NUMBERS = range(256)
+PORTS = range(255)
+"""Port 255 reads a whole bank as a bit mask (PD86-1180 manual 4.6.14): not a port of its own."""
+MAX_AXES = 16
+
+
+class ProbeError(TmclError):
+    """The probe could not finish (link lost, deadline passed)."""
+
+
+@dataclass
+class ProbeResult:
+    firmware_version: str
+    firmware_binary: int | None
+    axes: int
+    axis: dict[int, dict[int, int]] = field(default_factory=dict)        # motor -> number -> value
+    globals: dict[tuple[int, int], int] = field(default_factory=dict)    # (bank, number) -> value
+    io: dict[tuple[int, int], int] = field(default_factory=dict)         # (bank, port) -> value
+
+
+class _Asker:
+    def __init__(self, client, deadline: float, progress) -> None:
+        self.client, self.deadline, self.progress = client, deadline, progress
+        self.requests = 0
+
+    def read(self, command: int, type_: int, motor: int) -> int | None:
+        if time.monotonic() > self.deadline:
+            raise ProbeError(f"probe took longer than its time limit ({self.requests} requests sent)")
+        self.requests += 1
+        for attempt in range(3):
+            try:
+                return self.client.request(command, type_, motor, 0).value
+            except TmclStatusError:
+                return None
+            except TmclTimeout:
+                if attempt == 2:
+                    raise ProbeError(f"no reply to command {command} type {type_} motor {motor} "
+                                     "three times: is the module connected?") from None
+        return None
+
+
+def probe(client, *, max_seconds: float = 300.0, progress=lambda text: None) -> ProbeResult:
+    """Probe the module `client` talks to (its default address)."""
+    ask = _Asker(client, time.monotonic() + max_seconds, progress)
+    try:
+        version = client.request(VERSION, 0, 0, 0).text
+    except TmclError as exc:
+        raise ProbeError(f"the module does not answer command 136 (firmware version): {exc}") from None
+    try:
+        binary = client.request(VERSION, 1, 0, 0).value
+    except TmclStatusError:
+        binary = None
+    progress(f"firmware {version!r}")
+    axes = 0
+    while axes < MAX_AXES and ask.read(GAP, 1, axes) is not None:
+        axes += 1
+    result = ProbeResult(version, binary, axes)
+    for motor in range(axes):
+        found = {n: v for n in NUMBERS if (v := ask.read(GAP, n, motor)) is not None}
+        result.axis[motor] = found
+        progress(f"axis {motor}: {len(found)} axis parameters")
+    for bank in GLOBAL_BANKS:
+        found = {(bank, n): v for n in NUMBERS if (v := ask.read(GGP, n, bank)) is not None}
+        result.globals.update(found)
+        progress(f"bank {bank}: {len(found)} global parameters")
+    for bank in IO_BANKS:
+        found = {(bank, p): v for p in PORTS if (v := ask.read(GIO, p, bank)) is not None}
+        result.io.update(found)
+        progress(f"I/O bank {bank}: {len(found)} ports")
+    progress(f"done: {ask.requests} read requests")
+    return result
+
+
+def closest_builtin(version: str):
+    """The built-in profile with this firmware string, else one with the same module number
+    (the characters before 'V', e.g. 6212 of 6212V105), else None."""
+    from ..modules.profile import load_profile, module_names
+
+    profiles = [load_profile(n) for n in module_names()]
+    for prof in profiles:
+        if prof.firmware_version == version:
+            return prof
+    number = version.split("V")[0]
+    for prof in profiles:
+        if number and prof.firmware_version.split("V")[0] == number:
+            return prof
+    return None
+
+
+def _toml(value) -> str:
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, list):
+        return "[" + ", ".join(_toml(v) for v in value) + "]"
+    return str(value).lower() if isinstance(value, bool) else str(value)
+
+
+def _table(name: str, fields: dict) -> list[str]:
+    return ["", f"[[{name}]]", *(f"{k} = {_toml(v)}" for k, v in fields.items())]
+
+
+_UNKNOWN = {"min": -2147483648, "max": 2147483647, "access": "R"}
+
+
+def skeleton(result: ProbeResult, url: str) -> str:
+    """A profile file for the probed module: `extends` the closest built-in profile and overrides
+    what differs, or a standalone profile when none matches. Marked unverified."""
+    base = closest_builtin(result.firmware_version)
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    lines = [f"# Profile skeleton probed from {url} on {when} by opentmcl profile probe.",
+             "# UNVERIFIED: only reading commands were used; ranges, access letters and units of parameters",
+             "# the base profile does not know are placeholders. Check them against the module's manual.",
+             "# Writable parameters whose probed value differs from the base default override it; every other",
+             "# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
+    axis0 = result.axis.get(0, {})
+    if base is not None:
+        lines += [f'extends = "{base.name}"', "", "[module]", f'name = "{base.name}-probed"',
+                  f'firmware_version = {_toml(result.firmware_version)}']
+        if result.firmware_binary is not None and result.firmware_binary != base.firmware_binary:
+            lines.append(f"firmware_binary = {result.firmware_binary}")
+        if result.axes != base.axes:
+            lines.append(f"axes = {result.axes}")
+        known_axis, known_global, known_io = base.axis_parameters, base.global_parameters, base.io
+    else:
+        lines += ["", "[module]", f'name = "{result.firmware_version}"', "aliases = []",
+                  f"axes = {max(1, result.axes)}", 'engine = "linear"',
+                  f'firmware_version = {_toml(result.firmware_version)}',
+                  f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
+                  "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139)))]
+        known_axis, known_global, known_io = {}, {}, {}
+    comments, body = [], []
+    for number, value in sorted(axis0.items()):
+        p = known_axis.get(number)
+        if p is None:
+            body += _table("axis_parameter", {"number": number, "name": f"axis_parameter_{number}", **_UNKNOWN,
+                                              "default": value})
+        elif p.writable and p.default != value and p.min <= value <= p.max:
+            body += _table("axis_parameter", {"number": number, "default": value})
+        else:
+            comments.append(f"# GAP {number}, 0 = {value}  ({p.name})")
+    for (bank, number), value in sorted(result.globals.items()):
+        if bank == 2 and (bank, number) not in known_global:
+            continue  # user variables (bank 2) are counted, not listed
+        p = known_global.get((bank, number))
+        if p is None:
+            body += _table("global_parameter", {"bank": bank, "number": number,
+                                                "name": f"global_parameter_{bank}_{number}", **_UNKNOWN,
+                                                "default": value})
+        elif p.writable and p.default != value and p.min <= value <= p.max:
+            body += _table("global_parameter", {"bank": bank, "number": number, "default": value})
+        else:
+            comments.append(f"# GGP {number}, {bank} = {value}  ({p.name})")
+    for (bank, port), value in sorted(result.io.items()):
+        if (bank, port) not in known_io:
+            kind = {0: "digital", 1: "analog", 2: "output"}[bank]
+            body += _table("io", {"bank": bank, "port": port, "name": f"IO_{bank}_{port}", "kind": kind,
+                                  "access": "R" if bank < 2 else "RW", "min": 0, "max": max(1, value)})
+        else:
+            comments.append(f"# GIO {port}, {bank} = {value}  ({known_io[(bank, port)].name})")
+    user_vars = sum(1 for bank, _ in result.globals if bank == 2)
+    if base is None or user_vars != base.user_variables:
+        lines.insert(lines.index("[module]") + 1, f"user_variables = {user_vars}")
+    removed = {
+        "axis_parameter": [n for n, p in sorted(known_axis.items()) if p.readable and n not in axis0],
+        "global_parameter": [[b, n] for (b, n), p in sorted(known_global.items())
+                             if p.readable and b in (0, 2, 3) and (b, n) not in result.globals],
+        "io": [[b, n] for (b, n), p in sorted(known_io.items()) if "R" in p.access and (b, n) not in result.io],
+    }
+    removed = {k: v for k, v in removed.items() if v}
+    if removed:
+        body += ["", "[remove]", *(f"{k} = {_toml(v)}" for k, v in removed.items())]
+    return "\n".join(lines + body + ["", "# Probed values equal to the base profile:", *comments]) + "\n"

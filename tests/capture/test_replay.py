@@ -1,0 +1,169 @@
+"""Replay in virtual time (capture/replay.py): what agrees, what diverges, tolerances, API, exit codes.
+
+Captures here are recorded from one virtual module through the decoder (as the proxy does) and then,
+where a test needs a divergence, one captured value is changed by hand."""
+from __future__ import annotations
+
+import json
+
+import pytest
+
+import opentmcl
+from opentmcl import VirtualModule
+from opentmcl.capture import ReplayError, Tolerance, assert_replays, replay
+from opentmcl.capture.decode import HOST, MODULE, Decoder
+from opentmcl.protocol.frame import Request
+
+from .helpers import cli
+
+HEADER = {"record": "header", "format": "opentmcl-capture", "version": 1, "tool": "test", "target": "sim://"}
+
+
+def record(path, steps, name="TMCM-6212"):
+    """Run `steps` [(t, (command, type, motor, value))] against a module; write the capture."""
+    vm = VirtualModule(name, address=1)
+    decoder = Decoder(lambda a: vm.profile)
+    out = [HEADER]
+    for t, fields in steps:
+        vm.advance_to(round(t * 16_000_000))
+        for raw in vm.drain_events():
+            out += [{"record": "frame", **r} for r in decoder.feed(t, MODULE, raw)]
+        frame = Request(1, *fields).encode()
+        out += [{"record": "frame", **r} for r in decoder.feed(t, HOST, frame)]
+        reply = vm.handle(frame)
+        if reply:
+            out += [{"record": "frame", **r} for r in decoder.feed(t + 0.0005, MODULE, reply)]
+    path.write_text("".join(json.dumps(r) + "\n" for r in out))
+    return path
+
+
+def edit(path, predicate, **changes):
+    lines = [json.loads(x) for x in path.read_text().splitlines()]
+    hits = [r for r in lines if predicate(r)]
+    assert hits
+    for r in hits:
+        r.update(changes)
+    path.write_text("".join(json.dumps(r) + "\n" for r in lines))
+
+
+MOVE = [(0.1, (5, 4, 0, 51200)), (0.2, (4, 0, 0, 200000)), (2.0, (6, 1, 0, 0)), (2.1, (6, 3, 0, 0)),
+        (2.2, (6, 6, 0, 0))]
+"""SAP 4 = 51200 pps, MVP ABS 200000 (about 4.9 s), then GAP 1/3/6 while at constant speed."""
+
+
+def test_a_module_agrees_with_its_own_capture(tmp_path):
+    report = replay(record(tmp_path / "c.jsonl", MOVE), "TMCM-6212")
+    assert report.ok and report.compared == 5 and report.divergences == []
+
+
+def test_changed_constant_value_diverges_with_its_name(tmp_path):
+    path = record(tmp_path / "c.jsonl", MOVE)
+    edit(path, lambda r: r.get("kind") == "reply" and r.get("parameter") == "max_current", value=99)
+    report = replay(path, "TMCM-6212")
+    assert [d.parameter for d in report.divergences] == ["max_current"]
+    assert "GAP 6, 0" in str(report.divergences[0]) and "captured 99" in str(report.divergences[0])
+
+
+def test_position_within_the_time_window_agrees_and_beyond_it_diverges(tmp_path):
+    """At 51200 pps (TMCM-6212 AP4) the position moves 5120 µsteps in the default 0.1 s window: 1000
+    off agrees, 20000 off diverges unless the position tolerance covers it."""
+    path = record(tmp_path / "c.jsonl", MOVE)
+    actual = lambda r: r.get("kind") == "reply" and r.get("parameter") == "actual_position"  # noqa: E731
+    captured = next(json.loads(x)["value"] for x in path.read_text().splitlines() if actual(json.loads(x)))
+    edit(path, actual, value=captured + 1000)
+    assert replay(path, "TMCM-6212").ok
+    edit(path, actual, value=captured + 20000)
+    report = replay(path, "TMCM-6212")
+    assert report.parameters == ["actual_position"]
+    assert replay(path, "TMCM-6212", tolerance=["position=20000"]).ok
+    assert not replay(path, "TMCM-6212", tolerance=["position=10000"]).ok
+    assert replay(path, "TMCM-6212", tolerance={"time": 0.5}).ok  # 25600 µsteps either side
+
+
+def test_status_divergence_and_missing_reply(tmp_path):
+    """Manual 3.2.1: status codes are compared; a reply the module sent but the capture lacks diverges."""
+    path = record(tmp_path / "c.jsonl", [(0.1, (5, 4, 0, 51200)), (0.2, (6, 6, 0, 0))])
+    edit(path, lambda r: r.get("kind") == "reply" and r.get("command") == 5, status=4)
+    lines = [x for x in path.read_text().splitlines() if '"command": 6' not in x or '"dir": "host"' in x]
+    path.write_text("\n".join(lines) + "\n")
+    report = replay(path, "TMCM-6212")
+    whats = [(d.what, d.parameter) for d in report.divergences]
+    assert whats == [("status", "max_positioning_speed"), ("reply", "max_current")]
+
+
+def test_events_are_compared_in_order(tmp_path):
+    """Manual 3.6.35: 138 then MVP: one event with the motor mask when the target is reached."""
+    steps = [(0.1, (138, 0, 0, 1)), (0.2, (4, 0, 0, 1000)), (3.0, (6, 1, 0, 0))]
+    path = record(tmp_path / "c.jsonl", steps)
+    report = replay(path, "TMCM-6212")
+    assert report.ok and report.events == 1
+    edit(path, lambda r: r.get("kind") == "event", value=2)
+    assert [d.what for d in replay(path, "TMCM-6212").divergences] == ["event"]
+    lines = [x for x in path.read_text().splitlines() if '"event"' not in x]
+    path.write_text("\n".join(lines) + "\n")
+    report = replay(path, "TMCM-6212")
+    assert [(d.what, d.captured) for d in report.divergences] == [("event", "no event")]
+
+
+def test_requests_to_other_addresses_are_skipped(tmp_path):
+    path = record(tmp_path / "c.jsonl", MOVE)
+    report = replay(path, "TMCM-6212", address=2)
+    assert report.compared == 0 and report.skipped == 5 and report.ok
+
+
+@pytest.mark.parametrize("spec", ["speed=1", "position", "position=-1", "position=inf", "time=x"])
+def test_bad_tolerances(spec, tmp_path):
+    with pytest.raises(ReplayError):
+        Tolerance.parse([spec])
+    key, _, value = spec.partition("=")
+    with pytest.raises(ReplayError):
+        replay(record(tmp_path / "d.jsonl", MOVE), "TMCM-6212", tolerance={key: value})
+    done = cli("replay", str(record(tmp_path / "c.jsonl", MOVE)), "-m", "TMCM-6212", "--tolerance", spec)
+    assert done.returncode == 2 and len(done.stderr.splitlines()) == 1
+
+
+def test_api_helper_and_unknown_module(tmp_path):
+    path = record(tmp_path / "c.jsonl", MOVE)
+    assert opentmcl.replay is replay
+    assert assert_replays(path, "TMCM-6212").ok
+    edit(path, lambda r: r.get("parameter") == "max_current" and r["dir"] == "module", value=1)
+    with pytest.raises(AssertionError, match=r"max_current"):
+        assert_replays(path, "TMCM-6212")
+    with pytest.raises(ReplayError, match="unknown module"):
+        replay(path, "TMCM-9999")
+    with pytest.raises(ReplayError, match="does not identify"):
+        replay(path)
+    done = cli("replay", str(path), "--module", "TMCM-9999")
+    assert done.returncode == 2 and "unknown module" in done.stderr
+
+
+def test_eeprom_file_gives_the_replayed_module_its_stored_state(tmp_path):
+    """PD86-1180 manual 4.6.7 (STAP): a stored axis parameter is restored at power-up; a capture of a
+    module with max_current stored as 77 agrees only with a twin that powers up from that EEPROM."""
+    eeprom = tmp_path / "module.eeprom"
+    vm = VirtualModule("PD86-1180", address=1, eeprom=eeprom)
+    assert vm.request(5, 6, 0, 77).status == 100 and vm.request(7, 6, 0, 0).status == 100
+    vm.close()
+    path = record(tmp_path / "c.jsonl", [(0.1, (6, 6, 0, 0))], name="PD86-1180")
+    edit(path, lambda r: r.get("kind") == "reply", value=77)  # what the module with that EEPROM said
+    assert replay(path, "PD86-1180").parameters == ["max_current"]
+    done = cli("replay", str(path), "--module", "PD86-1180", "--eeprom", str(eeprom))
+    assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_the_replayed_module_follows_a_new_address(tmp_path):
+    """TMCM-6212 manual 3.6.7 example: SGP 66, 0, 3 gives the module address 3; the next requests go
+    to address 3 and must be replayed, not skipped."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    decoder = Decoder(lambda a: vm.profile)
+    out = [HEADER]
+    for t, (address, fields) in enumerate([(1, (9, 66, 0, 3)), (3, (6, 6, 0, 0)), (1, (6, 6, 0, 0))]):
+        frame = Request(address, *fields).encode()
+        out += [{"record": "frame", **r} for r in decoder.feed(t, HOST, frame)]
+        out += [{"record": "frame", **r} for r in decoder.feed(t + 0.001, MODULE, vm.handle(frame))]
+    path = tmp_path / "c.jsonl"
+    path.write_text("".join(json.dumps(r) + "\n" for r in out))
+    report = replay(path, "TMCM-6212")
+    assert report.ok and report.compared == 2 and report.skipped == 1
+    edit(path, lambda r: r.get("kind") == "reply" and r.get("address") == 3, value=1)
+    assert replay(path, "TMCM-6212").parameters == ["max_current"]
