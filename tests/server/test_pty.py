@@ -190,3 +190,13 @@ def test_paced_rs485_bus_turn_around_adds_gp75():
     finally:
         server.stop()
     assert min(times) >= WIRE_9600 + 0.020
+
+
+def test_a_paced_pty_stands_for_an_rs485_line():
+    """Manual 5.1 GP65 "RS485 baud rate": a paced pty is a line at that rate, so with one module it
+    defaults to rs485 (address filtering, GP75) instead of usb, and usb with pacing is refused."""
+    server = Server([VirtualModule("TMCM-6212", address=1)])
+    assert PtyServer(server.bus).interface == "usb"
+    assert PtyServer(server.bus, pace_bytes=True).interface == "rs485"
+    with pytest.raises(ValueError, match="baud rate"):
+        PtyServer(server.bus, pace_bytes=True, interface="usb")

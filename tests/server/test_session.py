@@ -23,12 +23,12 @@ class FakeTime:
         self.t += s
 
 
-def make(pace=False):
+def make(pace=False, interface="serial"):
     ft = FakeTime()
     writes = []
     bus = ModuleBus([VirtualModule("TMCM-6212", address=1)], clock=ft.clock)
     session = SerialSession(bus, lambda b: writes.append((ft.t, bytes(b))), gap=0.1,
-                            pace_bytes=pace, clock=ft.clock, sleep=ft.sleep)
+                            pace_bytes=pace, clock=ft.clock, sleep=ft.sleep, interface=interface)
     return ft, writes, session
 
 
@@ -51,6 +51,20 @@ def test_telegram_pause_gp75_delays_the_reply():
     session.receive(GGP_66)
     assert ft.sleeps == [pytest.approx(0.015)]
     assert writes == [(pytest.approx(start + 0.015), reply(2, 1, 100, 10, 1))]
+
+
+@pytest.mark.parametrize(("interface", "pause"), [("rs485", 0.015), ("rs232", 0.015), ("usb", None)])
+def test_telegram_pause_only_on_rs485_and_rs232(interface, pause):
+    """TMCM-6212 5.1 GP75 "Pause time before the reply via RS485 is sent"; PD86-1180 6.1 "Pause
+    time before the reply via RS232 or RS485 is sent. For RS232 set to 0": a link that stands for
+    USB sends the reply at once whatever GP75 holds."""
+    ft, writes, session = make(interface=interface)
+    session.receive(request(1, 9, 75, 0, 15))  # SGP 75, 0, 15
+    writes.clear()
+    ft.sleeps.clear()
+    session.receive(GGP_66)
+    assert ft.sleeps == ([] if pause is None else [pytest.approx(pause)])
+    assert writes == [(pytest.approx(ft.t), reply(2, 1, 100, 10, 1))]
 
 
 def test_byte_pacing_follows_gp65_baud_rate():

@@ -74,8 +74,9 @@ def fake_time(monkeypatch):
 
 def test_telegram_pause_delays_readability(fake_time):
     """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent" (ms, docs/assumptions.md):
-    the reply to the 3.6.8 GGP 66 example becomes readable only when the pause is over."""
-    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
+    the reply to the 3.6.8 GGP 66 example becomes readable only when the pause is over (a port
+    that stands for an RS-485 line)."""
+    with serial.serial_for_url("opentmcl://TMCM-6212?interface=rs485", timeout=2) as port:
         port.write(request(1, 9, 75, 0, 200))  # SGP 75, 0, 200
         port.read(9)
         port.write(GGP_66)
@@ -85,6 +86,30 @@ def test_telegram_pause_delays_readability(fake_time):
         fake_time.t += 0.002
         assert port.in_waiting == 9
         assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+def test_no_telegram_pause_on_usb(fake_time):
+    """Manual 5.1 GP75 "Pause time before the reply via RS485 is sent" (PD86-1180 6.1: "via RS232
+    or RS485"): a one-module port stands for the module's USB port, where GP75 = 200 delays nothing."""
+    with serial.serial_for_url("opentmcl://TMCM-6212", timeout=2) as port:
+        port.write(request(1, 9, 75, 0, 200))  # SGP 75, 0, 200
+        port.read(9)
+        port.write(GGP_66)
+        assert port.in_waiting == 9
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+
+
+def test_a_paced_port_is_a_serial_line():
+    """Manual 5.1 GP65 is the "RS485 baud rate": ?pace=1 paces at it, so a paced port to one module
+    stands for an RS-485 line (frames for other addresses get no reply) and ?interface=usb, which
+    has no baud rate, is refused with it."""
+    with serial.serial_for_url("opentmcl://TMCM-6212?pace=1", timeout=0.5) as port:
+        port.write(request(0, 10, 66, 0))
+        assert port.read(9) == b""
+        port.write(GGP_66)
+        assert port.read(9) == reply(2, 1, 100, 10, 1)
+    with pytest.raises(serial.SerialException, match="baud rate"):
+        serial.serial_for_url("opentmcl://TMCM-6212?pace=1&interface=usb")
 
 
 @pytest.mark.parametrize(("gp65", "baud"), [(0, 9600), (7, 115200)])

@@ -376,3 +376,53 @@ def test_wait_pos_after_wait_rfs_returns(rig, module):
     w.run()
     r.vm.advance(60)
     assert r.gap(1) == 777
+
+
+def _every_mode():
+    """(module, AP193 value) for every value each profile's row accepts."""
+    from opentmcl.modules.profile import load_profile
+
+    return [(m, v) for m in MODULES for v in load_profile(m).axis_parameter(193).values]
+
+
+def _stage_for(module: str, mode: int) -> dict:
+    """Left switch on [-23000, -20000], right on [30000, 33000], home on [4500, 5500] (none on
+    the TMCM-1180, whose reference input is the left one); the switch that +128 inverts is
+    normally closed; the slider starts left of the home switch, right of it for the modes that
+    search it in negative direction only (8: from 10000)."""
+    base = mode & 0x3F
+    if module == "TMCM-6212" and mode & 128 and base <= 4:
+        base += 4                       # 129..132 are modes 5..8 (TMCM-6212 6.1.5-6.1.8)
+    inverted = bool(mode & 128)
+    axis = {"start": 10000 if base == 8 else 0,
+            "left": {"position": -20000, "width": 3000, "inverted": inverted and module == "TMCM-1180"},
+            "right": {"position": 30000, "width": 3000}}
+    if module != "TMCM-1180":
+        axis["home"] = {"position": 5000, "width": 1000, "inverted": inverted}
+    return {"axis": {"0": axis}}
+
+
+@pytest.mark.parametrize(("module", "mode"), _every_mode())
+def test_every_mode_ends_with_target_equal_to_actual(rig, module, mode):
+    """TMCM-6212 manual 4.1 AP8: "This flag is always set when target position and actual position
+    are equal"; 3.6.4 MVP REL: "an offset to the actual position". Every reference search mode on
+    every module, after a move cancelled far from the switches (its target left in the old
+    coordinates): target and actual both read 0, AP8 reads 1, the motor stands, and MVP REL 100
+    (-100 for the +64 modes, whose reference is the right switch) ends 100 microsteps from the
+    reference point."""
+    sc = _stage_for(module, mode)
+    r = rig(module, sc)
+    r.sap(193, mode)
+    start = sc["axis"]["0"]["start"]
+    r.cmd(4, 0, 0, start + 40000)    # MVP ABS far right ...
+    r.vm.advance(0.2)
+    r.cmd(3)                         # ... cancelled by MST
+    r.vm.advance(2)
+    assert r.gap(0) == start + 40000 and r.gap(1) != r.gap(0)
+    r.search()
+    assert (r.gap(0), r.gap(1), r.gap(8), r.gap(3)) == (0, 0, 1, 0)
+    origin, step = r.phys(), -100 if mode & 64 else 100    # away from the reference switch
+    r.cmd(4, 1, 0, step)             # MVP REL
+    r.vm.advance(5)
+    assert (r.gap(0), r.gap(1), r.gap(8)) == (step, step, 1)
+    assert r.phys() == origin + step

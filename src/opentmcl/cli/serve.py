@@ -40,7 +40,7 @@ def register(subparsers) -> None:
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
     p.add_argument("--interface", choices=("usb", "rs485", "rs232"),
                    help="with --pty: the link the port stands for; usb answers any address byte "
-                        "(default usb for one module, rs485 for several)")
+                        "(default usb for one module, rs485 for several or with --pace)")
     p.add_argument("--can", metavar="INTERFACE:CHANNEL",
                    help="serve on a python-can bus, e.g. virtual:opentmcl (this process), udp_multicast:239.74.163.2 "
                         "(other processes) or socketcan:vcan0")
@@ -51,7 +51,7 @@ def register(subparsers) -> None:
     p.add_argument("--gap", type=float, default=0.1, metavar="SECONDS",
                    help="silence after which a partial serial frame is discarded (default 0.1)")
     p.add_argument("--pace", action="store_true",
-                   help="send reply bytes at the module's RS485 baud rate (global parameter 65)")
+                   help="pace request and reply bytes at the RS485 baud rate (global parameter 65)")
     p.add_argument("--web", metavar="HOST:PORT",
                    help="also serve the browser dashboard of every module, e.g. 127.0.0.1:8080 "
                         "(each module at /m/ADDRESS/, a selector on the page)")
@@ -209,8 +209,11 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
     if args.pty:
         if sys.platform == "win32":
             raise CliError("--pty needs a POSIX system")
-        if args.interface == "usb" and len(modules) > 1:
-            raise CliError("--interface usb carries one module; use rs485 for a bus of several")
+        from ..server.bus import interface_error
+
+        problem = args.interface and interface_error(args.interface, len(modules), args.pace)
+        if problem:
+            raise CliError(f"--interface {args.interface}: {problem}")
         server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
                              interface=args.interface))
     if args.can:

@@ -27,7 +27,7 @@ INSTRUCTION_SECONDS = 0.0001  # one TMCL instruction of the virtual modules (100
 WAIT_SLICE = 0.01             # how long the debugger lets a WAIT run between two looks
 POLL = 0.05                   # status polling period while the program runs freely
 
-# Bits of the flags word of 135 type 4 where a firmware offers it (layout of firmware/flags.py).
+# Bits of the program flags word (layout of firmware/flags.py; Loader.flags).
 FLAG_NAMES = ((0x100, "ZE"), (0x200, "EQ"), (0x400, "GT"), (0x800, "LT"),
               (1, "ETO"), (2, "EAL"), (4, "EDV"), (8, "EPO"), (16, "ESD"))
 
@@ -76,10 +76,7 @@ _INDEXED = {
 
 
 def _flags(ld: Loader) -> str:
-    try:
-        return describe_flags(ld.request(135, 4).value)
-    except TmclStatusError:
-        return "n/a"
+    return describe_flags(ld.flags())
 
 
 def parse_watch(spec: str) -> Watch:

@@ -4,7 +4,7 @@
     loader = Loader(opentmcl.connect("sim://TMCM-6212"))
     loader.download(program)        # 132 <start>, each instruction (status 101), 133, verify by 134
     loader.run()                    # 129 type 1 from the start address
-    loader.status()                 # 135 types 1-3 (and the flags, where the module has them)
+    loader.status()                 # 135 types 1-3 (and the flags of an in-process virtual module)
 
 `program` is a `lang.assembler.Program`, a list of (command, type, motor, value) tuples or
 the bytes of a TMCL-IDE binary file.
@@ -28,7 +28,6 @@ from .errors import TmclError, TmclStatusError, TmclTypeError, check_int, check_
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
 MODES = {0: "stop", 1: "run", 2: "step", 3: "reset"}  # GP128 / 135 (TMCM-6212 manual 5.1)
-FLAGS_TYPE = 4  # 135 type 4: program flags where a firmware offers them (the manuals list 0-3: status 3)
 
 
 class LoaderError(TmclError):
@@ -162,15 +161,19 @@ class Loader:
         self.request(RESET_APPLICATION)
 
     def status(self) -> AppStatus:
-        """135 type 1 (mode, wait flag, PC), 2 (A), 3 (X) and, where available, 4 (flags)."""
+        """135 type 1 (mode, wait flag, PC), 2 (A), 3 (X); the flags where they can be read."""
         word = self.request(GET_APPLICATION_STATUS, 1).value & 0xFFFFFFFF
         a = self.request(GET_APPLICATION_STATUS, 2).value
         x = self.request(GET_APPLICATION_STATUS, 3).value
-        try:
-            flags = self.request(GET_APPLICATION_STATUS, FLAGS_TYPE).value
-        except TmclStatusError:
-            flags = None
-        return AppStatus(word >> 24, bool(word >> 16 & 0xFF), word & 0xFFFF, a, x, flags)
+        return AppStatus(word >> 24, bool(word >> 16 & 0xFF), word & 0xFFFF, a, x, self.flags())
+
+    def flags(self) -> int | None:
+        """The program flags (ZE EQ GT LT and the error flags, layout of firmware/flags.py). No
+        TMCL command reads them (135 lists types 0-3 only), so they are known only for a virtual
+        module in this process (sim://, the dashboard of `serve --web`); None otherwise."""
+        vm = self.client.transport.local_module(self.address)
+        flags = getattr(vm, "flags", None)
+        return flags if isinstance(flags, int) else None
 
     def variable(self, number: int) -> int:
         """User variable `number` (GGP <number>, 2)."""

@@ -62,6 +62,11 @@ class Transport(ABC):
         """The clock that `timeout`/`sleep` are measured on (real links: wall clock)."""
         return time.monotonic()
 
+    def local_module(self, address: int):
+        """The virtual module in this process that answers `address`, or None (real links).
+        Lets the debugger read state the wire does not carry, such as the program flags."""
+        return None
+
     def __enter__(self):
         return self
 

@@ -54,9 +54,22 @@ SERIAL_INTERFACES = ("usb", "rs485", "rs232")
 """What a serial endpoint can stand for (`opentmcl serve --pty --interface`)."""
 
 
-def default_interface(modules) -> str:
-    """USB when the link carries one module, RS-485 for a bus of several (docs/endpoints.md)."""
-    return USB if len(modules) == 1 else "rs485"
+def default_interface(modules, paced: bool = False) -> str:
+    """USB when the link carries one module, RS-485 for a bus of several or a paced line
+    (docs/endpoints.md)."""
+    return USB if len(modules) == 1 and not paced else "rs485"
+
+
+def interface_error(interface: str, count: int, paced: bool) -> str | None:
+    """Why a serial endpoint cannot stand for `interface` with `count` modules, or None."""
+    if interface not in SERIAL_INTERFACES:
+        return f"interface must be one of {', '.join(SERIAL_INTERFACES)}, got {interface!r}"
+    if interface == USB and count != 1:
+        return "a USB link carries one module; use rs485 for a bus of several"
+    if interface == USB and paced:
+        # GP65 is the "RS485 baud rate" (TMCM-6212 5.1); a module's USB port has no baud rate.
+        return "a USB link has no baud rate to pace at (GP65 is the RS485 baud rate); use rs485 or rs232"
+    return None
 
 
 MIN_STEP = 0.002

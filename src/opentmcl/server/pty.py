@@ -18,7 +18,7 @@ import threading
 import time
 from pathlib import Path
 
-from .bus import SERIAL_INTERFACES, USB, default_interface
+from .bus import default_interface, interface_error
 from .framer import DEFAULT_GAP
 from .session import SerialSession
 
@@ -32,11 +32,10 @@ class PtyServer:
                  pace_bytes: bool = False, interface: str | None = None, session=SerialSession) -> None:
         if session is SerialSession:  # the proxy's own session relays bytes and filters nothing
             if interface is None:
-                interface = default_interface(bus.modules)
-            if interface not in SERIAL_INTERFACES:
-                raise ValueError(f"interface must be one of {', '.join(SERIAL_INTERFACES)}, got {interface!r}")
-            if interface == USB and len(bus.modules) != 1:
-                raise ValueError("a USB link carries one module; use rs485 for a bus of several")
+                interface = default_interface(bus.modules, pace_bytes)
+            problem = interface_error(interface, len(bus.modules), pace_bytes)
+            if problem:
+                raise ValueError(problem)
         self.interface = interface
         """What the port stands for: "usb" (any address byte is answered), "rs485" or "rs232"."""
         self.bus = bus

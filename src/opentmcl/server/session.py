@@ -5,8 +5,9 @@ ASCII mode, text lines (`SerialStream`), hands them to the modules of the bus
 and writes the replies back, as a module on an RS-485 line does:
 
 - it waits the telegram pause time (global parameter 75) before a reply
-  ("Pause time before the reply via RS485 is sent", manual 5.1); the manual
-  gives no unit, we use milliseconds (docs/assumptions.md);
+  ("Pause time before the reply via RS485 is sent", manual 5.1; not on a link
+  that stands for USB); the manual gives no unit, we use milliseconds
+  (docs/assumptions.md);
 - with `pace_bytes`, received bytes reach the modules only once they have crossed
   the line at the RS485 baud rate (global parameter 65, ten bit times per byte,
   8N1; the slowest module's rate on a bus), binary frames and ASCII text alike,
@@ -32,6 +33,7 @@ import time
 from collections.abc import Callable
 
 from . import vmapi
+from .bus import USB
 from .framer import DEFAULT_GAP
 from .stream import BINARY, SerialStream
 
@@ -105,7 +107,9 @@ class SerialSession:
             self.send_reply(vm, reply)
 
     def send_reply(self, vm, reply: bytes, *, pause: bool = True) -> None:
-        """Write `reply` after the telegram pause (if `pause`), paced at GP65 if asked."""
+        """Write `reply` after the telegram pause (if `pause`; never on USB: GP75 is the pause "before
+        the reply via RS485 is sent"), paced at GP65 if asked."""
+        pause = pause and self.interface != USB
         reader = self._readers.get(id(vm), False)
         if reader is False:
             reader = self._readers[id(vm)] = vmapi.raw_reader(vm)

@@ -39,7 +39,7 @@ from serial.serialutil import PortNotOpenError, SerialException, Timeout
 
 from ..modules.addresses import address_error
 from ..server import vmapi
-from ..server.bus import SERIAL_INTERFACES, USB, ModuleBus, default_interface
+from ..server.bus import SERIAL_INTERFACES, USB, ModuleBus, default_interface, interface_error
 from ..server.framer import DEFAULT_GAP
 from ..server.session import byte_time
 from ..server.stream import BINARY, SerialStream
@@ -73,8 +73,7 @@ def parse_url(url: str) -> dict:
     problem = address_error([a for _, a in modules])
     if problem:
         raise ValueError(problem)
-    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False,
-               "interface": default_interface(modules)}
+    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False, "interface": None}
     for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
         if key == "eeprom":
             options["eeprom"] = [v for v in value.split(",")]
@@ -90,11 +89,14 @@ def parse_url(url: str) -> dict:
         elif key == "interface":
             if value not in SERIAL_INTERFACES:
                 raise ValueError(f"bad interface {value!r}; use one of {', '.join(SERIAL_INTERFACES)}")
-            if value == USB and len(modules) != 1:
-                raise ValueError("interface=usb carries one module; use rs485 for a bus of several")
             options["interface"] = value
         else:
             raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace, interface)")
+    if options["interface"] is None:
+        options["interface"] = default_interface(modules, options["pace"])
+    problem = interface_error(options["interface"], len(modules), options["pace"])
+    if problem:
+        raise ValueError(problem)
     if len(options["eeprom"]) > len(modules):
         raise ValueError("more eeprom files than modules")
     return options
@@ -160,6 +162,7 @@ class Serial(serial.Serial):
         """Make `reply` readable after the telegram pause (binary replies only), paced at GP65 if asked;
         `at` is when the request reached the module (default: now)."""
         now = time.monotonic() if at is None else at
+        pause = pause and self.interface != USB   # GP75: "before the reply via RS485 is sent"
         start = now + (vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0)
         if self._rx:
             start = max(start, self._rx[-1][0])

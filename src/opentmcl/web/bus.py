@@ -23,6 +23,10 @@ class BusTransport(Transport):
         self._cond = threading.Condition()
         self._closed = False
 
+    def local_module(self, address: int):
+        """The served module at `address` (the dashboard runs in the server's process)."""
+        return next((m for m in self.bus.modules if m.accepts_address(address)), None)
+
     def send(self, data: bytes) -> None:
         if self._closed:
             raise TmclConnectionError("dashboard bus link is closed")

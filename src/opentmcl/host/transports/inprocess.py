@@ -124,6 +124,11 @@ def make_clock(clock: str | Clock) -> Clock:
         raise TmclValueError(f"unknown clock policy {clock!r}; use one of {', '.join(CLOCKS)}") from None
 
 
+def _answers(module, address: int) -> bool:
+    accepts = getattr(module, "accepts_address", None)
+    return accepts is not None and accepts(address)
+
+
 class InProcessTransport(Transport):
     """Transport to one or more VirtualModule-like objects in this process."""
 
@@ -149,6 +154,9 @@ class InProcessTransport(Transport):
     def _check_open(self) -> None:
         if self._closed:
             raise TmclConnectionError("in-process transport is closed")
+
+    def local_module(self, address: int):
+        return next((m for m in self.modules if _answers(m, address)), None)
 
     def _collect_events(self) -> None:
         for m in self.modules:
