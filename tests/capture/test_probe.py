@@ -59,7 +59,7 @@ def test_probe_extends_the_closest_builtin_and_notes_what_differs(tmp_path):
 
 
 def test_probe_is_bounded_in_time_and_fails_in_one_line(tmp_path):
-    with Tool("serve", "--module", "PD86-1180", "--pty") as served:
+    with Tool("serve", "--module", "PD86-1180", "--pty", "--interface", "rs485") as served:  # filters addresses
         slow = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--max-seconds", "0.05")
         nobody = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--address", "9", "--timeout", "0.2")
     assert slow.returncode == 1 and "longer than its time limit" in slow.stderr.splitlines()[-1]

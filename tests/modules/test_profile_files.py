@@ -69,7 +69,7 @@ def test_extends_overrides_adds_and_removes(derived):
     assert vm.request(6, 250, 0).value == 7
     assert vm.request(6, 206, 0).status == 3 and base.axis_parameter(206)
     assert (0, 81) not in vm.profile.global_parameters and (0, 81) in base.global_parameters
-    assert vm.request(7, 0, 0).status == 6  # STAP is not in the opcode list: 6 "Command not available"
+    assert vm.request(7, 0, 0).status == 2  # STAP is not in the opcode list: 2 "Invalid command"
     assert vm.profile.axis_parameter(6).title == base.axis_parameter(6).title  # inherited fields stay
     assert (2, 5) in vm.profile.io
     # PD86-1180 manual 4.6.15 (GIO): the removed analog input answers like a port the module lacks
