@@ -62,7 +62,7 @@ def test_ramp_mode_trapezoid_reaches_the_target_exactly():
     assert back & 0xFF == R.INT_BIT["pos_end"]
     # 6.1.9.2 hints: "With a good parameter p the minimal velocity V_MIN is reached a couple of
     # steps before the target position" - the velocity follows V_TARGET down to V_MIN, no crawl
-    moving = [(v, x) for v, x in zip(v_seen, x_seen) if v]
+    moving = [(v, x) for v, x in zip(v_seen, x_seen, strict=True) if v]
     assert moving[-1][0] == 10 and moving[-2][0] > 10 and moving[-2][1] >= 20_000 - 3
 
 

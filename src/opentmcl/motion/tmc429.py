@@ -533,7 +533,7 @@ class Tmc429Ramp:
             dx = self.dx
             units0 = self._remaining(_sign(dx), abs(dx))
             if self._fires(phase, units0, j0 + 1):     # the computed target binds now
-                return self._follow_plan()
+                return self._follow_plan(until)
 
         ramp_events: list[int] = []
         clamp = None
@@ -647,20 +647,24 @@ class Tmc429Ramp:
         return _first_true(lambda j: self._fires(ph, units0, j), j_lo, t_hi // rp, rp)
 
     # ------------------------------------------------------------------ following the target
-    def _follow_plan(self) -> tuple[int | None, None, _Follow]:
-        """Plan of a stretch where the ramp_mode velocity follows its computed target."""
+    def _follow_plan(self, until: int | None) -> tuple[int | None, None, _Follow]:
+        """Plan of a stretch where the ramp_mode velocity follows its computed target:
+        walked on a copy up to `until` (None: to its end, memoised by the start state)."""
         key = self._follow_key()
         hit = _FOLLOW_MEMO.get(key)
-        if hit is None:
-            probe = self.copy()
-            event = probe._follow(None, None)
-            hit = (event - self.now, probe.now - self.now, probe._units_made, abs(probe._v),
-                   probe._moved)
+        if hit is not None:
+            seg = _Follow(self.now, *hit)
+            return self.now + seg.event_offset, None, seg
+        probe = self.copy()
+        event = probe._follow(until, None)
+        hit = (event - self.now, probe.now - self.now, probe._units_made, abs(probe._v),
+               probe._moved)
+        if until is None or event <= until:           # the whole stretch: remember it
             if len(_FOLLOW_MEMO) >= _FOLLOW_MEMO_SIZE:
                 _FOLLOW_MEMO.clear()
             _FOLLOW_MEMO[key] = hit
         seg = _Follow(self.now, *hit)
-        return self.now + seg.event_offset, None, seg
+        return event, None, seg
 
     def _follow_key(self) -> tuple:
         dx = self.dx
