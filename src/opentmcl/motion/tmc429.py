@@ -706,7 +706,9 @@ class Tmc429Ramp:
             total += count * n
             return 0
 
-        while True:
+        if pp == rp and steps is None:
+            t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit, floor)
+        while event is None:
             c = (t // rp + 1) * rp                         # next ramp tick
             n = w >> 8
             if n and w == self._speed(units - total) * 256 and floor * 256 < w:
@@ -751,6 +753,39 @@ class Tmc429Ramp:
         self._units_made, self._moved = total, moved
         self._settle(t, made0 + total, s * w, s, moved)
         return event
+
+    def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
+                     limit: int | None, floor: int) -> tuple:
+        """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
+        same rules inlined; hands back (event None) before a run of one velocity that
+        is worth jumping, at `limit`, or when done."""
+        rp, a = 32 << self._ramp_div, self._a_max
+        pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
+        low = floor << 8
+        c = (t // rp + 1) * rp
+        while limit is None or c <= limit:
+            left = units - total
+            sp = isqrt(pm * left >> sh)
+            sp = vmax if sp > vmax else (vmin if sp < vmin else sp)
+            tgt = sp << 8
+            if w == tgt:
+                n = w >> 8
+                if n and w > low and left + (-(n * n << sh) // pm) >= n << 2:
+                    return t, w, total, moved, None        # a run: `_follow` jumps it
+                nw = w
+            elif w < tgt:
+                nw = w + a if w + a < tgt else tgt
+            else:
+                nw = w - a if w - a > tgt else tgt
+            n = nw >> 8
+            if n and total + n >= units:                   # the arrival step at c
+                return c - 1, w, total, moved, c
+            w, total, t = nw, total + n, c
+            moved = moved or w > 0
+            if w == low or w == 0:
+                return t, w, total, moved, t + 1
+            c += rp
+        return t, w, total, moved, None
 
     def _settle(self, t: int, made: int, v: int, s: int, moved: bool) -> None:
         """Set the state after a stretch of `_follow` (made: accumulator units towards the
