@@ -48,10 +48,18 @@ def move(pd: int, rd: int, a_max: int, v_max: int, v_min: int, distance: int,
     return r
 
 
+def v_min_zone(v_min: int, pmul: int, pdiv: int) -> int:
+    """Steps before the target where the computed velocity sqrt(2048 p d) is below V_MIN: the
+    hints' "approached with minimal velocity V_MIN, whenever the internally calculated target
+    velocity becomes less than V_MIN"."""
+    return -(-(v_min * v_min << (3 + pdiv)) // (2048 * pmul))
+
+
 def tail_at_v_min(r: Recorder, distance: int) -> int:
-    """Steps made at |v| <= V_MIN before the target: those after the last faster step."""
+    """Steps made at |v| <= V_MIN before the target, after the last faster step (0 for a move
+    that never got faster than V_MIN: it has no deceleration to end)."""
     faster = [x for x, w in r.trace if w > r.v_min * 256]
-    return distance - (faster[-1] if faster else 0)
+    return distance - faster[-1] if faster else 0
 
 
 chip_moves = st.tuples(st.integers(0, 3), st.integers(0, 3), st.integers(0, 2047), st.floats(0, 1),
@@ -66,19 +74,31 @@ def _params(pd, extra, a_pick, v_max, v_min, distance):
 
 
 @example((0, 0, 0, 0.49, 2047, 1, 100_000))     # PD86-1180-like: crawled ~12 steps at V_MIN before
-@settings(max_examples=12, deadline=None)
+@settings(max_examples=8, deadline=None)
 @given(chip_moves)
 def test_datasheet_p_never_passes_the_target_and_reaches_v_min_near_it(m):
     """6.1.9: "target positions are quickly reached without overshooting"; 6.1.9.2 hints: "With a
     good parameter p the minimal velocity V_MIN is reached a couple of steps before the target
-    position" (p from the datasheet's method, 1 % reduced, A_MAX within 6.1.7.1.1's limits)."""
+    position" (p from the datasheet's method, 1 % reduced, A_MAX within 6.1.7.1.1's limits).
+    Then p without the reduction: 6.1.9.2 hints "With parameter p set a little bit too large and a
+    small V_MIN overshooting of one step (respectively one microstep) may occur", 6.1.9.2.1 "q =
+    1.0 ... overshooting could result because of finite numerical precision" - at most one step
+    past the target for A_MAX up to 1024 (a p too large by a fraction e overshoots by about e
+    times the braking distance), then back on it (6.1.3: V_MIN >= 1 "assures reaching each target
+    position exactly"), still without a crawl."""
     pd, extra, _, a_pick, v_max, v_min, distance = m
     rd, a_max = _params(pd, extra, a_pick, v_max, v_min, distance)
     pmul, pdiv = registers_for(a_max, rd, pd)
     r = move(pd, rd, a_max, v_max, v_min, distance, pmul, pdiv)
     assert r.x_actual == distance and r.v == 0
     assert max(x for x, _ in r.trace) == distance                # never past the target
-    assert tail_at_v_min(r, distance) <= 5                      # "a couple of steps"
+    assert tail_at_v_min(r, distance) <= v_min_zone(v_min, pmul, pdiv) + 3   # "a couple of steps"
+    a_max = min(a_max, 1024)
+    pmul, pdiv = registers_for(a_max, rd, pd, 0.0)
+    r = move(pd, rd, a_max, v_max, 1, distance, pmul, pdiv)
+    assert max(x for x, _ in r.trace) <= distance + 1
+    assert r.x_actual == distance and r.v == 0
+    assert tail_at_v_min(r, distance) <= v_min_zone(1, pmul, pdiv) + 3
 
 
 def test_p_too_small_approaches_more_slowly_along_a_flatter_curve():
@@ -98,26 +118,6 @@ def test_p_too_small_approaches_more_slowly_along_a_flatter_curve():
     assert runs[0.05][0] > runs[0.01][0]          # reached slower
     assert runs[0.05][1] < runs[0.01][1]          # the slow-down starts earlier
     assert runs[0.05][2] <= 10                    # ~5 % of the 2600-step deceleration would be 130
-
-
-@example((0, 0, 0, 0.5, 2047, 1, 50_000))
-@settings(max_examples=12, deadline=None)
-@given(chip_moves)
-def test_p_without_reduction_overshoots_by_at_most_a_step_and_settles(m):
-    """6.1.9.2 hints: "With parameter p set a little bit too large and a small V_MIN overshooting
-    of one step (respectively one microstep) may occur"; 6.1.9.2.1: with q = 1.0 "overshooting
-    could result because of finite numerical precision". p without the 1 % reduction, A_MAX up
-    to 1024 (a p too large by a fraction e overshoots by about e times the braking distance, so
-    "a little" is what keeps that below a step): at most one step past the target, then back on
-    it (6.1.3: V_MIN >= 1 "assures reaching each target position exactly"), and no crawl."""
-    pd, extra, _, a_pick, v_max, v_min, distance = m
-    rd, a_max = _params(pd, extra, a_pick, v_max, v_min, distance)
-    a_max = min(a_max, 1024)
-    pmul, pdiv = registers_for(a_max, rd, pd, 0.0)
-    r = move(pd, rd, a_max, v_max, 1, distance, pmul, pdiv)
-    assert max(x for x, _ in r.trace) <= distance + 1
-    assert r.x_actual == distance and r.v == 0
-    assert tail_at_v_min(r, distance) <= 5
 
 
 def test_v_min_zero_may_stop_short():
@@ -155,15 +155,20 @@ def test_v_target_reads_what_the_ramp_follows_and_a_actual_is_signed():
 
 def test_fast_core_and_oracle_agree_on_a_follow_stretch_sampled_every_tick():
     """DESIGN.md "Time": the fast core walks the square-root deceleration in runs; at every ramp
-    tick of a PD86-1180-like move it holds the oracle's state (position, velocity with its
-    fraction, accumulator)."""
+    tick of a move it holds the oracle's state (position, velocity with its fraction,
+    accumulator), and V_MIN comes only at the end (6.1.9.2 hints: "reached a couple of steps
+    before the target position"; the old latched ramp ran ~1 % of the deceleration at V_MIN)."""
     pmul, pdiv = registers_for(30, 2, 1)
     fast, ref = Tmc429Ramp(position_bits=32), ReferenceRamp(position_bits=32)
     for r in (fast, ref):
         r.set(pulse_div=1, ramp_div=2, v_min=3, v_max=900, a_max=30, pmul=pmul, pdiv=pdiv)
         r.set(x_target=12_345)
+    peaked = False
     while not (ref.x_actual == 12_345 and ref.v == 0):
         t = fast.now + (32 << 2)
         fast.advance(t)
         ref.advance(t)
         assert (fast.x_actual, fast.v_internal, fast._acc) == (ref.x_actual, ref.v, ref.acc)
+        peaked |= ref.v > 3 * 256
+        if peaked and ref.v <= 3 * 256:
+            assert ref.x_actual >= 12_345 - 3
