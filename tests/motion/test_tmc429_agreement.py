@@ -10,7 +10,7 @@ X_TARGET at every sampled cycle.
 from __future__ import annotations
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from opentmcl.motion.pmulpdiv import registers_for
@@ -245,6 +245,7 @@ def test_agreement_while_following_the_computed_target(m):
         if e is None:
             break
         steps += fast.step_events(e)
+    assume(fast.a_actual < 0)        # in the stretch that follows V_TARGET down (signed, 2.4)
     ref.advance(fast.now)
     assert state(fast) == state(ref)
     lead = fast.time_at_position(distance)
