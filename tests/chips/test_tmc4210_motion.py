@@ -325,9 +325,10 @@ def test_a_short_move_that_overshoots_by_one_step_settles():
 def test_short_moves_settle_on_the_target(pd, extra, a_max, v_max, v_min, target):
     """6.1.7.1.1: with A_MAX inside its limits "any target position" is reached "without
     oscillations"; 6.1.3: V_MIN >= 1 "assures reaching each target position exactly". These
-    short moves (found by hypothesis) overshoot, and used to swing target-1 / target / target+1
-    for ever; the pulse generator's signed accumulator (6.1.12.1, range +-2047) now walks the
-    overshoot back and the motor stops on the target."""
+    short moves (found by hypothesis) overshot under the latched-braking model and used to swing
+    target-1 / target / target+1 for ever; with the ramp following V_TARGET each ramp step (6.1.9)
+    they pass the target by at most one step (6.1.9.2 hints), the signed accumulator (6.1.12.1,
+    range +-2047) walks such a step back, and the motor stops on the target."""
     chip = _short_move(pd, extra, None, v_max, v_min, target, a_max=a_max)
     peak, ramp_period = 0, 32 << (pd + extra)
     while chip.time < _settle_bound(chip, target):
