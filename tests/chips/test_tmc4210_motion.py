@@ -60,9 +60,10 @@ def test_ramp_mode_trapezoid_reaches_the_target_exactly():
     back = chip.spi(R.read_datagram(0x0B))
     assert back >> 24 & R.STATUS_XEQT1 and back >> 31 == 1
     assert back & 0xFF == R.INT_BIT["pos_end"]
-    # the deceleration ends at V_MIN a few steps before the target (6.1.9.2 hints)
-    last_moving = [v for v in v_seen if v][-3:]
-    assert all(v == 10 for v in last_moving)
+    # 6.1.9.2 hints: "With a good parameter p the minimal velocity V_MIN is reached a couple of
+    # steps before the target position" - the velocity follows V_TARGET down to V_MIN, no crawl
+    moving = [(v, x) for v, x in zip(v_seen, x_seen, strict=True) if v]
+    assert moving[-1][0] == 10 and moving[-2][0] > 10 and moving[-2][1] >= 20_000 - 3
 
 
 def test_v_target_in_ramp_mode_is_computed_by_the_chip():
@@ -314,7 +315,7 @@ def test_a_short_move_that_overshoots_by_one_step_settles():
     for _ in range(200):
         chip.advance(2 * 13 / units.step_rate(2, 3) / 200)
         peak = max(peak, chip.read("X_ACTUAL"))
-    assert peak == 14
+    assert peak <= 14                                 # at most the one step the hints allow
     assert chip.read("X_ACTUAL") == 13 and chip.read("V_ACTUAL") == 0
 
 
@@ -324,15 +325,16 @@ def test_a_short_move_that_overshoots_by_one_step_settles():
 def test_short_moves_settle_on_the_target(pd, extra, a_max, v_max, v_min, target):
     """6.1.7.1.1: with A_MAX inside its limits "any target position" is reached "without
     oscillations"; 6.1.3: V_MIN >= 1 "assures reaching each target position exactly". These
-    short moves (found by hypothesis) overshoot, and used to swing target-1 / target / target+1
-    for ever; the pulse generator's signed accumulator (6.1.12.1, range +-2047) now walks the
-    overshoot back and the motor stops on the target."""
+    short moves (found by hypothesis) overshot under the latched-braking model and used to swing
+    target-1 / target / target+1 for ever; with the ramp following V_TARGET each ramp step (6.1.9)
+    they pass the target by at most one step (6.1.9.2 hints), the signed accumulator (6.1.12.1,
+    range +-2047) walks such a step back, and the motor stops on the target."""
     chip = _short_move(pd, extra, None, v_max, v_min, target, a_max=a_max)
     peak, ramp_period = 0, 32 << (pd + extra)
     while chip.time < _settle_bound(chip, target):
         chip.advance_cycles(ramp_period)
         peak = max(peak, chip.read("X_ACTUAL"))
-    assert peak > target  # the overshoot that used to start the swing
+    assert peak <= target + 1  # at most one step past it (6.1.9.2 hints)
     seen = set()
     for _ in range(50):
         chip.advance(0.01)

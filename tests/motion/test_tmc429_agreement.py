@@ -10,9 +10,10 @@ X_TARGET at every sampled cycle.
 from __future__ import annotations
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from opentmcl.motion.pmulpdiv import registers_for
 from opentmcl.motion.tmc429 import HOLD_MODE, RAMP_MODE, SOFT_MODE, VELOCITY_MODE, Tmc429Ramp
 
 from .tmc429_reference import ReferenceRamp
@@ -211,3 +212,58 @@ def test_oracle_itself_follows_the_datasheet_formulas(pulse_div, ramp_div):
     r.set(mode=VELOCITY_MODE, pulse_div=pulse_div, ramp_div=ramp_div, v_max=2047, a_max=77, v_target=-2047)
     r.advance(50 * 32 * 2**ramp_div)
     assert r.v == -50 * 77
+
+
+follow_moves = st.tuples(
+    st.integers(0, 3), st.integers(-1, 3), st.integers(1, 2047), st.integers(100, 2047),
+    st.integers(0, 6), st.integers(1, 6000), st.floats(0.3, 1.0),
+    st.one_of(st.fixed_dictionaries({"x_target": st.integers(-6000, 6000)}),
+              st.fixed_dictionaries({"v_max": st.integers(0, 400)}),
+              st.sampled_from(["hard_stop", "soft_stop"])),
+    st.lists(st.integers(1, 900), min_size=1, max_size=5))
+
+
+@settings(deadline=None)
+@given(follow_moves)
+def test_agreement_while_following_the_computed_target(m):
+    """TMC4210 datasheet 6.1.9: "This calculation is done for each ramp step" - in the stretch
+    where the velocity follows V_TARGET down, a target change on the fly (6.1.1), a V_MAX below the
+    present velocity (6.1.4 "except if the limit V_MAX is changed during motion to a value below
+    the current velocity") or a switch stop (6.1.10.2) gives the oracle's state at every sampled
+    cycle and its steps, event by event."""
+    pd, extra, a_max, v_max, v_min, distance, when, action, waits = m
+    rd = max(0, pd + extra)
+    pmul, pdiv = registers_for(a_max, rd, pd)
+    regs = {"pulse_div": pd, "ramp_div": rd, "v_max": v_max, "v_min": v_min, "a_max": a_max,
+            "pmul": pmul, "pdiv": pdiv}
+    fast, ref = Tmc429Ramp(), RecordingReference()
+    apply((fast, ref), regs)
+    apply((fast, ref), {"x_target": distance})
+    steps = []
+    while fast.a_actual >= 0 and not fast.position_reached:   # up to the deceleration
+        e = fast.next_event()
+        if e is None:
+            break
+        steps += fast.step_events(e)
+    assume(fast.a_actual < 0)        # in the stretch that follows V_TARGET down (signed, 2.4)
+    ref.advance(fast.now)
+    assert state(fast) == state(ref)
+    lead = fast.time_at_position(distance)
+    t = fast.now + int(when * ((lead or fast.now) - fast.now)) + 1
+    steps += fast.step_events(t)
+    ref.advance(t)
+    assert state(fast) == state(ref)
+    apply((fast, ref), action)
+    for w in waits:
+        t = fast.now + 32 * w
+        steps += fast.step_events(t)
+        ref.advance(t)
+        assert state(fast) == state(ref)
+    for _ in range(6):                                           # and on, event by event
+        e = fast.next_event()
+        if e is None:
+            break
+        steps += fast.step_events(e)
+        ref.advance(e)
+        assert state(fast) == state(ref)
+    assert steps == ref.steps

@@ -164,7 +164,7 @@ def test_deceleration_starts_where_the_braking_distance_begins():
     pmul, pdiv = _p(a_max, 0, 0, reduction=0.01)
     r = ramp(v_max=2047, v_min=1, a_max=a_max, pmul=pmul, pdiv=pdiv)
     r.set(x_target=100_000)
-    while not r.braking:
+    while r.a_actual >= 0:          # until the velocity starts to fall (signed A_ACTUAL, 2.4)
         r.advance(r.next_event())
     s = 0.5 * 2047**2 / a_max / 8      # 6.1.12.2, T = 1
     remaining = r.dx
@@ -181,9 +181,11 @@ def test_ramp_mode_reaches_target_exactly_with_v_min_at_least_one():
         seen_v_min = False
         while (e := r.next_event()) is not None:
             r.advance(e)
-            seen_v_min |= abs(r.v_actual) == 1 and r.braking
+            seen_v_min |= abs(r.v_actual) == 1 and r.v_target * r.dx > 0
         assert signed24(r.x_actual) == target and r.position_reached
-        assert seen_v_min
+        # below A_MAX = 256 a ramp tick changes |v| by less than one unit, so V_MIN = 1 is
+        # reached on the way; with 2047 the last tick before the arrival may be above it
+        assert seen_v_min or a_max >= 256
 
 
 def test_p_too_large_overshoots():

@@ -17,19 +17,25 @@ choices where the datasheet is silent: docs/assumptions.md):
   +-2047"): the accumulator holds the fraction of a step made in the direction
   of the last motion, and when the motion reverses that fraction is walked back
   first (acc := 2047 - acc), so X_ACTUAL * 2048 + fraction is an up/down count.
-* ramp_mode (6.1.9, FACTS.md): the chip computes the velocity from which a
-  deceleration at A_MAX just ends on target, v^2 = 2048 * p * |dx| with
-  p = PMUL / 2^(3+PDIV). While |V_ACTUAL| is not above it the target velocity
-  is V_MAX; once it is, the ramp decelerates with A_MAX down to V_MIN
-  (6.1.3, 6.1.9.2 hints) and stays so until the target changes or the motion
-  turns away from the target.
+* ramp_mode (6.1.9, FACTS.md): on every ramp tick the chip computes the
+  velocity from which a deceleration at A_MAX just ends on target,
+  v_stop^2 = 2048 * p * D with p = PMUL / 2^(3+PDIV) and D the remaining
+  distance in steps *including the fraction of a step already in the pulse
+  accumulator* (D * 2048 = the accumulator units still to add before
+  X_ACTUAL == X_TARGET). The ramp target is V_TARGET = s * min(V_MAX,
+  max(V_MIN, floor(v_stop))); the velocity moves towards it by at most A_MAX
+  per tick, up or down, as in velocity_mode. No latched braking state.
 * soft_mode (6.1.10.1): the target velocity is p * |dx| (clamped to
   [V_MIN, V_MAX]), which approaches the target exponentially.
 * velocity_mode: the target velocity is V_TARGET limited to +-V_MAX.
 * hold_mode: the ramp generator leaves V_ACTUAL alone.
-* 6.1.3: at the target position a velocity of at most V_MIN stops abruptly.
+* 6.1.3: at the target position a velocity of at most V_MIN (all 19 bits:
+  |v| <= V_MIN * 256) stops abruptly, on the pulse tick of the arrival step
+  and on any ramp tick that finds X_ACTUAL == X_TARGET.
 """
 from __future__ import annotations
+
+from math import isqrt
 
 RAMP_MODE, SOFT_MODE, VELOCITY_MODE, HOLD_MODE = 0, 1, 2, 3
 
@@ -58,7 +64,6 @@ class ReferenceRamp:
         self.v = 0                # signed velocity, 1/256 units (8 fractional bits)
         self.acc = 0              # pulse accumulator, 0..2047
         self.acc_dir = 0          # direction `acc` counts in (0: no motion since power-on)
-        self.braking = False      # ramp_mode: deceleration towards V_MIN has begun
         self.stopping = False     # soft switch stop in progress
         self.v_min = 0
         self.v_max = 0
@@ -75,7 +80,6 @@ class ReferenceRamp:
         for name, value in regs.items():
             if name in ("x_target", "x_actual"):
                 setattr(self, name, value % (1 << self.bits))
-                self.braking = False
                 if name == "x_target":
                     self.stopping = False
             elif name == "v_actual":
@@ -87,7 +91,6 @@ class ReferenceRamp:
                 self.stopping = False
             elif name == "mode":
                 self.mode = value
-                self.braking = False
                 self.stopping = False
             elif name == "pmul":
                 self.pmul = value | 0x80
@@ -100,7 +103,6 @@ class ReferenceRamp:
             return
         self.v = 0
         self.stopping = False
-        self.braking = False
         self._after_stop()
 
     def _after_stop(self) -> None:
@@ -118,6 +120,13 @@ class ReferenceRamp:
         """X_TARGET - X_ACTUAL as a signed number of `bits` bits."""
         half = 1 << (self.bits - 1)
         return (self.x_target - self.x_actual + half) % (1 << self.bits) - half
+
+    def remaining(self, s: int, d: int) -> int:
+        """Accumulator units (1/2048 step) still to add before X_ACTUAL reaches a target d
+        steps away in direction s: the fraction already made towards it counts, one made
+        away from it is walked back first (acc := 2047 - acc on the reversal)."""
+        made = self.acc if self.acc_dir in (0, s) else 2047 - self.acc
+        return d * 2048 - made
 
     # --- the clock ----------------------------------------------------------
     def advance(self, until: int) -> None:
@@ -149,7 +158,6 @@ class ReferenceRamp:
             return
         dx = self.dx()
         if dx == 0:
-            self.braking = False
             if abs(self.v) <= self.v_min * 256:
                 self.v = 0
             else:
@@ -157,14 +165,8 @@ class ReferenceRamp:
             return
         s = _sign(dx)
         d = abs(dx)
-        if self.v * s <= 0:              # standing, or moving away from the target
-            self.braking = False
         if self.mode == RAMP_MODE:
-            n = abs(self.v) >> 8
-            # isqrt(2048 * p * d) < n  <=>  2048 * PMUL * d / 2^(3+PDIV) < n^2
-            if not self.braking and self.v * s > 0 and n * n << self.pdiv > self.pmul * d << 8:
-                self.braking = True
-            speed = min(self.v_min, self.v_max) if self.braking else self.v_max
+            speed = min(self.v_max, max(self.v_min, isqrt(self.pmul * self.remaining(s, d) >> (3 + self.pdiv))))
         else:                            # soft_mode: p * |dx|
             speed = min(self.v_max, max(self.v_min, self.pmul * d >> (3 + self.pdiv)))
         self.v = _toward(self.v, s * speed * 256, self.a_max)
@@ -183,7 +185,6 @@ class ReferenceRamp:
             if (self.mode in (RAMP_MODE, SOFT_MODE) and self.x_actual == self.x_target
                     and abs(self.v) <= self.v_min * 256):
                 self.v = 0
-                self.braking = False
 
     def on_step(self, cycle: int, direction: int) -> None:
         """Hook for tests that record step events."""

@@ -15,17 +15,22 @@ the choices where the datasheet is silent):
   generator takes the signed velocity: on a reversal the fraction of a step
   already made is walked back first (acc := 2047 - acc), which lets the
   overshoot of a short move settle on the target.
-* ramp_mode: V_MAX until |V_ACTUAL| exceeds sqrt(2048 * p * |dx|), p =
-  PMUL / 2^(3+PDIV) (6.1.9), then a deceleration with A_MAX down to V_MIN;
-  soft_mode: target velocity p * |dx|; velocity_mode: V_TARGET; hold_mode: the
-  velocity is left alone (6.1.10.1). At the target a velocity <= V_MIN stops (6.1.3).
+* ramp_mode: on every ramp tick the target velocity is min(V_MAX, max(V_MIN,
+  sqrt(2048 * p * D))), p = PMUL / 2^(3+PDIV), D the remaining distance with the
+  accumulator's fraction of a step (6.1.9); the velocity follows it like
+  velocity_mode follows V_TARGET. soft_mode: target velocity p * |dx|;
+  velocity_mode: V_TARGET; hold_mode: the velocity is left alone (6.1.10.1). At
+  the target a velocity <= V_MIN stops (6.1.3).
 
 Time `now` counts f_CLK cycles. `advance` jumps over whole ramp phases: inside a
 phase the ramp target is fixed, the velocity is linear in the ramp tick index
 (or constant), the step count is a floor-sum of it, and the first cycle where
-something changes (end of a ramp, deceleration start, arrival, a soft-mode
-target change) is found by binary search on those closed forms. That one
-cycle is then applied exactly. The per-tick oracle in
+something changes (end of a ramp, the computed ramp_mode target binding,
+arrival, a soft-mode target change) is found by binary search on those closed
+forms. That one cycle is then applied exactly. Where the ramp_mode velocity
+follows its computed target down the square-root curve (`_Follow`), the motion
+is walked ramp tick by ramp tick, whole runs of one velocity at a time, and the
+result is memoised by the state it starts from (repeated moves cost O(1)). The per-tick oracle in
 tests/motion/tmc429_reference.py defines the behaviour this must reproduce.
 """
 from __future__ import annotations
@@ -90,6 +95,22 @@ def _linear_floor_sum(count: int, start: int, slope: int) -> int:
         return floor_sum(count, 256, slope, start)
     last = start + slope * (count - 1)
     return floor_sum(count, 256, -slope, last)
+
+
+@dataclass
+class _Follow:
+    """A ramp_mode stretch walked tick by tick (`Tmc429Ramp._follow`), from cycle t0."""
+
+    t0: int
+    event_offset: int   # cycle to apply exactly next, relative to t0
+    end_offset: int     # where the stretch ends (event_offset - 1)
+    total: int          # accumulator units added
+    w_end: int          # |v| at the end
+    moved: bool         # a pulse tick saw a non-zero velocity
+
+
+_FOLLOW_MEMO: dict[tuple, tuple] = {}
+_FOLLOW_MEMO_SIZE = 4096
 
 
 @dataclass
@@ -190,7 +211,6 @@ class Tmc429Ramp:
         self._v = 0              # signed velocity, 8 fractional bits
         self._acc = 0            # pulse accumulator
         self._acc_dir = 0        # direction _acc counts in (0: no motion since power-on)
-        self._braking = False    # ramp_mode deceleration towards V_MIN has begun
         self._stopping = False   # soft switch stop in progress
         self._v_min = 0
         self._v_max = 0
@@ -231,12 +251,10 @@ class Tmc429Ramp:
         dx = self.dx
         if dx == 0:
             return 0
-        d = abs(dx)
+        s, d = _sign(dx), abs(dx)
         if self._mode == RAMP_MODE:
-            raw = isqrt(self._pmul * d << 8 >> self._pdiv)
-        else:
-            raw = self._pmul * d >> (3 + self._pdiv)
-        return _sign(dx) * min(self._v_max, max(self._v_min, raw))
+            return s * self._speed(self._remaining(s, d))
+        return s * self._soft_speed(d)
 
     @property
     def v_actual(self) -> int:
@@ -254,14 +272,14 @@ class Tmc429Ramp:
 
     @property
     def a_actual(self) -> int:
-        """A_ACTUAL (6.1.8), unsmoothed: A_MAX while the next ramp tick changes the
-        velocity, else 0."""
+        """A_ACTUAL (6.1.8), unsmoothed and signed (2.4): +A_MAX while the next ramp
+        tick raises |velocity|, -A_MAX while it lowers it, else 0."""
         if self._mode == HOLD_MODE or self._a_max == 0:
             return 0
-        vt = self._ramp_target()[0]
-        if vt is None:  # dx == 0: stop or decelerate towards 0
-            return 0 if abs(self._v) <= self._v_min * 256 else self._a_max
-        return self._a_max if self._v != vt else 0
+        probe = self.copy()
+        probe._ramp_tick()
+        change = abs(probe._v) - abs(self._v)
+        return _sign(change) * self._a_max
 
     @property
     def pmul(self) -> int:
@@ -287,12 +305,6 @@ class Tmc429Ramp:
     def dx(self) -> int:
         """X_TARGET - X_ACTUAL as a signed `position_bits` number (6.1.1: |dx| < 2^23)."""
         return (self._xt - self._x + self._half) % self._modulus - self._half
-
-    @property
-    def braking(self) -> bool:
-        """ramp_mode: the deceleration towards V_MIN has begun (cleared when the
-        target changes or the motion no longer heads for it)."""
-        return self._braking and self._v * self.dx > 0
 
     @property
     def stopping(self) -> bool:
@@ -324,7 +336,6 @@ class Tmc429Ramp:
                     self._stopping = False
                 else:
                     self._x = value
-                self._braking = False
             elif name == "v_actual":
                 if self._mode == HOLD_MODE:
                     self._v = value * 256
@@ -334,7 +345,6 @@ class Tmc429Ramp:
                 self._stopping = False
             elif name == "mode":
                 self._mode = value
-                self._braking = False
                 self._stopping = False
             elif name == "pmul":
                 self._pmul = value | 0x80
@@ -375,7 +385,6 @@ class Tmc429Ramp:
             return
         self._v = 0
         self._stopping = False
-        self._braking = False
         self._after_stop()
 
     def _after_stop(self) -> None:
@@ -399,18 +408,12 @@ class Tmc429Ramp:
             return
         dx = self.dx
         if dx == 0:
-            self._braking = False
             if abs(self._v) <= self._v_min * 256:
                 self._v = 0
             else:
                 self._v = _toward(self._v, 0, self._a_max)
             return
         s = _sign(dx)
-        if self._v * s <= 0:
-            self._braking = False
-        if self._mode == RAMP_MODE and not self._braking and self._v * s > 0:
-            if self._triggers(abs(self._v) >> 8, abs(dx)):
-                self._braking = True
         self._v = _toward(self._v, self._position_target(s, abs(dx)), self._a_max)
 
     def _pulse_tick(self) -> int:
@@ -427,7 +430,6 @@ class Tmc429Ramp:
         if (self._mode in (RAMP_MODE, SOFT_MODE) and self._x == self._xt
                 and abs(self._v) <= self._v_min * 256):
             self._v = 0
-            self._braking = False
         return direction
 
     def _cycle(self, c: int) -> int:
@@ -443,39 +445,56 @@ class Tmc429Ramp:
     def _velocity_mode_target(self) -> int:
         return _sign(self._v_target) * min(abs(self._v_target), self._v_max) * 256
 
-    def _triggers(self, n: int, d: int) -> bool:
-        """ramp_mode deceleration start: sqrt(2048 * p * d) < n (6.1.9)."""
-        return n * n << self._pdiv > self._pmul * d << 8
+    def _remaining(self, s: int, d: int) -> int:
+        """Accumulator units (1/2048 step) to add before X_ACTUAL reaches a target d
+        steps away in direction s (the fraction made towards it counts; one made away
+        from it is walked back first, acc := 2047 - acc)."""
+        made = self._acc if self._acc_dir in (0, s) else 2047 - self._acc
+        return d * 2048 - made
+
+    def _speed(self, units: int) -> int:
+        """ramp_mode target speed for `units` still to go: sqrt(2048 * p * D) within
+        [V_MIN, V_MAX] (6.1.9; D = units / 2048, p = PMUL / 2^(3+PDIV))."""
+        return min(self._v_max, max(self._v_min, isqrt(self._pmul * units >> (3 + self._pdiv))))
+
+    def _level_start(self, n: int) -> int:
+        """Smallest `units` whose sqrt term is at least n."""
+        return _ceil_div(n * n << (3 + self._pdiv), self._pmul)
 
     def _soft_speed(self, d: int) -> int:
         return min(self._v_max, max(self._v_min, self._pmul * d >> (3 + self._pdiv)))
 
     def _position_target(self, s: int, d: int) -> int:
         if self._mode == RAMP_MODE:
-            speed = min(self._v_min, self._v_max) if self._braking else self._v_max
+            speed = self._speed(self._remaining(s, d))
         else:
             speed = self._soft_speed(d)
         return s * speed * 256
 
     def _ramp_target(self) -> tuple[int | None, bool]:
-        """Target velocity (1/256 units) of the coming ramp ticks and the braking
-        flag they will see; None when dx == 0 in ramp/soft_mode."""
+        """Target velocity (1/256 units) of a linear phase from now and whether the
+        ramp_mode target may bind during it (then `_find_trigger` looks for the
+        tick); None when dx == 0 in ramp/soft_mode."""
         v = self._v
         if self._mode == HOLD_MODE:
-            return v, self._braking
+            return v, False
         if self._stopping:
-            return 0, self._braking
+            return 0, False
         if self._mode == VELOCITY_MODE:
-            return self._velocity_mode_target(), self._braking
+            return self._velocity_mode_target(), False
         dx = self.dx
         if dx == 0:
             return None, False
-        s = _sign(dx)
-        braking = self._braking and v * s > 0
-        saved, self._braking = self._braking, braking
-        target = self._position_target(s, abs(dx))
-        self._braking = saved
-        return target, braking
+        s, d = _sign(dx), abs(dx)
+        if self._mode == SOFT_MODE:
+            return self._position_target(s, d), False
+        speed = self._speed(self._remaining(s, d))
+        if v * s < 0:            # heading away: +-A_MAX per tick until the sign changes
+            return s * speed * 256, False
+        floor = min(self._v_min, self._v_max)
+        if speed == floor and abs(v) == floor * 256:
+            return s * floor * 256, False    # at V_MIN: the target cannot fall further
+        return s * self._v_max * 256, True
 
     # ------------------------------------------------------------------ phases
     def _plan(self, until: int | None) -> tuple[int | None, int | None, _Phase]:
@@ -487,8 +506,7 @@ class Tmc429Ramp:
         """
         rp, pp = 32 << self._ramp_div, 32 << self._pulse_div
         v0, a = self._v, self._a_max
-        vt, braking = self._ramp_target()
-        self._braking = braking  # what the next ramp tick would do anyway
+        vt, binds = self._ramp_target()
         dx_zero = vt is None
         if dx_zero:
             vt = 0
@@ -510,6 +528,12 @@ class Tmc429Ramp:
             if v0 == 0:                     # v turns non-zero at the next ramp tick
                 i_dir = _ceil_div((j0 + 1) * rp, pp)
         phase = _Phase(self.now, rp, pp, j0, i0, w0, delta, direction, acc0, i_dir)
+        units0 = 0
+        if binds and direction != 0:
+            dx = self.dx
+            units0 = self._remaining(_sign(dx), abs(dx))
+            if self._fires(phase, units0, j0 + 1):     # the computed target binds now
+                return self._follow_plan(until)
 
         ramp_events: list[int] = []
         clamp = None
@@ -541,9 +565,8 @@ class Tmc429Ramp:
             step_event = phase.nth_step_cycle(n_steps, bound)
         bound2 = _min_opt(bound, None if step_event is None else step_event - 1)
         trig = None
-        if (mode == RAMP_MODE and not braking and not dx_zero and not self._stopping
-                and direction == _sign(self.dx) and direction != 0):
-            trig = self._find_trigger(phase, abs(self.dx), bound2)
+        if binds and direction != 0:
+            trig = self._find_trigger(phase, units0, bound2)
         event = _min_opt(_min_opt(first_ramp, step_event), trig)
         return event, clamp, phase
 
@@ -587,58 +610,224 @@ class Tmc429Ramp:
                 limit = min(limit, lo - d + 1)
         return limit
 
-    def _find_trigger(self, ph: _Phase, d0: int, t_hi: int | None) -> int | None:
-        """First ramp tick (cycle) at which ramp_mode starts to decelerate."""
-        rp = ph.ramp_period
+    def _fires(self, ph: _Phase, units0: int, j: int) -> bool:
+        """ramp_mode: does ramp tick j of the linear phase `ph` (towards V_MAX) see a
+        computed target that binds, i.e. gives another velocity than the phase?"""
+        units = units0 - ph.pulse_sum((j * ph.ramp_period - 1) // ph.pulse_period)
+        if units <= 0:                  # arrives before tick j: the step event comes first
+            return False
+        speed = self._speed(units)
+        if ph.delta > 0:
+            return speed * 256 < min(self._v_max * 256, ph.w(j - 1 - ph.j0) + self._a_max)
+        return speed < self._v_max
 
-        def fires(j: int) -> bool:
-            n = ph.w(j - 1 - ph.j0) >> 8
-            d = d0 - ph.steps_until(j * rp - 1)
-            return self._triggers(n, d)
-
+    def _find_trigger(self, ph: _Phase, units0: int, t_hi: int | None) -> int | None:
+        """First ramp tick (cycle) of `ph` at which the computed ramp_mode target binds
+        (monotone: the remaining distance only falls, the velocity only rises)."""
+        rp, pp = ph.ramp_period, ph.pulse_period
         j_lo = ph.j0 + 1
         if ph.delta == 0:
-            # constant |V_ACTUAL| = n: fires once d <= D = ceil(n^2 2^PDIV / (256 PMUL)) - 1
-            n = ph.w0 >> 8
-            if n == 0:
+            # |v| = V_MAX * 256 held: binds once units < level_start(V_MAX)
+            u = ph.w0 >> 8
+            if u == 0 or self._v_max == 0:
                 return None
-            need = d0 - (_ceil_div(n * n << self._pdiv, self._pmul << 8) - 1)
+            need = units0 - self._level_start(self._v_max) + 1
             if need <= 0:
                 j = j_lo
             else:
-                c = ph.nth_step_cycle(need, t_hi)
-                if c is None:
+                i = ph.i0 + _ceil_div(need, u)
+                if t_hi is not None and i * pp > t_hi:
                     return None
-                j = max(j_lo, _ceil_div(c + 1, rp))
+                j = max(j_lo, i * pp // rp + 1)
             if t_hi is not None and j * rp > t_hi:
                 return None
             return j * rp
         if t_hi is None:               # a ramping phase always ends at its clamp
             raise AssertionError("unbounded trigger search in a ramping phase")
-        j_hi = t_hi // rp
-        if j_hi < j_lo:
-            return None
-        if ph.delta >= 0:
-            return _first_true(fires, j_lo, j_hi, rp)
-        # decelerating towards a lower V_MAX: monotone only while |V_ACTUAL| holds
-        j = j_lo
-        while j <= j_hi:
-            n = ph.w(j - 1 - ph.j0) >> 8
-            # last tick whose preceding velocity still has integer part n
-            k_last = (ph.w(j - 1 - ph.j0) - n * 256) // (-ph.delta) + (j - 1 - ph.j0)
-            j_end = min(j_hi, k_last + 1 + ph.j0)
-            found = _first_true(fires, j, j_end, rp)
-            if found is not None:
-                return found
-            j = j_end + 1
-        return None
+        return _first_true(lambda j: self._fires(ph, units0, j), j_lo, t_hi // rp, rp)
+
+    # ------------------------------------------------------------------ following the target
+    def _follow_plan(self, until: int | None) -> tuple[int | None, None, _Follow]:
+        """Plan of a stretch where the ramp_mode velocity follows its computed target:
+        walked on a copy up to `until` (None: to its end, memoised by the start state)."""
+        key = self._follow_key()
+        hit = _FOLLOW_MEMO.get(key)
+        if hit is not None:
+            seg = _Follow(self.now, *hit)
+            return self.now + seg.event_offset, None, seg
+        probe = self.copy()
+        event = probe._follow(until, None)
+        hit = (event - self.now, probe.now - self.now, probe._units_made, abs(probe._v),
+               probe._moved)
+        if until is None or event <= until:           # the whole stretch: remember it
+            if len(_FOLLOW_MEMO) >= _FOLLOW_MEMO_SIZE:
+                _FOLLOW_MEMO.clear()
+            _FOLLOW_MEMO[key] = hit
+        seg = _Follow(self.now, *hit)
+        return event, None, seg
+
+    def _follow_key(self) -> tuple:
+        dx = self.dx
+        s, d = _sign(dx), abs(dx)
+        period = max(32 << self._ramp_div, 32 << self._pulse_div)
+        return (self._remaining(s, d), abs(self._v), self.now % period, self._ramp_div,
+                self._pulse_div, self._a_max, self._v_min, self._v_max, self._pmul, self._pdiv)
+
+    def _follow(self, limit: int | None, steps: list | None) -> int:
+        """Walk ramp_mode tick by tick from now while the velocity heads for the target
+        (runs of one velocity in one go). Stops at `limit`, just before the arrival
+        step, or after the tick that reaches V_MIN (or 0); returns the cycle to apply
+        exactly next. `steps` collects (cycle, direction) of each step made."""
+        rp, pp, a = 32 << self._ramp_div, 32 << self._pulse_div, self._a_max
+        dx = self.dx
+        s, d = _sign(dx), abs(dx)
+        units = self._remaining(s, d)          # still to add before the arrival step
+        made0 = d * 2048 - units               # accumulator counting towards the target
+        total = 0                              # units added here
+        w = abs(self._v)
+        floor = min(self._v_min, self._v_max)
+        t = self.now
+        moved = False
+        event = None
+
+        def pulses(count: int, n: int, first: int) -> int:
+            """Add `count` pulses of n units from pulse index `first`; -1: arrival first."""
+            nonlocal total
+            if count <= 0 or n == 0:
+                return 0
+            if total + count * n >= units:      # the arrival step: stop just before it
+                k = _ceil_div(units - total, n)
+                if steps is not None:
+                    self._record(steps, made0 + total, n, k - 1, first, s)
+                total += (k - 1) * n
+                return (first + k - 1) * pp
+            if steps is not None:
+                self._record(steps, made0 + total, n, count, first, s)
+            total += count * n
+            return 0
+
+        if pp == rp and steps is None:
+            t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit, floor)
+        while event is None:
+            c = (t // rp + 1) * rp                         # next ramp tick
+            n = w >> 8
+            if n and w == self._speed(units - total) * 256 and floor * 256 < w:
+                # on the target: one velocity until the sqrt term drops below n
+                need = units - total - self._level_start(n) + 1
+                k = _ceil_div(need, n)
+                c_k = (t // pp + k) * pp
+                if limit is not None and c_k > limit:
+                    moved |= limit // pp > t // pp
+                    pulses(limit // pp - t // pp, n, t // pp + 1)
+                    t, event = limit, limit + 1
+                    break
+                moved = True
+                arrival = pulses(k, n, t // pp + 1)
+                if arrival:
+                    event, t = arrival, arrival - 1
+                    break
+                t = c_k
+                continue
+            end = c - 1 if limit is None else min(c - 1, limit)
+            count = end // pp - t // pp
+            moved |= count > 0 and w > 0
+            arrival = pulses(count, n, t // pp + 1)
+            if arrival:
+                event, t = arrival, arrival - 1
+                break
+            t = end
+            if limit is not None and t >= limit:
+                event = limit + 1
+                break
+            before = w
+            w = _toward(w, self._speed(units - total) * 256, a)     # the ramp tick at c
+            t = c
+            if c % pp == 0 and w > 0:
+                moved = True
+                if pulses(1, w >> 8, c // pp):
+                    event, t, w = c, c - 1, before
+                    break
+            if w == floor * 256 or w == 0:
+                event = t + 1
+                break
+        self._units_made, self._moved = total, moved
+        self._settle(t, made0 + total, s * w, s, moved)
+        return event
+
+    def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
+                     limit: int | None, floor: int) -> tuple:
+        """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
+        same rules inlined; hands back (event None) before a run of one velocity that
+        is worth jumping, at `limit`, or when done."""
+        rp, a = 32 << self._ramp_div, self._a_max
+        pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
+        low = floor << 8
+        c = (t // rp + 1) * rp
+        while limit is None or c <= limit:
+            left = units - total
+            sp = isqrt(pm * left >> sh)
+            sp = vmax if sp > vmax else (vmin if sp < vmin else sp)
+            tgt = sp << 8
+            if w == tgt:
+                n = w >> 8
+                if n and w > low and left + (-(n * n << sh) // pm) >= n << 2:
+                    return t, w, total, moved, None        # a run: `_follow` jumps it
+                nw = w
+            elif w < tgt:
+                nw = w + a if w + a < tgt else tgt
+            else:
+                nw = w - a if w - a > tgt else tgt
+            n = nw >> 8
+            if n and total + n >= units:                   # the arrival step at c
+                return c - 1, w, total, moved, c
+            w, total, t = nw, total + n, c
+            moved = moved or w > 0
+            if w == low or w == 0:
+                return t, w, total, moved, t + 1
+            c += rp
+        return t, w, total, moved, None
+
+    def _settle(self, t: int, made: int, v: int, s: int, moved: bool) -> None:
+        """Set the state after a stretch of `_follow` (made: accumulator units towards the
+        target, counted from the last whole step before the stretch)."""
+        self._cached_plan = None
+        steps, self._acc = divmod(made, 2048)
+        self._x = (self._x + s * steps) % self._modulus
+        if moved:
+            self._acc_dir = s
+        elif self._acc_dir not in (0, s):      # no pulse yet: keep the old orientation
+            self._acc = 2047 - self._acc
+        self._v = v
+        self.now = t
+
+    def _record(self, steps: list, made: int, n: int, count: int, first: int, s: int) -> None:
+        """Append (cycle, s) for each step of `count` pulses of n units from pulse index
+        `first`, the accumulator holding `made` units before them."""
+        pp = 32 << self._pulse_div
+        m = made // 2048 + 1
+        while m * 2048 <= made + count * n:
+            steps.append(((first + _ceil_div(m * 2048 - made, n) - 1) * pp, s))
+            m += 1
+
+    def _follow_end(self, seg: _Follow) -> None:
+        """Jump to the end of a planned `_follow` stretch (memoised result)."""
+        dx = self.dx
+        s, d = _sign(dx), abs(dx)
+        made0 = d * 2048 - self._remaining(s, d)
+        self._settle(seg.t0 + seg.end_offset, made0 + seg.total, s * seg.w_end, s, seg.moved)
 
     # ------------------------------------------------------------------ time
-    def _jump(self, phase: _Phase, t: int) -> None:
+    def _jump(self, phase: _Phase | _Follow, t: int) -> None:
         """Move the state to cycle t inside `phase` (closed form)."""
         if t <= self.now:
             return
         self._cached_plan = None
+        if isinstance(phase, _Follow):
+            if t == phase.t0 + phase.end_offset:
+                self._follow_end(phase)
+            else:
+                self._follow(t, None)
+            return
         i = t // phase.pulse_period
         if i >= phase.i_dir:
             total = phase.acc0 + phase.pulse_sum(i)
@@ -685,7 +874,10 @@ class Tmc429Ramp:
             else:
                 event, _clamp, phase = self._plan(until)
             end = until if event is None or event > until else event - 1
-            if phase.direction != 0 and end > self.now:
+            if isinstance(phase, _Follow):
+                if end > self.now:
+                    self._follow(end, out)
+            elif phase.direction != 0 and end > self.now:
                 k = 1
                 while (t := phase.nth_step_cycle(k, end)) is not None:
                     out.append((t, phase.direction))
@@ -711,7 +903,13 @@ class Tmc429Ramp:
         probe = self.copy()
         for _ in range(max_phases):
             event, _clamp, phase = probe._plan(None)
-            if phase.direction != 0:
+            if isinstance(phase, _Follow):
+                steps: list = []
+                probe.copy()._follow(event - 1, steps)
+                need = (target - probe._x) * _sign(probe.dx) % probe._modulus
+                if 0 < need <= len(steps):
+                    return steps[need - 1][0]
+            elif phase.direction != 0:
                 need = (target - probe._x) * phase.direction % probe._modulus
                 end = None if event is None else event - 1
                 if end is None or end > probe.now:

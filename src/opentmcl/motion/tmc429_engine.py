@@ -112,8 +112,11 @@ class Tmc429Engine(RampEngine):
         if r.mode in (VELOCITY_MODE, HOLD_MODE):
             return r.v_target
         dx = r.dx
-        if dx == 0 or r.stopping or (r.braking and r.v_internal * dx > 0):
+        if dx == 0 or r.stopping:
             return 0
+        computed = abs(r.v_target)     # the ramp's own target (TMC4210 6.1.9)
+        if r.v_internal * dx > 0 and computed < r.v_max and abs(r.v_internal) >= computed * 256:
+            return 0                   # following the target down: decelerating
         return r.v_max if dx > 0 else -r.v_max
 
     @property
