@@ -19,6 +19,7 @@ import io
 import os
 from collections.abc import Iterable, Sequence
 
+from .atomicfile import open_atomic
 from .columns import Column
 
 FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("load", 206),
@@ -129,7 +130,7 @@ class Trace:
             w.writerow(["" if v is None else v for v in row])
         text = buf.getvalue()
         if target is not None:
-            with open(target, "w", encoding="utf-8", newline="") as f:
+            with open_atomic(target, text=True) as f:
                 f.write(text)
         return text
 

@@ -22,6 +22,7 @@ import os
 from array import array
 from dataclasses import dataclass, field
 
+from ..atomicfile import open_atomic
 from ..columns import Column
 from ..limits import CSV_MAX, LINE_MAX, size_text
 
@@ -102,7 +103,7 @@ class Trace:
         if isinstance(target, io.TextIOBase):
             _write(target, meta, header, rows)
             return
-        with open(target, "w", newline="", encoding="utf-8") as fh:
+        with open_atomic(target, text=True) as fh:   # a failed or killed write keeps the old file
             _write(fh, meta, header, rows)
 
     @classmethod
