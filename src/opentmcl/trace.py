@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 from collections.abc import Iterable, Sequence
 
@@ -110,8 +111,8 @@ class Trace:
 
     def record(self, vm, seconds: float, interval: float) -> _Rows:
         """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
-        if interval <= 0 or seconds < 0:
-            raise ValueError("interval must be > 0 and seconds >= 0")
+        if not 0 < interval < math.inf or not 0 <= seconds < math.inf:  # also NaN
+            raise ValueError("interval must be a finite number > 0 and seconds a finite number >= 0")
         steps = round(seconds / interval)
         if len(self.rows) + steps + 1 > self.max_rows:
             raise TraceFull(f"{steps + 1} more rows would pass the limit of {self.max_rows} rows")
