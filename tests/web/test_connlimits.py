@@ -113,3 +113,22 @@ def test_an_open_websocket_is_not_taken_for_a_silent_connection():
             time.sleep(2.0)                              # four head timeouts
             sock.recv(1 << 20)                           # what came so far
             assert sock.recv(1024) != b""                # and it is still streaming
+
+
+def test_a_refused_websocket_logs_its_reason_and_no_error():
+    """`opentmcl serve --web`: a WebSocket upgrade with a foreign Origin gets 403 with the reason and
+    one warning line; the console shows no ERROR line for it (uvicorn's sans-I/O protocol logged
+    "ASGI callable returned without completing handshake." at ERROR after each refusal)."""
+    from .rawhttp import ws_upgrade
+
+    proc, url, _ = start_cli(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0"],
+                             "dashboard http")
+    port = urllib.parse.urlsplit(url).port
+    try:
+        reply = ws_upgrade(port, "/m/1/ws", origin="http://evil.example")
+        assert reply.status == 403 and "Origin" in reply.error
+        assert ws_upgrade(port, "/m/1/ws", protocol=None).status == 403
+    finally:
+        out = stop_cli(proc)
+    assert out.count("refused WEBSOCKET /m/1/ws") == 2, out
+    assert "ERROR" not in out and "Traceback" not in out, out

@@ -9,6 +9,7 @@ Each module's page is at /m/ADDRESS/; the root redirects to the first one.
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 
@@ -93,6 +94,18 @@ def _ws_implementation() -> str:
     if importlib.util.find_spec("uvicorn.protocols.websockets.websockets_sansio_impl") is not None:
         return "websockets-sansio"
     return "websockets"
+
+
+class _RefusedHandshakeFilter(logging.Filter):
+    """uvicorn's sans-I/O WebSocket protocol logs "ASGI callable returned without completing
+    handshake." at ERROR level after a denial response (guard.py's 403), which it does complete:
+    drop that line, the guard has logged the refusal with its reason."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith("ASGI callable returned without completing handshake")
+
+
+_HANDSHAKE_FILTER = _RefusedHandshakeFilter()
 
 
 class DashboardStartError(OSError):
@@ -195,6 +208,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
                             http=protocol_class(head_timeout, max_connections), h11_max_incomplete_event_size=HEAD_MAX,
                             timeout_keep_alive=KEEP_ALIVE)
     server = uvicorn.Server(config)
+    logging.getLogger("uvicorn.error").addFilter(_HANDSHAKE_FILTER)  # idempotent: one filter object
     server.install_signal_handlers = lambda: None  # older uvicorn; the caller owns the signals
     failure: list[BaseException] = []
 
