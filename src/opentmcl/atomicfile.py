@@ -1,5 +1,6 @@
 """Atomic file replacement shared by every layer that persists data (EEPROM, program binaries):
-write a temporary file in the same folder, fsync it, rename it over the target. A process killed at
+write a temporary file in the same folder, fsync it, rename it over the target (`write_atomic`
+for bytes at hand, `open_atomic` for a file object to stream into). A process killed at
 any point leaves the old file or the new one, never a torn one. The folder must exist (a typo in
 a path is an error, not a new folder tree); the file gets the mode a plain open() would give it
 (an existing file keeps its mode).
@@ -9,10 +10,14 @@ holds an flock on it until the rename: `remove_stale(path)` deletes those a kill
 and never one whose writer is still alive."""
 from __future__ import annotations
 
+import contextlib
 import fcntl
+import io
 import os
 import re
+import stat
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 _RANDOM = r"[a-z0-9_]{8}"   # tempfile's name alphabet
@@ -28,7 +33,27 @@ _UMASK = _read_umask()
 
 
 def write_atomic(path: str | os.PathLike, data: bytes) -> None:
-    target = Path(path)
+    with open_atomic(path) as fh:
+        fh.write(data)
+
+
+@contextlib.contextmanager
+def open_atomic(path: str | os.PathLike, text: bool = False) -> Iterator[io.IOBase]:
+    """A file to write `path` through: the temporary file, renamed over `path` when the block
+    ends without an exception, deleted otherwise (`path` keeps its old content). `text=True`:
+    a UTF-8 text file without newline translation. A symbolic link is followed (the file it names
+    is replaced, the link stays); a target that exists but is no regular file (/dev/null, a FIFO,
+    a terminal) is written straight through, never replaced."""
+    kind = {"mode": "w", "encoding": "utf-8", "newline": ""} if text else {"mode": "wb"}
+    target = Path(os.path.realpath(path))
+    try:
+        special = not stat.S_ISREG(target.stat().st_mode)
+    except OSError:
+        special = False
+    if special:
+        with open(target, **kind) as fh:
+            yield fh
+        return
     directory = target.parent
     if not directory.is_dir():
         raise FileNotFoundError(2, f"folder {directory} does not exist", str(target))
@@ -40,8 +65,8 @@ def write_atomic(path: str | os.PathLike, data: bytes) -> None:
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)   # "a writer is alive" for remove_stale
         os.chmod(tmp, mode)
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
+        with os.fdopen(fd, **kind) as fh:
+            yield fh
             fh.flush()
             os.fsync(fh.fileno())
             os.replace(tmp, target)      # still locked: renamed before the lock goes
@@ -60,8 +85,9 @@ def stale_pattern(path: str | os.PathLike) -> re.Pattern[str]:
 
 def remove_stale(path: str | os.PathLike) -> list[Path]:
     """Delete the temporary files of `path` that a killed writer left next to it (same folder,
-    our own name pattern, no writer holding its lock); returns those deleted."""
-    target = Path(path)
+    our own name pattern, no writer holding its lock); returns those deleted. Like `open_atomic`,
+    it follows a symbolic link to the image."""
+    target = Path(os.path.realpath(path))
     pattern = stale_pattern(target)
     try:
         names = os.listdir(target.parent)

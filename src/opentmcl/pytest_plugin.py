@@ -25,6 +25,7 @@ from __future__ import annotations
 import pytest
 
 from .host.client import Client
+from .host.errors import TmclError, TmclValueError, check_int, check_seconds, check_timeout
 from .host.module import Module
 from .host.transports.inprocess import InProcessTransport
 
@@ -48,9 +49,7 @@ class TmclModule(Module):
 
     def advance(self, seconds: float) -> None:
         """Let `seconds` of virtual time pass (events such as command 138 replies are collected)."""
-        if seconds < 0:
-            raise ValueError("time cannot run backwards")
-        self.transport.advance(seconds)
+        self.transport.advance(check_seconds(seconds, "seconds to advance"))
 
     @property
     def time(self) -> float:
@@ -65,14 +64,17 @@ class TmclModule(Module):
 
 def make_tmcl_module(name: str = DEFAULT_MODULE, *, address: int = 1, eeprom=None, clock: str = "virtual",
                      timeout: float = 5.0, host_address: int = 2) -> TmclModule:
-    """What the fixture builds; usable without pytest. KeyError for an unknown module name,
-    ValueError for a bad address or clock policy."""
+    """What the fixture builds; usable without pytest. KeyError for an unknown module name; the host
+    library's typed errors for bad arguments: TmclValueError (also a ValueError) for an address
+    outside 1..255 (the rule of `opentmcl serve`), a timeout that is not finite and > 0 or an
+    unknown clock policy, TmclTypeError (also a TypeError) for an argument of the wrong type."""
     from .firmware.vm import VirtualModule
+    from .modules.addresses import address_error
 
-    if isinstance(address, bool) or not isinstance(address, int) or not 1 <= address <= 255:
-        raise ValueError(f"module address must be 1..255, got {address!r}")
-    if isinstance(timeout, bool) or not isinstance(timeout, (int, float)) or not 0 < timeout < float("inf"):
-        raise ValueError(f"timeout must be a positive number of seconds, got {timeout!r}")
+    reason = address_error([check_int(address, "module address")])
+    if reason is not None:
+        raise TmclValueError(reason)
+    timeout = check_timeout(timeout)
     vm = VirtualModule(name, address=address, eeprom=eeprom)
     try:
         return TmclModule(vm, address=address, clock=clock, timeout=timeout, host_address=host_address)
@@ -124,7 +126,7 @@ def tmcl_module(request):
     name, kwargs = _spec(request)
     try:
         module = make_tmcl_module(name, **kwargs)
-    except (KeyError, ValueError, EepromError) as exc:
+    except (KeyError, ValueError, EepromError, TmclError) as exc:
         pytest.fail(f"tmcl_module: {exc.args[0] if exc.args else exc}", pytrace=False)
     try:
         yield module

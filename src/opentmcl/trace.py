@@ -16,9 +16,11 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 from collections.abc import Iterable, Sequence
 
+from .atomicfile import open_atomic
 from .columns import Column
 
 FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("load", 206),
@@ -109,8 +111,8 @@ class Trace:
 
     def record(self, vm, seconds: float, interval: float) -> _Rows:
         """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
-        if interval <= 0 or seconds < 0:
-            raise ValueError("interval must be > 0 and seconds >= 0")
+        if not 0 < interval < math.inf or not 0 <= seconds < math.inf:  # also NaN
+            raise ValueError("interval must be a finite number > 0 and seconds a finite number >= 0")
         steps = round(seconds / interval)
         if len(self.rows) + steps + 1 > self.max_rows:
             raise TraceFull(f"{steps + 1} more rows would pass the limit of {self.max_rows} rows")
@@ -129,7 +131,7 @@ class Trace:
             w.writerow(["" if v is None else v for v in row])
         text = buf.getvalue()
         if target is not None:
-            with open(target, "w", encoding="utf-8", newline="") as f:
+            with open_atomic(target, text=True) as f:
                 f.write(text)
         return text
 

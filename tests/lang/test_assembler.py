@@ -180,8 +180,8 @@ def test_listing_and_symbol_file():
 
 
 @pytest.mark.parametrize(("src", "text"), [
-    ("SAP 4, 0, " + "(" * 5000 + "1" + ")" * 5000, "nested deeper"),
-    ("SAP 4, 0, " + "-" * 5000 + "1", "nested deeper"),
+    ("SAP 4, 0, " + "(" * 300 + "1" + ")" * 300, "nested deeper"),
+    ("SAP 4, 0, " + "-" * 300 + "1", "nested deeper"),
     ("C0 = 0xFFFFFFFF\n" + "".join(f"C{i} = C{i - 1} * C{i - 1}\n" for i in range(1, 40)) + "SAP 4, 0, C39",
      "more than 64 bits"),
     ("SAP 4, 0, 1 << 64", "out of range"),

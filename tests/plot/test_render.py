@@ -137,7 +137,7 @@ def test_cli_unwritable_output_and_binary_trace_are_one_line_errors(tmp_path, ca
     binary.write_bytes(b"\xff\xfe\x00")
     assert main(["plot", str(binary), "-o", str(tmp_path / "x.png")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("opentmcl plot: error: cannot write") and "No such file" in err
+    assert err.startswith("opentmcl plot: error: cannot write") and "folder" in err and "does not exist" in err
     assert "cannot read" in err and "UTF-8" in err and "Traceback" not in err
 
 

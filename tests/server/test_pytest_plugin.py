@@ -147,7 +147,7 @@ def test_bad_timeout(tmcl_module):
 ''')
     result.assert_outcomes(errors=4)
     result.stdout.fnmatch_lines(["*unknown module 'TMCM-9999'*", "*unknown option(s) speed*",
-                                 "*module address must be 1..255*", "*timeout must be a positive number*"])
+                                 "*module address must be 1..255*", "*timeout must be a positive, finite number*"])
     assert "Traceback" not in result.stdout.str()
 
 

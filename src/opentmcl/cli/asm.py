@@ -5,6 +5,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..atomicfile import write_atomic
 from . import CliError, same_file
 
 
@@ -47,7 +48,7 @@ def _emit(target: str, text: str) -> None:
         return
     _check_folder(target)
     try:
-        Path(target).write_text(text, encoding="utf-8")
+        write_atomic(target, text.encode("utf-8"))
     except OSError as exc:
         raise CliError(f"cannot write {target}: {exc.strerror or exc}") from None
 

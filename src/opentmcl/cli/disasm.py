@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import argparse
 import re
-from pathlib import Path
 
+from ..atomicfile import write_atomic
 from . import CliError
 
 
@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
             if given and same_file(args.output, given):
                 raise CliError(f"output {args.output} would overwrite the input {given}")
         try:
-            Path(args.output).write_text(text, encoding="utf-8")
+            write_atomic(args.output, text.encode("utf-8"))
         except OSError as exc:
             raise CliError(f"cannot write {args.output}: {exc.strerror or exc}") from None
     else:

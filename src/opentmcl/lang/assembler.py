@@ -38,12 +38,15 @@ INCLUDE_DIR = Path(__file__).resolve().parent / "include"
 DEFAULT_MODULE = "TMCM-6212"
 MAX_INCLUDE_DEPTH = 32
 MAX_EXPR_DEPTH = 100
+MAX_EXPR_TOKENS = 1000      # numbers, names and operators in one expression
+MAX_CONSTANT_DEPTH = 100    # constants defined through constants, this many levels deep
 MAX_INTERMEDIATE = 1 << 64  # expression results beyond this are errors (keeps numbers small)
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
 _LABEL_RE = re.compile(rf"\s*({_IDENT})\s*:")
 _CONST_RE = re.compile(rf"\s*({_IDENT})\s*=(.*)\Z", re.S)
 _WORD_RE = re.compile(rf"\s*({_IDENT})")
+_BLANK_RE = re.compile(r"\s*\Z")
 _TOKEN_RE = re.compile(
     r"\s*(?:(?P<num>0[xX][0-9A-Fa-f]+|\$[0-9A-Fa-f]+|0[bB][01]+|[0-9]+)"
     rf"|(?P<name>{_IDENT})|(?P<op><<|>>|[-+*/%&|^~()]))"
@@ -129,8 +132,10 @@ class _ExprParser:
         self.err = err
         pos = 0
         while pos < len(text):
-            if text[pos:].strip() == "":
+            if _BLANK_RE.match(text, pos):
                 break
+            if len(self.tokens) == MAX_EXPR_TOKENS:
+                err(self.tokens[-1][2], f"expression longer than {MAX_EXPR_TOKENS} numbers, names and operators")
             m = _TOKEN_RE.match(text, pos)
             if not m:
                 bad = len(text) - len(text[pos:].lstrip())
@@ -460,6 +465,9 @@ def _lookup(name: str, col: int, where: _Where, st: _State) -> int:
         if name in st.resolving:
             chain = " -> ".join(st.resolving[st.resolving.index(name):] + [name])
             _fail(where, col, f"constant defined in terms of itself: {chain}")
+        if len(st.resolving) > MAX_CONSTANT_DEPTH:
+            _fail(where, col, f"constant {st.resolving[0]!r} is defined through more than "
+                              f"{MAX_CONSTANT_DEPTH} levels of other constants (down to {name!r})")
         st.resolving.append(name)
         defs = st.constants[name]
         first = _eval(defs[0].expr, defs[0].where, st)
@@ -479,11 +487,27 @@ def _lookup(name: str, col: int, where: _Where, st: _State) -> int:
 
 
 def _eval(e: _Expr, where: _Where, st: _State) -> int:
-    if e.kind == "num":
-        return e.value
-    if e.kind == "name":
-        return _lookup(e.name, e.column, where, st)
-    vals = [_eval(a, where, st) for a in e.args]
+    """The value of `e`, without recursion (a long chain like 1+1+...+1 is a deep tree)."""
+    todo: list[tuple[_Expr, bool]] = [(e, False)]
+    values: list[int] = []
+    while todo:
+        node, ready = todo.pop()
+        if node.kind == "num":
+            values.append(node.value)
+        elif node.kind == "name":
+            values.append(_lookup(node.name, node.column, where, st))
+        elif not ready:
+            todo.append((node, True))
+            todo.extend((a, False) for a in reversed(node.args))
+        else:
+            n = len(node.args)
+            vals = values[-n:]
+            del values[-n:]
+            values.append(_combine(node, vals, where))
+    return values[0]
+
+
+def _combine(e: _Expr, vals: list[int], where: _Where) -> int:
     try:
         result = _apply(e.op, *vals)
         if abs(result) > MAX_INTERMEDIATE:

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 
+from ..atomicfile import open_atomic
 from .trace import CHANNELS, SWITCHES, Trace, TraceError
 
 DEFAULT_CHANNELS = ("position", "velocity", "acceleration", "load", "current", "switches")
@@ -68,7 +69,8 @@ def render(trace: Trace, path: str | os.PathLike, *, channels=DEFAULT_CHANNELS, 
     axs[-1].set_xlabel("time [s]")
     which = f"axis {trace.axes[0]}" if len(trace.axes) == 1 else f"axes {', '.join(map(str, trace.axes))}"
     fig.suptitle(title or f"{trace.module or 'module'}: {which}")
-    fig.savefig(path, format=fmt, dpi=110)
+    with open_atomic(path) as fh:   # a failed or killed render keeps the old image
+        fig.savefig(fh, format=fmt, dpi=110)
     return fmt
 
 

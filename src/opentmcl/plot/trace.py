@@ -22,6 +22,7 @@ import os
 from array import array
 from dataclasses import dataclass, field
 
+from ..atomicfile import open_atomic
 from ..columns import Column
 from ..limits import CSV_MAX, LINE_MAX, size_text
 
@@ -102,7 +103,7 @@ class Trace:
         if isinstance(target, io.TextIOBase):
             _write(target, meta, header, rows)
             return
-        with open(target, "w", newline="", encoding="utf-8") as fh:
+        with open_atomic(target, text=True) as fh:   # a failed or killed write keeps the old file
             _write(fh, meta, header, rows)
 
     @classmethod
@@ -243,9 +244,9 @@ class Sampler:
 
 
 def check_duration(seconds: float, interval: float) -> None:
-    """ValueError unless `interval` > 0, `seconds` finite >= 0 and at most MAX_SAMPLES samples."""
-    if not interval > 0 or not seconds >= 0 or math.isinf(seconds):
-        raise ValueError("interval must be > 0 and seconds a finite number >= 0")
+    """ValueError unless `interval` is finite > 0, `seconds` finite >= 0 and at most MAX_SAMPLES samples."""
+    if not 0 < interval < math.inf or not 0 <= seconds < math.inf:  # also NaN
+        raise ValueError("interval must be a finite number > 0 and seconds a finite number >= 0")
     if seconds / interval > MAX_SAMPLES:
         raise ValueError(f"{seconds:g} s every {interval:g} s is more than {MAX_SAMPLES} samples; "
                          "record less or sample less often")

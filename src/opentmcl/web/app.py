@@ -38,7 +38,7 @@ from starlette.routing import Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
-from .guard import MAX_BODY, SUBPROTOCOL, Guard
+from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
 from .service import FAST_HZ, Dashboard, DashboardError
 
 log = logging.getLogger("opentmcl.web")
@@ -93,11 +93,13 @@ def _str(data: dict, key: str) -> str:
 
 
 def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Sequence[str] = (),
-               token: str | None = None, max_body: int = MAX_BODY) -> Starlette:
+               token: str | None = None, max_body: int = MAX_BODY,
+               body_timeout: float = BODY_TIMEOUT) -> Starlette:
     """The Starlette app for one `Dashboard` or several (one per module, distinct addresses).
 
     `allowed_hosts`: Host names accepted besides the loopback ones (the bound address, --allow-host);
-    `token`: required on every request when given; `max_body`: the largest request body in bytes.
+    `token`: required on every request when given; `max_body`: the largest request body in bytes,
+    `body_timeout`: seconds within which it must have arrived.
     (Starlette's TestClient sends Host "testserver": give it base_url="http://127.0.0.1".)"""
     if isinstance(dashboards, Dashboard):
         dashboards = [dashboards]
@@ -131,7 +133,8 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
         Route("/m/{address}/{rest:path}", unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
         Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
     ]
-    guard = Middleware(Guard, allowed_hosts=allowed_hosts, token=token, max_body=max_body)
+    guard = Middleware(Guard, allowed_hosts=allowed_hosts, token=token, max_body=max_body,
+                       body_timeout=body_timeout)
     return Starlette(routes=routes, middleware=[guard])
 
 

@@ -7,12 +7,15 @@ before any route, so a refused request changes nothing.
 3. Every method but GET/HEAD, and the WebSocket upgrade: an Origin, when sent, must be the
    dashboard's own, and the request must carry ``X-OpenTMCL: 1`` (WebSocket: subprotocol
    ``opentmcl``), which a cross-site form cannot send.
-4. A body is at most `MAX_BODY` bytes, read before the route runs and never beyond the limit.
+4. A body is at most `MAX_BODY` bytes, read before the route runs and never beyond the limit,
+   and must be complete within `BODY_TIMEOUT` seconds (a body sent a byte at a time holds no
+   connection for ever).
 
-Refusals are 403 or 413 with ``{"error": "<one line>"}`` and a log line.
+Refusals are 403, 408 or 413 with ``{"error": "<one line>"}`` and a log line.
 """
 from __future__ import annotations
 
+import asyncio
 import logging
 import secrets
 import urllib.parse
@@ -24,6 +27,7 @@ from starlette.responses import JSONResponse, RedirectResponse
 log = logging.getLogger("opentmcl.web")
 
 MAX_BODY = 1 << 20           # 1 MiB: a full 6144-instruction program source is well below
+BODY_TIMEOUT = 30.0          # seconds for the whole body: 1 MiB takes under 10 s even at 1 Mbit/s
 HEADER = "x-opentmcl"        # value "1"; a custom header needs a CORS preflight, never granted
 TOKEN_HEADER = "x-opentmcl-token"
 SUBPROTOCOL = "opentmcl"
@@ -66,8 +70,9 @@ class Guard:
     """ASGI middleware: see the module docstring. `allowed_hosts` extends the loopback names."""
 
     def __init__(self, app, allowed_hosts: Iterable[str] = (), token: str | None = None,
-                 max_body: int = MAX_BODY) -> None:
+                 max_body: int = MAX_BODY, body_timeout: float = BODY_TIMEOUT) -> None:
         self.app = app
+        self.body_timeout = body_timeout
         self.allowed = {host_name(h) for h in (*LOOPBACK_NAMES, *allowed_hosts) if h}
         self.token = token
         self.max_body = max_body
@@ -91,7 +96,12 @@ class Guard:
                 await self.refuse(scope, receive, send, 413, self.too_large())
                 return
             if scope["method"] not in SAFE_METHODS:
-                body = await self.read_body(receive)
+                try:
+                    body = await asyncio.wait_for(self.read_body(receive), self.body_timeout)
+                except asyncio.TimeoutError:
+                    await self.refuse(scope, receive, send, 408,
+                                      f"request body not complete within {self.body_timeout:g} s")
+                    return
                 if body is GONE:
                     return  # the client left before its body was complete: nothing to act on
                 if body is None:
@@ -161,7 +171,7 @@ class Guard:
         log.warning("refused %s %s from %s: %s", scope.get("method", "WEBSOCKET"), scope["path"],
                     client[0], reason)
         response = JSONResponse({"error": reason}, status_code=status,
-                                headers={"Connection": "close"} if status == 413 else None)
+                                headers={"Connection": "close"} if status in (408, 413) else None)
         if scope["type"] == "websocket":
             await receive()  # websocket.connect
             if "websocket.http.response" not in scope.get("extensions", {}):

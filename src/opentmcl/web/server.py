@@ -9,9 +9,12 @@ Each module's page is at /m/ADDRESS/; the root redirects to the first one.
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 
+from .connlimits import HEAD_MAX, HEAD_TIMEOUT, KEEP_ALIVE, MAX_CONNECTIONS, protocol_class
+from .guard import BODY_TIMEOUT
 from .service import Dashboard, Poller
 
 WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's default is 16 MiB
@@ -93,6 +96,18 @@ def _ws_implementation() -> str:
     return "websockets"
 
 
+class _RefusedHandshakeFilter(logging.Filter):
+    """uvicorn's sans-I/O WebSocket protocol logs "ASGI callable returned without completing
+    handshake." at ERROR level after a denial response (guard.py's 403), which it does complete:
+    drop that line, the guard has logged the refusal with its reason."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not str(record.msg).startswith("ASGI callable returned without completing handshake")
+
+
+_HANDSHAKE_FILTER = _RefusedHandshakeFilter()
+
+
 class DashboardStartError(OSError):
     """The web server could not start (port in use, bad address)."""
 
@@ -130,17 +145,17 @@ def check_allowed_hosts(names) -> tuple[str, ...]:
 
 def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=None, vm_lock=None,
                     url: str = "", on_stop=None, poll: bool = True, allow_hosts=(),
-                    token: str | None = None) -> DashboardHandle:
+                    token: str | None = None, **limits) -> DashboardHandle:
     """Serve the dashboard for a host `Module` at http://host:port/m/ADDRESS/ (the root redirects
     there) from a daemon thread.
 
     `vm`/`vm_lock`: the in-process VirtualModule behind `module` and the lock that guards it, for
     the virtual-only features (forcing inputs). `port` 0 picks a free port (see `handle.port`).
-    `allow_hosts` and `token`: see `serve_dashboards`.
+    `allow_hosts`, `token` and the connection `limits`: see `serve_dashboards`.
     """
     dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
     return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll, allow_hosts=allow_hosts,
-                            token=token)
+                            token=token, **limits)
 
 
 def _bind(host: str, port: int):
@@ -164,12 +179,17 @@ def _bind(host: str, port: int):
 
 
 def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port: int = 8080, *,
-                     on_stop=None, poll: bool = True, allow_hosts=(), token: str | None = None) -> DashboardHandle:
+                     on_stop=None, poll: bool = True, allow_hosts=(), token: str | None = None,
+                     head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS,
+                     body_timeout: float = BODY_TIMEOUT) -> DashboardHandle:
     """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each.
 
     Requests must name a loopback host, `host` or one of `allow_hosts` (guard.py). A token is
     required when `allow_hosts` is given or `host` is not loopback (a new random one unless `token`
     is given; `handle.token`, `handle.open_url`); `token` also forces one on loopback.
+
+    Connection limits (connlimits.py, guard.py): a request head must be complete within
+    `head_timeout` seconds and its body within `body_timeout`; at most `max_connections` at once.
     """
     import uvicorn
 
@@ -180,12 +200,15 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     allow_hosts = check_allowed_hosts(allow_hosts)
     if token is None and (allow_hosts or not is_loopback(host)):
         token = new_token()
-    app = create_app(dashboards, allowed_hosts=(host, *allow_hosts), token=token)
+    app = create_app(dashboards, allowed_hosts=(host, *allow_hosts), token=token, body_timeout=body_timeout)
     warn_if_exposed(host)
     sock = _bind(host, port)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
-                            ws=_ws_implementation(), access_log=False, ws_max_size=WS_MAX_SIZE)
+                            ws=_ws_implementation(), access_log=False, ws_max_size=WS_MAX_SIZE,
+                            http=protocol_class(head_timeout, max_connections), h11_max_incomplete_event_size=HEAD_MAX,
+                            timeout_keep_alive=KEEP_ALIVE)
     server = uvicorn.Server(config)
+    logging.getLogger("uvicorn.error").addFilter(_HANDSHAKE_FILTER)  # idempotent: one filter object
     server.install_signal_handlers = lambda: None  # older uvicorn; the caller owns the signals
     failure: list[BaseException] = []
 
