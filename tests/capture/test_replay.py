@@ -105,10 +105,16 @@ def test_events_are_compared_in_order(tmp_path):
     assert [(d.what, d.captured) for d in report.divergences] == [("event", "no event")]
 
 
-def test_requests_to_other_addresses_are_skipped(tmp_path):
+def test_an_address_without_requests_is_bad_input_not_agreement(tmp_path):
+    """docs/capture.md: exit 0 means "all agree"; a replay that compared nothing (a mistyped
+    --address) proves nothing, so it is bad input: ReplayError, exit 2 with one line naming the
+    addresses the capture has. (Old code: 0 replies compared, "all replies agree", exit 0.)"""
     path = record(tmp_path / "c.jsonl", MOVE)
-    report = replay(path, "TMCM-6212", address=2)
-    assert report.compared == 0 and report.skipped == 5 and report.ok
+    with pytest.raises(ReplayError, match=r"no request to address 2 .*requests go to 1\)"):
+        replay(path, "TMCM-6212", address=2)
+    done = cli("replay", str(path), "--module", "TMCM-6212", "--address", "2")
+    assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1
+    assert "no request to address 2" in done.stderr
 
 
 @pytest.mark.parametrize("spec", ["speed=1", "position", "position=-1", "position=inf", "time=x"])

@@ -326,6 +326,10 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
         _Replayer(cap, vm, address, tol, report).run()
     finally:
         vm.close()
+    if report.compared == 0:  # nothing checked is no evidence: not "all replies agree"
+        seen = sorted({r["address"] for r in cap.frames if r["kind"] == "request" and "address" in r})
+        raise ReplayError(f"{cap.path}: no request to address {address} in the capture "
+                          f"(requests go to {', '.join(map(str, seen)) or 'no address'})")
     return report
 
 
