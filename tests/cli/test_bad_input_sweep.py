@@ -235,6 +235,11 @@ def captures(files):
         "version2.jsonl": text.replace('"version":1,', '"version":2,', 1),
         "empty.jsonl": "",
     }
+    head = text.splitlines()[0]
+    request = ('{"record": "frame", "n": 1, "t": %s, "dir": "host", "kind": "request", "raw": "01 06 01 00 00 00 '
+               '00 00 08", "address": 1, "command": 6, "type": 1, "motor": 0, "value": 0}')
+    for name, t in [("nan_time.jsonl", "NaN"), ("inf_time.jsonl", "1e400"), ("negative_time.jsonl", "-5")]:
+        bad[name] = f"{head}\n{request % t}\n"
     for name, content in bad.items():
         (files / name).write_text(content)
     (files / "junk.jsonl").write_bytes(bytes(range(256)) * 8)
@@ -245,12 +250,14 @@ def captures(files):
 @pytest.mark.parametrize("argv", [["log", "show"], ["log", "show", "--command", "GAP"],
                                   ["replay"], ["replay", "--module", "TMCM-6212"]])
 @pytest.mark.parametrize("case", ["truncated.jsonl", "wrong_json.jsonl", "huge_line.jsonl", "version2.jsonl",
-                                  "empty.jsonl", "junk.jsonl", "zero", "dir"])
+                                  "empty.jsonl", "junk.jsonl", "zero", "dir",
+                                  "nan_time.jsonl", "inf_time.jsonl", "negative_time.jsonl"])
 def test_bad_capture_files(capsys, captures, argv, case):
     """docs/capture.md: "anything that is not a version-1 capture" is "a one-line error naming the
     file and line (exit 2)", also a line longer than MAX_LINE_BYTES and an endless /dev/zero. The
     message names the subcommand (`opentmcl log: error: ...`; old code printed `opentmcl None:`
-    and, with --command GAP, `opentmcl GAP:`)."""
+    and, with --command GAP, `opentmcl GAP:`). A frame's `t` is "seconds since the proxy started":
+    NaN, infinity or a negative time is refused (old code: shown, and replay crashed, exit 1/3)."""
     path = captures[1][case]
     line = one_line_error(capsys, [*argv[:2], str(path), *argv[2:]] if argv[0] == "log" else
                           [argv[0], str(path), *argv[1:]], str(path))
