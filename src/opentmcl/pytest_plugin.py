@@ -98,10 +98,23 @@ def pytest_configure(config) -> None:
         "the virtual module that the tmcl_module fixture gives this test (opentmcl)")
 
 
+def _ini_module(config) -> str | None:
+    """The ini `tmcl_module`; a relative profile file path is relative to the ini file, as
+    pytest's own path options are, so the suite runs from any directory."""
+    from pathlib import Path
+
+    from .modules.profile_file import looks_like_path
+
+    name = config.getini("tmcl_module")
+    if name and looks_like_path(name) and not Path(name).is_absolute() and config.inipath is not None:
+        return str(Path(config.inipath).parent / name)
+    return name
+
+
 def _spec(request) -> tuple[str, dict]:
     marker = request.node.get_closest_marker(MARKER)
     config = request.config
-    name = config.getoption("tmcl_module", None) or config.getini("tmcl_module") or DEFAULT_MODULE
+    name = config.getoption("tmcl_module", None) or _ini_module(config) or DEFAULT_MODULE
     kwargs: dict = {}
     if marker is not None:
         if len(marker.args) > 1:
@@ -127,7 +140,11 @@ def tmcl_module(request):
     try:
         module = make_tmcl_module(name, **kwargs)
     except (KeyError, ValueError, EepromError, TmclError) as exc:
-        pytest.fail(f"tmcl_module: {exc.args[0] if exc.args else exc}", pytrace=False)
+        error = f"tmcl_module: {exc.args[0] if exc.args else exc}"
+    else:
+        error = None
+    if error:  # failed outside the except block: one line, no "During handling of..." echo
+        pytest.fail(error, pytrace=False)
     try:
         yield module
     finally:
@@ -145,7 +162,11 @@ def tmcl_replay():
         try:
             report = replay(capture, module, **kwargs)
         except (CaptureError, ReplayError) as exc:
-            pytest.fail(f"tmcl_replay: {exc}", pytrace=False)
+            error = f"tmcl_replay: {exc}"
+        else:
+            error = None
+        if error:
+            pytest.fail(error, pytrace=False)
         if not report.ok:
             pytest.fail(report.text(), pytrace=False)
         return report

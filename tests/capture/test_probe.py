@@ -59,10 +59,18 @@ def test_probe_extends_the_closest_builtin_and_notes_what_differs(tmp_path):
 
 
 def test_probe_is_bounded_in_time_and_fails_in_one_line(tmp_path):
-    with Tool("serve", "--module", "PD86-1180", "--pty", "--interface", "rs485") as served:  # filters addresses
+    """On an RS-485 line nobody answers address 9 (docs/endpoints.md: only frames for GP66/GP87 are
+    answered); on USB the module answers every address with its own (GP66 = 1), so the 136 type 1
+    reply comes from module 1 and the probe says so in one line. (Merged code: `serve --pty` became
+    USB for one module, and the probe ended with the client's bare time-out message.)"""
+    with Tool("serve", "--module", "PD86-1180", "--pty", "--interface", "rs485") as served:
         slow = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--max-seconds", "0.05")
         nobody = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--address", "9", "--timeout", "0.2")
+    with Tool("serve", "--module", "PD86-1180", "--pty", "--interface", "usb") as served:
+        usb = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--address", "9", "--timeout", "0.2")
     assert slow.returncode == 1 and "longer than its time limit" in slow.stderr.splitlines()[-1]
     assert nobody.returncode == 1 and "does not answer command 136" in nobody.stderr.splitlines()[-1]
+    assert usb.returncode == 1 and len(usb.stderr.splitlines()) == 1
+    assert "not type 1 at this address" in usb.stderr and "give that --address" in usb.stderr
     bad = cli("profile", "probe", "nope://x")
     assert bad.returncode == 2 and len(bad.stderr.splitlines()) == 1

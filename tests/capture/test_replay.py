@@ -14,7 +14,7 @@ from opentmcl.capture import ReplayError, Tolerance, assert_replays, replay
 from opentmcl.capture.decode import HOST, MODULE, Decoder
 from opentmcl.protocol.frame import Request
 
-from .helpers import cli
+from .helpers import Tool, cli
 
 HEADER = {"record": "header", "format": "opentmcl-capture", "version": 1, "tool": "test", "target": "sim://"}
 
@@ -105,10 +105,16 @@ def test_events_are_compared_in_order(tmp_path):
     assert [(d.what, d.captured) for d in report.divergences] == [("event", "no event")]
 
 
-def test_requests_to_other_addresses_are_skipped(tmp_path):
+def test_an_address_without_requests_is_bad_input_not_agreement(tmp_path):
+    """docs/capture.md: exit 0 means "all agree"; a replay that compared nothing (a mistyped
+    --address) proves nothing, so it is bad input: ReplayError, exit 2 with one line naming the
+    addresses the capture has. (Old code: 0 replies compared, "all replies agree", exit 0.)"""
     path = record(tmp_path / "c.jsonl", MOVE)
-    report = replay(path, "TMCM-6212", address=2)
-    assert report.compared == 0 and report.skipped == 5 and report.ok
+    with pytest.raises(ReplayError, match=r"no request to address 2 .*requests go to 1\)"):
+        replay(path, "TMCM-6212", address=2)
+    done = cli("replay", str(path), "--module", "TMCM-6212", "--address", "2")
+    assert done.returncode == 2 and done.stdout == "" and len(done.stderr.splitlines()) == 1
+    assert "no request to address 2" in done.stderr
 
 
 @pytest.mark.parametrize("spec", ["speed=1", "position", "position=-1", "position=inf", "time=x"])
@@ -167,3 +173,19 @@ def test_the_replayed_module_follows_a_new_address(tmp_path):
     assert report.ok and report.compared == 2 and report.skipped == 1
     edit(path, lambda r: r.get("kind") == "reply" and r.get("address") == 3, value=1)
     assert replay(path, "TMCM-6212").parameters == ["max_current"]
+
+
+def test_capture_of_a_sim_profile_file_replays_against_that_file(tmp_path):
+    """docs/capture.md: "default: the module the capture identified". Behind
+    `proxy --to sim:///path/my.toml` the identity is the file's module name, which no built-in has;
+    the default is then the target's file (old code: "unknown module 'MY-6212'", exit 2). A changed
+    default of AP 4 (TMCM-6212 manual 3.6.6 GAP) in the file is seen, with its firmware string (manual 3.6.36: 136)."""
+    profile = tmp_path / "my.toml"
+    profile.write_text('extends = "TMCM-6212"\n[module]\nname = "MY-6212"\nfirmware_version = "6212V999"\n'
+                       '[[axis_parameter]]\nnumber = 4\ndefault = 1234\n')
+    with Tool("proxy", "--to", f"sim://{profile}", "--tcp", "127.0.0.1:0", "--log", str(tmp_path / "c.jsonl")) as px:
+        assert cli("send", "136 0, 0, 0", "--to", px.endpoint("tcp")).stdout.strip() == "6212V999"
+        assert cli("send", "GAP 4, 0", "--to", px.endpoint("tcp")).stdout.strip() == "1234"
+    done = cli("replay", str(tmp_path / "c.jsonl"))
+    assert done.returncode == 0 and "against MY-6212 at address 1" in done.stdout, done.stdout + done.stderr
+    assert cli("replay", str(tmp_path / "c.jsonl"), "--module", "TMCM-6212").returncode == 1

@@ -219,3 +219,80 @@ def test_addresses_beyond_32_bits(capsys, files):
     capsys.readouterr()
     one_line_error(capsys, ["load", str(files / "ok.bin"), "--to", SIM, "--start", "99999999999999999999"],
                    "--start")
+
+
+@pytest.fixture
+def captures(files):
+    """A valid capture (the TMCM-6212 example) and the damaged files a user may hand over."""
+    from pathlib import Path
+
+    good = Path(__file__).resolve().parents[2] / "examples" / "captures" / "tmcm6212_program_reference_events.jsonl"
+    text = good.read_text()
+    bad = {
+        "truncated.jsonl": text[:300],
+        "wrong_json.jsonl": '{"record": "header", "format": "opentmcl-capture",\n',
+        "huge_line.jsonl": '{"record": "header", "x": "' + "a" * 100_000 + '"}\n',
+        "version2.jsonl": text.replace('"version":1,', '"version":2,', 1),
+        "empty.jsonl": "",
+    }
+    head = text.splitlines()[0]
+    request = ('{"record": "frame", "n": 1, "t": %s, "dir": "host", "kind": "request", "raw": "01 06 01 00 00 00 '
+               '00 00 08", "address": 1, "command": 6, "type": 1, "motor": 0, "value": 0}')
+    for name, t in [("nan_time.jsonl", "NaN"), ("inf_time.jsonl", "1e400"), ("negative_time.jsonl", "-5")]:
+        bad[name] = f"{head}\n{request % t}\n"
+    for name, content in bad.items():
+        (files / name).write_text(content)
+    (files / "junk.jsonl").write_bytes(bytes(range(256)) * 8)
+    return good, {**{name: files / name for name in bad}, "junk.jsonl": files / "junk.jsonl",
+                  "zero": "/dev/zero", "dir": files / "adir"}
+
+
+@pytest.mark.parametrize("argv", [["log", "show"], ["log", "show", "--command", "GAP"],
+                                  ["replay"], ["replay", "--module", "TMCM-6212"]])
+@pytest.mark.parametrize("case", ["truncated.jsonl", "wrong_json.jsonl", "huge_line.jsonl", "version2.jsonl",
+                                  "empty.jsonl", "junk.jsonl", "zero", "dir",
+                                  "nan_time.jsonl", "inf_time.jsonl", "negative_time.jsonl"])
+def test_bad_capture_files(capsys, captures, argv, case):
+    """docs/capture.md: "anything that is not a version-1 capture" is "a one-line error naming the
+    file and line (exit 2)", also a line longer than MAX_LINE_BYTES and an endless /dev/zero. The
+    message names the subcommand (`opentmcl log: error: ...`; old code printed `opentmcl None:`
+    and, with --command GAP, `opentmcl GAP:`). A frame's `t` is "seconds since the proxy started":
+    NaN, infinity or a negative time is refused (old code: shown, and replay crashed, exit 1/3)."""
+    path = captures[1][case]
+    line = one_line_error(capsys, [*argv[:2], str(path), *argv[2:]] if argv[0] == "log" else
+                          [argv[0], str(path), *argv[1:]], str(path))
+    assert line.startswith(f"opentmcl {argv[0]}: error: "), line
+
+
+def test_log_show_and_replay_bad_options(capsys, captures):
+    """Unknown mnemonics, tolerances, modules and addresses are one-line errors, exit 2."""
+    good = str(captures[0])
+    one_line_error(capsys, ["log", "show", good, "--command", "FOO"], "opentmcl log: error", "FOO")
+    one_line_error(capsys, ["replay", good, "--tolerance", "warp=1"], "opentmcl replay: error", "warp")
+    one_line_error(capsys, ["replay", good, "--tolerance", "position=-1"], "position", ">= 0")
+    one_line_error(capsys, ["replay", good, "--tolerance", "time=nan"], "time")
+    one_line_error(capsys, ["replay", good, "--module", "TMCM-9999"], "TMCM-9999")
+    one_line_error(capsys, ["replay", good, "--address", "256"], "0..255")
+    one_line_error(capsys, ["replay", good, "--scenario", "/dev/zero"], "/dev/zero")
+
+
+def test_profile_bad_files(capsys, files):
+    """docs/profiles.md: a profile file is read up to 1 MiB; a missing, binary or endless file is one
+    line naming it, exit 2 for `profile show` and for every command that takes a module file."""
+    (files / "bin.toml").write_bytes(bytes(range(256)))
+    for path in [files / "missing.toml", files / "bin.toml", files / "adir" / "x.toml"]:
+        one_line_error(capsys, ["profile", "show", str(path)], "opentmcl profile: error", path.name)
+        one_line_error(capsys, ["serve", "--module", str(path), "--pty"], path.name)
+        one_line_error(capsys, ["replay", str(files / "x.jsonl"), "--module", str(path)])
+
+
+def test_profile_probe_and_proxy_bad_options(capsys):
+    """Bad URLs, time-outs and listener options of `profile probe` and `proxy`: one line, exit 2."""
+    one_line_error(capsys, ["profile", "probe", "nope://x"], "opentmcl profile: error")
+    one_line_error(capsys, ["profile", "probe", SIM, "--timeout", "nan"], "--timeout")
+    one_line_error(capsys, ["profile", "probe", SIM, "--max-seconds", "-1"], "--max-seconds")
+    one_line_error(capsys, ["profile", "probe", SIM, "--address", "256"], "--address")
+    one_line_error(capsys, ["proxy", "--to", SIM], "opentmcl proxy: error", "--pty")
+    one_line_error(capsys, ["proxy", "--to", SIM, "--tcp", "0", "--gap", "nan"], "--gap")
+    one_line_error(capsys, ["proxy", "--to", SIM, "--tcp", "0", "--max-clients", "0"], "--max-clients")
+    one_line_error(capsys, ["proxy", "--to", SIM, "--tcp", "0", "--idle-timeout", "inf"], "--idle-timeout")

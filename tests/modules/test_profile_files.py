@@ -69,7 +69,9 @@ def test_extends_overrides_adds_and_removes(derived):
     assert vm.request(6, 250, 0).value == 7
     assert vm.request(6, 206, 0).status == 3 and base.axis_parameter(206)
     assert (0, 81) not in vm.profile.global_parameters and (0, 81) in base.global_parameters
-    assert vm.request(7, 0, 0).status == 2  # STAP is not in the opcode list: 2 "Invalid command"
+    # STAP is not in this module's opcode list: 2 "Invalid command" (manual 4.2.1), the project's one
+    # opcode rule (docs/assumptions.md); 6 is kept for control commands met by a running program
+    assert vm.request(7, 0, 0).status == 2
     assert vm.profile.axis_parameter(6).title == base.axis_parameter(6).title  # inherited fields stay
     assert (2, 5) in vm.profile.io
     # PD86-1180 manual 4.6.15 (GIO): the removed analog input answers like a port the module lacks
@@ -210,3 +212,36 @@ def test_a_scenario_for_the_parent_fits_the_derived_module(tmp_path):
     other = cli("replay", str(root / "examples" / "captures" / "bus_ascii_two_modules.jsonl"),
                 "--module", str(grandchild), "--scenario", str(root / "examples" / "scenarios" / "pd28_1021_home.toml"))
     assert other.returncode == 2 and "the scenario is for TMCM-1021, not MY-6212-B" in other.stderr
+
+
+def test_profile_check_reports_extends_and_schema_errors_at_once(tmp_path):
+    """Issue 13 item 4: "every error one line with its key path". A bad [remove] entry used to
+    hide the schema errors until it was fixed (old code: 1 line, then 2 more on the next run); a
+    keyless entry is named by its index in the user's file, not in the merged table (old code:
+    `global_parameter[32]` for the file's only one); a missing parent file names the `extends`
+    key of the file that asked for it (old code: just `nope.toml: cannot read`)."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text('extends = "PD86-1180"\n[module]\naxes = 0\n[[global_parameter]]\nnumber = 5\n'
+                   '[remove]\naxis_parameter = [77]\n')
+    done = cli("profile", "check", str(bad))
+    lines = done.stderr.splitlines()
+    assert done.returncode == 1 and all(line.startswith(f"{bad}: ") for line in lines), lines
+    assert f"{bad}: remove.axis_parameter[0]: [77] is not an inherited entry (number)" in lines
+    assert f"{bad}: module.axes: must be 1..255, got 0" in lines
+    assert f"{bad}: global_parameter[0].bank: missing" in lines
+    missing = tmp_path / "child.toml"
+    missing.write_text('extends = "nope.toml"\n')
+    done = cli("profile", "check", str(missing))
+    assert done.returncode == 1
+    assert done.stderr.splitlines() == [f"{missing}: extends: {tmp_path / 'nope.toml'}: cannot read: No such file or directory"]
+
+
+def test_two_keyless_entries_are_two_errors(tmp_path):
+    """Two [[axis_parameter]] tables without `number` are two entries of the file (old code merged
+    them into one and reported its fields once)."""
+    path = tmp_path / "k.toml"
+    path.write_text('extends = "TMCM-6212"\n[[axis_parameter]]\nname = "a"\n[[axis_parameter]]\nname = "b"\n')
+    with pytest.raises(ProfileError) as err:
+        load_profile(str(path))
+    assert [line for line in err.value.errors if line.endswith(".number: missing")] == \
+        [f"{path}: axis_parameter[0].number: missing", f"{path}: axis_parameter[1].number: missing"]

@@ -140,6 +140,8 @@ def read_capture(path: str | os.PathLike) -> Capture:
             for key, types in _FRAME_KEYS.items():
                 if not isinstance(rec.get(key), types) or isinstance(rec.get(key), bool):
                     raise CaptureError(f"{path}:{number}: frame record without a valid {key!r}")
+            if not 0 <= rec["t"] < float("inf"):  # also NaN: seconds since the proxy started
+                raise CaptureError(f"{path}:{number}: 't' must be a finite number of seconds >= 0, got {rec['t']!r}")
             for key in _KIND_KEYS.get(rec["kind"], ()):
                 if type(rec.get(key)) is not int:
                     raise CaptureError(f"{path}:{number}: {rec['kind']} record without an integer {key!r}")

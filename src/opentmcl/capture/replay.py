@@ -288,6 +288,28 @@ def first_address(cap: Capture) -> int | None:
     return None
 
 
+def _sim_profile_file(target, address: int | None) -> str | None:
+    """The profile file of a `sim://` capture target (at `address`, else the first), if any."""
+    import urllib.parse
+
+    from ..host.errors import TmclConnectionError
+    from ..host.transports.inprocess import _parse_modules
+    from ..modules.profile_file import looks_like_path
+
+    if not isinstance(target, str) or not target.startswith("sim://"):
+        return None
+    url = urllib.parse.urlsplit(target)
+    spec = url.netloc + url.path if ".toml" in url.path.lower() else (url.netloc or url.path.lstrip("/"))
+    try:
+        specs = _parse_modules(spec, 1)
+    except TmclConnectionError:  # a target the proxy could not have opened: keep the identity
+        return None
+    for name, at in specs:
+        if looks_like_path(name) and (address is None or at == address):
+            return name
+    return None
+
+
 def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | None = None, *,
            address: int | None = None, eeprom: str | os.PathLike | None = None, scenario=None,
            tolerance: Tolerance | dict | list | None = None) -> ReplayReport:
@@ -304,7 +326,12 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
         tol = tolerance
     else:
         tol = Tolerance.parse(tolerance)
-    module = module if module is not None else cap.module_name()
+    if module is None:
+        module = cap.module_name()
+        from ..modules.profile import module_names
+
+        if module is None or module not in module_names():  # e.g. proxy --to sim:///path/my.toml
+            module = _sim_profile_file(cap.header.get("target"), address) or module
     if module is None:
         raise ReplayError(f"{cap.path}: the capture does not identify its module; name one (--module)")
     if address is None:
@@ -326,6 +353,10 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
         _Replayer(cap, vm, address, tol, report).run()
     finally:
         vm.close()
+    if report.compared == 0:  # nothing checked is no evidence: not "all replies agree"
+        seen = sorted({r["address"] for r in cap.frames if r["kind"] == "request" and "address" in r})
+        raise ReplayError(f"{cap.path}: no request to address {address} in the capture "
+                          f"(requests go to {', '.join(map(str, seen)) or 'no address'})")
     return report
 
 

@@ -14,7 +14,7 @@ def register(subparsers) -> None:
     show = sub.add_parser("show", help="print a capture as a table")
     show.add_argument("file", metavar="FILE")
     show.add_argument("--address", "-a", type=int, metavar="N", help="only frames of module address N")
-    show.add_argument("--command", "-c", metavar="MNEMONIC", help="only frames of this command, e.g. GAP or 138")
+    show.add_argument("--command", "-c", dest="command_filter", metavar="MNEMONIC", help="only frames of this command, e.g. GAP or 138")
     show.set_defaults(func=run_show)
 
 
@@ -61,7 +61,7 @@ def row(rec: dict) -> str:
 def run_show(args) -> int:
     from ..capture import CaptureError, read_capture
 
-    command = _command_filter(args.command)
+    command = _command_filter(args.command_filter)
     try:
         cap = read_capture(args.file)
     except CaptureError as exc:

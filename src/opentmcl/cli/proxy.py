@@ -1,6 +1,6 @@
 """`opentmcl proxy`: sit between a host program and a module, relay every byte, capture the traffic.
 
-    opentmcl proxy --to URL (--pty [--link PATH] | --tcp [HOST:]PORT) [--log FILE]
+    opentmcl proxy --to URL (--pty [--link PATH] | --tcp [HOST:]PORT) [--log FILE] [--idle-timeout 300]
 
 URL is the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT, sim://NAME or
 can://INTERFACE/CHANNEL?id=N (a gateway: frames are converted, docs/capture.md). The host
@@ -28,6 +28,8 @@ def register(subparsers) -> None:
     p.add_argument("--tcp", metavar="[HOST:]PORT", help="listen on TCP (loopback unless --host)")
     p.add_argument("--host", metavar="ADDR", help="bind TCP to this address instead of loopback")
     p.add_argument("--max-clients", type=int, default=4, metavar="N", help="TCP clients at once (default 4)")
+    p.add_argument("--idle-timeout", type=float, default=300.0, metavar="SECONDS",
+                   help="drop a TCP client that sends nothing for SECONDS (default 300; 0: never)")
     p.add_argument("--log", metavar="FILE", help="write the capture (JSON Lines) to FILE")
     p.add_argument("--gap", type=float, default=0.1, metavar="SECONDS",
                    help="silence after which the decoder drops a partial frame as garbage (default 0.1)")
@@ -38,7 +40,7 @@ def build_proxy(args):
     from ..capture.proxy import Proxy, ProxySession
     from ..host.errors import TmclConnectionError
     from ..server import PtyServer, TcpServer
-    from ..server.tcp import is_loopback
+    from ..server.tcp import check_idle_timeout, is_loopback
     from .serve import parse_hostport
 
     if args.link:
@@ -49,6 +51,11 @@ def build_proxy(args):
         raise CliError(f"--gap must be a positive number of seconds, got {args.gap}")
     if args.max_clients < 1:
         raise CliError("--max-clients must be at least 1")
+    try:
+        check_idle_timeout(args.idle_timeout)
+    except ValueError:
+        raise CliError(f"--idle-timeout must be 0 (none) or a positive, finite number of seconds, "
+                       f"got {args.idle_timeout}") from None
     if args.pty and sys.platform == "win32":
         raise CliError("--pty needs a POSIX system")
     tcp = None
@@ -65,13 +72,24 @@ def build_proxy(args):
     except OSError as exc:
         raise CliError(f"cannot write {args.log}: {exc.strerror or exc}") from None
     if tcp is not None:
-        proxy.listen(TcpServer(proxy, tcp[0], tcp[1], max_clients=args.max_clients, session=ProxySession))
+        proxy.listen(TcpServer(proxy, tcp[0], tcp[1], max_clients=args.max_clients,
+                                     idle_timeout=args.idle_timeout, session=ProxySession))
     if args.pty:
         proxy.listen(PtyServer(proxy, link=args.link, session=ProxySession))
     return proxy
 
 
 def run(args) -> int:
+    from .serve import _log_to_stderr
+
+    logger, handler = _log_to_stderr("proxy")
+    try:
+        return _run(args)
+    finally:
+        logger.removeHandler(handler)
+
+
+def _run(args) -> int:
     from ..server import PtyServer, TcpServer
 
     proxy = build_proxy(args)
@@ -100,6 +118,8 @@ def run(args) -> int:
                       "capturing stopped", file=sys.stderr, flush=True)
             error = getattr(proxy.upstream, "error", None)
             if error:
+                if args.to.startswith("tcp://") and "closed" in error:  # e.g. serve's idle timeout
+                    error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
                 print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
                 return 1
     finally:

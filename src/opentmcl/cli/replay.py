@@ -1,7 +1,7 @@
 """`opentmcl replay`: send a capture's host requests to a virtual module in virtual time, compare replies.
 
     opentmcl replay FILE [--module NAME|PROFILE.toml] [--address N] [--eeprom F] [--scenario F]
-                    [--tolerance KEY=VALUE ...]
+                    [--tolerance KEY=VALUE[,KEY=VALUE...]]...
 
 Prints every divergence (time, request as TMCL text, parameter name, captured vs virtual) and a
 summary. Exit status 0 when all replies agree, 1 when any diverge, 2 on bad input (docs/capture.md).

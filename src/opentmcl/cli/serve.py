@@ -248,12 +248,12 @@ def describe(server) -> list[str]:
     return lines
 
 
-def _log_to_stderr():
-    """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl serve: ...`` lines."""
+def _log_to_stderr(tool: str = "serve"):
+    """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl TOOL: ...`` lines."""
     import logging
 
     handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("opentmcl serve: %(message)s"))
+    handler.setFormatter(logging.Formatter(f"opentmcl {tool}: %(message)s"))
     logger = logging.getLogger("opentmcl.server")
     logger.addHandler(handler)
     return logger, handler

@@ -67,6 +67,10 @@ def probe(client, *, max_seconds: float = 300.0, progress=lambda text: None) -> 
         binary = client.request(VERSION, 1, 0, 0).value
     except TmclStatusError:
         binary = None
+    except TmclError as exc:  # the string reply carries no module address; this one does (USB: GP66)
+        raise ProbeError(f"the module answers command 136 type 0 but not type 1 at this address ({exc}); "
+                         "on USB every address reaches the module, which replies with its own (GP66): "
+                         "give that --address") from None
     progress(f"firmware {version!r}")
     axes = 0
     while axes < MAX_AXES and ask.read(GAP, 1, axes) is not None:

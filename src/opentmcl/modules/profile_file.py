@@ -37,6 +37,7 @@ _REQUIRED = {"axis_parameter": ("number", "name", "min", "max", "access"),
              "io": ("bank", "port", "name", "kind", "access"), "interrupt": ("number", "name")}
 _INT_FIELDS = ("number", "bank", "port", "min", "max", "default")
 _TOP = {"extends", "module", "remove", *_TABLES}
+_FILE_INDEX = "_file_index"  # of a keyless entry after merging: its index in the user's file
 
 
 class ProfileError(ValueError):
@@ -101,10 +102,13 @@ def merge(base: dict, child: dict, where: str = "") -> tuple[dict, list[str]]:
                               f"({', '.join(key_fields)})")
                 continue
             del entries[key]
-        for entry in child.get(table, []):
+        for i, entry in enumerate(child.get(table, [])):
             if not isinstance(entry, dict):
                 continue  # reported by validate
             key = _key(table, entry)
+            if key is None:  # no usable key: kept apart (never merged into another) and named by its index in the file
+                entries[("?", i)] = {**entry, _FILE_INDEX: i}
+                continue
             entries[key] = {**entries.get(key, {}), **entry}
         out[table] = list(entries.values())
     return out, errors
@@ -159,7 +163,7 @@ def _check_entry(table: str, i: int, entry, seen: dict) -> list[str]:
     if not isinstance(entry, dict):
         return [f"{table}[{i}]: expected a table"]
     key = _key(table, entry)  # entries are named by their key: the index of a merged table means little
-    path = f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key, strict=True))}]" if key else f"{table}[{i}]"
+    path = f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key, strict=True))}]" if key else f"{table}[{entry.get(_FILE_INDEX, i)}]"
     errors = [f"{path}.{f}: missing" for f in _REQUIRED[table] if f not in entry]
     for f in _INT_FIELDS:
         if f in entry and not _is_int(entry[f]):
@@ -187,20 +191,25 @@ def _check_entry(table: str, i: int, entry, seen: dict) -> list[str]:
     return errors
 
 
-def resolve(path: str | Path, builtin, _depth: int = 0) -> dict:
+def resolve(path: str | Path, builtin, _depth: int = 0, _via: Path | None = None) -> dict:
     """The raw dict of the profile file at `path` with its `extends` chain applied; `builtin(name)`
     returns the raw dict of a built-in profile (KeyError if unknown). ProfileError on any problem."""
     path = Path(path)
     if _depth > MAX_DEPTH:
         raise ProfileError([f"{path}: extends: more than {MAX_DEPTH} levels (a cycle?)"])
-    data = read_toml(path)
+    try:
+        data = read_toml(path)
+    except ProfileError as exc:
+        if _via is None:
+            raise
+        raise ProfileError([f"{_via}: extends: {line}" for line in exc.errors]) from None
     parent = data.get("extends")
     if parent is None:
         return data
     if not isinstance(parent, str) or not parent:
         raise ProfileError([f"{path}: extends: expected a module name or a file name"])
     if looks_like_path(parent):
-        base = resolve((path.parent / parent), builtin, _depth + 1)
+        base = resolve((path.parent / parent), builtin, _depth + 1, path)
     else:
         try:
             base = builtin(parent)
@@ -210,8 +219,8 @@ def resolve(path: str | Path, builtin, _depth: int = 0) -> dict:
     for key in data:
         if key not in _TOP:
             errors.append(f"{path}: {key}: unknown key (a profile has {', '.join(sorted(_TOP))})")
-    if errors:
-        raise ProfileError(errors)
+    if errors:  # with the schema errors of the rest: every error at once, not in rounds
+        raise ProfileError(errors + [f"{path}: {line}" for line in validate(merged)])
     if not data.get("module", {}).get("aliases"):
         merged["module"]["aliases"] = []  # a derived module does not answer to its parent's aliases
     parent_module = base.get("module", {})
