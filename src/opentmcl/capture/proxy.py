@@ -20,6 +20,7 @@ import urllib.parse
 
 from .. import __version__
 from ..host.errors import TmclConnectionError
+from ..server.app import start_all
 from .decode import HOST, MODULE, Decoder
 from .format import CaptureWriter
 
@@ -50,8 +51,10 @@ class ProxySession:
         self.proxy._detach(self)
 
 
-class StreamUpstream:
-    """A serial port or TCP socket to the module, read by a thread."""
+class _ThreadUpstream:
+    """A transport to the module read by a thread (`_loop`); `error` says why it ended."""
+
+    thread_name = "opentmcl-proxy-up"
 
     def __init__(self, transport, on_bytes) -> None:
         self.transport = transport
@@ -61,8 +64,24 @@ class StreamUpstream:
         self.error: str | None = None
 
     def start(self) -> None:
-        self._thread = threading.Thread(target=self._loop, name="opentmcl-proxy-up", daemon=True)
+        self._thread = threading.Thread(target=self._loop, name=self.thread_name, daemon=True)
         self._thread.start()
+
+    def _loop(self) -> None:
+        raise NotImplementedError
+
+    def profile_for(self, address: int):
+        return None
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+        self.transport.close()
+
+
+class StreamUpstream(_ThreadUpstream):
+    """A serial port or TCP socket to the module."""
 
     def _loop(self) -> None:
         while not self._stop.is_set():
@@ -76,15 +95,6 @@ class StreamUpstream:
 
     def send(self, data: bytes) -> None:
         self.transport.send(data)
-
-    def profile_for(self, address: int):
-        return None
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-        self.transport.close()
 
 
 class SimUpstream:
@@ -115,7 +125,7 @@ class SimUpstream:
         self.server.stop()
 
 
-class CanUpstream:
+class CanUpstream(_ThreadUpstream):
     """A module on CAN behind a serial-framed host link: a gateway, the one place that reframes.
 
     CAN carries no serial byte stream (TMCM-6212 manual 3.1/3.2: the address byte and the checksum
@@ -125,19 +135,13 @@ class CanUpstream:
     added; an 8-byte reply (136 type 0) as `reply_id` + the eight characters. The capture records
     the serial side, which is what the host saw."""
 
+    thread_name = "opentmcl-proxy-can"
+
     def __init__(self, transport, on_bytes, gap: float = 0.1) -> None:
         from ..server.framer import SerialFramer
 
-        self.transport = transport
-        self.on_bytes = on_bytes
+        super().__init__(transport, on_bytes)
         self.framer = SerialFramer(gap)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        self.error: str | None = None
-
-    def start(self) -> None:
-        self._thread = threading.Thread(target=self._loop, name="opentmcl-proxy-can", daemon=True)
-        self._thread.start()
 
     def send(self, data: bytes) -> None:
         for frame in self.framer.feed(data, time.monotonic()):
@@ -161,15 +165,6 @@ class CanUpstream:
                 self.on_bytes(raw + bytes([checksum(raw)]))
             elif len(data) == 8:  # 136 type 0: the version string, no checksum (PD86-1180 4.6.39)
                 self.on_bytes(raw)
-
-    def profile_for(self, address: int):
-        return None
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(timeout=5)
-        self.transport.close()
 
 
 def open_upstream(url: str, on_bytes):
@@ -242,14 +237,9 @@ class Proxy:
         if self.writer is not None:
             self._writer_thread = threading.Thread(target=self._write_loop, name="opentmcl-capture", daemon=True)
             self._writer_thread.start()
-        started = []
         try:
-            for endpoint in self.endpoints:
-                endpoint.start()
-                started.append(endpoint)
+            start_all(self.endpoints)
         except BaseException:
-            for endpoint in reversed(started):
-                endpoint.stop()
             self.stop()
             raise
 

@@ -40,22 +40,14 @@ def build_proxy(args):
     from ..capture.proxy import Proxy, ProxySession
     from ..host.errors import TmclConnectionError
     from ..server import PtyServer, TcpServer
-    from ..server.tcp import check_idle_timeout, is_loopback
-    from .serve import parse_hostport
+    from ..server.tcp import is_loopback
+    from .serve import check_listen_options, parse_hostport
 
     if args.link:
         args.pty = True
     if not args.pty and not args.tcp:
         raise CliError("give --pty (a pseudo-terminal) or --tcp [HOST:]PORT to listen on")
-    if not 0 < args.gap < float("inf"):
-        raise CliError(f"--gap must be a positive number of seconds, got {args.gap}")
-    if args.max_clients < 1:
-        raise CliError("--max-clients must be at least 1")
-    try:
-        check_idle_timeout(args.idle_timeout)
-    except ValueError:
-        raise CliError(f"--idle-timeout must be 0 (none) or a positive, finite number of seconds, "
-                       f"got {args.idle_timeout}") from None
+    check_listen_options(args)
     if args.pty and sys.platform == "win32":
         raise CliError("--pty needs a POSIX system")
     tcp = None

@@ -161,22 +161,27 @@ def build_modules(args) -> list:
     return modules
 
 
-def build_server(args, out=sys.stdout, err=sys.stderr):
-    """The Server with its endpoints, not started."""
-    from ..server import CanServer, PtyServer, Server, TcpServer
-    from ..server.tcp import is_loopback
+def check_listen_options(args) -> None:
+    """--gap, --max-clients and --idle-timeout, shared by `serve` and `proxy`."""
+    from ..server.tcp import check_idle_timeout
 
     if not 0 < args.gap < float("inf"):  # also NaN
         raise CliError(f"--gap must be a positive number of seconds, got {args.gap}")
     if args.max_clients < 1:
         raise CliError("--max-clients must be at least 1")
-    from ..server.tcp import check_idle_timeout
-
     try:
         check_idle_timeout(args.idle_timeout)
     except ValueError:
         raise CliError(f"--idle-timeout must be 0 (none) or a positive, finite number of seconds, "
                        f"got {args.idle_timeout}") from None
+
+
+def build_server(args, out=sys.stdout, err=sys.stderr):
+    """The Server with its endpoints, not started."""
+    from ..server import CanServer, PtyServer, Server, TcpServer
+    from ..server.tcp import is_loopback
+
+    check_listen_options(args)
     if args.link and not args.pty:
         args.pty = True
     if args.interface and not args.pty:

@@ -13,6 +13,19 @@ from __future__ import annotations
 from .bus import ModuleBus, RealTimeRunner
 
 
+def start_all(endpoints) -> None:
+    """Start each endpoint; if one fails, stop those already started and re-raise."""
+    started = []
+    try:
+        for endpoint in endpoints:
+            endpoint.start()
+            started.append(endpoint)
+    except BaseException:
+        for endpoint in reversed(started):
+            endpoint.stop()
+        raise
+
+
 class Server:
     def __init__(self, modules, *, tick: float = 0.01) -> None:
         self.bus = ModuleBus(modules)
@@ -35,14 +48,9 @@ class Server:
     def start(self) -> None:
         """Start the endpoints and the clock; on failure, stop what was started and re-raise."""
         self._started = True
-        started = []
         try:
-            for endpoint in self.endpoints:
-                endpoint.start()
-                started.append(endpoint)
+            start_all(self.endpoints)
         except BaseException:
-            for endpoint in reversed(started):
-                endpoint.stop()
             self._started = False
             raise
         self.runner.start()
