@@ -1,6 +1,6 @@
-"""Figures for issue 11's closing note, against real `opentmcl serve` processes on loopback.
+"""Robustness figures against real `opentmcl serve` processes on loopback: fuzzed frames, kills.
 
-    python bench/bench_issue11.py [--frames N] [--kills N]
+    python bench/bench_robustness.py [--frames N] [--kills N]
 
 - frames fuzzed: N random 9-byte frames (random bytes: mostly bad checksums, some valid commands)
   streamed over one TCP connection in chunks of random size; afterwards GGP 66 (manual 3.6.8
