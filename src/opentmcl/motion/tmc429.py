@@ -739,6 +739,13 @@ class Tmc429Ramp:
             if limit is not None and t >= limit:
                 event = limit + 1
                 break
+            ticks, count, n = self._brake_run(c, w, units - total, limit)
+            if ticks:                               # falling by A_MAX at one pulse size
+                moved |= count > 0
+                pulses(count, n, (c - 1) // pp + 1)
+                w -= a * ticks
+                t = c + ticks * rp - 1
+                continue
             before = w
             w = _toward(w, self._speed(units - total) * 256, a)     # the ramp tick at c
             t = c
@@ -775,6 +782,8 @@ class Tmc429Ramp:
                 nw = w
             elif w < tgt:
                 nw = w + a if w + a < tgt else tgt
+            elif w - a > tgt and (w - a) & 255 > a << 1:
+                return t, w, total, moved, None            # braking run: `_follow` jumps it
             else:
                 nw = w - a if w - a > tgt else tgt
             n = nw >> 8
@@ -786,6 +795,31 @@ class Tmc429Ramp:
                 return t, w, total, moved, t + 1
             c += rp
         return t, w, total, moved, None
+
+    def _brake_run(self, c: int, w: int, left: int, limit: int | None) -> tuple[int, int, int]:
+        """Ramp ticks from tick c on (pulses before c done, `left` units to go) over which |v|
+        keeps falling by A_MAX above its target without crossing a multiple of 256 nor
+        arriving nor passing `limit`: (ticks, pulse ticks among them, units per pulse).
+
+        Within them w >> 8 = n is fixed, the target must stay below n + 1 (it only falls
+        as `left` falls, so the first tick decides) and the pulses add n each."""
+        a, rp, pp = self._a_max, 32 << self._ramp_div, 32 << self._pulse_div
+        w1 = w - a                                  # |v| after tick c
+        if a == 0 or w1 <= 0 or not w1 & 255:
+            return 0, 0, 0
+        n = w1 >> 8
+        if self._v_max > n and (self._v_min > n or left >= self._level_start(n + 1)):
+            return 0, 0, 0                          # the target catches up at tick c
+        ticks = ((w1 & 255) - 1) // a + 1           # ticks with |v| in (n*256, n*256+256)
+        first = (c - 1) // pp                       # pulse ticks done before c
+        if n:                                       # the arrival pulse stays outside
+            last = first + _ceil_div(left, n) - 1
+            ticks = min(ticks, ((last + 1) * pp - c) // rp)
+        if limit is not None:
+            ticks = min(ticks, (limit + 1 - c) // rp)
+        if ticks <= 0:
+            return 0, 0, 0
+        return ticks, (c + ticks * rp - 1) // pp - first, n
 
     def _settle(self, t: int, made: int, v: int, s: int, moved: bool) -> None:
         """Set the state after a stretch of `_follow` (made: accumulator units towards the
