@@ -706,9 +706,13 @@ class Tmc429Ramp:
             total += count * n
             return 0
 
-        if pp == rp and steps is None:
-            t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit, floor)
-        while event is None:
+        fast = pp == rp and steps is None
+        while True:
+            if fast:        # tick by tick inlined, back here for a run worth jumping
+                t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit,
+                                                              floor)
+                if event is not None:
+                    break
             c = (t // rp + 1) * rp                         # next ramp tick
             n = w >> 8
             if n and w == self._speed(units - total) * 256 and floor * 256 < w:
@@ -782,7 +786,7 @@ class Tmc429Ramp:
                 nw = w
             elif w < tgt:
                 nw = w + a if w + a < tgt else tgt
-            elif w - a > tgt and (w - a) & 255 > a << 1:
+            elif w - a > tgt and (w - a) & 255 > a << 3:
                 return t, w, total, moved, None            # braking run: `_follow` jumps it
             else:
                 nw = w - a if w - a > tgt else tgt
@@ -805,7 +809,7 @@ class Tmc429Ramp:
         as `left` falls, so the first tick decides) and the pulses add n each."""
         a, rp, pp = self._a_max, 32 << self._ramp_div, 32 << self._pulse_div
         w1 = w - a                                  # |v| after tick c
-        if a == 0 or w1 <= 0 or not w1 & 255:
+        if a == 0 or w1 <= 0 or w1 & 255 <= a:      # not even two ticks: walk it
             return 0, 0, 0
         n = w1 >> 8
         if self._v_max > n and (self._v_min > n or left >= self._level_start(n + 1)):
