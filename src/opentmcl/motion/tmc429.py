@@ -28,8 +28,9 @@ phase the ramp target is fixed, the velocity is linear in the ramp tick index
 something changes (end of a ramp, the computed ramp_mode target binding,
 arrival, a soft-mode target change) is found by binary search on those closed
 forms. That one cycle is then applied exactly. Where the ramp_mode velocity
-follows its computed target down the square-root curve (`_Follow`), the motion
-is walked ramp tick by ramp tick, whole runs of one velocity at a time, and the
+follows its computed target down the square-root curve (`_Follow`), runs on the
+target and runs falling by A_MAX inside one velocity level are jumped by
+arithmetic, the ticks between them walked (a few per velocity level), and the
 result is memoised by the state it starts from (repeated moves cost O(1)). The per-tick oracle in
 tests/motion/tmc429_reference.py defines the behaviour this must reproduce.
 """
@@ -99,7 +100,7 @@ def _linear_floor_sum(count: int, start: int, slope: int) -> int:
 
 @dataclass
 class _Follow:
-    """A ramp_mode stretch walked tick by tick (`Tmc429Ramp._follow`), from cycle t0."""
+    """A ramp_mode stretch following the computed target (`Tmc429Ramp._follow`), from t0."""
 
     t0: int
     event_offset: int   # cycle to apply exactly next, relative to t0
@@ -674,8 +675,8 @@ class Tmc429Ramp:
                 self._pulse_div, self._a_max, self._v_min, self._v_max, self._pmul, self._pdiv)
 
     def _follow(self, limit: int | None, steps: list | None) -> int:
-        """Walk ramp_mode tick by tick from now while the velocity heads for the target
-        (runs of one velocity in one go). Stops at `limit`, just before the arrival
+        """Go through ramp_mode from now while the velocity heads for the target, tick by
+        tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at `limit`, just before the arrival
         step, or after the tick that reaches V_MIN (or 0); returns the cycle to apply
         exactly next. `steps` collects (cycle, direction) of each step made."""
         rp, pp, a = 32 << self._ramp_div, 32 << self._pulse_div, self._a_max
@@ -768,8 +769,9 @@ class Tmc429Ramp:
     def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
                      limit: int | None, floor: int) -> tuple:
         """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
-        same rules inlined; hands back (event None) before a run of one velocity that
-        is worth jumping, at `limit`, or when done."""
+        same rules inlined; hands back (event None) before a run worth jumping (one
+        velocity on the target, or many ticks falling inside one level), at `limit`, or
+        when done."""
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
         low = floor << 8
