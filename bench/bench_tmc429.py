@@ -10,7 +10,10 @@ pulse_div = ramp_div = 0, V_MAX = 2047, A_MAX = 1000 and returns:
   (tests/motion/tmc429_reference.py) on the same moves, after checking that
   both arrive at exactly the same cycles and positions;
 - virtual seconds per wall second of the fast engine (Tmc429Engine) on a long
-  run of that scenario.
+  run of that scenario;
+- wall milliseconds of one long ramp_mode move at a small A_MAX (first braking,
+  follow memo cleared), where the braking stretch lasts V_MAX * 256 / A_MAX ramp
+  ticks (lower is better).
 """
 from __future__ import annotations
 
@@ -19,7 +22,7 @@ import importlib.util
 import time
 from pathlib import Path
 
-from opentmcl.motion import CLOCK_HZ
+from opentmcl.motion import CLOCK_HZ, tmc429
 from opentmcl.motion.pmulpdiv import registers_for
 from opentmcl.motion.tmc429 import Tmc429Ramp
 from opentmcl.motion.tmc429_engine import Tmc429Engine
@@ -108,6 +111,22 @@ def _engine_run(virtual_seconds: float, distance: int) -> float:
     return virtual_seconds / wall
 
 
+def _small_a_max_move_ms(a_max: int, distance: int) -> float:
+    """Wall ms of one ramp_mode move from 0 at V_MAX = 2047 and `a_max`, memo cold."""
+    pmul, pdiv = registers_for(a_max, 0, 0)
+    r = Tmc429Ramp(position_bits=32)
+    r.set(pulse_div=0, ramp_div=0, v_max=V_MAX, v_min=1, a_max=a_max, pmul=pmul, pdiv=pdiv)
+    r.set(x_target=distance)
+    tmc429._FOLLOW_MEMO.clear()
+    start = time.perf_counter()
+    while (e := r.next_event()) is not None:
+        r.advance(e)
+    wall = time.perf_counter() - start
+    if r.x_actual != distance or not r.position_reached:
+        raise AssertionError(f"small A_MAX move ended at {r.x_actual}, not {distance}")
+    return wall * 1000
+
+
 def measure(quick: bool = False) -> dict:
     """Speed-up over the per-tick model and virtual s per wall s (higher is better)."""
     moves, distance = (2, 20_000) if quick else (6, 50_000)
@@ -133,6 +152,8 @@ def measure(quick: bool = False) -> dict:
         "per-tick model virtual s per wall s": span_s / ref_wall,
         "PD86-1180 engine back-and-forth, pulse_div=ramp_div=0, virtual s per wall s":
             _engine_run(20.0 if quick else 600.0, 200_000),
+        "one move at A_MAX=4, V_MAX=2047, 3e6 steps, first braking (memo cold), wall ms":
+            _small_a_max_move_ms(4, 3_000_000),
     }
 
 

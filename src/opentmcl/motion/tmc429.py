@@ -28,8 +28,9 @@ phase the ramp target is fixed, the velocity is linear in the ramp tick index
 something changes (end of a ramp, the computed ramp_mode target binding,
 arrival, a soft-mode target change) is found by binary search on those closed
 forms. That one cycle is then applied exactly. Where the ramp_mode velocity
-follows its computed target down the square-root curve (`_Follow`), the motion
-is walked ramp tick by ramp tick, whole runs of one velocity at a time, and the
+follows its computed target down the square-root curve (`_Follow`), runs on the
+target and runs falling by A_MAX inside one velocity level are jumped by
+arithmetic, the ticks between them walked (a few per velocity level), and the
 result is memoised by the state it starts from (repeated moves cost O(1)). The per-tick oracle in
 tests/motion/tmc429_reference.py defines the behaviour this must reproduce.
 """
@@ -99,7 +100,7 @@ def _linear_floor_sum(count: int, start: int, slope: int) -> int:
 
 @dataclass
 class _Follow:
-    """A ramp_mode stretch walked tick by tick (`Tmc429Ramp._follow`), from cycle t0."""
+    """A ramp_mode stretch following the computed target (`Tmc429Ramp._follow`), from t0."""
 
     t0: int
     event_offset: int   # cycle to apply exactly next, relative to t0
@@ -674,8 +675,8 @@ class Tmc429Ramp:
                 self._pulse_div, self._a_max, self._v_min, self._v_max, self._pmul, self._pdiv)
 
     def _follow(self, limit: int | None, steps: list | None) -> int:
-        """Walk ramp_mode tick by tick from now while the velocity heads for the target
-        (runs of one velocity in one go). Stops at `limit`, just before the arrival
+        """Go through ramp_mode from now while the velocity heads for the target, tick by
+        tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at `limit`, just before the arrival
         step, or after the tick that reaches V_MIN (or 0); returns the cycle to apply
         exactly next. `steps` collects (cycle, direction) of each step made."""
         rp, pp, a = 32 << self._ramp_div, 32 << self._pulse_div, self._a_max
@@ -706,9 +707,13 @@ class Tmc429Ramp:
             total += count * n
             return 0
 
-        if pp == rp and steps is None:
-            t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit, floor)
-        while event is None:
+        fast = pp == rp and steps is None
+        while True:
+            if fast:        # tick by tick inlined, back here for a run worth jumping
+                t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit,
+                                                              floor)
+                if event is not None:
+                    break
             c = (t // rp + 1) * rp                         # next ramp tick
             n = w >> 8
             if n and w == self._speed(units - total) * 256 and floor * 256 < w:
@@ -739,6 +744,13 @@ class Tmc429Ramp:
             if limit is not None and t >= limit:
                 event = limit + 1
                 break
+            ticks, count, n = self._brake_run(c, w, units - total, limit)
+            if ticks:                               # falling by A_MAX at one pulse size
+                moved |= count > 0
+                pulses(count, n, (c - 1) // pp + 1)
+                w -= a * ticks
+                t = c + ticks * rp - 1
+                continue
             before = w
             w = _toward(w, self._speed(units - total) * 256, a)     # the ramp tick at c
             t = c
@@ -757,8 +769,9 @@ class Tmc429Ramp:
     def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
                      limit: int | None, floor: int) -> tuple:
         """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
-        same rules inlined; hands back (event None) before a run of one velocity that
-        is worth jumping, at `limit`, or when done."""
+        same rules inlined; hands back (event None) before a run worth jumping (one
+        velocity on the target, or many ticks falling inside one level), at `limit`, or
+        when done."""
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
         low = floor << 8
@@ -775,6 +788,8 @@ class Tmc429Ramp:
                 nw = w
             elif w < tgt:
                 nw = w + a if w + a < tgt else tgt
+            elif w - a > tgt and (w - a) & 255 > a << 3:
+                return t, w, total, moved, None            # braking run: `_follow` jumps it
             else:
                 nw = w - a if w - a > tgt else tgt
             n = nw >> 8
@@ -786,6 +801,31 @@ class Tmc429Ramp:
                 return t, w, total, moved, t + 1
             c += rp
         return t, w, total, moved, None
+
+    def _brake_run(self, c: int, w: int, left: int, limit: int | None) -> tuple[int, int, int]:
+        """Ramp ticks from tick c on (pulses before c done, `left` units to go) over which |v|
+        keeps falling by A_MAX above its target without crossing a multiple of 256 nor
+        arriving nor passing `limit`: (ticks, pulse ticks among them, units per pulse).
+
+        Within them w >> 8 = n is fixed, the target must stay below n + 1 (it only falls
+        as `left` falls, so the first tick decides) and the pulses add n each."""
+        a, rp, pp = self._a_max, 32 << self._ramp_div, 32 << self._pulse_div
+        w1 = w - a                                  # |v| after tick c
+        if a == 0 or w1 <= 0 or w1 & 255 <= a:      # not even two ticks: walk it
+            return 0, 0, 0
+        n = w1 >> 8
+        if self._v_max > n and (self._v_min > n or left >= self._level_start(n + 1)):
+            return 0, 0, 0                          # the target catches up at tick c
+        ticks = ((w1 & 255) - 1) // a + 1           # ticks with |v| in (n*256, n*256+256)
+        first = (c - 1) // pp                       # pulse ticks done before c
+        if n:                                       # the arrival pulse stays outside
+            last = first + _ceil_div(left, n) - 1
+            ticks = min(ticks, ((last + 1) * pp - c) // rp)
+        if limit is not None:
+            ticks = min(ticks, (limit + 1 - c) // rp)
+        if ticks <= 0:
+            return 0, 0, 0
+        return ticks, (c + ticks * rp - 1) // pp - first, n
 
     def _settle(self, t: int, made: int, v: int, s: int, moved: bool) -> None:
         """Set the state after a stretch of `_follow` (made: accumulator units towards the

@@ -1,0 +1,126 @@
+"""The braking stretch of the fast TMC429 core: exact and O(velocity levels), for a small A_MAX.
+
+TMC4210 datasheet 6.1.9: the chip calculates "the velocity required for stopping in time to
+exactly reach the target position ... This calculation is done for each ramp step. ... Whenever
+V_TARGET falls below the actual velocity, the TMC4210 decelerates." With a small A_MAX ("the
+maximum acceleration A_MAX ... 0..2047", 6.1.7) that deceleration lasts |V| * 256 / A_MAX ramp
+ticks; DESIGN.md "Time" asks the event-driven core not to pay per tick. The cost is counted as
+the number of target-velocity evaluations (integer square roots) the core does — the real
+`isqrt` wrapped by a counter, no wall clock — and the result must still be the per-tick oracle's.
+"""
+from __future__ import annotations
+
+import math
+from contextlib import contextmanager
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from opentmcl.motion import tmc429
+from opentmcl.motion.pmulpdiv import registers_for
+from opentmcl.motion.tmc429 import HOLD_MODE, RAMP_MODE, Tmc429Ramp
+
+from .test_tmc429_agreement import RecordingReference, apply, state
+
+
+@contextmanager
+def counted_isqrt():
+    """Count the fast core's target-velocity evaluations (its calls of math.isqrt)."""
+    calls = [0]
+
+    def counting(x: int) -> int:
+        calls[0] += 1
+        return math.isqrt(x)
+
+    saved = tmc429.isqrt
+    tmc429.isqrt = counting
+    try:
+        yield calls
+    finally:
+        tmc429.isqrt = saved
+
+
+def level_budget(v: int) -> int:
+    """Allowed evaluations for a stretch that starts at |V| = v: a few per velocity level
+    (whatever A_MAX), plus the phase planning around it."""
+    return 16 * (v + 1) + 400
+
+
+def braking_distance(v: int, pmul: int, pdiv: int) -> int:
+    """Steps over which the computed target falls from v to 0: v^2 = 2048 p D (6.1.9)."""
+    return max(1, (v * v << (3 + pdiv)) // (2048 * pmul))
+
+
+braking = st.tuples(
+    st.integers(0, 2), st.integers(0, 1), st.integers(1, 64), st.integers(16, 300),
+    st.integers(1, 4), st.floats(0.3, 1.5), st.lists(st.floats(0.0, 1.0), min_size=1, max_size=4))
+
+
+@settings(max_examples=20, deadline=None)
+@given(braking)
+def test_long_braking_at_small_a_max_is_exact_and_cheap(m):
+    """TMC4210 6.1.9 ("This calculation is done for each ramp step"), 6.1.7 (A_MAX 1..64 here):
+    a motor running at |V| (hold_mode, 6.1.10.1) switched to ramp_mode with its target within
+    about its braking distance follows V_TARGET down for up to V*256/A_MAX ramp ticks. At random
+    cycles inside that stretch (a `limit` cut) the state and every step (cycle, direction) are the
+    oracle's, arrival and the V_MIN stop (6.1.3) happen on the oracle's cycle, and the whole
+    stretch costs a bounded number of target evaluations per velocity level, not per tick."""
+    pd, extra, a_max, v, v_min, f, cuts = m
+    rd = pd + extra
+    pmul, pdiv = registers_for(a_max, rd, pd)
+    regs = {"pulse_div": pd, "ramp_div": rd, "v_max": v, "v_min": v_min, "a_max": a_max,
+            "pmul": pmul, "pdiv": pdiv, "mode": HOLD_MODE}
+    fast, ref = Tmc429Ramp(position_bits=32), RecordingReference(position_bits=32)
+    apply((fast, ref), regs)
+    apply((fast, ref), {"v_actual": v})
+    apply((fast, ref), {"mode": RAMP_MODE,
+                        "x_target": max(1, int(f * braking_distance(v, pmul, pdiv)))})
+    span = v * 256 // a_max * (32 << rd)          # about the length of the braking
+    tmc429._FOLLOW_MEMO.clear()
+    steps: list = []
+    with counted_isqrt() as calls:
+        for cut in sorted(cuts):
+            t = max(fast.now, int(cut * span))
+            steps += fast.step_events(t)
+            ref.advance(t)
+            assert state(fast) == state(ref)
+        events = 0
+        while (e := fast.next_event()) is not None and events < 200:
+            steps += fast.step_events(e)
+            ref.advance(e)
+            assert state(fast) == state(ref)
+            events += 1
+    assert fast.position_reached
+    assert steps == ref.steps
+    assert calls[0] <= (len(cuts) + 2) * level_budget(v)
+
+
+def test_first_braking_at_a_max_1_costs_levels_not_ticks():
+    """TMC4210 6.1.9 / 6.1.7: a 3 000 000-step move at V_MAX = 2047, A_MAX = 1 (the smallest
+    acceleration) brakes for 2047 * 256 = 524 032 ramp ticks; with a cold memo the fast core
+    evaluates the target a few times per velocity level (at most 16 * 2048 + 400 times for the
+    whole move) and lands where the per-tick oracle lands, on the same cycle."""
+    pmul, pdiv = registers_for(1, 0, 0)
+    regs = {"v_max": 2047, "v_min": 1, "a_max": 1, "pmul": pmul, "pdiv": pdiv}
+    fast = Tmc429Ramp(position_bits=32)
+    apply((fast,), regs)
+    apply((fast,), {"x_target": 3_000_000})
+    tmc429._FOLLOW_MEMO.clear()
+    with counted_isqrt() as calls:
+        while (e := fast.next_event()) is not None:
+            fast.advance(e)
+    assert fast.position_reached and fast.x_actual == 3_000_000
+    assert calls[0] <= level_budget(2047)
+    # exactness on the same move, checked on the braking stretch only (the oracle is slow):
+    # both models are put at the fast core's state when braking starts
+    probe = Tmc429Ramp(position_bits=32)
+    apply((probe,), regs)
+    apply((probe,), {"x_target": 3_000_000})
+    while probe.a_actual >= 0:
+        probe.advance(probe.next_event())
+    ref = RecordingReference(position_bits=32)
+    apply((ref,), regs)
+    ref.now, ref.x_actual, ref.x_target = probe.now, probe.x_actual, probe.x_target
+    ref.v, ref.acc, ref.acc_dir = probe.v_internal, probe._acc, probe._acc_dir
+    ref.advance(fast.now)
+    assert state(ref) == state(fast)
