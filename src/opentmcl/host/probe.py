@@ -94,18 +94,13 @@ def probe(client, *, max_seconds: float = 300.0, progress=lambda text: None) -> 
 
 def closest_builtin(version: str):
     """The built-in profile with this firmware string, else one with the same module number
-    (the characters before 'V', e.g. 6212 of 6212V105), else None."""
-    from ..modules.profile import load_profile, module_names
+    (the characters before 'V', e.g. 6212 of 6212V105), else None (`profile_for_version`)."""
+    from .module import profile_for_version
 
-    profiles = [load_profile(n) for n in module_names()]
-    for prof in profiles:
-        if prof.firmware_version == version:
-            return prof
-    number = version.split("V")[0]
-    for prof in profiles:
-        if number and prof.firmware_version.split("V")[0] == number:
-            return prof
-    return None
+    try:
+        return profile_for_version(version)
+    except TmclError:
+        return None
 
 
 def _toml(value) -> str:
