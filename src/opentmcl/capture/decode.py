@@ -9,7 +9,7 @@ follows ASCII mode from a successful command 139 to a ``BIN`` line (PD28-1021 ma
 """
 from __future__ import annotations
 
-from ..protocol.frame import FRAME_LEN, checksum, to_int32
+from ..protocol.frame import FRAME_LEN, Reply, Request, checksum
 from ..protocol.opcodes import (
     COMMANDS,
     ENTER_ASCII_MODE,
@@ -46,10 +46,6 @@ def parameter_name(profile, command: int, type_: int, motor: int) -> str | None:
     else:
         return None
     return p.name if p is not None else None
-
-
-def _fields(data: bytes) -> tuple[int, int, int, int, int]:
-    return data[0], data[1], data[2], data[3], to_int32(int.from_bytes(data[4:8], "big"))
 
 
 class _Stream:
@@ -114,11 +110,11 @@ class Decoder:
     def _request(self, t: float, frame: bytes) -> dict:
         if self.ascii[MODULE]:  # the host is binary again (after BIN): so are the replies
             self.ascii[MODULE] = False
-        address, command, type_, motor, value = _fields(frame)
+        req = Request.decode(frame, verify=False)
         rec = self._record(t, HOST, "request", frame)
-        rec.update(address=address, command=command, mnemonic=mnemonic(command), type=type_, motor=motor,
-                   value=value, checksum_ok=checksum(frame[:8]) == frame[8])
-        name = parameter_name(self.profile_for(address), command, type_, motor)
+        rec.update(address=req.address, command=req.command, mnemonic=mnemonic(req.command), type=req.type,
+                   motor=req.motor, value=req.value, checksum_ok=checksum(frame[:8]) == frame[8])
+        name = parameter_name(self.profile_for(req.address), req.command, req.type, req.motor)
         if name:
             rec["parameter"] = name
         self._pending.append(rec)
@@ -142,11 +138,12 @@ class Decoder:
             rec.update(reply_address=frame[0], address=oldest["address"], request=oldest["n"],
                        latency=round(t - oldest["t"], 6), checksum_ok=checksum(frame[:8]) == frame[8])
             return rec
-        reply_address, module_address, status, command, value = _fields(frame)
+        reply = Reply.decode(frame, verify=False)
+        status, command = reply.status, reply.command
         event = status == Status.POSITION_REACHED_EVENT and command == REQUEST_TARGET_REACHED_EVENT
         rec = self._record(t, MODULE, "event" if event else "reply", frame)
-        rec.update(reply_address=reply_address, address=module_address, status=status,
-                   status_text=message(status), command=command, mnemonic=mnemonic(command), value=value,
+        rec.update(reply_address=reply.reply_address, address=reply.module_address, status=status,
+                   status_text=message(status), command=command, mnemonic=mnemonic(command), value=reply.value,
                    checksum_ok=checksum(frame[:8]) == frame[8])
         if event:
             return rec
