@@ -37,7 +37,7 @@ IGNORED = ("random_number",)
 """Parameters whose value cannot be reproduced (GGP 129 random number): never compared."""
 DEFAULT_WINDOW = 0.1
 TOLERANCE_KEYS = ("time", "position", "velocity", "load", "timer")
-_READS = {6: "axis", 10: "global", 15: "io"}
+_READS = (6, 10, 15)  # GAP, GGP, GIO
 _RFS, _RFS_STATUS, _APP_STATUS = 13, 2, 135
 
 
