@@ -28,6 +28,12 @@ FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("lo
 MAX_ROWS = 1_000_000   # about 2.8 hours at 10 ms; `run` takes at most this many looks
 
 
+def check_interval(seconds: float, interval: float) -> None:
+    """ValueError unless `interval` is a finite number > 0 and `seconds` one >= 0 (NaN too)."""
+    if not 0 < interval < math.inf or not 0 <= seconds < math.inf:
+        raise ValueError("interval must be a finite number > 0 and seconds a finite number >= 0")
+
+
 class TraceFull(ValueError):
     """A trace that already holds max_rows rows."""
 
@@ -111,8 +117,7 @@ class Trace:
 
     def record(self, vm, seconds: float, interval: float) -> _Rows:
         """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
-        if not 0 < interval < math.inf or not 0 <= seconds < math.inf:  # also NaN
-            raise ValueError("interval must be a finite number > 0 and seconds a finite number >= 0")
+        check_interval(seconds, interval)
         steps = round(seconds / interval)
         if len(self.rows) + steps + 1 > self.max_rows:
             raise TraceFull(f"{steps + 1} more rows would pass the limit of {self.max_rows} rows")

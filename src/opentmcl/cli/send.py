@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import os
 
+from ..limits import shown
 from . import CliError
 
 ENV_URL = "OPENTMCL_URL"
@@ -30,12 +31,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each reply (default 5)")
     p.add_argument("-v", "--verbose", action="store_true", help="print the whole reply, not just the value")
     p.set_defaults(func=run)
-
-
-def shown(text: str) -> str:
-    from ..limits import shown as cut
-
-    return cut(text)
 
 
 def parse(text: str) -> tuple[int, int, int, int]:

@@ -446,12 +446,15 @@ class Tmc429Ramp:
     def _velocity_mode_target(self) -> int:
         return _sign(self._v_target) * min(abs(self._v_target), self._v_max) * 256
 
+    def _made(self, s: int) -> int:
+        """Accumulator units of the current step made in direction s (one made the other
+        way is walked back first, acc := 2047 - acc)."""
+        return self._acc if self._acc_dir in (0, s) else 2047 - self._acc
+
     def _remaining(self, s: int, d: int) -> int:
         """Accumulator units (1/2048 step) to add before X_ACTUAL reaches a target d
-        steps away in direction s (the fraction made towards it counts; one made away
-        from it is walked back first, acc := 2047 - acc)."""
-        made = self._acc if self._acc_dir in (0, s) else 2047 - self._acc
-        return d * 2048 - made
+        steps away in direction s (the fraction made towards it counts)."""
+        return d * 2048 - self._made(s)
 
     def _speed(self, units: int) -> int:
         """ramp_mode target speed for `units` still to go: sqrt(2048 * p * D) within
@@ -851,10 +854,8 @@ class Tmc429Ramp:
 
     def _follow_end(self, seg: _Follow) -> None:
         """Jump to the end of a planned `_follow` stretch (memoised result)."""
-        dx = self.dx
-        s, d = _sign(dx), abs(dx)
-        made0 = d * 2048 - self._remaining(s, d)
-        self._settle(seg.t0 + seg.end_offset, made0 + seg.total, s * seg.w_end, s, seg.moved)
+        s = _sign(self.dx)
+        self._settle(seg.t0 + seg.end_offset, self._made(s) + seg.total, s * seg.w_end, s, seg.moved)
 
     # ------------------------------------------------------------------ time
     def _jump(self, phase: _Phase | _Follow, t: int) -> None:

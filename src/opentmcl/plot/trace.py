@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import csv
 import io
-import math
 import os
 from array import array
 from dataclasses import dataclass, field
@@ -25,6 +24,7 @@ from dataclasses import dataclass, field
 from ..atomicfile import open_atomic
 from ..columns import Column
 from ..limits import CSV_MAX, LINE_MAX, size_text
+from ..trace import check_interval
 
 # channel -> (axis parameter number, unit). position/velocity are always recorded.
 CHANNELS: dict[str, tuple[int | None, str]] = {
@@ -245,8 +245,7 @@ class Sampler:
 
 def check_duration(seconds: float, interval: float) -> None:
     """ValueError unless `interval` is finite > 0, `seconds` finite >= 0 and at most MAX_SAMPLES samples."""
-    if not 0 < interval < math.inf or not 0 <= seconds < math.inf:  # also NaN
-        raise ValueError("interval must be a finite number > 0 and seconds a finite number >= 0")
+    check_interval(seconds, interval)
     if seconds / interval > MAX_SAMPLES:
         raise ValueError(f"{seconds:g} s every {interval:g} s is more than {MAX_SAMPLES} samples; "
                          "record less or sample less often")
