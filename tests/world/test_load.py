@@ -316,3 +316,23 @@ def test_load_ramp_over_time_is_followed(rig):
     assert r.gap(206) == load_value(0.25, speed_share(5000), 0)
     r.vm.advance(1.0)
     assert r.gap(206) == load_value(0.75, speed_share(5000), 0)
+
+
+def test_stall_limit_after_the_driver_was_off(rig):
+    """TMCM-6212 manual 4.1 AP181, as above, after AP167 (TOFF) = 0 let the counter run while the
+    stage stood: the counter and the stage now disagree, and the stop still comes the moment the
+    speed reaches the stop-on-stall speed, 200 microsteps after the start."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.9}}})
+    toff = r.gap(167)
+    r.sap(167, 0)
+    r.cmd(4, 0, 0, 5000)               # MVP ABS: the counter runs, the free-wheeling stage stays
+    r.vm.advance(5)
+    assert r.gap(1) == 5000 and r.phys() == 0
+    r.sap(167, toff)
+    r.sap(5, 10000)
+    r.sap(181, 2000)
+    r.cmd(1, 0, 0, 20000)
+    r.vm.advance(1)
+    assert r.gap(3) == 0
+    assert r.gap(207) == 1
+    assert r.gap(1) == 5200

@@ -479,21 +479,21 @@ class AxisWorld:
         counters: list[int] = []
         off = self.driver_off()
         if not self.slipping and not off:
-            phys, off = self.phys, self.offset
+            phys, offset = self.phys, self.offset
             for name, sw in self.stage.switches().items():
                 if name not in self.forced:
-                    counters += [x - off for x in self.stage.edge_candidates(phys, sw, self.raw[name])]
+                    counters += [x - offset for x in self.stage.edge_candidates(phys, sw, self.raw[name])]
             if self.load.by == "position":
                 for x in self.load.profile.breakpoints():
                     for c in (int(-(-x // 1)), int(-(-x // 1)) - 1):
                         if c != phys:
-                            counters.append(c - off)
+                            counters.append(c - offset)
             lo, hi = self.stage.ends
-            counters += [x - off for x in (lo, hi) if x is not None and x != phys]
+            counters += [x - offset for x in (lo, hi) if x is not None and x != phys]
             if self.p(210) & 4 and self.vm.profile.engine != "sixpoint":
                 spr = self._steps_per_round()
                 base = phys - phys % spr
-                counters += [x - off for x in (base, base + spr) if x != phys]
+                counters += [x - offset for x in (base, base + spr) if x != phys]
         elif self.p(212):  # the stage stands: only the deviation limit can be crossed
             enc, lim = self.encoder(), self.p(212)
             counters += [enc + lim + 1, enc - lim - 1]
