@@ -170,10 +170,9 @@ def check_listen_options(args) -> None:
     if args.max_clients < 1:
         raise CliError("--max-clients must be at least 1")
     try:
-        check_idle_timeout(args.idle_timeout)
-    except ValueError:
-        raise CliError(f"--idle-timeout must be 0 (none) or a positive, finite number of seconds, "
-                       f"got {args.idle_timeout}") from None
+        check_idle_timeout(args.idle_timeout, "--idle-timeout")
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
 
 
 def build_server(args, out=sys.stdout, err=sys.stderr):
