@@ -68,7 +68,9 @@ def _address(text: str) -> int:
         value = int(text, 0)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text[:40]!r}") from None
-    if not 1 <= value <= 255:
+    from ..modules.addresses import ADDRESSES
+
+    if value not in ADDRESSES:
         raise argparse.ArgumentTypeError("module address must be 1..255 (manual 5.1, parameter 66)")
     return value
 
