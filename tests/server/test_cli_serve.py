@@ -15,46 +15,17 @@ from opentmcl import VirtualModule
 from opentmcl.cli import CliError, main
 from opentmcl.cli.serve import assign_addresses, parse_hostport
 
+from ..capture.helpers import Tool
 from .helpers import GGP_66, is_ok, recv_exactly, reply, request, unique_channel
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and ptys")
 
 
-class ServeProcess:
+class ServeProcess(Tool):
     """`python -m opentmcl serve ...` with its announced endpoints."""
 
     def __init__(self, *args):
-        self.proc = subprocess.Popen([sys.executable, "-m", "opentmcl", "serve", *args],
-                                     stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-        self.lines = []
-        deadline = time.monotonic() + 30
-        while not any(line.startswith("Press Ctrl-C") for line in self.lines):
-            line = self._readline(deadline)
-            if line is None:
-                self.kill()
-                raise AssertionError(f"server did not start: {self.lines} {self.proc.stderr.read()!r}")
-            self.lines.append(line)
-
-    def _readline(self, deadline):
-        buf = b""
-        while not buf.endswith(b"\n"):
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return None
-            ready, _, _ = select.select([self.proc.stdout], [], [], left)
-            if not ready:
-                return None
-            ch = os.read(self.proc.stdout.fileno(), 1)
-            if not ch:
-                return None
-            buf += ch
-        return buf.decode().strip()
-
-    def endpoint(self, kind):
-        for line in self.lines:
-            if line.startswith(kind + " "):
-                return line.split()[1]
-        raise KeyError(kind)
+        super().__init__("serve", *args)
 
     def tcp_address(self):
         m = re.match(r"tcp://([\d.]+):(\d+)", self.endpoint("tcp"))

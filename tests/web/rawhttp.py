@@ -113,6 +113,9 @@ def start_cli(args: list[str], marker: str):
 
 
 def stop_cli(proc) -> str:
+    """SIGTERM, wait for the exit, and the output after the lines `start_cli` read (also what its
+    line iteration had buffered, which communicate(timeout=...) would skip)."""
     proc.send_signal(signal.SIGTERM)
-    out, _ = proc.communicate(timeout=30)
-    return out
+    proc.wait(timeout=30)
+    with proc.stdout:
+        return proc.stdout.read()

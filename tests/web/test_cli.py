@@ -2,10 +2,6 @@
 from __future__ import annotations
 
 import json
-import os
-import signal
-import subprocess
-import sys
 import urllib.request
 
 import pytest
@@ -13,27 +9,9 @@ import pytest
 from opentmcl.cli import CliError, main
 from opentmcl.cli.dashboard import parse_web, sim_url_real_time
 
+from .rawhttp import start_cli, stop_cli
+
 pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
-
-
-def _start(args: list[str], marker: str):
-    env = dict(os.environ, PYTHONUNBUFFERED="1")
-    proc = subprocess.Popen([sys.executable, "-m", "opentmcl", *args], stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True, env=env)
-    lines = []
-    for line in proc.stdout:
-        lines.append(line)
-        if marker in line:
-            url = "http" + line.split("http", 1)[1].split()[0]
-            return proc, url, lines
-    proc.wait()
-    pytest.fail(f"no dashboard URL printed: {''.join(lines)}")
-
-
-def _stop(proc) -> str:
-    proc.send_signal(signal.SIGTERM)
-    out, _ = proc.communicate()
-    return out
 
 
 def _get(url: str) -> dict:
@@ -43,13 +21,13 @@ def _get(url: str) -> dict:
 
 def test_serve_with_web_serves_the_dashboard_of_the_served_module():
     """TMCM-6212 manual 3.6.36: the overview's version string is the module's command-136 answer."""
-    proc, url, _ = _start(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0"],
-                          "dashboard http")
+    proc, url, _ = start_cli(["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0"],
+                             "dashboard http")
     try:
         ov = _get(url + "m/1/api/overview")
         assert ov["module"] == "TMCM-6212" and ov["version"] == "6212V105" and ov["virtual"]
     finally:
-        out = _stop(proc)
+        out = stop_cli(proc)
     assert proc.returncode == 0, out
     assert "stopped" in out
 
@@ -58,27 +36,27 @@ def test_serve_with_web_serves_every_module_of_the_bus():
     """Two modules on one bus (serial addresses 1 and 2, global parameter 66, TMCM-6212 manual 5.1):
     both overviews are reachable, each with its command-136 version string (TMCM-6212 manual 3.6.36
     "6212V105"; PD86-1180 manual 4.6.39, firmware V4.45: "1180V445")."""
-    proc, url, lines = _start(["serve", "--module", "TMCM-6212", "--address", "1", "--module", "PD86-1180",
-                               "--address", "2", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0"], "dashboard http")
+    proc, url, lines = start_cli(["serve", "--module", "TMCM-6212", "--address", "1", "--module", "PD86-1180",
+                                  "--address", "2", "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0"], "dashboard http")
     try:
         modules = _get(url + "api/modules")
         assert [(m["address"], m["module"]) for m in modules] == [(1, "TMCM-6212"), (2, "PD86-1180")]
         versions = {m["address"]: _get(url + m["url"].lstrip("/") + "api/overview")["version"] for m in modules}
         assert versions == {1: "6212V105", 2: "1180V445"}
     finally:
-        out = _stop(proc)
+        out = stop_cli(proc)
     assert proc.returncode == 0, out
     assert "2 modules" in lines[-1]
     assert f"PD86-1180 at address 2: {url}m/2/" in out
 
 
 def test_dashboard_command_for_a_sim_url():
-    proc, url, _ = _start(["dashboard", "--to", "sim://PD86-1180", "--web", "127.0.0.1:0"], "dashboard for")
+    proc, url, _ = start_cli(["dashboard", "--to", "sim://PD86-1180", "--web", "127.0.0.1:0"], "dashboard for")
     try:
         ov = _get(url + "m/1/api/overview")
         assert ov["module"] == "PD86-1180" and ov["axes"] == 1
     finally:
-        _stop(proc)
+        stop_cli(proc)
     assert proc.returncode == 0
 
 

@@ -68,7 +68,9 @@ def _address(text: str) -> int:
         value = int(text, 0)
     except ValueError:
         raise argparse.ArgumentTypeError(f"not a number: {text[:40]!r}") from None
-    if not 1 <= value <= 255:
+    from ..modules.addresses import ADDRESSES
+
+    if value not in ADDRESSES:
         raise argparse.ArgumentTypeError("module address must be 1..255 (manual 5.1, parameter 66)")
     return value
 
@@ -170,10 +172,9 @@ def check_listen_options(args) -> None:
     if args.max_clients < 1:
         raise CliError("--max-clients must be at least 1")
     try:
-        check_idle_timeout(args.idle_timeout)
-    except ValueError:
-        raise CliError(f"--idle-timeout must be 0 (none) or a positive, finite number of seconds, "
-                       f"got {args.idle_timeout}") from None
+        check_idle_timeout(args.idle_timeout, "--idle-timeout")
+    except ValueError as exc:
+        raise CliError(str(exc)) from None
 
 
 def build_server(args, out=sys.stdout, err=sys.stderr):

@@ -101,11 +101,10 @@ class ModuleBus:
         self.min_step = min_step
         self._route: dict[int, Channel] = {}
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
-        # (module, its handle() for serial frames) looked up once: the per-frame path is hot.
-        self._serial_handlers = [(vm, id(vm), partial(vm.handle, interface="serial")
-                                  if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
-        self._usb_handlers = [(vm, id(vm), partial(vm.handle, interface=USB)
-                               if self._interface_kw[id(vm)] else vm.handle) for vm in self.modules]
+        # (module, its handle() for serial / USB frames) looked up once: the per-frame path is hot.
+        self._serial_handlers, self._usb_handlers = (
+            [(vm, id(vm), partial(vm.handle, interface=interface) if self._interface_kw[id(vm)] else vm.handle)
+             for vm in self.modules] for interface in ("serial", USB))
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:

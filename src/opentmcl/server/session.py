@@ -46,6 +46,12 @@ def byte_time(baud: int) -> float:
     return BITS_PER_BYTE / baud
 
 
+def line_byte_time(modules) -> float:
+    """Seconds one received byte occupies on a line shared by `modules`: at the slowest of their
+    RS485 baud rates (GP65); the caller holds the bus lock."""
+    return max(byte_time(vmapi.baud_rate(vm)) for vm in modules)
+
+
 class SerialSession:
     """Frames a byte stream, talks to the bus, writes replies with pause and pacing."""
 
@@ -95,7 +101,7 @@ class SerialSession:
         """Pacing: sleep until `count` bytes read at `now` have crossed the line (they follow
         the bytes received before, at the slowest baud rate of the modules on the bus)."""
         with self.bus.lock:
-            per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self.bus.modules)
+            per_byte = line_byte_time(self.bus.modules)
         self._rx_free = max(self._rx_free, now) + count * per_byte
         wait = self._rx_free - self._clock()
         if wait > 0:

@@ -39,12 +39,12 @@ REFUSED_LOG_EVERY = 1.0
 """At most one "refused" log line per this many seconds (a connect storm must not flood the log)."""
 
 
-def check_idle_timeout(seconds) -> float:
+def check_idle_timeout(seconds, name: str = "idle timeout") -> float:
     """`seconds` as a float: 0 (no idle timeout) or a finite positive number; ValueError otherwise."""
     if isinstance(seconds, bool) or not isinstance(seconds, (int, float)):
-        raise ValueError(f"idle timeout must be a number of seconds, got {seconds!r}")
+        raise ValueError(f"{name} must be a number of seconds, got {seconds!r}")
     if seconds != 0 and not 0 < seconds < math.inf:  # also NaN
-        raise ValueError(f"idle timeout must be 0 (none) or a positive, finite number of seconds, got {seconds!r}")
+        raise ValueError(f"{name} must be 0 (none) or a positive, finite number of seconds, got {seconds!r}")
     return float(seconds)
 
 

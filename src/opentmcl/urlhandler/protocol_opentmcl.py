@@ -41,7 +41,7 @@ from ..modules.addresses import address_error
 from ..server import vmapi
 from ..server.bus import SERIAL_INTERFACES, USB, ModuleBus, default_interface, interface_error
 from ..server.framer import DEFAULT_GAP
-from ..server.session import byte_time
+from ..server.session import byte_time, line_byte_time
 from ..server.stream import BINARY, SerialStream
 
 SCHEME = "opentmcl"
@@ -224,7 +224,7 @@ class Serial(serial.Serial):
         with self._lock:
             now = time.monotonic()
             if self._pace and data:  # the bytes reach the modules once they crossed the line
-                per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self._bus.modules)
+                per_byte = line_byte_time(self._bus.modules)
                 self._tx_free = max(self._tx_free, now) + len(data) * per_byte
                 self._tx.append((self._tx_free, data))
                 self._feed_arrived()
@@ -264,7 +264,7 @@ class Serial(serial.Serial):
             self._feed_arrived()
             if not self._tx:
                 return 0
-            per_byte = max(byte_time(vmapi.baud_rate(vm)) for vm in self._bus.modules)
+            per_byte = line_byte_time(self._bus.modules)
             # bytes whose stop bit has not crossed the line yet (the line is busy until the last end)
             return min(sum(len(data) for _, data in self._tx),
                        math.ceil((self._tx[-1][0] - time.monotonic()) / per_byte - 1e-9))
