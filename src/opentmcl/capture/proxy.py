@@ -101,8 +101,8 @@ class SimUpstream:
     """Virtual modules of a sim:// URL served in real time in this process (as `opentmcl serve`)."""
 
     def __init__(self, url: str, on_bytes) -> None:
-        from ..host.transports.inprocess import open_sim
         from ..server import SerialSession, Server
+        from ..sim import open_sim
 
         transport = open_sim(urllib.parse.urlsplit(url))  # parses and builds the modules
         self.server = Server(transport.modules)

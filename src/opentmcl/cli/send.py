@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import os
 
-from ..limits import shown
 from . import CliError
 
 ENV_URL = "OPENTMCL_URL"
@@ -34,46 +33,13 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def parse(text: str) -> tuple[int, int, int, int]:
-    """(command, type, motor, value) of one instruction; CliError if it cannot be read.
+    """(command, type, motor, value) of one instruction (`opentmcl.lang.direct`); CliError if unreadable."""
+    from ..lang.direct import InstructionError, parse_direct
 
-    Mnemonic forms go through the assembler (symbolic names, expressions such as ``51200*2``);
-    control commands are written as up to four numbers.
-    """
-    from ..limits import LiteralTooLong
-    from ..protocol.opcodes import parse_number
-
-    parts = [p.strip() for p in text.replace(",", " ").split()]
     try:
-        numeric = bool(parts) and parse_number(parts[0]) is not None
-        nums = [parse_number(p) for p in parts] if numeric else []
-    except LiteralTooLong as exc:
+        return parse_direct(text)
+    except InstructionError as exc:
         raise CliError(str(exc)) from None
-    if numeric:  # numeric form for control commands
-        if len(nums) > 4 or any(n is None for n in nums):
-            raise CliError(f"{shown(text)}: expected COMMAND, TYPE, MOTOR, VALUE as numbers")
-        return tuple((nums + [0, 0, 0])[:4])  # type: ignore[return-value]
-    return _parse_mnemonic(text)
-
-
-def _parse_mnemonic(text: str) -> tuple[int, int, int, int]:
-    try:
-        from ..lang.assembler import AsmError, assemble
-    except ImportError:  # pragma: no cover - the assembler is part of the package
-        from ..protocol.opcodes import OperandError, UnknownCommand, parse_instruction
-        try:
-            return parse_instruction(text)
-        except (OperandError, UnknownCommand) as exc:
-            raise CliError(str(exc)) from None
-    if "\n" in text:
-        raise CliError(f"{shown(text)}: one instruction per argument")
-    try:
-        program = assemble(text, filename="<send>", append_stop=False)
-    except AsmError as exc:
-        raise CliError(f"{shown(text)}: {exc.message}") from None
-    if len(program.instructions) != 1:
-        raise CliError(f"{shown(text)}: expected one instruction")
-    ins = program.instructions[0]
-    return ins.command, ins.type, ins.motor, ins.value
 
 
 def _show(reply, verbose: bool) -> str:

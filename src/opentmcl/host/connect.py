@@ -10,22 +10,49 @@ All return the same `Module` API. Several modules on one bus share one `Client`:
 """
 from __future__ import annotations
 
-import importlib
 import urllib.parse
+from collections.abc import Callable, Mapping
 
+from .. import registry
 from ..modules.profile import ModuleProfile
 from .client import Client, check_address
-from .errors import TmclConnectionError, TmclError, check_timeout
+from .errors import TmclConnectionError, TmclError, TmclValueError, check_timeout
 from .module import Module
 from .transport import Transport
 
-# Lazy "module:function" references; function(url: urllib.parse.SplitResult) -> Transport.
-SCHEMES = {
-    "sim": "opentmcl.host.transports.inprocess:open_sim",
-    "tcp": "opentmcl.host.transports.tcp:open_tcp",
-    "serial": "opentmcl.host.transports.serial:open_serial",
-    "can": "opentmcl.host.transports.can:open_can",
-}
+TransportFactory = Callable[[urllib.parse.SplitResult], Transport]
+"""What a URL scheme stands for: the split URL (scheme in lower case) -> an open `Transport`."""
+
+ENTRY_POINT_GROUP = registry.TRANSPORTS
+"""Installed distributions add schemes here: ``[project.entry-points."opentmcl.transports"]``."""
+
+_TRANSPORTS = registry.of(ENTRY_POINT_GROUP)
+
+
+def register_transport(scheme: str, factory: TransportFactory | str) -> None:
+    """Make `connect` open ``scheme://`` URLs with `factory`, or with the object a lazy
+    ``"package.module:attribute"`` reference names (imported on first use). A later registration
+    of the same scheme replaces the earlier one (docs/architecture.md "Extension points")."""
+    if not (callable(factory) or isinstance(factory, str)):
+        raise TmclValueError(f"a transport factory must be callable or 'module:attribute', got {factory!r}")
+    try:
+        _TRANSPORTS.register(scheme, factory)
+    except ValueError as exc:
+        raise TmclValueError(str(exc)) from None
+
+
+def transport_schemes() -> list[str]:
+    """The schemes `connect` knows: registered ones, then those of installed entry points."""
+    return _TRANSPORTS.available()
+
+
+# The host library's own links; sim:// is registered by the package that owns the virtual module.
+register_transport("tcp", "opentmcl.host.transports.tcp:open_tcp")
+register_transport("serial", "opentmcl.host.transports.serial:open_serial")
+register_transport("can", "opentmcl.host.transports.can:open_can")
+
+SCHEMES: Mapping[str, object] = _TRANSPORTS.targets()
+"""Read-only view: registered scheme -> factory (or its lazy reference until first use)."""
 
 
 def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
@@ -37,9 +64,6 @@ def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
     except ValueError as exc:  # e.g. an unclosed [IPv6 bracket
         raise TmclConnectionError(f"bad module URL {url!r}: {exc}") from None
     scheme = parts.scheme.lower()
-    if scheme not in SCHEMES:
-        raise TmclConnectionError(f"unknown URL scheme {parts.scheme!r} in {url!r}; "
-                                  f"use one of {', '.join(s + '://' for s in SCHEMES)}")
     parts = parts._replace(scheme=scheme)
     if scheme == "sim" and address is not None:
         # A single virtual module takes the address the caller will talk to,
@@ -52,20 +76,32 @@ def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
 
 
 def open_transport(url: str, *, address: int | None = None) -> Transport:
-    """The transport for `url` (see SCHEMES); `TmclConnectionError` if it cannot be opened."""
+    """The transport for `url` (see `register_transport`); `TmclConnectionError` if it cannot be opened."""
     parts = _split(url, address)
-    target = SCHEMES[parts.scheme]
-    mod_name, _, func_name = target.partition(":")
+    factory = _factory(parts.scheme, url)
     try:
-        factory = getattr(importlib.import_module(mod_name), func_name)
-    except (ImportError, AttributeError) as exc:
-        raise TmclConnectionError(f"{parts.scheme}:// transport is not available: {exc}") from None
-    try:
-        return factory(parts)
+        transport = factory(parts)
     except TmclError:
         raise
     except (OSError, ValueError, KeyError) as exc:
         raise TmclConnectionError(f"cannot open {url}: {exc}") from exc
+    if not isinstance(transport, Transport):
+        raise TmclConnectionError(f"{parts.scheme}:// factory returned {type(transport).__name__}, not a Transport")
+    return transport
+
+
+def _factory(scheme: str, url: str) -> Callable[[urllib.parse.SplitResult], object]:
+    """The registered factory of `scheme` (an entry point only if nobody registered it)."""
+    try:
+        factory = _TRANSPORTS.find(scheme) if registry.NAME.fullmatch(scheme) else None
+    except (ImportError, AttributeError) as exc:
+        raise TmclConnectionError(f"{scheme}:// transport is not available: {exc}") from None
+    if factory is None:
+        raise TmclConnectionError(f"unknown URL scheme {scheme!r} in {url!r}; "
+                                  f"use one of {', '.join(s + '://' for s in transport_schemes())}")
+    if not callable(factory):
+        raise TmclConnectionError(f"{scheme}:// transport is not callable: {factory!r}")
+    return factory
 
 
 def _default_address(url: str) -> int:

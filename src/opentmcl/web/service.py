@@ -250,8 +250,7 @@ class Dashboard:
     # --- direct mode console ---------------------------------------------------------------
     def console(self, line: str) -> dict:
         """One instruction as in `opentmcl send` (mnemonic or numbers); the reply with its status text."""
-        from ..cli import CliError
-        from ..cli.send import parse
+        from ..lang.direct import InstructionError, parse_direct
         from ..protocol.opcodes import format_instruction
         from ..protocol.replies import MemoryReply
 
@@ -259,8 +258,8 @@ class Dashboard:
         if not text:
             raise DashboardError("empty command")
         try:
-            command, type_, motor, value = parse(text)
-        except CliError as exc:
+            command, type_, motor, value = parse_direct(text)
+        except InstructionError as exc:
             raise DashboardError(_short(str(exc))) from None
         except ValueError as exc:  # a number the parser cannot convert (e.g. 5000 digits)
             raise DashboardError(_short(f"{_short(text, 40)}: {exc}")) from None

@@ -19,7 +19,6 @@ No thread and no socket: time passes only as the clock policy says (DESIGN.md
 """
 from __future__ import annotations
 
-import importlib
 import threading
 import time
 import urllib.parse
@@ -27,7 +26,7 @@ from collections.abc import Callable, Iterable
 
 from ...modules.addresses import address_error
 from ..errors import TmclConnectionError, TmclTimeout, TmclValueError, check_timeout
-from ..transport import Transport, url_query
+from ..transport import Transport
 
 
 class Clock:
@@ -234,32 +233,3 @@ def _parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
     if problem:
         raise TmclConnectionError(f"sim://: {problem}")
     return out
-
-
-def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
-    """Factory for ``sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S]``."""
-    query = url_query(url, ("address", "clock", "step"))
-    try:
-        default_address = int(query.get("address", "1"), 0)
-    except ValueError:
-        raise TmclConnectionError(f"bad address {query['address']!r} in sim:// URL") from None
-    # A profile file is a path: sim:///abs/module.toml or sim://relative/module.toml (docs/profiles.md).
-    spec = url.netloc + url.path if ".toml" in url.path.lower() else (url.netloc or url.path.lstrip("/"))
-    specs = _parse_modules(spec, default_address)
-    # The only place where the host layer touches the firmware layer (DESIGN.md "Layers").
-    vm_class = importlib.import_module("opentmcl.firmware.vm").VirtualModule
-    modules = []
-    for name, address in specs:
-        try:
-            modules.append(vm_class(name, address=address))
-        except (KeyError, ValueError) as exc:  # ValueError: a bad profile file
-            raise TmclConnectionError(f"sim://: {exc.args[0] if exc.args else exc}") from None
-    clock_name = query.get("clock", "virtual")
-    try:
-        if clock_name == "virtual" and "step" in query:
-            clock: str | Clock = VirtualClock(float(query["step"]))
-        else:
-            clock = make_clock(clock_name)
-    except ValueError as exc:
-        raise TmclConnectionError(f"sim://: {exc}") from None
-    return InProcessTransport(modules, clock=clock)

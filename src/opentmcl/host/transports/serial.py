@@ -5,17 +5,46 @@
 
 `baud` defaults to 9600, the modules' default (global parameter 65). Any other
 pyserial port name works too, including pyserial URLs given as
-``serial://?port=URL`` (e.g. ``port=opentmcl://TMCM-6212`` after
-``import opentmcl.urlhandler``).
+``serial://?port=URL`` (e.g. ``port=opentmcl://TMCM-6212``). Before pyserial opens a port
+URL, the hook registered for its scheme (`register_port_handler`) runs, so pyserial knows
+handlers that live in other layers: the root package registers ``opentmcl://``.
 """
 from __future__ import annotations
 
 import urllib.parse
+from collections.abc import Callable
 
-from ..errors import TmclConnectionError, TmclTypeError
+from ... import registry
+from ..errors import TmclConnectionError, TmclTypeError, TmclValueError
 from ..transport import StreamTransport, url_query
 
 DEFAULT_BAUD = 9600
+
+_PORT_HANDLERS = registry.of(registry.SERIAL_URL_HANDLERS)
+
+
+def register_port_handler(scheme: str, hook: Callable[[], object] | str) -> None:
+    """Run `hook` (or the object a lazy ``"package.module:attribute"`` names) before pyserial opens a
+    ``scheme://`` port URL, e.g. to add a package to ``serial.protocol_handler_packages``."""
+    if not (callable(hook) or isinstance(hook, str)):
+        raise TmclValueError(f"a port handler hook must be callable or 'module:attribute', got {hook!r}")
+    try:
+        _PORT_HANDLERS.register(scheme, hook)
+    except ValueError as exc:
+        raise TmclValueError(str(exc)) from None
+
+
+def prepare_port(port: str) -> None:
+    """Run the hook registered for the scheme of a pyserial port URL (none for a device path)."""
+    scheme, sep, _ = port.partition("://")
+    if not sep or not registry.NAME.fullmatch(scheme.lower()):
+        return
+    try:
+        hook = _PORT_HANDLERS.find(scheme)
+    except (ImportError, AttributeError) as exc:
+        raise TmclConnectionError(f"the {scheme}:// port handler is not available: {exc}") from None
+    if callable(hook):
+        hook()
 
 
 class SerialTransport(StreamTransport):
@@ -26,10 +55,7 @@ class SerialTransport(StreamTransport):
 
         if not isinstance(port, str):
             raise TmclTypeError(f"serial port must be a name or path, got {port!r}")
-        if port.lower().startswith("opentmcl://"):
-            from ...urlhandler import register
-
-            register()  # pyserial finds the opentmcl:// scheme (idempotent)
+        prepare_port(port)
         super().__init__()
         self.port = port
         self.name = f"serial port {port}"
