@@ -19,9 +19,11 @@ of bytes asked for, or raises `TmclTimeout`. Concrete transports live in
 """
 from __future__ import annotations
 
+import threading
 import time
 import urllib.parse
 from abc import ABC, abstractmethod
+from typing import Self
 
 from .errors import TmclConnectionError, TmclTimeout
 
@@ -62,15 +64,22 @@ class Transport(ABC):
         """The clock that `timeout`/`sleep` are measured on (real links: wall clock)."""
         return time.monotonic()
 
-    def local_module(self, address: int):
+    def local_module(self, address: int) -> object | None:
         """The virtual module in this process that answers `address`, or None (real links).
         Lets the debugger read state the wire does not carry, such as the program flags."""
         return None
 
-    def __enter__(self):
+    @property
+    def lock(self) -> threading.RLock:
+        """Held by whoever works on what lies behind this link outside the client (the dashboard
+        reads an in-process module under it). One re-entrant lock per transport, made on first use."""
+        lock: threading.RLock = self.__dict__.setdefault("_lock", threading.RLock())
+        return lock
+
+    def __enter__(self) -> Self:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
 

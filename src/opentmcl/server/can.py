@@ -14,15 +14,19 @@ from __future__ import annotations
 
 import logging
 import threading
+from typing import TYPE_CHECKING
 
 from . import canmap, vmapi
+
+if TYPE_CHECKING:
+    from can import BusABC
 
 log = logging.getLogger("opentmcl.server")
 
 POLL = 0.2
 
 
-def open_can_bus(interface: str, channel: str, **kwargs):
+def open_can_bus(interface: str, channel: str, **kwargs) -> BusABC:
     """A python-can bus, e.g. ("virtual", "opentmcl") or ("socketcan", "vcan0")."""
     import can
 
@@ -39,7 +43,7 @@ class CanServer:
         self.can_interface = interface
         self.channel = channel
         self.can_kwargs = can_kwargs
-        self.canbus = None
+        self.canbus: BusABC | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._send_lock = threading.Lock()
@@ -58,8 +62,11 @@ class CanServer:
         import can
 
         while not self._stop.is_set():
+            canbus = self.canbus  # opened by start() before the thread runs
+            if canbus is None:
+                return
             try:
-                msg = self.canbus.recv(POLL)
+                msg = canbus.recv(POLL)
             except (can.CanError, OSError, ValueError):
                 if self._stop.wait(POLL):
                     return

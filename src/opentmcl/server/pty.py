@@ -60,7 +60,7 @@ class PtyServer:
             os.set_blocking(master, False)
             self.path = os.ttyname(slave)
             if self.link is not None:
-                self._make_link()
+                self._make_link(self.link)
         except BaseException:
             os.close(master)
             os.close(slave)
@@ -72,8 +72,7 @@ class PtyServer:
         self._thread = threading.Thread(target=self._loop, name="opentmcl-pty", daemon=True)
         self._thread.start()
 
-    def _make_link(self) -> None:
-        link = self.link
+    def _make_link(self, link: Path) -> None:
         if link.is_symlink():
             link.unlink()
         elif link.exists():
@@ -94,14 +93,17 @@ class PtyServer:
 
     def _loop(self) -> None:
         while not self._stop.is_set():
+            master, session = self.master, self.session  # set by start() before the thread runs
+            if master is None or session is None:
+                return
             try:
-                ready, _, _ = select.select([self.master], [], [], POLL)
+                ready, _, _ = select.select([master], [], [], POLL)
             except (OSError, ValueError):
                 return
             if not ready:
                 continue
             try:
-                data = os.read(self.master, 4096)
+                data = os.read(master, 4096)
             except BlockingIOError:
                 continue
             except OSError as exc:
@@ -110,7 +112,7 @@ class PtyServer:
                     continue
                 return
             if data:
-                self.session.receive(data)
+                session.receive(data)
 
     def stop(self) -> None:
         self._stop.set()

@@ -67,7 +67,7 @@ class SerialSession:
         self._clock = clock
         self._sleep = sleep
         self._write_lock = threading.Lock()
-        self._readers: dict[int, object] = {}  # id(vm) -> vmapi.raw_reader(vm)
+        self._readers: dict[int, Callable[[int], int] | None] = {}  # id(vm) -> vmapi.raw_reader(vm)
         self.bytes_received = 0
         """Bytes handled so far (replies written): for diagnostics and tests."""
         self.closed = False
@@ -116,9 +116,9 @@ class SerialSession:
         """Write `reply` after the telegram pause (if `pause`; never on USB: GP75 is the pause "before
         the reply via RS485 is sent"), paced at GP65 if asked."""
         pause = pause and self.interface != USB
-        reader = self._readers.get(id(vm), False)
-        if reader is False:
-            reader = self._readers[id(vm)] = vmapi.raw_reader(vm)
+        if id(vm) not in self._readers:
+            self._readers[id(vm)] = vmapi.raw_reader(vm)
+        reader = self._readers[id(vm)]
         if reader is not None:  # a RAM read: no bus lock needed
             wait = reader(vmapi.GP_TELEGRAM_PAUSE) / 1000.0 if pause else 0.0
             per_byte = byte_time(vmapi.baud_rate(vm)) if self.pace_bytes else 0.0

@@ -173,12 +173,15 @@ class TcpServer:
 
     def _accept_loop(self) -> None:
         while not self._stop.is_set():
+            sock = self._sock  # read each time: tests put a failing socket in its place
+            if sock is None:
+                return
             try:
-                conn, _peer = self._sock.accept()
+                conn, _peer = sock.accept()
             except TimeoutError:
                 continue
             except OSError as exc:
-                if self._stop.is_set() or self._sock.fileno() < 0:
+                if self._stop.is_set() or sock.fileno() < 0:
                     break  # stop() closed the listening socket
                 # A client that reset before it was accepted, or no file descriptor left
                 # (EMFILE): the endpoint lives on and accepts again a moment later.

@@ -33,6 +33,7 @@ import math
 import threading
 import time
 import urllib.parse
+from typing import TypedDict
 
 import serial
 from serial.serialutil import PortNotOpenError, SerialException, Timeout
@@ -50,16 +51,40 @@ RX_BUFFER = 4096
 """Bytes of unread replies kept; more are dropped (the size of a Linux tty input buffer)."""
 
 
-def parse_url(url: str) -> dict:
+class PortOptions(TypedDict):
+    """What an ``opentmcl://`` URL asks for (see the module docstring)."""
+
+    modules: list[tuple[str, int]]
+    """(profile name, module address) of each module on the bus."""
+    eeprom: list[str]
+    gap: float
+    pace: bool
+    interface: str
+
+
+def parse_url(url: str) -> PortOptions:
     """Split an ``opentmcl://`` URL into module specs and options; ValueError when malformed."""
     parts = urllib.parse.urlsplit(url)
     if parts.scheme.lower() != SCHEME:
         raise ValueError(f"expected an {SCHEME}:// URL, got {url!r}")
-    spec = urllib.parse.unquote(parts.netloc + parts.path).strip("/")
-    modules = []
+    modules = _module_specs(urllib.parse.unquote(parts.netloc + parts.path).strip("/"), url)
+    eeprom, gap, pace, interface = _query_options(parts.query, url)
+    if interface is None:
+        interface = default_interface(modules, pace)
+    problem = interface_error(interface, len(modules), pace)
+    if problem:
+        raise ValueError(problem)
+    if len(eeprom) > len(modules):
+        raise ValueError("more eeprom files than modules")
+    return PortOptions(modules=modules, eeprom=eeprom, gap=gap, pace=pace, interface=interface)
+
+
+def _module_specs(spec: str, url: str) -> list[tuple[str, int]]:
+    """``NAME[@ADDR][,NAME@ADDR...]`` -> [(name, address), ...]; without ``@`` the n-th module is at n."""
     names = [p.strip() for p in spec.split(",") if p.strip()]
     if not names:
         raise ValueError(f"{SCHEME}:// URL names no module, e.g. {SCHEME}://TMCM-6212")
+    modules = []
     for i, item in enumerate(names):
         name, sep, addr = item.partition("@")
         if sep:
@@ -73,33 +98,38 @@ def parse_url(url: str) -> dict:
     problem = address_error([a for _, a in modules])
     if problem:
         raise ValueError(problem)
-    options = {"modules": modules, "eeprom": [], "gap": DEFAULT_GAP, "pace": False, "interface": None}
-    for key, value in urllib.parse.parse_qsl(parts.query, keep_blank_values=True):
+    return modules
+
+
+def _query_options(query: str, url: str) -> tuple[list[str], float, bool, str | None]:
+    """(eeprom files, gap, pace, interface or None for the default) of the URL's query."""
+    eeprom: list[str] = []
+    gap, pace, interface = DEFAULT_GAP, False, None
+    for key, value in urllib.parse.parse_qsl(query, keep_blank_values=True):
         if key == "eeprom":
-            options["eeprom"] = [v for v in value.split(",")]
+            eeprom = value.split(",")
         elif key == "gap":
-            try:
-                options["gap"] = float(value)
-            except ValueError:
-                raise ValueError(f"bad gap {value!r}") from None
-            if not 0 < options["gap"] < float("inf"):
-                raise ValueError(f"gap must be a positive number of seconds, got {value!r}")
+            gap = _gap(value)
         elif key == "pace":
-            options["pace"] = value.lower() in ("1", "true", "yes", "on")
+            pace = value.lower() in ("1", "true", "yes", "on")
         elif key == "interface":
             if value not in SERIAL_INTERFACES:
                 raise ValueError(f"bad interface {value!r}; use one of {', '.join(SERIAL_INTERFACES)}")
-            options["interface"] = value
+            interface = value
         else:
             raise ValueError(f"unknown option {key!r} in {url!r} (known: eeprom, gap, pace, interface)")
-    if options["interface"] is None:
-        options["interface"] = default_interface(modules, options["pace"])
-    problem = interface_error(options["interface"], len(modules), options["pace"])
-    if problem:
-        raise ValueError(problem)
-    if len(options["eeprom"]) > len(modules):
-        raise ValueError("more eeprom files than modules")
-    return options
+    return eeprom, gap, pace, interface
+
+
+def _gap(value: str) -> float:
+    """The telegram gap in seconds: a positive, finite number."""
+    try:
+        gap = float(value)
+    except ValueError:
+        raise ValueError(f"bad gap {value!r}") from None
+    if not 0 < gap < float("inf"):
+        raise ValueError(f"gap must be a positive number of seconds, got {value!r}")
+    return gap
 
 
 class Serial(serial.Serial):
@@ -107,6 +137,7 @@ class Serial(serial.Serial):
 
     interface = "serial"
     """Replaced at open by the URL's `interface` (bus.Channel.interface)."""
+    is_open: bool
 
     def open(self) -> None:
         if self._port is None:

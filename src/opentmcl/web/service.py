@@ -263,7 +263,7 @@ class Dashboard:
             raise DashboardError(_short(str(exc))) from None
         except ValueError as exc:  # a number the parser cannot convert (e.g. 5000 digits)
             raise DashboardError(_short(f"{_short(text, 40)}: {exc}")) from None
-        out = {"line": text, "request": [command, type_, motor, value]}
+        out: dict[str, object] = {"line": text, "request": [command, type_, motor, value]}
         try:
             with self.lock:
                 reply = self.module.request(command, type_, motor, value)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 import urllib.parse
+from typing import Any
 
 from ..errors import TmclConnectionError, TmclProtocolError, TmclTimeout, check_int
 from ..transport import Transport, url_query
@@ -27,7 +28,8 @@ class CanTransport(Transport):
     frame_format = "can"
 
     def __init__(self, interface: str, channel: str, can_id: int = DEFAULT_ID,
-                 reply_id: int = DEFAULT_REPLY_ID, **kwargs) -> None:
+                 reply_id: int = DEFAULT_REPLY_ID, **kwargs: Any) -> None:
+        # kwargs go to can.Bus unchanged (its own signature: **kwargs: Any), e.g. bitrate
         import can
 
         for name, value in (("id", can_id), ("reply_id", reply_id)):
@@ -110,7 +112,7 @@ def open_can(url: urllib.parse.SplitResult) -> CanTransport:
     if not interface or not channel:
         raise TmclConnectionError(f"CAN URL needs an interface and a channel, e.g. can://socketcan/can0?id=1, "
                                   f"got {url.geturl()!r}")
-    kwargs = {}
+    kwargs: dict[str, int] = {}
     try:
         can_id = int(query.get("id", str(DEFAULT_ID)), 0)
         reply_id = int(query.get("reply_id", str(DEFAULT_REPLY_ID)), 0)

@@ -7,8 +7,8 @@ Any object with the VirtualModule interface can sit behind it:
 Several modules may share one transport, like modules on one RS-485 bus: each
 request is offered to every module and only the addressed one answers.
 
-No thread and no socket: time passes only as the clock policy says (DESIGN.md
-"Time"):
+No thread and no socket: time passes only as the clock policy says
+(docs/architecture.md "Time"):
 
 - ``"virtual"`` (default): waiting for a reply or an event advances the modules'
   virtual time in slices of `step` seconds (or from one internal event to the
@@ -23,47 +23,64 @@ import threading
 import time
 import urllib.parse
 from collections.abc import Callable, Iterable
+from typing import Generic, Protocol, TypeVar
 
 from ...modules.addresses import address_error
 from ..errors import TmclConnectionError, TmclTimeout, TmclValueError, check_timeout
 from ..transport import Transport
 
 
+class SimulatedModule(Protocol):
+    """What the transport needs of a module (`opentmcl.firmware.vm.VirtualModule` has it). Optional:
+    ``accepts_address(address) -> bool`` and ``next_event_in() -> float | None``."""
+
+    def handle(self, frame: bytes, /) -> bytes: ...
+
+    def drain_events(self) -> list[bytes]: ...
+
+    def advance(self, seconds: float, /) -> object: ...
+
+
+M = TypeVar("M", bound=SimulatedModule, covariant=True)  # the clocks only read the modules
+
+
 class Clock:
     """How time passes for the modules behind an `InProcessTransport` (policy ``"none"``)."""
 
-    def sync(self, transport: InProcessTransport) -> None:
+    def sync(self, transport: InProcessTransport[SimulatedModule]) -> None:
         """Called before every request: bring the modules up to date."""
 
-    def wait(self, transport: InProcessTransport, ready: Callable[[], bool], timeout: float) -> None:
+    def wait(self, transport: InProcessTransport[SimulatedModule], ready: Callable[[], bool],
+             timeout: float) -> None:
         """Let time pass until `ready()` or `timeout` seconds have passed."""
 
-    def sleep(self, transport: InProcessTransport, seconds: float) -> None:
+    def sleep(self, transport: InProcessTransport[SimulatedModule], seconds: float) -> None:
         """Let `seconds` pass."""
 
-    def now(self, transport: InProcessTransport) -> float:
+    def now(self, transport: InProcessTransport[SimulatedModule]) -> float:
         return transport.elapsed
 
 
 class VirtualClock(Clock):
     """Virtual time that advances only while the host waits."""
 
-    def __init__(self, step: float = 0.001):
+    def __init__(self, step: float = 0.001) -> None:
         self.step = check_timeout(step, "virtual clock step")
 
-    def wait(self, transport, ready, timeout):
+    def wait(self, transport: InProcessTransport[SimulatedModule], ready: Callable[[], bool],
+             timeout: float) -> None:
         left = max(0.0, float(timeout))
         while not ready() and left > 0:
             dt = min(self._jump(transport), left)
             transport.advance(dt)
             left -= dt
 
-    def _jump(self, transport) -> float:
+    def _jump(self, transport: InProcessTransport[SimulatedModule]) -> float:
         """Seconds to advance next: up to the modules' next internal event when every module
         tells it (optional ``next_event_in() -> float | None``), else one `step`."""
-        nearest = None
+        nearest: float | None = None
         for m in transport.modules:
-            probe = getattr(m, "next_event_in", None)
+            probe: Callable[[], float | None] | None = getattr(m, "next_event_in", None)
             if probe is None:
                 return self.step
             t = probe()
@@ -73,7 +90,7 @@ class VirtualClock(Clock):
             return float("inf")  # nothing will happen: the whole timeout passes at once
         return nearest if nearest > 0 else self.step
 
-    def sleep(self, transport, seconds):
+    def sleep(self, transport: InProcessTransport[SimulatedModule], seconds: float) -> None:
         if seconds > 0:
             transport.advance(seconds)
 
@@ -81,17 +98,18 @@ class VirtualClock(Clock):
 class RealClock(Clock):
     """The modules follow the wall clock, advanced lazily at each access."""
 
-    def __init__(self, poll: float = 0.002):
+    def __init__(self, poll: float = 0.002) -> None:
         self.poll = check_timeout(poll, "real clock poll interval")
         self._last: float | None = None
 
-    def sync(self, transport):
+    def sync(self, transport: InProcessTransport[SimulatedModule]) -> None:
         now = time.monotonic()
         if self._last is not None and now > self._last:
             transport.advance(now - self._last)
         self._last = now
 
-    def wait(self, transport, ready, timeout):
+    def wait(self, transport: InProcessTransport[SimulatedModule], ready: Callable[[], bool],
+             timeout: float) -> None:
         deadline = time.monotonic() + max(0.0, timeout)
         self.sync(transport)
         while not ready():
@@ -101,13 +119,13 @@ class RealClock(Clock):
             time.sleep(min(self.poll, left))
             self.sync(transport)
 
-    def sleep(self, transport, seconds):
+    def sleep(self, transport: InProcessTransport[SimulatedModule], seconds: float) -> None:
         if seconds > 0:
             time.sleep(seconds)  # without holding the transport's lock
         with transport.lock:
             self.sync(transport)
 
-    def now(self, transport):
+    def now(self, transport: InProcessTransport[SimulatedModule]) -> float:
         return time.monotonic()
 
 
@@ -123,30 +141,31 @@ def make_clock(clock: str | Clock) -> Clock:
         raise TmclValueError(f"unknown clock policy {clock!r}; use one of {', '.join(CLOCKS)}") from None
 
 
-def _answers(module, address: int) -> bool:
-    accepts = getattr(module, "accepts_address", None)
+def _answers(module: object, address: int) -> bool:
+    accepts: Callable[[int], bool] | None = getattr(module, "accepts_address", None)
     return accepts is not None and accepts(address)
 
 
-class InProcessTransport(Transport):
-    """Transport to one or more VirtualModule-like objects in this process."""
+class InProcessTransport(Transport, Generic[M]):
+    """Transport to one or more VirtualModule-like objects (`SimulatedModule`) in this process."""
 
     frame_format = "serial"
 
-    def __init__(self, modules, clock: str | Clock = "virtual"):
-        if not isinstance(modules, Iterable):
-            modules = [modules]
-        self.modules = list(modules)
+    def __init__(self, modules: M | Iterable[M], clock: str | Clock = "virtual") -> None:
+        if isinstance(modules, Iterable):
+            self.modules: list[M] = list(modules)
+        else:
+            self.modules = [modules]
         if not self.modules:
             raise TmclValueError("InProcessTransport needs at least one module")
         self.clock = make_clock(clock)
         self.elapsed = 0.0  # virtual seconds advanced through this transport
         self._rx = bytearray()
         self._closed = False
-        self.lock = threading.RLock()  # the modules are not thread-safe; one caller at a time
+        self._lock = threading.RLock()  # `lock`: the modules are not thread-safe; one caller at a time
 
     @property
-    def module(self):
+    def module(self) -> M:
         """The first (often the only) module."""
         return self.modules[0]
 
@@ -154,7 +173,7 @@ class InProcessTransport(Transport):
         if self._closed:
             raise TmclConnectionError("in-process transport is closed")
 
-    def local_module(self, address: int):
+    def local_module(self, address: int) -> M | None:
         return next((m for m in self.modules if _answers(m, address)), None)
 
     def _collect_events(self) -> None:

@@ -13,12 +13,32 @@ from __future__ import annotations
 
 import urllib.parse
 from collections.abc import Callable
+from typing import Protocol
 
 from ... import registry
 from ..errors import TmclConnectionError, TmclTypeError, TmclValueError
 from ..transport import StreamTransport, url_query
 
 DEFAULT_BAUD = 9600
+
+
+class PyserialPort(Protocol):
+    """What the transport uses of a pyserial port (`serial.serial_for_url`)."""
+
+    timeout: float | None
+
+    @property
+    def in_waiting(self) -> int: ...
+
+    def read(self, size: int = 1, /) -> bytes: ...
+
+    def write(self, data: bytes, /) -> int | None: ...
+
+    def flush(self) -> None: ...
+
+    def reset_input_buffer(self) -> None: ...
+
+    def close(self) -> None: ...
 
 _PORT_HANDLERS = registry.of(registry.SERIAL_URL_HANDLERS)
 
@@ -60,7 +80,7 @@ class SerialTransport(StreamTransport):
         self.port = port
         self.name = f"serial port {port}"
         try:
-            self._ser = serial.serial_for_url(port, baudrate=baud, timeout=0.1, write_timeout=5.0)
+            self._ser: PyserialPort = serial.serial_for_url(port, baudrate=baud, timeout=0.1, write_timeout=5.0)
         except (serial.SerialException, ValueError, OSError) as exc:
             raise TmclConnectionError(f"cannot open serial port {port}: {exc}") from None
 
