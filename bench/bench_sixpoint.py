@@ -4,7 +4,7 @@
 
 `measure()` returns virtual seconds per wall second for six six-point
 engines (a TMCM-6212) and for one linear engine doing back-and-forth MVP
-moves, driven purely by next_event() (DESIGN.md "Time"), and the wall cost
+moves, driven purely by next_event() (docs/architecture.md "Time"), and the wall cost
 of one move_to() in microseconds: for a distance moved before (the planner's
 per-distance cache, the back-and-forth case) and for a new distance each time.
 """

@@ -102,7 +102,7 @@ def run(actions) -> None:
 
 @given(script)
 def test_chip_matches_the_per_tick_reference(actions):
-    """DESIGN.md "Time" / issue 6: the fast engine agrees exactly with the per-tick reference;
+    """docs/architecture.md "Time" / issue 6: the fast engine agrees exactly with the per-tick reference;
     TMC4210 datasheet 6.1 register semantics, 6.1.10.2 switch stops, 8.1 step edges."""
     run(actions)
 

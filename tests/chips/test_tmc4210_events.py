@@ -1,6 +1,6 @@
 """Event-driven time must not miss what a clock-by-clock walk sees: flags, latch and stops come
 out the same whether the model jumps over a whole move or is advanced one pulse tick at a time
-(DESIGN.md "Time"; datasheet 6.1.10.2, 6.1.11, 6.1.14, 6.2.1.2)."""
+(docs/architecture.md "Time"; datasheet 6.1.10.2, 6.1.11, 6.1.14, 6.2.1.2)."""
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st

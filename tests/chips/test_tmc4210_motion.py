@@ -380,7 +380,7 @@ def test_reset_restores_the_power_on_registers():
 
 
 def test_the_pd86_1180_engine_and_the_chip_share_one_ramp_core():
-    """Issue 6 / DESIGN.md layers: the TMC4210 model and the PD86-1180 firmware engine run the same
+    """Issue 6 / docs/architecture.md "Layers": the TMC4210 model and the PD86-1180 firmware engine run the same
     TMC429 ramp core, so the same registers give the same motion, cycle for cycle."""
     from opentmcl.motion.tmc429 import Tmc429Ramp
     from opentmcl.motion.tmc429_engine import Tmc429Engine

@@ -309,7 +309,7 @@ def test_direct_mode_alongside_a_running_program():
 
 
 def test_runs_are_reproducible():
-    """DESIGN.md "Time": the same program and the same host commands give the same trace."""
+    """docs/architecture.md "Time": the same program and the same host commands give the same trace."""
     def trace():
         w = module()
         w.load("Loop: GAP 1, 0\nCALC ADD, 100\nAAP 0, 0\nWAIT TICKS, 0, 3\nJA Loop")
@@ -323,7 +323,7 @@ def test_runs_are_reproducible():
 
 
 def test_running_pure_instructions_ahead_changes_nothing():
-    """DESIGN.md "Time": batching pure instructions between events (Interpreter.run_ahead) gives
+    """docs/architecture.md "Time": batching pure instructions between events (Interpreter.run_ahead) gives
     exactly the trace of one event per instruction - motors, timer interrupt, host commands."""
     src = """
     VECT 0, Tick

@@ -118,7 +118,7 @@ def test_heartbeat_stops_motors(m6212):
 
 
 def test_advance_splits_do_not_matter():
-    """DESIGN.md "Time": advance jumps between events — one long advance equals many short ones."""
+    """docs/architecture.md "Time": advance jumps between events — one long advance equals many short ones."""
     a, b = Host(VirtualModule("TMCM-6212")), Host(VirtualModule("TMCM-6212"))
     for h in (a, b):
         h.ok(4, 0, 0, 51200)

@@ -142,7 +142,7 @@ def test_stop_run_from_address_step_reset(w):
 
 
 def test_program_survives_restart_with_file_eeprom(tmp_path):
-    """DESIGN.md: the TMCL program lives in the (file-backed) EEPROM; 5.1 GP77 "1 - Start TMCL
+    """docs/architecture.md "Errors": the TMCL program lives in the (file-backed) EEPROM; 5.1 GP77 "1 - Start TMCL
     application automatically after power up"."""
     path = tmp_path / "eeprom.json"
     w = Wire(VirtualModule("TMCM-6212", address=1, eeprom=path))

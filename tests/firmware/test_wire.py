@@ -190,7 +190,7 @@ def test_constructor_rejects_an_address_outside_gp66(address):
 
 @pytest.mark.parametrize("seconds", [float("nan"), float("inf"), -0.5])
 def test_advance_rejects_non_finite_or_negative_time(seconds):
-    """Issue #2 contract `vm.advance(seconds)` (DESIGN.md "Errors and bad input"): NaN, infinity and
+    """Issue #2 contract `vm.advance(seconds)` (docs/architecture.md "Errors"): NaN, infinity and
     negative spans are a clear ValueError, and the module's clock does not move."""
     vm = VirtualModule("TMCM-6212")
     with pytest.raises(ValueError, match="finite number"):
@@ -217,7 +217,7 @@ def test_eeprom_file_that_cannot_be_created_fails_at_construction(tmp_path):
     '{"format":"opentmcl-eeprom","version":99,"module":"TMCM-6212"}',
 ])
 def test_a_damaged_eeprom_file_is_refused_and_left_unchanged(tmp_path, content):
-    """DESIGN.md "Errors and bad input" (never a corrupted EEPROM file): an image whose sections
+    """docs/architecture.md "Errors" (never a corrupted EEPROM file): an image whose sections
     are not what the module writes (stored parameters are 32-bit integers, manual 3.6.7 STAP;
     program instructions are four bytes-and-value fields, 3.1) or of a newer format is an
     EepromError when the module is built, and the file keeps its bytes."""

@@ -179,7 +179,7 @@ def test_out_of_range_fields_are_rejected_before_sending(kwargs):
 
 @given(st.binary(max_size=40), st.sampled_from([(6, 1, 0), (136, 0, 0)]))
 def test_any_bytes_give_a_reply_or_a_typed_error(data, request):
-    """DESIGN.md "Errors and bad input": whatever arrives, the client returns a reply or raises a
+    """docs/architecture.md "Errors": whatever arrives, the client returns a reply or raises a
     TmclError — never another exception, never a hang."""
     t = ScriptedTransport(data)
     try:

@@ -356,7 +356,7 @@ class EventAwareModule(opentmcl.VirtualModule):
 
 
 def test_virtual_clock_jumps_from_event_to_event_when_the_module_tells_them():
-    """DESIGN.md "Time": advance jumps ahead as far as the next event, never by fixed small steps."""
+    """docs/architecture.md "Time": advance jumps ahead as far as the next event, never by fixed small steps."""
     vm = EventAwareModule("TMCM-6212", address=1)
     m = Client(InProcessTransport(vm)).module()
     m.axes[0].move_to(51200 * 20, wait=True, timeout=120)
@@ -442,7 +442,7 @@ def test_reading_beyond_program_memory_is_refused(m6212):
     "can://virtual/x?id=1&replyid=2",            # typo of reply_id
 ])
 def test_a_url_with_an_unknown_query_key_is_refused(url):
-    """DESIGN.md "Errors and bad input": a typo in a transport URL (docs/host.md lists each
+    """docs/architecture.md "Errors": a typo in a transport URL (docs/host.md lists each
     scheme's keys) is a TmclConnectionError naming the key, not silently ignored - the user would
     otherwise talk at the wrong baud rate or with the wrong clock without knowing it."""
     with pytest.raises(TmclConnectionError, match="unknown"):

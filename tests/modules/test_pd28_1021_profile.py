@@ -111,7 +111,7 @@ def test_first_steps_examples_are_accepted_speeds(prof):
 
 
 def test_speeds_are_pps_not_tmc429_units(prof):
-    """DESIGN.md: the PD28-1021 has a linear ramp in pps; no TMC429 divisors or internal units."""
+    """docs/architecture.md "Capabilities": the PD28-1021 has a linear ramp in pps; no TMC429 divisors or internal units."""
     units = {p.unit for p in prof.axis_parameters.values()}
     assert "int_velocity" not in units and "int_acceleration" not in units
     for n in (2, 3, 130, 181, 182, 194, 195):

@@ -54,7 +54,7 @@ def all_params(prof: ModuleProfile):
 
 
 def test_the_three_modules_are_shipped():
-    """DESIGN.md "Data-driven modules": TMCM-6212, PD28-1021 and PD86-1180 are profiles."""
+    """docs/architecture.md "Capabilities": TMCM-6212, PD28-1021 and PD86-1180 are profiles."""
     assert module_names() == sorted(NAMES)
 
 

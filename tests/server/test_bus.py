@@ -73,7 +73,7 @@ def test_reply_suppression_gp255_but_not_for_ggp():
 
 
 def test_time_follows_the_clock():
-    """DESIGN.md "Time": in a server, virtual time is paced to the wall clock."""
+    """docs/architecture.md "Time": in a server, virtual time is paced to the wall clock."""
     clock = FakeClock()
     vm = VirtualModule("TMCM-6212", address=1)
     bus = ModuleBus([vm], clock=clock)

@@ -102,7 +102,7 @@ def test_eeprom_is_flushed_on_sigterm(serve, tmp_path):
 
 
 def test_sigkill_during_eeprom_writes_leaves_a_readable_file(serve, tmp_path):
-    """DESIGN.md "Errors and bad input": the EEPROM is written atomically, so SIGKILL in the
+    """docs/architecture.md "Errors": the EEPROM is written atomically, so SIGKILL in the
     middle of a stream of auto-stored SGP writes (manual 5.1) never leaves a torn file."""
     from opentmcl import VirtualModule
 

@@ -97,7 +97,7 @@ def test_several_modules_on_one_served_bus(kind):
 
 @pytest.mark.parametrize("url", ["tcp://[::1", "tcp://[::1:2323", "serial://[x"])
 def test_malformed_url_is_a_connection_error(url):
-    """Bad input gives a typed error (DESIGN.md "Errors and bad input"), not a bare ValueError."""
+    """Bad input gives a typed error (docs/architecture.md "Errors"), not a bare ValueError."""
     from opentmcl.host.errors import TmclConnectionError
 
     with pytest.raises(TmclConnectionError, match="bad module URL"):

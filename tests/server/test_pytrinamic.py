@@ -1,4 +1,4 @@
-"""Interop: unmodified PyTrinamic against the endpoints (DESIGN.md: third-party clients
+"""Interop: unmodified PyTrinamic against the endpoints (docs/architecture.md "Request path": third-party clients
 must behave the same against a virtual module). Skipped when pytrinamic is not installed."""
 import sys
 import time

@@ -143,7 +143,7 @@ class AbortOnce:
 
 
 def test_a_failed_accept_does_not_stop_the_endpoint(tcp_server):
-    """DESIGN.md "Errors and bad input": the server never dies. A failed accept leaves the TCP
+    """docs/architecture.md "Errors": the server never dies. A failed accept leaves the TCP
     endpoint listening; the next client gets its reply to the manual 3.6.8 GGP 66 example."""
     _, tcp = tcp_server
     tcp._sock = AbortOnce(tcp._sock)
@@ -211,7 +211,7 @@ class FaultyModule(VirtualModule):
 
 
 def test_a_module_bug_does_not_kill_the_endpoint():
-    """DESIGN.md "Errors and bad input": the server never dies; the link keeps answering
+    """docs/architecture.md "Errors": the server never dies; the link keeps answering
     well-formed requests (manual 3.6.8 example) after a frame that made the module raise."""
     server = Server([FaultyModule("TMCM-6212", address=1)])
     tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0, gap=GAP))

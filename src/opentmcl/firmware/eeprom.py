@@ -1,4 +1,4 @@
-"""Non-volatile storage of a virtual module (DESIGN.md "Errors and bad input").
+"""Non-volatile storage of a virtual module (docs/architecture.md "Errors").
 
 The EEPROM holds what the manuals say survives power-off: stored axis
 parameters (STAP), bank-0 global parameters (auto-stored) and stored user

@@ -1,4 +1,4 @@
-"""Module profiles as data (DESIGN.md "Data-driven modules").
+"""Module profiles as data (docs/architecture.md "Capabilities").
 
 A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
 

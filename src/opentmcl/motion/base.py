@@ -1,4 +1,4 @@
-"""Common interface of the per-axis ramp generators (DESIGN.md "Time").
+"""Common interface of the per-axis ramp generators (docs/architecture.md "Time").
 
 Every engine lives on an integer clock: `now` counts ticks of `clock_hz` since
 power-up. Positions are integer microsteps held in a 32-bit two's complement

@@ -1,4 +1,4 @@
-"""Analytic motion segments (DESIGN.md "Time", the Klipper `trapq` idea).
+"""Analytic motion segments (docs/architecture.md "Time", the Klipper `trapq` idea).
 
 A `Segment` is one constant-acceleration piece of an axis's motion between
 two whole ticks of the 16 MHz clock, in exact integer units:

@@ -1,4 +1,4 @@
-"""Virtual modules on one bus, in real time (DESIGN.md "Time": real time).
+"""Virtual modules on one bus, in real time (docs/architecture.md "Time": real time).
 
 `ModuleBus` owns one or more virtual modules that share a bus, as several
 modules share one RS-485 line or CAN bus (TMCM-6212 manual 3: "any collision
