@@ -7,6 +7,11 @@
 
 All return the same `Module` API. Several modules on one bus share one `Client`:
 ``bus = open_bus(url); m1, m2 = bus.module(1), bus.module(2)``.
+
+The transport of a URL is found by its scheme in a registry (docs/architecture.md "Extension
+points"): this module registers the host's own tcp/serial/can, the root package registers
+``sim`` for `opentmcl.sim`, `register_transport` adds more, and the entry-point group
+``opentmcl.transports`` is asked for a scheme nobody registered.
 """
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """``sim://``: virtual modules in this process behind the host library (docs/architecture.md "Layers").
 
-This package sits above both the host library and the firmware: it builds `VirtualModule`\\ s
+This package sits above both the host library and the firmware: it builds `VirtualModule` objects
 from a ``sim://`` URL and puts them behind the host's `InProcessTransport`, so the host itself
 never imports the firmware. The root package registers ``sim`` as the lazy reference
 ``opentmcl.sim:open_sim``; importing this package registers the function itself.

@@ -6,6 +6,8 @@ Any object with the VirtualModule interface can sit behind it:
 "position reached" reply, TMCM-6212 manual 3.6.35) and ``advance(seconds)``.
 Several modules may share one transport, like modules on one RS-485 bus: each
 request is offered to every module and only the addressed one answers.
+This module never imports the firmware: ``sim://`` URLs are turned into
+`VirtualModule` objects by `opentmcl.sim`, which sits above both (docs/architecture.md "Layers").
 
 No thread and no socket: time passes only as the clock policy says
 (docs/architecture.md "Time"):
