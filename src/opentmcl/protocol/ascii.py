@@ -50,7 +50,6 @@ ASCII_COMMANDS = frozenset({
     "ROL", "ROR", "MST", "MVP", "SAP", "GAP", "STAP", "RSAP", "SGP", "GGP", "STGP", "RSGP", "RFS",
     "SIO", "GIO", "SCO", "GCO", "CCO", *(f"UF{i}" for i in range(8)),
 })
-SPECIAL_COMMANDS = frozenset({BIN, RUN, STOP})
 
 _MNEMONIC = re.compile(r"\s*([A-Za-z]+[0-9]?)(.*)\Z", re.S)
 _REPLY = re.compile(r"\s*([A-Za-z])\s*([A-Za-z])\s+([+-]?[0-9]+)\s+([+\-\u2212\u2013]?\s*[0-9]+)\s*\Z")
