@@ -49,10 +49,9 @@ def decode_frame(data: bytes, *, verify: bool = True, what: str = "frame") -> Fi
     reports a wrong checksum when `verify`."""
     if len(data) != FRAME_LEN:
         raise FrameError(f"{what} must be {FRAME_LEN} bytes, got {len(data)}")
-    if verify and not checksum_ok(data):
+    if verify and checksum(data[:8]) != data[8]:
         raise FrameError("wrong checksum")
-    b1, b2, b3, b4, value = _BODY.unpack_from(data)
-    return b1, b2, b3, b4, value
+    return _BODY.unpack_from(data)  # ">BBBBi": five ints
 
 
 @dataclass(frozen=True, slots=True)
