@@ -1,4 +1,4 @@
-"""Typed exceptions of the host library (DESIGN.md "Errors and bad input").
+"""Typed exceptions of the host library (docs/architecture.md "Errors").
 
 Every failure a user can meet while talking to a module is a `TmclError`:
 a reply with a non-success status (`TmclStatusError`, worded as in the

@@ -8,7 +8,7 @@
   internal units): TMC4210 datasheet 6.1.12.1 and PD86-1180 manual ch. 5 units:
   ``R[Hz] = f_CLK * velocity / (2**pulse_div * 2048 * 32)`` and
   ``dR[Hz/s] = f_CLK**2 * A_MAX / 2**(pulse_div + ramp_div + 29)``, f_CLK = 16 MHz.
-- TMC5130 units (TMCM-6212 with axis parameter 255 = 0, FACTS.md "TMC5130"):
+- TMC5130 units (TMCM-6212 with axis parameter 255 = 0; TMC5130 datasheet, docs/assumptions.md):
   ``v = v_internal * f_CLK / 2**24``, ``a = a_internal * f_CLK**2 / 2**41``.
 
 Conversions to physical units return floats; conversions to module units return

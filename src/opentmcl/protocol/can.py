@@ -8,7 +8,7 @@ left out" - so a reply payload is module address, status, command, value (7 byte
 
 A request payload is 7 bytes: command, type, motor/bank, value (MSB first). Public clients
 (PyTrinamic) send 8 bytes: the 9-byte serial frame without its address byte, i.e. with a trailing
-checksum that the module ignores (FACTS.md). Both lengths are accepted. PD86-1180 manual 4.6.39:
+checksum that the module ignores (docs/assumptions.md). Both lengths are accepted. PD86-1180 manual 4.6.39:
 command 136 type 0 sent in an eight-byte frame is answered with eight bytes, so that all eight
 characters of the version string fit.
 """
