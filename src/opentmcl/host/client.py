@@ -10,10 +10,10 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import TYPE_CHECKING, ClassVar
 
-from ..protocol.frame import FRAME_LEN, FrameError, Reply, Request, checksum, to_int32
-from ..protocol.replies import MemoryReply
+from ..protocol.frame import FRAME_LEN, FrameError, Reply, Request, checksum_ok, to_int32
+from ..protocol.replies import MemoryReply, is_version_request
 from ..protocol.status import Status, is_success
 from .errors import (
     TmclAddressError,
@@ -28,6 +28,10 @@ from .errors import (
     describe_request,
 )
 from .transport import Transport
+
+if TYPE_CHECKING:
+    from ..modules.profile import ModuleProfile
+    from .module import Module
 
 READ_PROGRAM_MEMORY = 134  # control command with a special reply format (manual 3.6.36)
 GET_FIRMWARE_VERSION = 136  # control command, type 0 = string, 1 = binary (manual 3.6.36)
@@ -57,10 +61,9 @@ class VersionReply:
         return self.text
 
 
-def _is_event(frame: bytes) -> bool:
-    """A checksum-valid "target position reached" reply (manual 3.6.35)."""
-    return (len(frame) == FRAME_LEN and checksum(frame[:8]) == frame[8]
-            and frame[2] == Status.POSITION_REACHED_EVENT and frame[3] == REQUEST_TARGET_POSITION_REACHED_EVENT)
+Answer = Reply | VersionReply | MemoryReply | None
+"""What `Client.request` returns: a `Reply`, or the special replies of command 136 type 0
+(`VersionReply`) and 134 (`MemoryReply`), or None for command 137, which has no reply."""
 
 
 def _check_byte(name: str, value: int) -> int:
@@ -75,6 +78,12 @@ def _check_value(value: int) -> int:
     if not -(2**31) <= value <= 2**32 - 1:
         raise TmclValueError(f"value {value} does not fit in 32 bits")
     return to_int32(value)
+
+
+def has_special_reply(command: int, type: int) -> bool:
+    """True for the requests not answered in the 9-byte reply format of manual 3.2: 134 (read
+    program memory), 136 type 0 (version string) and 137 (no reply)."""
+    return command in NO_REPLY or command == READ_PROGRAM_MEMORY or is_version_request(command, type)
 
 
 def check_address(value: int) -> int:
@@ -105,27 +114,51 @@ class Client:
     # ------------------------------------------------------------------ requests
 
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
-                address: int | None = None, timeout: float | None = None,
-                ) -> Reply | VersionReply | MemoryReply | None:
+                address: int | None = None, timeout: float | None = None) -> Answer:
         """Send one request and return its reply; raise `TmclStatusError` unless the status is 100/101.
 
         Command 136 type 0 returns a `VersionReply`, command 134 a `MemoryReply` (the stored
         instruction); command 137 sends no reply and returns None.
         """
-        self._check_reachable(address)
-        req = Request(_check_byte("address", self.address if address is None else address),
-                      _check_byte("command", command), _check_byte("type", type),
-                      _check_byte("motor", motor), _check_value(value))
-        timeout = self.timeout if timeout is None else check_timeout(timeout)
+        req, timeout = self._prepare(command, type, motor, value, address, timeout)
         with self._lock:
             self._send(req)
             if req.command in NO_REPLY:
                 return None
-            if req.command == GET_FIRMWARE_VERSION and req.type == 0:
+            if is_version_request(req.command, req.type):
                 return self._read_version(req, timeout)
             if req.command == READ_PROGRAM_MEMORY:
                 return self._read_memory(req, timeout)
             return self._read_reply(req, timeout)
+
+    def reply(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
+              address: int | None = None, timeout: float | None = None) -> Reply:
+        """`request` for a command answered in the reply format of manual 3.2. Commands 134,
+        136 type 0 and 137 answer otherwise (or not at all): TmclValueError, nothing is sent."""
+        if has_special_reply(command, type):
+            raise TmclValueError(f"command {command} type {type} has no reply in the normal format "
+                                 "(manual 3.2); use Client.request")
+        req, timeout = self._prepare(command, type, motor, value, address, timeout)
+        with self._lock:
+            self._send(req)
+            return self._read_reply(req, timeout)
+
+    def read_memory(self, index: int, *, address: int | None = None,
+                    timeout: float | None = None) -> MemoryReply:
+        """Command 134: the instruction stored at program memory `index` (manual 3.6.36)."""
+        req, timeout = self._prepare(READ_PROGRAM_MEMORY, 0, 0, index, address, timeout)
+        with self._lock:
+            self._send(req)
+            return self._read_memory(req, timeout)
+
+    def _prepare(self, command: int, type: int, motor: int, value: int, address: int | None,
+                 timeout: float | None) -> tuple[Request, float]:
+        """The checked request and the time-out to wait for its reply."""
+        self._check_reachable(address)
+        req = Request(_check_byte("address", self.address if address is None else address),
+                      _check_byte("command", command), _check_byte("type", type),
+                      _check_byte("motor", motor), _check_value(value))
+        return req, self.timeout if timeout is None else check_timeout(timeout)
 
     def _check_reachable(self, address: int | None) -> None:
         """On CAN the connection's CAN ID selects the module: other addresses cannot be reached."""
@@ -135,7 +168,7 @@ class Client:
                 f"({getattr(self.transport, 'can_id', '?')}, address {self.address} here); the address "
                 "byte is not sent on CAN (manual 3.1). Open can://...?id=N for another module")
 
-    def send_raw(self, frame: bytes, *, timeout: float | None = None) -> Reply | VersionReply | None:
+    def send_raw(self, frame: bytes, *, timeout: float | None = None) -> Answer:
         """Send a ready-made 9-byte request frame (its checksum is not checked) and return the reply."""
         try:
             req = Request.decode(bytes(frame), verify=False)
@@ -170,7 +203,7 @@ class Client:
             return Reply(self.host_address, b[0], b[1], b[2], int.from_bytes(b[3:7], "big", signed=True))
         buf = self._recv(FRAME_LEN, deadline)
         first_bad = None
-        while checksum(buf[:8]) != buf[8]:
+        while not checksum_ok(buf):
             first_bad = first_bad or buf
             try:
                 buf = buf[1:] + self._recv(1, deadline)
@@ -222,7 +255,7 @@ class Client:
             except TmclTimeout:
                 raise TmclTimeout(f"no reply from module {req.address} to "
                                   f"{describe_request(req)} within {timeout:g} s") from None
-            if not can and checksum(buf[:8]) == buf[8] and buf[3] & 0x80:
+            if not can and checksum_ok(buf) and buf[3] & 0x80:
                 # A normal frame (command byte >= 128 is never an ASCII character).
                 reply = Reply.decode(buf)
                 if self._take_event(reply):
@@ -299,7 +332,8 @@ class Client:
 
     # ------------------------------------------------------------------ misc
 
-    def module(self, address: int | None = None, profile=None):
+    def module(self, address: int | None = None,
+               profile: ModuleProfile | str | None = None) -> Module:
         """A `Module` at `address` on this client's bus (several modules may share one client)."""
         from .module import Module
 
@@ -317,5 +351,5 @@ class Client:
     def __enter__(self) -> Client:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()

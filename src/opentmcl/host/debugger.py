@@ -18,7 +18,9 @@ from __future__ import annotations
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Protocol
 
+from ..lang.binfile import Instruction
 from ..protocol.opcodes import format_instruction
 from .errors import TmclStatusError, TmclTypeError, TmclValueError, check_int, check_timeout
 from .loader import MODES, AppStatus, Loader
@@ -47,28 +49,38 @@ class Watch:
     """A named value read from the module: `read(loader)` returns an int or a short text."""
 
     name: str
-    read: Callable[[Loader], int | str]
+    read: Reader
 
 
-def _gio(port: int, bank: int):
+Reader = Callable[[Loader], int | str]
+
+
+class SourceText(Protocol):
+    """A source line of the program (`lang.assembler.SourceLine`): its text is listed."""
+
+    @property
+    def text(self) -> str: ...
+
+
+def _gio(port: int, bank: int) -> Reader:
     return lambda ld: ld.request(15, port, bank).value
 
 
-def _gap(param: int, motor: int):
+def _gap(param: int, motor: int) -> Reader:
     return lambda ld: ld.request(6, param, motor).value
 
 
-def _ggp(number: int, bank: int):
+def _ggp(number: int, bank: int) -> Reader:
     return lambda ld: ld.request(10, number, bank).value
 
 
-_SIMPLE: dict[str, Callable[[Loader], int | str]] = {
+_SIMPLE: dict[str, Reader] = {
     "a": lambda ld: ld.request(135, 2).value,
     "x": lambda ld: ld.request(135, 3).value,
     "pc": lambda ld: ld.request(135, 1).value & 0xFFFF,
     "state": lambda ld: MODES.get((ld.request(135, 1).value >> 24) & 0xFF, "?"),
 }
-_INDEXED = {
+_INDEXED: dict[str, Callable[[int], Reader]] = {
     "var": lambda n: _ggp(n, 2), "out": lambda n: _gio(n, 2), "in": lambda n: _gio(n, 0),
     "adc": lambda n: _gio(n, 1), "pos": lambda n: _gap(1, n), "target": lambda n: _gap(0, n),
     "speed": lambda n: _gap(3, n),
@@ -124,9 +136,9 @@ class Debugger:
     address, its `source` line (objects with .file, .line, .text, or None)."""
 
     loader: Loader
-    instructions: list = field(default_factory=list)
+    instructions: Sequence[Instruction] = field(default_factory=list)
     labels: dict[str, int] = field(default_factory=dict)
-    source: list = field(default_factory=list)
+    source: Sequence[SourceText | None] = field(default_factory=list)
     breakpoints: set[int] = field(default_factory=set)
     watches: list[Watch] = field(default_factory=list)
 

@@ -98,7 +98,7 @@ class AxisNumberError(UnknownParameterError, IndexError):
     """An axis number the module does not have (``module.axes[6]`` on a six-axis module)."""
 
 
-def check_timeout(value, name: str = "timeout") -> float:
+def check_timeout(value: object, name: str = "timeout") -> float:
     """`value` as float seconds: a finite number > 0; TmclTypeError / TmclValueError otherwise."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TmclTypeError(f"{name} must be a number of seconds, got {value!r}")
@@ -107,7 +107,7 @@ def check_timeout(value, name: str = "timeout") -> float:
     return float(value)
 
 
-def check_seconds(value, name: str = "seconds") -> float:
+def check_seconds(value: object, name: str = "seconds") -> float:
     """`value` as float seconds: a finite number >= 0 (a sleep of 0 is allowed)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise TmclTypeError(f"{name} must be a number of seconds, got {value!r}")
@@ -116,7 +116,7 @@ def check_seconds(value, name: str = "seconds") -> float:
     return float(value)
 
 
-def check_int(value, name: str) -> int:
+def check_int(value: object, name: str) -> int:
     """`value` if it is an int (not a bool); TmclTypeError otherwise."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise TmclTypeError(f"{name} must be an int, got {type(value).__name__} {value!r}")

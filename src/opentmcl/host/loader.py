@@ -17,17 +17,33 @@ say "special reply format"; this layout is the one our virtual modules use
 """
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..lang.binfile import BinFileError, Instruction, decode
 from ..protocol.frame import Reply, to_int32
 from .client import Client, check_address
 from .errors import TmclError, TmclStatusError, TmclTypeError, check_int, check_timeout
 
+if TYPE_CHECKING:
+    from .module import Module
+
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
 MODES = {0: "stop", 1: "run", 2: "step", 3: "reset"}  # GP128 / 135 (TMCM-6212 manual 5.1)
+
+@runtime_checkable
+class HasInstructions(Protocol):
+    """A program object such as `lang.assembler.Program`: anything with an `instructions` list."""
+
+    @property
+    def instructions(self) -> Sequence[Iterable[int]]: ...
+
+
+ProgramSource = HasInstructions | bytes | bytearray | memoryview | Iterable[Iterable[int]]
+"""What `instructions_of` takes: a Program, a TMCL-IDE binary image or (command, type, motor,
+value) tuples."""
 
 
 class LoaderError(TmclError):
@@ -62,34 +78,38 @@ class AppStatus:
         return MODES.get(self.mode, str(self.mode))
 
 
-def instructions_of(program) -> list[Instruction]:
+def instructions_of(program: ProgramSource) -> list[Instruction]:
     """The instructions of a Program, a binary image or a sequence of 4-tuples."""
     if isinstance(program, (bytes, bytearray, memoryview)):
         try:
             return decode(bytes(program))
         except BinFileError as exc:
             raise LoaderError(f"not a TMCL binary image: {exc}") from None
-    items = getattr(program, "instructions", program)
-    out = []
+    source = program.instructions if isinstance(program, HasInstructions) else program
     try:
-        items = list(items)
+        items = list(source)
     except TypeError:
         raise LoaderError(f"not a program (a Program, a binary image or 4-tuples): {program!r}") from None
-    for ins in items:
-        try:
-            fields = [x for x in ins] if not isinstance(ins, (str, bytes)) else None
-        except TypeError:
-            fields = None
-        if fields is None or len(fields) != 4 or any(isinstance(x, bool) or not isinstance(x, int) for x in fields):
-            raise LoaderError(f"not an instruction (command, type, motor, value as ints): {ins!r}")
-        out.append(Instruction(*fields))
-    return out
+    return [_instruction(ins) for ins in items]
+
+
+def _instruction(ins: Iterable[int]) -> Instruction:
+    """One (command, type, motor, value) of ints as an Instruction; LoaderError otherwise."""
+    try:
+        fields = [x for x in ins] if not isinstance(ins, (str, bytes)) else None
+    except TypeError:
+        fields = None
+    if fields is None or len(fields) != 4 or any(isinstance(x, bool) or not isinstance(x, int) for x in fields):
+        raise LoaderError(f"not an instruction (command, type, motor, value as ints): {ins!r}")
+    command, type_, motor, value = fields
+    return Instruction(command, type_, motor, value)
 
 
 class Loader:
     """Program loader and application control for the module behind a `Client` or `Module`."""
 
-    def __init__(self, target, address: int | None = None, *, timeout: float | None = None):
+    def __init__(self, target: Client | Module, address: int | None = None, *,
+                 timeout: float | None = None) -> None:
         client = getattr(target, "client", target)
         if not isinstance(client, Client):
             raise TmclTypeError(f"Loader needs a Client or Module, got {type(target).__name__}")
@@ -98,10 +118,12 @@ class Loader:
         self.timeout = client.timeout if timeout is None else check_timeout(timeout)
 
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0) -> Reply:
-        return self.client.request(command, type, motor, value, address=self.address, timeout=self.timeout)
+        """One request with a reply in the format of manual 3.2 (`Client.reply`): commands 134,
+        136 type 0 and 137 are a TmclValueError (use `read_one` for 134)."""
+        return self.client.reply(command, type, motor, value, address=self.address, timeout=self.timeout)
 
     # --- download / read back ---------------------------------------------------------------
-    def download(self, program, *, start: int = 0, verify: bool = True,
+    def download(self, program: ProgramSource, *, start: int = 0, verify: bool = True,
                  progress: Callable[[int, int], None] | None = None) -> list[Instruction]:
         """132 <start>, every instruction (answered 101), 133; then, if `verify`, read each back
         with 134 and compare. Returns the instructions written."""
@@ -122,7 +144,7 @@ class Loader:
             self.verify(code, start=start)
         return code
 
-    def verify(self, program, *, start: int = 0) -> None:
+    def verify(self, program: ProgramSource, *, start: int = 0) -> None:
         """Compare program memory from `start` with `program` (134); VerifyError on a difference."""
         code = instructions_of(program)
         got = self.read(start, len(code))
@@ -139,8 +161,8 @@ class Loader:
 
     def read_one(self, address: int) -> Instruction:
         """One program memory location (command 134, special reply)."""
-        reply = self.client.request(READ_PROGRAM_MEMORY, 0, 0, to_int32(check_int(address, "address")), address=self.address,
-                                    timeout=self.timeout)
+        reply = self.client.read_memory(to_int32(check_int(address, "address")), address=self.address,
+                                        timeout=self.timeout)
         return Instruction(reply.command, reply.type, reply.motor, reply.value)
 
     # --- application control (129-131, 135) ----------------------------------------------------
@@ -192,7 +214,7 @@ class Loader:
             waited += poll
 
 
-def download(target, program, *, start: int = 0, verify: bool = True) -> list[Instruction]:
+def download(target: Client | Module, program: ProgramSource, *, start: int = 0, verify: bool = True) -> list[Instruction]:
     """Shortcut: `Loader(target).download(program, start=start, verify=verify)`."""
     return Loader(target).download(program, start=start, verify=verify)
 

@@ -13,7 +13,8 @@ and answers bad ones with a status code, which raises `TmclStatusError`.
 from __future__ import annotations
 
 import difflib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
+from typing import SupportsIndex, overload
 
 from ..modules.profile import IOPort, ModuleProfile, Param, load_profile, module_names
 from ..protocol.frame import Reply
@@ -21,6 +22,7 @@ from . import units
 from .client import (
     GET_FIRMWARE_VERSION,
     REQUEST_TARGET_POSITION_REACHED_EVENT,
+    Answer,
     Client,
     VersionReply,
     check_address,
@@ -28,6 +30,7 @@ from .client import (
 from .errors import (
     AxisNumberError,
     TmclError,
+    TmclTimeout,
     TmclTypeError,
     TmclValueError,
     UnknownAttributeError,
@@ -56,16 +59,21 @@ def _norm(name: str) -> str:
     return "_".join(name.strip().lower().replace("-", " ").replace("/", " ").split())
 
 
-def _raw_number(kind: str, key) -> int | None:
+def _byte_number(kind: str, number: int) -> int:
+    """A parameter or bank number: 0..255, the type or motor/bank byte of the frame (manual 3.1)."""
+    if not 0 <= number <= 255:
+        raise UnknownParameterError(f"{kind} number must be 0..255, got {number}")
+    return number
+
+
+def _raw_number(kind: str, key: object) -> int | None:
     """A parameter given by number passes through unchanged (0..255): the module decides."""
     if isinstance(key, int) and not isinstance(key, bool):
-        if not 0 <= key <= 255:
-            raise UnknownParameterError(f"{kind} number must be 0..255, got {key}")
-        return key
+        return _byte_number(kind, key)
     return None
 
 
-def _find(kind: str, key: str | int, params: list[Param], lookup) -> Param:
+def _find(kind: str, key: str | int, params: list[Param], lookup: Callable[[str | int], Param]) -> Param:
     if isinstance(key, bool) or not isinstance(key, (int, str)):
         raise TmclTypeError(f"{kind} must be a name or a number, got {key!r}")
     try:
@@ -108,7 +116,12 @@ def profile_for_version(version: str) -> ModuleProfile:
 class _Params:
     """Attribute access to parameters: ``axis.params.actual_position``; assignment sets."""
 
-    def __init__(self, getter, setter, names):
+    _get: Callable[[str], int]
+    _set: Callable[[str, int], None]
+    _names: Callable[[], list[str]]
+
+    def __init__(self, getter: Callable[[str], int], setter: Callable[[str, int], None],
+                 names: Callable[[], list[str]]) -> None:
         object.__setattr__(self, "_get", getter)
         object.__setattr__(self, "_set", setter)
         object.__setattr__(self, "_names", names)
@@ -131,15 +144,21 @@ class _Params:
         return sorted(self._names())
 
 
-class AxisList(list):
+class AxisList(list["Axis"]):
     """`Module.axes`: a list whose bad index is an `AxisNumberError` (an IndexError and a
     TmclError) naming the axes the module has."""
 
-    def __init__(self, axes, module_name: str):
+    def __init__(self, axes: Iterable[Axis], module_name: str) -> None:
         super().__init__(axes)
         self._module_name = module_name
 
-    def __getitem__(self, index):
+    @overload
+    def __getitem__(self, index: SupportsIndex) -> Axis: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[Axis]: ...
+
+    def __getitem__(self, index: SupportsIndex | slice) -> Axis | list[Axis]:
         if isinstance(index, slice):
             return super().__getitem__(index)
         if isinstance(index, bool) or not isinstance(index, int):
@@ -150,7 +169,7 @@ class AxisList(list):
             raise AxisNumberError(f"{self._module_name} has axes 0..{len(self) - 1}, not {index}") from None
 
 
-def _check_poll(poll) -> float:
+def _check_poll(poll: float) -> float:
     return check_timeout(poll, "poll interval")
 
 
@@ -169,7 +188,7 @@ class Axis:
         return list(self.module.profile.axis_parameters.values())
 
     def _req(self, command: int, type: int = 0, value: int = 0) -> Reply:
-        return self.module.request(command, type, self.number, value)
+        return self.module.reply(command, type, self.number, value)
 
     # --- parameters -------------------------------------------------------------
     def param(self, name: str | int) -> Param:
@@ -385,7 +404,7 @@ class Module:
 
     def firmware_version_binary(self) -> int:
         """Command 136 type 1: the version number in the value field (PD86-1180 manual 4.6.39)."""
-        return self.request(GET_FIRMWARE_VERSION, 1).value
+        return self.reply(GET_FIRMWARE_VERSION, 1).value
 
     @property
     def axes(self) -> list[Axis]:
@@ -407,9 +426,14 @@ class Module:
 
     # --- raw requests -----------------------------------------------------------
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
-                timeout: float | None = None):
+                timeout: float | None = None) -> Answer:
         """Send one request to this module; see `Client.request`."""
         return self.client.request(command, type, motor, value, address=self.address, timeout=timeout)
+
+    def reply(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
+              timeout: float | None = None) -> Reply:
+        """A request with a reply in the format of manual 3.2; see `Client.reply`."""
+        return self.client.reply(command, type, motor, value, address=self.address, timeout=timeout)
 
     # --- global parameters and user variables (manual 3.6.7-3.6.10, 5) ------------
     def global_param(self, name: str | int, bank: int = 0) -> Param:
@@ -423,14 +447,14 @@ class Module:
             check_int(bank, "bank")
         number = _raw_number("global parameter", name)
         if number is not None:
-            return number, _raw_number("bank", 0 if bank is None else bank)
+            return number, _byte_number("bank", 0 if bank is None else bank)
         p = self.global_param(name)
         return p.number, (p.bank if p.bank is not None else (bank or 0))
 
     def get_global(self, name: str | int, bank: int | None = None) -> int:
         """GGP <parameter>, <bank> (manual 3.6.8). A name implies its bank."""
         number, bank = self._gp(name, bank)
-        return self.request(GGP, number, bank).value
+        return self.reply(GGP, number, bank).value
 
     def set_global(self, name: str | int, value: int, bank: int | None = None) -> None:
         """SGP <parameter>, <bank>, <value> (manual 3.6.7)."""
@@ -455,7 +479,7 @@ class Module:
 
     def get_variable(self, index: int) -> int:
         """GGP <index>, 2: TMCL user variable (manual 5.3)."""
-        return self.request(GGP, self._var(index), USER_VARIABLE_BANK).value
+        return self.reply(GGP, self._var(index), USER_VARIABLE_BANK).value
 
     def set_variable(self, index: int, value: int) -> None:
         """SGP <index>, 2, <value>."""
@@ -481,17 +505,17 @@ class Module:
     def digital_input(self, port: int | str) -> int:
         """GIO <port>, <digital input bank> (bank 0 on the TMCM-6212)."""
         p = self._port(port, "digital")
-        return self.request(GIO, p.port, p.bank).value
+        return self.reply(GIO, p.port, p.bank).value
 
     def analog_input(self, port: int | str) -> int:
         """GIO <port>, <analog input bank> (bank 1 on the TMCM-6212): 0..65535."""
         p = self._port(port, "analog")
-        return self.request(GIO, p.port, p.bank).value
+        return self.reply(GIO, p.port, p.bank).value
 
     def output(self, port: int | str) -> int:
         """GIO <port>, <output bank>: the state of a digital output (bank 2)."""
         p = self._port(port, "output")
-        return self.request(GIO, p.port, p.bank).value
+        return self.reply(GIO, p.port, p.bank).value
 
     def set_output(self, port: int | str, value: int) -> None:
         """SIO <port>, <output bank>, <value> (bank 2)."""
@@ -501,7 +525,7 @@ class Module:
 
     def get_io(self, port: int, bank: int) -> int:
         """GIO <port>, <bank> with raw numbers."""
-        return self.request(GIO, port, bank).value
+        return self.reply(GIO, port, bank).value
 
     def set_io(self, port: int, bank: int, value: int) -> None:
         """SIO <port>, <bank>, <value> with raw numbers."""
@@ -526,9 +550,7 @@ class Module:
         """Let time pass on the module's clock (virtual time for sim:// modules)."""
         self.client.sleep(seconds)
 
-    def _poll(self, done, timeout: float | None, poll: float, what: str) -> None:
-        from .errors import TmclTimeout
-
+    def _poll(self, done: Callable[[], bool], timeout: float | None, poll: float, what: str) -> None:
         transport = self.client.transport
         timeout = MOTION_TIMEOUT if timeout is None else check_timeout(timeout)
         _check_poll(poll)
@@ -555,7 +577,7 @@ class Module:
     def reset_application(self) -> None:
         self.request(RESET_APPLICATION)
 
-    def download_program(self, instructions, start: int = 0) -> int:
+    def download_program(self, instructions: Iterable[Iterable[int]], start: int = 0) -> int:
         """Store (command, type, motor, value) instructions in the TMCL memory from `start`:
         command 132, the instructions (each answered with status 101), command 133 (manual 3.6.36).
         Returns the number stored. Download mode is left even when an instruction is refused."""
@@ -576,12 +598,12 @@ class Module:
 
     def read_program_memory(self, address: int) -> tuple[int, int, int, int]:
         """Command 134: the (command, type, motor, value) stored at `address` (manual 3.6.36)."""
-        r = self.request(READ_PROGRAM_MEMORY, 0, 0, address)
+        r = self.client.read_memory(address, address=self.address)
         return r.command, r.type, r.motor, r.value
 
     def application_status(self, type: int = 0) -> int:
         """Command 135 (type 0: mode, wait flag, memory pointer ...)."""
-        return self.request(GET_APPLICATION_STATUS, type).value
+        return self.reply(GET_APPLICATION_STATUS, type).value
 
     def restore_factory_settings(self) -> None:
         """Command 137 with value 1234; the module sends no reply (manual 3.6.36)."""
@@ -594,5 +616,5 @@ class Module:
     def __enter__(self) -> Module:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.close()

@@ -8,9 +8,15 @@ Every request has a time-out and the whole probe a deadline, so it always ends.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
+from .client import Client, VersionReply
 from .errors import TmclError, TmclStatusError, TmclTimeout
+
+if TYPE_CHECKING:
+    from ..modules.profile import IOPort, ModuleProfile, Param
 
 GAP, GGP, GIO, VERSION = 6, 10, 15, 136
 GLOBAL_BANKS = (0, 2, 3)
@@ -35,8 +41,12 @@ class ProbeResult:
     io: dict[tuple[int, int], int] = field(default_factory=dict)         # (bank, port) -> value
 
 
+Progress = Callable[[str], None]
+TomlValue = str | int | bool | Sequence["TomlValue"]
+
+
 class _Asker:
-    def __init__(self, client, deadline: float, progress) -> None:
+    def __init__(self, client: Client, deadline: float, progress: Progress) -> None:
         self.client, self.deadline, self.progress = client, deadline, progress
         self.requests = 0
 
@@ -46,7 +56,7 @@ class _Asker:
         self.requests += 1
         for attempt in range(3):
             try:
-                return self.client.request(command, type_, motor, 0).value
+                return self.client.reply(command, type_, motor, 0).value
             except TmclStatusError:
                 return None
             except TmclTimeout:
@@ -56,43 +66,60 @@ class _Asker:
         return None
 
 
-def probe(client, *, max_seconds: float = 300.0, progress=lambda text: None) -> ProbeResult:
-    """Probe the module `client` talks to (its default address)."""
-    ask = _Asker(client, time.monotonic() + max_seconds, progress)
+def _no_progress(text: str) -> None:
+    return None
+
+
+def _version_string(client: Client) -> str:
+    """Command 136 type 0, the version string (PD86-1180 manual 4.6.39)."""
     try:
-        version = client.request(VERSION, 0, 0, 0).text
+        reply = client.request(VERSION, 0, 0, 0)
     except TmclError as exc:
         raise ProbeError(f"the module does not answer command 136 (firmware version): {exc}") from None
+    if not isinstance(reply, VersionReply):  # pragma: no cover - Client.request returns one for 136 type 0
+        raise ProbeError(f"unexpected reply to command 136 type 0: {reply!r}")
+    return reply.text
+
+
+def _version_binary(client: Client) -> int | None:
+    """Command 136 type 1, the version number; None when the module refuses it."""
     try:
-        binary = client.request(VERSION, 1, 0, 0).value
+        return client.reply(VERSION, 1, 0, 0).value
     except TmclStatusError:
-        binary = None
+        return None
     except TmclError as exc:  # the string reply carries no module address; this one does (USB: GP66)
         raise ProbeError(f"the module answers command 136 type 0 but not type 1 at this address ({exc}); "
                          "on USB every address reaches the module, which replies with its own (GP66): "
                          "give that --address") from None
+
+
+def probe(client: Client, *, max_seconds: float = 300.0, progress: Progress = _no_progress) -> ProbeResult:
+    """Probe the module `client` talks to (its default address)."""
+    ask = _Asker(client, time.monotonic() + max_seconds, progress)
+    version = _version_string(client)
+    binary = _version_binary(client)
     progress(f"firmware {version!r}")
     axes = 0
     while axes < MAX_AXES and ask.read(GAP, 1, axes) is not None:
         axes += 1
     result = ProbeResult(version, binary, axes)
     for motor in range(axes):
-        found = {n: v for n in NUMBERS if (v := ask.read(GAP, n, motor)) is not None}
-        result.axis[motor] = found
-        progress(f"axis {motor}: {len(found)} axis parameters")
+        axis = {n: v for n in NUMBERS if (v := ask.read(GAP, n, motor)) is not None}
+        result.axis[motor] = axis
+        progress(f"axis {motor}: {len(axis)} axis parameters")
     for bank in GLOBAL_BANKS:
         found = {(bank, n): v for n in NUMBERS if (v := ask.read(GGP, n, bank)) is not None}
         result.globals.update(found)
         progress(f"bank {bank}: {len(found)} global parameters")
     for bank in IO_BANKS:
-        found = {(bank, p): v for p in PORTS if (v := ask.read(GIO, p, bank)) is not None}
-        result.io.update(found)
-        progress(f"I/O bank {bank}: {len(found)} ports")
+        ports = {(bank, p): v for p in PORTS if (v := ask.read(GIO, p, bank)) is not None}
+        result.io.update(ports)
+        progress(f"I/O bank {bank}: {len(ports)} ports")
     progress(f"done: {ask.requests} read requests")
     return result
 
 
-def closest_builtin(version: str):
+def closest_builtin(version: str) -> ModuleProfile | None:
     """The built-in profile with this firmware string, else one with the same module number
     (the characters before 'V', e.g. 6212 of 6212V105), else None (`profile_for_version`)."""
     from .module import profile_for_version
@@ -103,7 +130,7 @@ def closest_builtin(version: str):
         return None
 
 
-def _toml(value) -> str:
+def _toml(value: TomlValue) -> str:
     if isinstance(value, str):
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
     if isinstance(value, list):
@@ -111,78 +138,137 @@ def _toml(value) -> str:
     return str(value).lower() if isinstance(value, bool) else str(value)
 
 
-def _table(name: str, fields: dict) -> list[str]:
+def _table(name: str, fields: Mapping[str, TomlValue]) -> list[str]:
     return ["", f"[[{name}]]", *(f"{k} = {_toml(v)}" for k, v in fields.items())]
 
 
-_UNKNOWN = {"min": -2147483648, "max": 2147483647, "access": "R"}
+_UNKNOWN: dict[str, TomlValue] = {"min": -2147483648, "max": 2147483647, "access": "R"}
+_IO_KINDS = {0: "digital", 1: "analog", 2: "output"}
+USER_VARIABLE_BANK = 2
+
+
+@dataclass
+class _Known:
+    """What the base profile already says: axis parameters, global parameters and I/O ports."""
+
+    axis: dict[int, Param] = field(default_factory=dict)
+    globals: dict[tuple[int, int], Param] = field(default_factory=dict)
+    io: dict[tuple[int, int], IOPort] = field(default_factory=dict)
+
+
+@dataclass
+class _Skeleton:
+    """The profile file being written: `[[...]]` tables, and comments for values the base already has."""
+
+    body: list[str] = field(default_factory=list)
+    comments: list[str] = field(default_factory=list)
+
+
+def _header(url: str) -> list[str]:
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    return [f"# Profile skeleton probed from {url} on {when} by opentmcl profile probe.",
+            "# UNVERIFIED: only reading commands were used; ranges, access letters and units of parameters",
+            "# the base profile does not know are placeholders. Check them against the module's manual.",
+            "# Writable parameters whose probed value differs from the base default override it; every other",
+            "# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
+
+
+def _extending_module(result: ProbeResult, base: ModuleProfile) -> list[str]:
+    """`extends` the base profile; the [module] table lists only what differs from it."""
+    lines = [f'extends = "{base.name}"', "", "[module]", f'name = "{base.name}-probed"',
+             f"firmware_version = {_toml(result.firmware_version)}"]
+    if result.firmware_binary is not None and result.firmware_binary != base.firmware_binary:
+        lines.append(f"firmware_binary = {result.firmware_binary}")
+    if result.axes != base.axes:
+        lines.append(f"axes = {result.axes}")
+    return lines
+
+
+def _standalone_module(result: ProbeResult) -> list[str]:
+    """A [module] table of its own, for a firmware no built-in profile matches."""
+    return ["", "[module]", f'name = "{result.firmware_version}"', "aliases = []",
+            f"axes = {max(1, result.axes)}", 'engine = "linear"',
+            f"firmware_version = {_toml(result.firmware_version)}",
+            f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
+            "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139)))]
+
+
+def _overrides_default(p: Param, value: int) -> bool:
+    """A writable parameter whose probed value is a valid default other than the base's."""
+    return p.writable and p.default != value and p.min <= value <= p.max
+
+
+def _axis_parameters(out: _Skeleton, axis0: dict[int, int], known: dict[int, Param]) -> None:
+    """Axis parameters of motor 0 (GAP n, 0): new ones, changed defaults, the rest as comments."""
+    for number, value in sorted(axis0.items()):
+        p = known.get(number)
+        if p is None:
+            out.body += _table("axis_parameter", {"number": number, "name": f"axis_parameter_{number}",
+                                                  **_UNKNOWN, "default": value})
+        elif _overrides_default(p, value):
+            out.body += _table("axis_parameter", {"number": number, "default": value})
+        else:
+            out.comments.append(f"# GAP {number}, 0 = {value}  ({p.name})")
+
+
+def _global_parameters(out: _Skeleton, probed: dict[tuple[int, int], int],
+                       known: dict[tuple[int, int], Param]) -> None:
+    """Global parameters (GGP n, bank); user variables (bank 2) the base does not name are skipped."""
+    for (bank, number), value in sorted(probed.items()):
+        if bank == USER_VARIABLE_BANK and (bank, number) not in known:
+            continue  # user variables (bank 2) are counted, not listed
+        p = known.get((bank, number))
+        if p is None:
+            out.body += _table("global_parameter", {"bank": bank, "number": number,
+                                                    "name": f"global_parameter_{bank}_{number}", **_UNKNOWN,
+                                                    "default": value})
+        elif _overrides_default(p, value):
+            out.body += _table("global_parameter", {"bank": bank, "number": number, "default": value})
+        else:
+            out.comments.append(f"# GGP {number}, {bank} = {value}  ({p.name})")
+
+
+def _io_ports(out: _Skeleton, probed: dict[tuple[int, int], int], known: dict[tuple[int, int], IOPort]) -> None:
+    """Ports (GIO port, bank) the base does not know become [[io]] tables; the rest comments."""
+    for (bank, port), value in sorted(probed.items()):
+        if (bank, port) not in known:
+            out.body += _table("io", {"bank": bank, "port": port, "name": f"IO_{bank}_{port}",
+                                      "kind": _IO_KINDS[bank], "access": "R" if bank < 2 else "RW",
+                                      "min": 0, "max": max(1, value)})
+        else:
+            out.comments.append(f"# GIO {port}, {bank} = {value}  ({known[(bank, port)].name})")
+
+
+def _removed(result: ProbeResult, known: _Known) -> list[str]:
+    """The [remove] table: readable entries of the base profile the module did not answer."""
+    axis0 = result.axis.get(0, {})
+    removed: dict[str, TomlValue] = {
+        "axis_parameter": [n for n, p in sorted(known.axis.items()) if p.readable and n not in axis0],
+        "global_parameter": [[b, n] for (b, n), p in sorted(known.globals.items())
+                             if p.readable and b in GLOBAL_BANKS and (b, n) not in result.globals],
+        "io": [[b, n] for (b, n), p in sorted(known.io.items()) if "R" in p.access and (b, n) not in result.io],
+    }
+    removed = {k: v for k, v in removed.items() if v}
+    return ["", "[remove]", *(f"{k} = {_toml(v)}" for k, v in removed.items())] if removed else []
 
 
 def skeleton(result: ProbeResult, url: str) -> str:
     """A profile file for the probed module: `extends` the closest built-in profile and overrides
     what differs, or a standalone profile when none matches. Marked unverified."""
     base = closest_builtin(result.firmware_version)
-    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    lines = [f"# Profile skeleton probed from {url} on {when} by opentmcl profile probe.",
-             "# UNVERIFIED: only reading commands were used; ranges, access letters and units of parameters",
-             "# the base profile does not know are placeholders. Check them against the module's manual.",
-             "# Writable parameters whose probed value differs from the base default override it; every other",
-             "# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
-    axis0 = result.axis.get(0, {})
+    lines = _header(url)
     if base is not None:
-        lines += [f'extends = "{base.name}"', "", "[module]", f'name = "{base.name}-probed"',
-                  f'firmware_version = {_toml(result.firmware_version)}']
-        if result.firmware_binary is not None and result.firmware_binary != base.firmware_binary:
-            lines.append(f"firmware_binary = {result.firmware_binary}")
-        if result.axes != base.axes:
-            lines.append(f"axes = {result.axes}")
-        known_axis, known_global, known_io = base.axis_parameters, base.global_parameters, base.io
+        lines += _extending_module(result, base)
+        known = _Known(base.axis_parameters, base.global_parameters, base.io)
     else:
-        lines += ["", "[module]", f'name = "{result.firmware_version}"', "aliases = []",
-                  f"axes = {max(1, result.axes)}", 'engine = "linear"',
-                  f'firmware_version = {_toml(result.firmware_version)}',
-                  f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
-                  "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139)))]
-        known_axis, known_global, known_io = {}, {}, {}
-    comments, body = [], []
-    for number, value in sorted(axis0.items()):
-        p = known_axis.get(number)
-        if p is None:
-            body += _table("axis_parameter", {"number": number, "name": f"axis_parameter_{number}", **_UNKNOWN,
-                                              "default": value})
-        elif p.writable and p.default != value and p.min <= value <= p.max:
-            body += _table("axis_parameter", {"number": number, "default": value})
-        else:
-            comments.append(f"# GAP {number}, 0 = {value}  ({p.name})")
-    for (bank, number), value in sorted(result.globals.items()):
-        if bank == 2 and (bank, number) not in known_global:
-            continue  # user variables (bank 2) are counted, not listed
-        p = known_global.get((bank, number))
-        if p is None:
-            body += _table("global_parameter", {"bank": bank, "number": number,
-                                                "name": f"global_parameter_{bank}_{number}", **_UNKNOWN,
-                                                "default": value})
-        elif p.writable and p.default != value and p.min <= value <= p.max:
-            body += _table("global_parameter", {"bank": bank, "number": number, "default": value})
-        else:
-            comments.append(f"# GGP {number}, {bank} = {value}  ({p.name})")
-    for (bank, port), value in sorted(result.io.items()):
-        if (bank, port) not in known_io:
-            kind = {0: "digital", 1: "analog", 2: "output"}[bank]
-            body += _table("io", {"bank": bank, "port": port, "name": f"IO_{bank}_{port}", "kind": kind,
-                                  "access": "R" if bank < 2 else "RW", "min": 0, "max": max(1, value)})
-        else:
-            comments.append(f"# GIO {port}, {bank} = {value}  ({known_io[(bank, port)].name})")
-    user_vars = sum(1 for bank, _ in result.globals if bank == 2)
+        lines += _standalone_module(result)
+        known = _Known()
+    out = _Skeleton()
+    _axis_parameters(out, result.axis.get(0, {}), known.axis)
+    _global_parameters(out, result.globals, known.globals)
+    _io_ports(out, result.io, known.io)
+    user_vars = sum(1 for bank, _ in result.globals if bank == USER_VARIABLE_BANK)
     if base is None or user_vars != base.user_variables:
         lines.insert(lines.index("[module]") + 1, f"user_variables = {user_vars}")
-    removed = {
-        "axis_parameter": [n for n, p in sorted(known_axis.items()) if p.readable and n not in axis0],
-        "global_parameter": [[b, n] for (b, n), p in sorted(known_global.items())
-                             if p.readable and b in (0, 2, 3) and (b, n) not in result.globals],
-        "io": [[b, n] for (b, n), p in sorted(known_io.items()) if "R" in p.access and (b, n) not in result.io],
-    }
-    removed = {k: v for k, v in removed.items() if v}
-    if removed:
-        body += ["", "[remove]", *(f"{k} = {_toml(v)}" for k, v in removed.items())]
-    return "\n".join(lines + body + ["", "# Probed values equal to the base profile:", *comments]) + "\n"
+    body = out.body + _removed(result, known)
+    return "\n".join(lines + body + ["", "# Probed values equal to the base profile:", *out.comments]) + "\n"

@@ -8,7 +8,7 @@
   internal units): TMC4210 datasheet 6.1.12.1 and PD86-1180 manual ch. 5 units:
   ``R[Hz] = f_CLK * velocity / (2**pulse_div * 2048 * 32)`` and
   ``dR[Hz/s] = f_CLK**2 * A_MAX / 2**(pulse_div + ramp_div + 29)``, f_CLK = 16 MHz.
-- TMC5130 units (TMCM-6212 with axis parameter 255 = 0, FACTS.md "TMC5130"):
+- TMC5130 units (TMCM-6212 with axis parameter 255 = 0; TMC5130 datasheet, docs/assumptions.md):
   ``v = v_internal * f_CLK / 2**24``, ``a = a_internal * f_CLK**2 / 2**41``.
 
 Conversions to physical units return floats; conversions to module units return
@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
+from typing import ParamSpec, TypeVar
 
 from ..motion import units as exact
 from .errors import TmclArgumentError, TmclTypeError, TmclValueError
@@ -29,10 +31,14 @@ F_CLK = exact.F_CLK  # Hz, the clock of the TMCM-1180 / TMCM-6212 motion control
 DIVISORS = range(0, 14)  # pulse_div / ramp_div (axis parameters 154 / 153): 0 .. 13
 
 
-def _typed(func):
+_P = ParamSpec("_P")
+_R = TypeVar("_R")
+
+
+def _typed(func: Callable[_P, _R]) -> Callable[_P, _R]:
     """Turn the argument errors of the exact layer into TmclValueError / TmclTypeError."""
     @functools.wraps(func)
-    def wrapper(*args, **kwargs):
+    def wrapper(*args: _P.args, **kwargs: _P.kwargs) -> _R:
         try:
             return func(*args, **kwargs)
         except TmclArgumentError:
@@ -91,10 +97,10 @@ def rpm_to_pps(rpm: float, microstep_resolution: int = 8, fullstep_resolution: i
 # ---------------------------------------------------------------- TMC429 / TMC4210 (TMCM-1180)
 
 @_typed
-def tmc429_velocity_to_pps(velocity: int, pulse_div: int, f_clk: int = F_CLK) -> float:
+def tmc429_velocity_to_pps(velocity: float, pulse_div: int, f_clk: int = F_CLK) -> float:
     """Internal velocity (0..2047) -> microsteps per second (TMC4210 datasheet 6.1.12.1)."""
     _int_in("pulse_div", pulse_div, DIVISORS)
-    return f_clk * velocity / (2 ** pulse_div * 2048 * 32)
+    return f_clk * velocity / ((1 << pulse_div) * 2048 * 32)
 
 
 @_typed
@@ -109,7 +115,7 @@ def tmc429_accel_to_pps2(a_max: int, pulse_div: int, ramp_div: int, f_clk: int =
     """Internal acceleration A_MAX (0..2047) -> microsteps per second² (TMC4210 datasheet 6.1.12.1)."""
     _int_in("pulse_div", pulse_div, DIVISORS)
     _int_in("ramp_div", ramp_div, DIVISORS)
-    return f_clk * f_clk * a_max / 2 ** (pulse_div + ramp_div + 29)
+    return f_clk * f_clk * a_max / (1 << (pulse_div + ramp_div + 29))
 
 
 @_typed

@@ -34,6 +34,7 @@ from .opcodes import (
     STOP_APPLICATION,
     TYPE,
     VALUE,
+    Command,
     by_mnemonic,
     lookup_symbol,
     parse_number,
@@ -50,7 +51,6 @@ ASCII_COMMANDS = frozenset({
     "ROL", "ROR", "MST", "MVP", "SAP", "GAP", "STAP", "RSAP", "SGP", "GGP", "STGP", "RSGP", "RFS",
     "SIO", "GIO", "SCO", "GCO", "CCO", *(f"UF{i}" for i in range(8)),
 })
-SPECIAL_COMMANDS = frozenset({BIN, RUN, STOP})
 
 _MNEMONIC = re.compile(r"\s*([A-Za-z]+[0-9]?)(.*)\Z", re.S)
 _REPLY = re.compile(r"\s*([A-Za-z])\s*([A-Za-z])\s+([+-]?[0-9]+)\s+([+\-\u2212\u2013]?\s*[0-9]+)\s*\Z")
@@ -132,6 +132,23 @@ class AsciiReply:
 
 def parse_command(line: str) -> AsciiCommand:
     """Parse one command line (with or without its trailing <CR>)."""
+    address, mnemonic, operands = _split_line(line)
+    if mnemonic in (BIN, STOP, RUN):
+        return _ascii_only_command(address, mnemonic, operands)
+    if mnemonic not in ASCII_COMMANDS:
+        raise AsciiError(f"command {mnemonic} cannot be used in ASCII mode")
+    cmd = by_mnemonic(mnemonic)
+    form = cmd.form_for(len(operands))
+    if form is None or any(not p for p in operands):
+        raise AsciiError(f"wrong operands for {mnemonic}; expected {cmd.usage()}", Status.WRONG_TYPE)
+    fields = {TYPE: 0, MOTOR: 0, VALUE: 0}
+    for name, text in zip(form, operands, strict=True):
+        fields[name] = _operand(cmd, mnemonic, name, text)
+    return AsciiCommand(address, mnemonic, cmd.number, fields[TYPE], fields[MOTOR], fields[VALUE])
+
+
+def _split_line(line: str) -> tuple[int, str, list[str]]:
+    """Address character, command (upper case) and comma-separated operands of a line (3.4.2)."""
     text = line.rstrip("\r\n")
     stripped = text.lstrip()
     if not stripped:
@@ -143,36 +160,35 @@ def parse_command(line: str) -> AsciiCommand:
     mnemonic, rest = m.group(1).upper(), m.group(2).strip()
     if m.group(2)[:1] not in ("", " ", "\t"):
         raise AsciiError(f"expected a space after {mnemonic} in {text!r}")
-    operands = [p.strip() for p in rest.split(",")] if rest else []
-    if mnemonic == BIN or mnemonic == STOP:
+    return address, mnemonic, [p.strip() for p in rest.split(",")] if rest else []
+
+
+def _ascii_only_command(address: int, mnemonic: str, operands: list[str]) -> AsciiCommand:
+    """BIN and STOP (no operands) and RUN [start address]: the commands of ASCII mode only."""
+    if mnemonic in (BIN, STOP):
         if operands:
             raise AsciiError(f"{mnemonic} takes no operands")
         return AsciiCommand(address, mnemonic, None if mnemonic == BIN else STOP_APPLICATION)
-    if mnemonic == RUN:
-        if not operands:
-            return AsciiCommand(address, RUN, RUN_APPLICATION, 0, 0, 0)
-        if len(operands) == 1:
-            return AsciiCommand(address, RUN, RUN_APPLICATION, 1, 0, _number(operands[0], "address"))
-        raise AsciiError("RUN takes at most one operand (start address)")
-    if mnemonic not in ASCII_COMMANDS:
-        raise AsciiError(f"command {mnemonic} cannot be used in ASCII mode")
-    cmd = by_mnemonic(mnemonic)
-    form = cmd.form_for(len(operands))
-    if form is None or any(not p for p in operands):
-        raise AsciiError(f"wrong operands for {mnemonic}; expected {cmd.usage()}", Status.WRONG_TYPE)
-    fields = {TYPE: 0, MOTOR: 0, VALUE: 0}
-    for name, text_op in zip(form, operands, strict=True):
-        num = lookup_symbol(cmd, text_op) if name == TYPE else None
-        if num is None and name == TYPE and _number_or_none(text_op, name) is None:
-            raise AsciiError(f"unknown type {text_op!r} for {mnemonic}; expected {cmd.usage()}",
-                             Status.WRONG_TYPE)
-        if num is None:
-            num = _number(text_op, name)
-        if name in (TYPE, MOTOR) and not 0 <= num <= 255:
-            raise AsciiError(f"{name} of {mnemonic} must be 0..255, got {num}",
-                             Status.WRONG_TYPE if name == TYPE else Status.INVALID_VALUE)
-        fields[name] = num
-    return AsciiCommand(address, mnemonic, cmd.number, fields[TYPE], fields[MOTOR], fields[VALUE])
+    if not operands:
+        return AsciiCommand(address, RUN, RUN_APPLICATION, 0, 0, 0)
+    if len(operands) == 1:
+        return AsciiCommand(address, RUN, RUN_APPLICATION, 1, 0, _number(operands[0], "address"))
+    raise AsciiError("RUN takes at most one operand (start address)")
+
+
+def _operand(cmd: Command, mnemonic: str, name: str, text: str) -> int:
+    """One operand: a type (a symbol such as ABS, or a number 0..255), a motor/bank (0..255) or a
+    value (32 bit). Out of range: "wrong type" for a type, "invalid value" otherwise."""
+    num = lookup_symbol(cmd, text) if name == TYPE else None
+    if num is None and name == TYPE and _number_or_none(text, name) is None:
+        raise AsciiError(f"unknown type {text!r} for {mnemonic}; expected {cmd.usage()}",
+                         Status.WRONG_TYPE)
+    if num is None:
+        num = _number(text, name)
+    if name in (TYPE, MOTOR) and not 0 <= num <= 255:
+        raise AsciiError(f"{name} of {mnemonic} must be 0..255, got {num}",
+                         Status.WRONG_TYPE if name == TYPE else Status.INVALID_VALUE)
+    return num
 
 
 def _number_or_none(text: str, what: str) -> int | None:

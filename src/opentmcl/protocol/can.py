@@ -8,23 +8,21 @@ left out" - so a reply payload is module address, status, command, value (7 byte
 
 A request payload is 7 bytes: command, type, motor/bank, value (MSB first). Public clients
 (PyTrinamic) send 8 bytes: the 9-byte serial frame without its address byte, i.e. with a trailing
-checksum that the module ignores (FACTS.md). Both lengths are accepted. PD86-1180 manual 4.6.39:
+checksum that the module ignores (docs/assumptions.md). Both lengths are accepted. PD86-1180 manual 4.6.39:
 command 136 type 0 sent in an eight-byte frame is answered with eight bytes, so that all eight
 characters of the version string fit.
 """
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 
-from .frame import FrameError, checksum, to_int32
+from .frame import FrameError, checksum, decode_frame, encode_frame, to_int32
 
 REQUEST_LEN = 7
 LONG_REQUEST_LEN = 8
 REPLY_LEN = 7
 VERSION_LEN = 8
 MAX_STANDARD_ID = 0x7FF
-_BODY = struct.Struct(">BBBi")
 
 
 class CanFrameError(FrameError):
@@ -69,13 +67,13 @@ def _check_byte(name: str, v: int) -> int:
 
 def encode_request(command: int, type: int, motor: int, value: int, *,
                    long: bool = False, address: int | None = None) -> bytes:
-    """CAN request payload: command, type, motor, value (MSB first) [+ checksum when `long`]."""
-    body = _BODY.pack(_check_byte("command", command), _check_byte("type", type),
-                      _check_byte("motor", motor), to_int32(value))
-    if not long:
-        return body
-    addr = 0 if address is None else _check_byte("address", address)
-    return body + bytes([checksum(bytes([addr]) + body)])
+    """CAN request payload: command, type, motor, value (MSB first) [+ checksum when `long`]:
+    the 9-byte frame without its address byte (and without its checksum unless `long`)."""
+    fields = _check_byte("command", command), _check_byte("type", type), _check_byte("motor", motor)
+    value = to_int32(value)
+    addr = 0 if address is None or not long else _check_byte("address", address)
+    frame = encode_frame(addr, *fields, value)
+    return frame[1:] if long else frame[1:REQUEST_LEN + 1]
 
 
 def decode_request(data: bytes) -> CanRequest:
@@ -83,14 +81,15 @@ def decode_request(data: bytes) -> CanRequest:
     data = bytes(data)
     if len(data) not in (REQUEST_LEN, LONG_REQUEST_LEN):
         raise CanFrameError(f"CAN request must be {REQUEST_LEN} or {LONG_REQUEST_LEN} bytes, got {len(data)}")
-    cmd, typ, motor, value = _BODY.unpack_from(data)
+    _, cmd, typ, motor, value = _fields(data)
     return CanRequest(cmd, typ, motor, value, long=len(data) == LONG_REQUEST_LEN)
 
 
 def encode_reply(module_address: int, status: int, command: int, value: int) -> bytes:
-    """CAN reply payload (7 bytes): module address, status, command, value (MSB first)."""
-    return _BODY.pack(_check_byte("module address", module_address), _check_byte("status", status),
-                      _check_byte("command", command), to_int32(value))
+    """CAN reply payload (7 bytes): module address, status, command, value (MSB first) - the serial
+    reply without reply address and checksum."""
+    fields = _check_byte("module address", module_address), _check_byte("status", status), _check_byte("command", command)
+    return encode_frame(0, *fields, value)[1:REPLY_LEN + 1]
 
 
 def decode_reply(data: bytes) -> CanReply:
@@ -98,7 +97,15 @@ def decode_reply(data: bytes) -> CanReply:
     data = bytes(data)
     if len(data) != REPLY_LEN:
         raise CanFrameError(f"CAN reply must be {REPLY_LEN} bytes, got {len(data)}")
-    return CanReply(*_BODY.unpack_from(data))
+    _, module_address, status, command, value = _fields(data)
+    return CanReply(module_address, status, command, value)
+
+
+def _fields(payload: bytes) -> tuple[int, int, int, int, int]:
+    """The frame fields of the first seven payload bytes, read as a 9-byte frame with an address
+    byte 0 in front and its checksum after (manual 3.1 note: CAN leaves both out)."""
+    body = bytes(1) + payload[:7]
+    return decode_frame(body + bytes([checksum(body)]))
 
 
 def encode_version_reply(version: str, *, long: bool = True) -> bytes:

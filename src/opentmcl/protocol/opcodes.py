@@ -93,32 +93,6 @@ class ErrorFlag(IntEnum):
     ESD = 5
 
 
-class TargetReachedMode(IntEnum):
-    """Type field of command 138 (TMCM-6212 3.6.35): 0 = only for the next MVP, 1 = for every MVP."""
-    NEXT = 0
-    EVERY = 1
-
-
-class RunMode(IntEnum):
-    """Type field of command 129 run application (TMCM-6212 3.6.36)."""
-    FROM_CURRENT = 0
-    FROM_ADDRESS = 1
-
-
-class ApplicationStatusType(IntEnum):
-    """Type field of command 135 get application status (TMCM-6212 3.6.36)."""
-    MODE_WAIT_MEMORY_POINTER = 0
-    MODE_WAIT_PROGRAM_COUNTER = 1
-    ACCUMULATOR = 2
-    X_REGISTER = 3
-
-
-class VersionFormat(IntEnum):
-    """Type field of command 136 get firmware version (TMCM-6212 3.6.36)."""
-    STRING = 0
-    BINARY = 1
-
-
 def _names(enum: type[IntEnum], only: tuple[str, ...] | None = None) -> Mapping[str, int]:
     return MappingProxyType({m.name: int(m) for m in enum if only is None or m.name in only})
 
@@ -363,11 +337,6 @@ def parse_number(text: str) -> int | None:
 
 class OperandError(ValueError):
     """An instruction whose operands do not fit the command's operand forms."""
-
-
-def fields_of(form: tuple[str, ...], type: int, motor: int, value: int) -> list[int]:
-    """The field values in the order of `form`."""
-    return [{TYPE: type, MOTOR: motor, VALUE: value}[f] for f in form]
 
 
 def choose_form(command: Command, type: int, motor: int, value: int) -> tuple[str, ...] | None:

@@ -12,16 +12,14 @@
 """
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 
-from .frame import FRAME_LEN, FrameError, Reply, checksum, to_int32
-from .opcodes import GET_FIRMWARE_VERSION, READ_PROGRAM_MEMORY, REQUEST_TARGET_REACHED_EVENT
+from .frame import FrameError, Reply, decode_frame, encode_frame
+from .opcodes import GET_FIRMWARE_VERSION, REQUEST_TARGET_REACHED_EVENT
 from .status import Status
 
 VERSION_LEN = 8
 VERSION_REPLY_LEN = 1 + VERSION_LEN
-_BODY = struct.Struct(">BBBBi")
 
 
 # --- 136 type 0: version string --------------------------------------------------------------
@@ -96,19 +94,8 @@ class MemoryReply:
     value: int
 
     def encode(self) -> bytes:
-        body = _BODY.pack(self.reply_address & 0xFF, self.command & 0xFF, self.type & 0xFF,
-                          self.motor & 0xFF, to_int32(self.value))
-        return body + bytes([checksum(body)])
+        return encode_frame(self.reply_address, self.command, self.type, self.motor, self.value)
 
     @classmethod
     def decode(cls, data: bytes, *, verify: bool = True) -> MemoryReply:
-        data = bytes(data)
-        if len(data) != FRAME_LEN:
-            raise FrameError(f"memory reply must be {FRAME_LEN} bytes, got {len(data)}")
-        if verify and checksum(data[:8]) != data[8]:
-            raise FrameError("wrong checksum")
-        return cls(*_BODY.unpack_from(data))
-
-
-def is_memory_request(command: int) -> bool:
-    return command == READ_PROGRAM_MEMORY
+        return cls(*decode_frame(data, verify=verify, what="memory reply"))

@@ -26,7 +26,6 @@ from collections.abc import Callable, Iterable
 from functools import partial
 from typing import NamedTuple, Protocol
 
-from ..protocol.frame import Request
 from . import canmap, vmapi
 
 
@@ -240,19 +239,6 @@ class ModuleBus:
         with self.lock:
             for key in [k for k, c in self._route.items() if c is channel]:
                 del self._route[key]
-
-    def module_at(self, address: int):
-        """The module whose serial address (GP 66) is `address`, or None."""
-        with self.lock:
-            for vm in self.modules:
-                if vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS) == address:
-                    return vm
-        return None
-
-
-def make_ggp(address: int, number: int, bank: int = 0) -> bytes:
-    """A GGP request frame (manual 3.6.8)."""
-    return Request(address, vmapi.GGP, number, bank, 0).encode()
 
 
 class RealTimeRunner:

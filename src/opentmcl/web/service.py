@@ -172,8 +172,8 @@ class Dashboard:
         """Position (axis parameter 1) and actual speed (3) of every axis."""
         pos, vel = [], []
         for ax in range(self.profile.axes):
-            pos.append(self._try(lambda a=ax: self.module.request(6, 1, a).value))
-            vel.append(self._try(lambda a=ax: self.module.request(6, 3, a).value))
+            pos.append(self._try(lambda a=ax: self.module.reply(6, 1, a).value))
+            vel.append(self._try(lambda a=ax: self.module.reply(6, 3, a).value))
         self.seq += 1
         s = Sample(self.seq, round(self.clock() - self.start, 4), pos, vel)
         self.samples.append(s)
@@ -186,7 +186,7 @@ class Dashboard:
         for ax in range(self.profile.axes):
             card = {}
             for key, num in CARD_PARAMS.items():
-                card[key] = self._try(lambda n=num, a=ax: self.module.request(6, n, a).value) if num in have else None
+                card[key] = self._try(lambda n=num, a=ax: self.module.reply(6, n, a).value) if num in have else None
             axes.append(card)
         state = {"axes": axes, "io": self.read_io(), "program": self.program_state(),
                  "connected": self.connected, "last_error": self.last_error}
@@ -202,7 +202,7 @@ class Dashboard:
         out = []
         for p in sorted(self.profile.axis_parameters.values(), key=lambda p: p.number):
             row = _param_info(p, axis)
-            row["value"] = self._try(lambda n=p.number: self.module.request(6, n, axis).value) if p.readable else None
+            row["value"] = self._try(lambda n=p.number: self.module.reply(6, n, axis).value) if p.readable else None
             row["can_store"] = p.storable and STAP in self.profile.opcodes
             row["can_restore"] = p.storable and RSAP in self.profile.opcodes
             out.append(row)
@@ -212,7 +212,7 @@ class Dashboard:
         out = []
         for (bank, num), p in sorted(self.profile.global_parameters.items()):
             row = _param_info(p, bank)
-            row["value"] = self._try(lambda n=num, b=bank: self.module.request(10, n, b).value) if p.readable else None
+            row["value"] = self._try(lambda n=num, b=bank: self.module.reply(10, n, b).value) if p.readable else None
             row["can_store"] = p.storable and STGP in self.profile.opcodes
             row["can_restore"] = p.storable and RSGP in self.profile.opcodes
             out.append(row)
@@ -225,14 +225,14 @@ class Dashboard:
         if p is None or not p.writable:
             raise DashboardError(f"axis parameter {number} is not writable on {self.profile.name}")
         self._do(lambda: self.module.request(5, number, axis, int(value)))
-        return self._do(lambda: self.module.request(6, number, axis).value) if p.readable else int(value)
+        return self._do(lambda: self.module.reply(6, number, axis).value) if p.readable else int(value)
 
     def set_global_parameter(self, bank: int, number: int, value: int) -> int:
         p = self.profile.global_parameters.get((bank, number))
         if p is None or not p.writable:
             raise DashboardError(f"global parameter {number} of bank {bank} is not writable on {self.profile.name}")
         self._do(lambda: self.module.request(9, number, bank, int(value)))
-        return self._do(lambda: self.module.request(10, number, bank).value) if p.readable else int(value)
+        return self._do(lambda: self.module.reply(10, number, bank).value) if p.readable else int(value)
 
     def store(self, kind: str, number: int, axis_or_bank: int, restore: bool = False) -> None:
         """STAP/RSAP (axis) or STGP/RSGP (global), manual 3.6.7-3.6.10 / PD86-1180 4.6.7-4.6.8."""
@@ -293,7 +293,7 @@ class Dashboard:
         out = []
         forced = self._forced()
         for io in sorted(self.profile.io.values(), key=lambda i: (i.bank, i.port)):
-            value = self._try(lambda i=io: self.module.request(15, i.port, i.bank).value) if "R" in io.access else None
+            value = self._try(lambda i=io: self.module.reply(15, i.port, i.bank).value) if "R" in io.access else None
             out.append({"bank": io.bank, "port": io.port, "name": io.name, "kind": io.kind, "value": value,
                         "forced": forced.get((io.bank, io.port))})
         return out
@@ -309,7 +309,7 @@ class Dashboard:
         if io is None or io.kind != "output":
             raise DashboardError(f"no output port {port} in bank {bank}")
         self._do(lambda: self.module.request(14, port, bank, int(value)))
-        return self._do(lambda: self.module.request(15, port, bank).value)
+        return self._do(lambda: self.module.reply(15, port, bank).value)
 
     def force_input(self, bank: int, port: int, value: int | None) -> None:
         """Virtual modules only: hold an input at `value` (None releases it). No TMCL command
@@ -447,7 +447,7 @@ class Dashboard:
                 line = src.line
         variables = {}
         for n in self._variables_shown():
-            variables[n] = self._try(lambda i=n: self.module.request(10, i, USER_BANK).value)
+            variables[n] = self._try(lambda i=n: self.module.reply(10, i, USER_BANK).value)
         return {"mode": st.mode, "mode_name": st.mode_name, "waiting": st.waiting, "pc": st.pc, "line": line,
                 "a": st.accumulator, "x": st.x_register, "flags": describe_flags(st.flags),
                 "variables": variables, "breakpoints": sorted(self.breakpoints),
