@@ -13,6 +13,7 @@ scenario file for the virtual module (any other name). The output format follows
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 from . import CliError
@@ -118,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     if Path(args.output).suffix.lower() not in (".png", ".svg"):
         raise CliError(f"cannot write {args.output}: use a .png or .svg file name")
     axes = _axes(args.axes or "0")
-    channels = DEFAULT_CHANNELS
+    channels: Sequence[str] = DEFAULT_CHANNELS
     if args.channels is not None:
         channels = [c.strip() for c in args.channels.split(",") if c.strip()]
         if not channels:

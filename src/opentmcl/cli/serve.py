@@ -12,11 +12,18 @@ the EEPROM files. See docs/endpoints.md.
 """
 from __future__ import annotations
 
+import argparse
 import signal
 import sys
 import threading
+from typing import TYPE_CHECKING, TextIO
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..firmware.vm import VirtualModule
+    from ..motion.scenario import Scenario
+    from ..server import Server
 
 DEFAULT_TCP = "127.0.0.1:2323"
 
@@ -62,8 +69,6 @@ def register(subparsers) -> None:
 
 
 def _address(text: str) -> int:
-    import argparse
-
     try:
         value = int(text, 0)
     except ValueError:
@@ -115,12 +120,12 @@ def assign_addresses(count: int, given: list[int]) -> list[int]:
     return out
 
 
-def load_scenario(path: str | None):
+def load_scenario(path: str | None) -> Scenario | None:
     """A scenario file loaded by opentmcl.motion.scenario (the same hook as `opentmcl run`)."""
     if path is None:
         return None
     try:
-        from ..motion.scenario import load_scenario as load  # type: ignore[attr-defined]
+        from ..motion.scenario import load_scenario as load
     except ImportError:
         raise CliError("scenario files are not supported by this version") from None
     try:
@@ -177,10 +182,9 @@ def check_listen_options(args) -> None:
         raise CliError(str(exc)) from None
 
 
-def build_server(args, out=sys.stdout, err=sys.stderr):
+def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO = sys.stderr) -> Server:
     """The Server with its endpoints, not started."""
-    from ..server import CanServer, PtyServer, Server, TcpServer
-    from ..server.tcp import is_loopback
+    from ..server import Server
 
     check_listen_options(args)
     if args.link and not args.pty:
@@ -192,42 +196,68 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         tcp_spec = DEFAULT_TCP
     modules = build_modules(args)
     if len(modules) > 1:
-        # Several modules on one CAN bus need distinct CAN IDs (GP 71, default 1 on every
-        # module): each gets its serial address as CAN ID, in RAM only (docs/assumptions.md).
-        from ..server import vmapi
-
-        for vm in modules:
-            if vm.stored_global(0, vmapi.GP_CAN_ID) is None:  # a CAN ID stored in the EEPROM stays
-                vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+        _give_can_ids(modules)
     server = Server(modules)
     if tcp_spec is not None or args.host:
-        host, port = parse_hostport(tcp_spec or DEFAULT_TCP)
-        if args.host:
-            host = args.host
-        host = host or "127.0.0.1"
-        if not is_loopback(host):
-            if not args.host:
-                raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
-            print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
-                  "anyone who can connect can move the motors", file=err)
-        server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
-                             pace_bytes=args.pace, idle_timeout=args.idle_timeout))
+        _add_tcp(server, args, tcp_spec or DEFAULT_TCP, err)
     if args.pty:
-        if sys.platform == "win32":
-            raise CliError("--pty needs a POSIX system")
-        from ..server.bus import interface_error
-
-        problem = args.interface and interface_error(args.interface, len(modules), args.pace)
-        if problem:
-            raise CliError(f"--interface {args.interface}: {problem}")
-        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
-                             interface=args.interface))
+        _add_pty(server, args, len(modules))
     if args.can:
-        interface, sep, channel = args.can.partition(":")
-        if not sep or not interface or not channel:
-            raise CliError(f"bad --can {args.can!r}; use INTERFACE:CHANNEL, e.g. virtual:opentmcl")
-        server.add(CanServer(server.bus, interface, channel))
+        _add_can(server, args.can)
     return server
+
+
+def _give_can_ids(modules: list[VirtualModule]) -> None:
+    """Several modules on one CAN bus need distinct CAN IDs (GP 71, default 1 on every module):
+    each gets its serial address as CAN ID, in RAM only (docs/assumptions.md)."""
+    from ..server import vmapi
+
+    for vm in modules:
+        if vm.stored_global(0, vmapi.GP_CAN_ID) is None:  # a CAN ID stored in the EEPROM stays
+            vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+
+
+def _add_tcp(server: Server, args: argparse.Namespace, spec: str, err: TextIO) -> None:
+    """--tcp [HOST:]PORT and --host: loopback unless --host names another address (with a warning)."""
+    from ..server import TcpServer
+    from ..server.tcp import is_loopback
+
+    host, port = parse_hostport(spec)
+    if args.host:
+        host = args.host
+    host = host or "127.0.0.1"
+    if not is_loopback(host):
+        if not args.host:
+            raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
+        print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
+              "anyone who can connect can move the motors", file=err)
+    server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
+                         pace_bytes=args.pace, idle_timeout=args.idle_timeout))
+
+
+def _add_pty(server: Server, args: argparse.Namespace, module_count: int) -> None:
+    """--pty [--link PATH] [--interface]: the interface must suit the modules and --pace."""
+    from ..server import PtyServer
+
+    if sys.platform == "win32":
+        raise CliError("--pty needs a POSIX system")
+    from ..server.bus import interface_error
+
+    problem = args.interface and interface_error(args.interface, module_count, args.pace)
+    if problem:
+        raise CliError(f"--interface {args.interface}: {problem}")
+    server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
+                         interface=args.interface))
+
+
+def _add_can(server: Server, spec: str) -> None:
+    """--can INTERFACE:CHANNEL (python-can)."""
+    from ..server import CanServer
+
+    interface, sep, channel = spec.partition(":")
+    if not sep or not interface or not channel:
+        raise CliError(f"bad --can {spec!r}; use INTERFACE:CHANNEL, e.g. virtual:opentmcl")
+    server.add(CanServer(server.bus, interface, channel))
 
 
 def describe(server) -> list[str]:
