@@ -15,8 +15,12 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..plot import Trace
 
 PROGRAM_SUFFIXES = (".tmc", ".bin")
 
@@ -53,7 +57,7 @@ def _axes(text: str) -> list[int]:
     return sorted(set(axes))
 
 
-def _record(args, axes):
+def _record(args: argparse.Namespace, axes: list[int]) -> Trace:
     from ..host import TmclError, UnknownParameterError
     from ..plot import run_virtual
     from .load import read_program
@@ -82,7 +86,7 @@ def _record(args, axes):
         raise CliError(str(exc)) from None
 
 
-def _record_remote(args, axes, is_program: bool):
+def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) -> Trace:
     from ..host import TmclError, connect
     from ..host.loader import Loader
     from ..plot import record

@@ -9,9 +9,15 @@ from __future__ import annotations
 
 import argparse
 import os
+from typing import TYPE_CHECKING
 
 from ..limits import shown
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..host import VersionReply
+    from ..protocol.frame import Reply
+    from ..protocol.replies import MemoryReply
 
 ENV_URL = "OPENTMCL_URL"
 
@@ -76,7 +82,7 @@ def _parse_mnemonic(text: str) -> tuple[int, int, int, int]:
     return ins.command, ins.type, ins.motor, ins.value
 
 
-def _show(reply, verbose: bool) -> str:
+def _show(reply: Reply | VersionReply | MemoryReply | None, verbose: bool) -> str:
     from ..host import VersionReply
     from ..protocol.replies import MemoryReply
     from ..protocol.status import message

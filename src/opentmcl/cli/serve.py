@@ -16,19 +16,23 @@ import argparse
 import signal
 import sys
 import threading
+from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
 from . import CliError
 
 if TYPE_CHECKING:
+    import logging
+
     from ..firmware.vm import VirtualModule
     from ..motion.scenario import Scenario
     from ..server import Server
+    from ..web.server import DashboardHandle
 
 DEFAULT_TCP = "127.0.0.1:2323"
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("serve", help="host virtual modules on TCP, a pty or CAN in real time",
                               description=__doc__.split("\n\n")[0])
     p.add_argument("--module", "-m", action="append", required=True, metavar="NAME|FILE",
@@ -134,7 +138,7 @@ def load_scenario(path: str | None) -> Scenario | None:
         raise CliError(f"cannot load scenario {path}: {exc}") from None
 
 
-def build_modules(args) -> list:
+def build_modules(args: argparse.Namespace) -> list:
     """The modules of the bus. The n-th --address wins; a module without one keeps the address its
     EEPROM file stores (GP66), else gets the next free address (docs/endpoints.md)."""
     from ..firmware.eeprom import EepromError
@@ -168,7 +172,7 @@ def build_modules(args) -> list:
     return modules
 
 
-def check_listen_options(args) -> None:
+def check_listen_options(args: argparse.Namespace) -> None:
     """--gap, --max-clients and --idle-timeout, shared by `serve` and `proxy`."""
     from ..server.tcp import check_idle_timeout
 
@@ -260,7 +264,7 @@ def _add_can(server: Server, spec: str) -> None:
     server.add(CanServer(server.bus, interface, channel))
 
 
-def describe(server) -> list[str]:
+def describe(server: Server) -> list[str]:
     """Lines telling the user how to connect."""
     from ..server import CanServer, PtyServer, TcpServer, vmapi
 
@@ -284,7 +288,7 @@ def describe(server) -> list[str]:
     return lines
 
 
-def _log_to_stderr(tool: str = "serve"):
+def _log_to_stderr(tool: str = "serve") -> tuple[logging.Logger, logging.Handler]:
     """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl TOOL: ...`` lines."""
     import logging
 
@@ -295,7 +299,7 @@ def _log_to_stderr(tool: str = "serve"):
     return logger, handler
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if getattr(args, "allow_host", None) and not getattr(args, "web", None):
         raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
     logger, handler = _log_to_stderr()
@@ -305,7 +309,7 @@ def run(args) -> int:
         logger.removeHandler(handler)
 
 
-def _run(args) -> int:
+def _run(args: argparse.Namespace) -> int:
     try:
         server = build_server(args)
         server.start()
@@ -319,7 +323,7 @@ def _run(args) -> int:
         raise
     stop = threading.Event()
 
-    def on_signal(_signum, _frame):
+    def on_signal(_signum: int, _frame: FrameType | None) -> None:
         stop.set()
 
     previous = {}
@@ -354,7 +358,7 @@ def _run(args) -> int:
     return 0
 
 
-def _start_web(server, spec: str, allow_host: list[str]):
+def _start_web(server: Server, spec: str, allow_host: list[str]) -> DashboardHandle:
     """The dashboard (opentmcl.web) for every served module on HOST:PORT (--allow-host names too)."""
     from .dashboard import allowed_hosts
 
