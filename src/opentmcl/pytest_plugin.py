@@ -22,6 +22,10 @@ Which module: the ``tmcl_module`` marker of the test (or its class/module), else
 """
 from __future__ import annotations
 
+import os
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, Any
+
 import pytest
 
 from .host.client import Client
@@ -33,11 +37,15 @@ DEFAULT_MODULE = "TMCM-6212"
 MARKER = "tmcl_module"
 _OPTIONS = ("address", "eeprom", "clock", "timeout", "host_address")
 
+if TYPE_CHECKING:
+    from .capture import ReplayReport
+    from .firmware.vm import VirtualModule
+
 
 class TmclModule(Module):
     """A host `Module` on an in-process `VirtualModule`, with control over its virtual time."""
 
-    def __init__(self, vm, *, address: int, clock: str = "virtual", timeout: float = 5.0,
+    def __init__(self, vm: VirtualModule, *, address: int, clock: str = "virtual", timeout: float = 5.0,
                  host_address: int = 2) -> None:
         self.vm = vm
         self.transport = InProcessTransport([vm], clock=clock)
@@ -62,8 +70,8 @@ class TmclModule(Module):
         self.vm.close()
 
 
-def make_tmcl_module(name: str = DEFAULT_MODULE, *, address: int = 1, eeprom=None, clock: str = "virtual",
-                     timeout: float = 5.0, host_address: int = 2) -> TmclModule:
+def make_tmcl_module(name: str = DEFAULT_MODULE, *, address: int = 1, eeprom: str | os.PathLike[str] | None = None,
+                     clock: str = "virtual", timeout: float = 5.0, host_address: int = 2) -> TmclModule:
     """What the fixture builds; usable without pytest. KeyError for an unknown module name; the host
     library's typed errors for bad arguments: TmclValueError (also a ValueError) for an address
     outside 1..255 (the rule of `opentmcl serve`), a timeout that is not finite and > 0 or an
@@ -83,7 +91,7 @@ def make_tmcl_module(name: str = DEFAULT_MODULE, *, address: int = 1, eeprom=Non
         raise
 
 
-def pytest_addoption(parser) -> None:
+def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("opentmcl", "OpenTMCL virtual modules")
     group.addoption("--tmcl-module", dest="tmcl_module", default=None, metavar="NAME",
                     help="module of the tmcl_module fixture when a test has no tmcl_module marker "
@@ -91,31 +99,32 @@ def pytest_addoption(parser) -> None:
     parser.addini("tmcl_module", help="default module of the tmcl_module fixture", default=None)
 
 
-def pytest_configure(config) -> None:
+def pytest_configure(config: pytest.Config) -> None:
     config.addinivalue_line(
         "markers",
         "tmcl_module(name, *, address=1, eeprom=None, clock='virtual', timeout=5.0, host_address=2): "
         "the virtual module that the tmcl_module fixture gives this test (opentmcl)")
 
 
-def _ini_module(config) -> str | None:
+def _ini_module(config: pytest.Config) -> str | None:
     """The ini `tmcl_module`; a relative profile file path is relative to the ini file, as
     pytest's own path options are, so the suite runs from any directory."""
     from pathlib import Path
 
     from .modules.profile_file import looks_like_path
 
-    name = config.getini("tmcl_module")
+    name: str | None = config.getini("tmcl_module")
     if name and looks_like_path(name) and not Path(name).is_absolute() and config.inipath is not None:
         return str(Path(config.inipath).parent / name)
     return name
 
 
-def _spec(request) -> tuple[str, dict]:
+def _spec(request: pytest.FixtureRequest) -> tuple[str, dict[str, Any]]:
+    """The module name and make_tmcl_module() keywords of this test (the marker's, as pytest gives them)."""
     marker = request.node.get_closest_marker(MARKER)
     config = request.config
     name = config.getoption("tmcl_module", None) or _ini_module(config) or DEFAULT_MODULE
-    kwargs: dict = {}
+    kwargs: dict[str, Any] = {}
     if marker is not None:
         if len(marker.args) > 1:
             pytest.fail(f"@pytest.mark.{MARKER} takes one module name, got {marker.args!r}", pytrace=False)
@@ -132,17 +141,16 @@ def _spec(request) -> tuple[str, dict]:
 
 
 @pytest.fixture
-def tmcl_module(request):
+def tmcl_module(request: pytest.FixtureRequest) -> Iterator[TmclModule]:
     """A virtual TMCL module behind the host `Module` API, in virtual time (opentmcl)."""
     from .firmware.eeprom import EepromError
 
     name, kwargs = _spec(request)
+    error: str | None = None
     try:
         module = make_tmcl_module(name, **kwargs)
     except (KeyError, ValueError, EepromError, TmclError) as exc:
         error = f"tmcl_module: {exc.args[0] if exc.args else exc}"
-    else:
-        error = None
     if error:  # failed outside the except block: one line, no "During handling of..." echo
         pytest.fail(error, pytrace=False)
     try:
@@ -152,19 +160,19 @@ def tmcl_module(request):
 
 
 @pytest.fixture
-def tmcl_replay():
+def tmcl_replay() -> Callable[..., ReplayReport]:
     """Keep captures as regression tests (docs/capture.md): ``tmcl_replay("run.jsonl", "PD86-1180")``
     replays a capture against a fresh virtual module and fails the test listing every divergence.
     Takes the arguments of `opentmcl.replay` and returns its report."""
     from .capture import CaptureError, ReplayError, replay
 
-    def check(capture, module=None, **kwargs):
+    def check(capture: str | os.PathLike[str], module: str | os.PathLike[str] | None = None,
+              **kwargs: Any) -> ReplayReport:  # replay()'s keywords, passed through
+        error: str | None = None
         try:
             report = replay(capture, module, **kwargs)
         except (CaptureError, ReplayError) as exc:
             error = f"tmcl_replay: {exc}"
-        else:
-            error = None
         if error:
             pytest.fail(error, pytrace=False)
         if not report.ok:

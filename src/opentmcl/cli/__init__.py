@@ -12,6 +12,7 @@ import importlib
 import os
 import pathlib
 import sys
+from typing import NoReturn
 
 COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard",
             "proxy", "log", "replay", "profile"]
@@ -62,7 +63,7 @@ def float_arg(text: str) -> float:
 class _Parser(argparse.ArgumentParser):
     """argparse with the house rule for usage errors: one line, exit status 2 (not the usage block)."""
 
-    def error(self, message: str):
+    def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 

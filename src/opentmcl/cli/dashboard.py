@@ -15,8 +15,12 @@ import os
 import signal
 import threading
 import urllib.parse
+from typing import TYPE_CHECKING
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..web.server import DashboardHandle
 
 DEFAULT_WEB = "127.0.0.1:8080"
 
@@ -50,7 +54,7 @@ def allowed_hosts(names: list[str]) -> tuple[str, ...]:
         raise CliError(str(exc)) from None
 
 
-def print_urls(handle, prefix: str, suffix: str = "") -> None:
+def print_urls(handle: DashboardHandle, prefix: str, suffix: str = "") -> None:
     """The URL(s) to open; with a token, say that it is needed."""
     first, *others = handle.urls_to_open()
     print(f"{prefix}{first}{suffix}", flush=True)

@@ -30,10 +30,16 @@ import shlex
 import signal
 import sys
 import threading
+from collections.abc import Callable, Iterator
+from typing import TYPE_CHECKING, TextIO
 
 from . import CliError
 from .load import add_connection_options, module_name, read_program
 from .run import DEFAULT_MODULE, open_target
+
+if TYPE_CHECKING:
+    from ..host.debugger import Debugger
+    from ..host.loader import AppStatus
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -53,7 +59,7 @@ class BoundedLines:
     """The shell's stdin when it is not a terminal (a pipe, a file, /dev/zero): lines of at most
     COMMAND_LINE_MAX characters, so an endless line is a one-line error instead of a growing read."""
 
-    def __init__(self, stream) -> None:
+    def __init__(self, stream: TextIO) -> None:
         self.stream = stream
 
     def readline(self) -> str:
@@ -69,8 +75,10 @@ class DebugShell(cmd.Cmd):
     prompt = "(tmcl) "
     intro = "OpenTMCL debugger - type help for the commands, quit to leave."
 
-    def __init__(self, debugger, *, stdin=None, stdout=None):
-        super().__init__(stdin=stdin, stdout=stdout)
+    def __init__(self, debugger: Debugger, *, stdin: BoundedLines | None = None,
+                 stdout: TextIO | None = None) -> None:
+        # cmd.Cmd reads only stdin.readline() when use_rawinput is off, all BoundedLines offers
+        super().__init__(stdin=stdin, stdout=stdout)  # type: ignore[arg-type]
         self.dbg = debugger
         if stdin is not None:
             self.use_rawinput = False
@@ -80,7 +88,7 @@ class DebugShell(cmd.Cmd):
         self.stdout.write(text + "\n")
         self.stdout.flush()
 
-    def show_stop(self, st) -> None:
+    def show_stop(self, st: AppStatus) -> None:
         from ..host.debugger import describe_flags
 
         where = {0: "stopped", 1: "running", 2: "paused", 3: "reset"}.get(st.mode, str(st.mode))
@@ -89,7 +97,7 @@ class DebugShell(cmd.Cmd):
         for name, value in self.dbg.watch_values():
             self.say(f"  {name} = {value}")
 
-    def onecmd(self, line):
+    def onecmd(self, line: str) -> bool:
         from ..host import TmclError
         from ..host.debugger import DebugError
 
@@ -103,24 +111,24 @@ class DebugShell(cmd.Cmd):
             self.show_stop(self.dbg.status())
         return False
 
-    def emptyline(self):
+    def emptyline(self) -> bool:
         return False
 
-    def default(self, line):
+    def default(self, line: str) -> None:
         self.say(f"unknown command {line.split()[0]!r}; type help")
 
-    def do_EOF(self, arg):  # noqa: N802 - cmd.Cmd's name for end of input
+    def do_EOF(self, arg: str) -> bool:  # noqa: N802 - cmd.Cmd's name for end of input
         self.say()
         return True
 
     # --- commands ---------------------------------------------------------------------------
-    def do_quit(self, arg):
+    def do_quit(self, arg: str) -> bool:
         """quit: leave the debugger"""
         return True
 
     do_q = do_quit
 
-    def do_step(self, arg):
+    def do_step(self, arg: str) -> None:
         """step [N]: execute N instructions (default 1)"""
         n = _number(arg, "step [N]", minimum=1) if arg.strip() else 1
         self.show_stop(self.dbg.step(n))
@@ -128,7 +136,7 @@ class DebugShell(cmd.Cmd):
     do_s = do_step
     do_next = do_step
 
-    def do_cont(self, arg):
+    def do_cont(self, arg: str) -> None:
         """cont: continue to the next breakpoint, or until the program stops"""
         with _ctrl_c() as pressed:
             st = self.dbg.cont(on_start=lambda: self.say("running (Ctrl-C stops)"), interrupted=pressed)
@@ -138,14 +146,14 @@ class DebugShell(cmd.Cmd):
 
     do_c = do_cont
 
-    def do_until(self, arg):
+    def do_until(self, arg: str) -> None:
         """until LABEL|ADDR: run to a label or address"""
         if not arg.strip():
             self.say("usage: until LABEL|ADDR")
             return
         self.show_stop(self.dbg.until(arg))
 
-    def do_break(self, arg):
+    def do_break(self, arg: str) -> None:
         """break [LABEL|ADDR]: set a breakpoint, or list them"""
         if not arg.strip():
             for addr in sorted(self.dbg.breakpoints):
@@ -159,14 +167,14 @@ class DebugShell(cmd.Cmd):
 
     do_b = do_break
 
-    def do_delete(self, arg):
+    def do_delete(self, arg: str) -> None:
         """delete [LABEL|ADDR]: remove a breakpoint, or all"""
         if arg.strip():
             self.dbg.breakpoints.discard(self.dbg.address(arg))
         else:
             self.dbg.breakpoints.clear()
 
-    def do_watch(self, arg):
+    def do_watch(self, arg: str) -> None:
         """watch EXPR...: watch values (a x pc flags state varN outN inN adcN posN targetN speedN apP.M gpN[.B])"""
         from ..host.debugger import parse_watches
 
@@ -178,18 +186,18 @@ class DebugShell(cmd.Cmd):
         for name, value in self.dbg.watch_values():
             self.say(f"  {name} = {value}")
 
-    def do_unwatch(self, arg):
+    def do_unwatch(self, arg: str) -> None:
         """unwatch [EXPR]: remove a watch, or all"""
         name = arg.strip().lower()
         self.dbg.watches[:] = [w for w in self.dbg.watches if name and w.name != name]
 
-    def do_info(self, arg):
+    def do_info(self, arg: str) -> None:
         """info: status, registers, flags and watches"""
         self.show_stop(self.dbg.status())
 
     do_i = do_info
 
-    def do_list(self, arg):
+    def do_list(self, arg: str) -> None:
         """list [LABEL|ADDR]: program listing around the PC or an address"""
         center = self.dbg.address(arg) if arg.strip() else self.dbg.status().pc
         end = len(self.dbg.instructions) or center + 1
@@ -199,22 +207,22 @@ class DebugShell(cmd.Cmd):
 
     do_l = do_list
 
-    def do_run(self, arg):
+    def do_run(self, arg: str) -> None:
         """run [LABEL|ADDR]: run freely (129) from a label/address or the current PC"""
         self.dbg.loader.run(self.dbg.address(arg) if arg.strip() else None)
         self.say("running")
 
-    def do_stop(self, arg):
+    def do_stop(self, arg: str) -> None:
         """stop: stop the program (128)"""
         self.dbg.loader.stop()
         self.show_stop(self.dbg.status())
 
-    def do_reset(self, arg):
+    def do_reset(self, arg: str) -> None:
         """reset: reset the program (131): PC, stack, A, X and flags to 0"""
         self.dbg.loader.reset()
         self.show_stop(self.dbg.status())
 
-    def do_sleep(self, arg):
+    def do_sleep(self, arg: str) -> None:
         """sleep SECONDS: let time pass"""
         try:
             seconds = float(arg)
@@ -225,7 +233,7 @@ class DebugShell(cmd.Cmd):
         self.dbg.loader.client.sleep(seconds)
         self.show_stop(self.dbg.status())
 
-    def do_set(self, arg):
+    def do_set(self, arg: str) -> None:
         """set var N VALUE: set a user variable (SGP N, 2, VALUE)"""
         parts = shlex.split(arg)
         if len(parts) != 3 or parts[0] != "var":
@@ -238,7 +246,7 @@ class DebugShell(cmd.Cmd):
 
 
 @contextlib.contextmanager
-def _ctrl_c():
+def _ctrl_c() -> Iterator[Callable[[], bool]]:
     """While a program runs freely, Ctrl-C (SIGINT) only sets a flag that the run loop reads: the
     module is never interrupted in the middle of a request. Yields a callable: was it pressed?"""
     pressed = threading.Event()

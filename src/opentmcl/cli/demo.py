@@ -3,13 +3,17 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import TYPE_CHECKING
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..firmware.vm import VirtualModule
 
 MAX_ROWS = 100_000  # a table longer than this is a typo in --duration / --interval
 
 
-def register(sub: argparse._SubParsersAction) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser("demo", help="run a virtual module through a few moves and print a table")
     p.add_argument("--module", default=None, help="module type (default: the scenario's, else TMCM-6212)")
     p.add_argument("--duration", type=float, default=2.0, help="virtual seconds to run (default 2)")
@@ -19,7 +23,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _plan(vm) -> list[tuple[int, int, int, int]]:
+def _plan(vm: VirtualModule) -> list[tuple[int, int, int, int]]:
     """Requests (command, type, motor, value): each axis gets its own ramp and target."""
     reqs = []
     fast = vm.profile.engine != "tmc429"
@@ -36,42 +40,71 @@ def _plan(vm) -> list[tuple[int, int, int, int]]:
 
 
 def run(args: argparse.Namespace) -> int:
+    _check_table_size(args.duration, args.interval)
+    if args.scenario or args.csv:
+        return _run_in_world(args)
+    vm = _start_moves(args.module or "TMCM-6212")
+    _print_table(vm, args.duration, args.interval)
+    return 0
+
+
+def _check_table_size(duration: float, interval: float) -> None:
+    """--duration and --interval: finite, positive, at most MAX_ROWS rows."""
+    if not (math.isfinite(interval) and math.isfinite(duration)):
+        raise CliError("--duration and --interval must be finite numbers")
+    if interval <= 0 or duration <= 0:
+        raise CliError("--duration and --interval must be positive")
+    if duration / interval > MAX_ROWS:
+        raise CliError(f"--duration / --interval gives more than {MAX_ROWS} rows; use a longer --interval")
+
+
+def _run_in_world(args: argparse.Namespace) -> int:
+    """--scenario [--csv]: the same moves in a physical world, printed or saved as its trace."""
+    from . import same_file
+
+    if args.csv and args.scenario and same_file(args.csv, args.scenario):
+        raise CliError(f"--csv {args.csv} would overwrite the scenario {args.scenario}")
+    from ..trace import world_demo  # the world trace (position, switches, load value, current)
+    return world_demo(args, _plan, CliError)
+
+
+def _start_moves(module: str) -> VirtualModule:
+    """A virtual `module` with the moves of `_plan` started on every axis."""
     from ..firmware.vm import VirtualModule
 
-    if not (math.isfinite(args.interval) and math.isfinite(args.duration)):
-        raise CliError("--duration and --interval must be finite numbers")
-    if args.interval <= 0 or args.duration <= 0:
-        raise CliError("--duration and --interval must be positive")
-    if args.duration / args.interval > MAX_ROWS:
-        raise CliError(f"--duration / --interval gives more than {MAX_ROWS} rows; use a longer --interval")
-    if args.scenario or args.csv:
-        from . import same_file
-
-        if args.csv and args.scenario and same_file(args.csv, args.scenario):
-            raise CliError(f"--csv {args.csv} would overwrite the scenario {args.scenario}")
-        from ..trace import world_demo  # the world trace (position, switches, load value, current)
-        return world_demo(args, _plan, CliError)
     try:
-        vm = VirtualModule(args.module or "TMCM-6212")
+        vm = VirtualModule(module)
     except KeyError as exc:
         raise CliError(exc.args[0]) from None
     for cmd, type_, motor, value in _plan(vm):
         reply = vm.request(cmd, type_, motor, value)
         if reply is None or reply.status != 100:
             raise CliError(f"module refused command {cmd} {type_} {motor} {value}")
+    return vm
+
+
+def _print_table(vm: VirtualModule, duration: float, interval: float) -> None:
+    """Position and velocity of every axis each `interval` virtual seconds, then who reached AP8."""
     unit = "pps" if vm.profile.engine != "tmc429" else "internal"
     print(f"Virtual {vm.profile.name} (firmware {vm.profile.firmware_version}), virtual time; "
           f"position in microsteps, velocity in {unit}")
     head = "  time/s" + "".join(f"  {f'axis{a} pos':>11} {'vel':>7}" for a in range(vm.profile.axes))
     print(head)
     print("-" * len(head))
-    steps = round(args.duration / args.interval)
+    steps = round(duration / interval)
     for i in range(steps + 1):
         if i:
-            vm.advance(args.interval)
-        cells = "".join(f"  {vm.request(6, 1, a).value:>11} {vm.request(6, 3, a).value:>7}"
+            vm.advance(interval)
+        cells = "".join(f"  {_axis_parameter(vm, 1, a):>11} {_axis_parameter(vm, 3, a):>7}"
                         for a in range(vm.profile.axes))
         print(f"{vm.time:8.3f}{cells}")
-    reached = [a for a in range(vm.profile.axes) if vm.request(6, 8, a).value]
+    reached = [a for a in range(vm.profile.axes) if _axis_parameter(vm, 8, a)]
     print(f"position reached (AP8) on axes: {reached or 'none'}")
-    return 0
+
+
+def _axis_parameter(vm: VirtualModule, number: int, axis: int) -> int:
+    """GAP `number` of `axis` (command 6)."""
+    reply = vm.request(6, number, axis)
+    if reply is None:
+        raise CliError(f"module gave no reply to GAP {number} {axis}")
+    return reply.value

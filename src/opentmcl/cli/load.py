@@ -11,8 +11,12 @@ import argparse
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..host import Module
 
 ENV_URL = "OPENTMCL_URL"
 
@@ -83,7 +87,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def module_name(module, given: str | None) -> str:
+def module_name(module: Module, given: str | None) -> str:
     """The module type: --module, else the profile found from the version string (136)."""
     from ..host import TmclError
 

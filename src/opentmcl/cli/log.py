@@ -4,10 +4,12 @@
 """
 from __future__ import annotations
 
+import argparse
+
 from . import CliError
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("log", help="read capture files written by opentmcl proxy --log",
                               description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="log_command", metavar="ACTION", required=True)
@@ -58,7 +60,7 @@ def row(rec: dict) -> str:
     return f"{rec['t']:12.6f}  {arrow} {address!s:>3}  {kind:<8} {latency}  {text}" + (f"  [{name}]" if name else "")
 
 
-def run_show(args) -> int:
+def run_show(args: argparse.Namespace) -> int:
     from ..capture import CaptureError, read_capture
 
     command = _command_filter(args.command_filter)

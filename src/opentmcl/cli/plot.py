@@ -13,9 +13,14 @@ scenario file for the virtual module (any other name). The output format follows
 from __future__ import annotations
 
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..plot import Trace
 
 PROGRAM_SUFFIXES = (".tmc", ".bin")
 
@@ -52,7 +57,7 @@ def _axes(text: str) -> list[int]:
     return sorted(set(axes))
 
 
-def _record(args, axes):
+def _record(args: argparse.Namespace, axes: list[int]) -> Trace:
     from ..host import TmclError, UnknownParameterError
     from ..plot import run_virtual
     from .load import read_program
@@ -81,7 +86,7 @@ def _record(args, axes):
         raise CliError(str(exc)) from None
 
 
-def _record_remote(args, axes, is_program: bool):
+def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) -> Trace:
     from ..host import TmclError, connect
     from ..host.loader import Loader
     from ..plot import record
@@ -118,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
     if Path(args.output).suffix.lower() not in (".png", ".svg"):
         raise CliError(f"cannot write {args.output}: use a .png or .svg file name")
     axes = _axes(args.axes or "0")
-    channels = DEFAULT_CHANNELS
+    channels: Sequence[str] = DEFAULT_CHANNELS
     if args.channels is not None:
         channels = [c.strip() for c in args.channels.split(",") if c.strip()]
         if not channels:

@@ -6,12 +6,18 @@
 """
 from __future__ import annotations
 
+import argparse
 import sys
+from collections.abc import Mapping
+from typing import TYPE_CHECKING
 
 from . import CliError
 
+if TYPE_CHECKING:
+    from ..modules.profile import Param
 
-def register(subparsers) -> None:
+
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("profile", help="check, show or probe module profiles (bring your own module)",
                               description=__doc__.split("\n\n")[0])
     sub = p.add_subparsers(dest="profile_command", metavar="ACTION", required=True)
@@ -32,7 +38,7 @@ def register(subparsers) -> None:
     probe.set_defaults(func=run_probe)
 
 
-def run_check(args) -> int:
+def run_check(args: argparse.Namespace) -> int:
     from ..modules.profile import builtin_raw, parse_profile
     from ..modules.profile_file import ProfileError, resolve, validate
 
@@ -53,7 +59,7 @@ def run_check(args) -> int:
     return 0
 
 
-def run_show(args) -> int:
+def run_show(args: argparse.Namespace) -> int:
     from ..modules.profile import load_profile
     from ..modules.profile_file import ProfileError
 
@@ -66,7 +72,7 @@ def run_show(args) -> int:
     print(f"{prof.name}  firmware {prof.firmware_version!r}  {prof.axes} axes  engine {prof.engine}  "
           f"program memory {prof.program_memory}")
 
-    def rows(title, params):
+    def rows(title: str, params: Mapping[int, Param] | Mapping[tuple[int, int], Param]) -> None:
         print(f"\n{title}")
         print(f"  {'no':>7}  {'name':<40} {'access':<6} {'min':>12} {'max':>12} {'default':>12}  unit")
         for key, p in sorted(params.items()):
@@ -81,7 +87,7 @@ def run_show(args) -> int:
     return 0
 
 
-def run_probe(args) -> int:
+def run_probe(args: argparse.Namespace) -> int:
     from ..atomicfile import write_atomic
     from ..host.connect import open_bus
     from ..host.errors import TmclError

@@ -10,14 +10,19 @@ program opens the pty (or connects to the TCP port) exactly as it would a served
 """
 from __future__ import annotations
 
+import argparse
 import signal
 import sys
 import threading
+from typing import TYPE_CHECKING
 
 from . import CliError
 
+if TYPE_CHECKING:
+    from ..capture.proxy import Proxy
 
-def register(subparsers) -> None:
+
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("proxy", help="relay a host program's traffic to a module and capture it",
                               description=__doc__.split("\n\n")[0])
     p.add_argument("--to", required=True, metavar="URL",
@@ -36,7 +41,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def build_proxy(args):
+def build_proxy(args: argparse.Namespace) -> Proxy:
     from ..capture.proxy import Proxy, ProxySession
     from ..host.errors import TmclConnectionError
     from ..server import PtyServer, TcpServer
@@ -71,7 +76,7 @@ def build_proxy(args):
     return proxy
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from .serve import _log_to_stderr
 
     logger, handler = _log_to_stderr("proxy")
@@ -81,7 +86,7 @@ def run(args) -> int:
         logger.removeHandler(handler)
 
 
-def _run(args) -> int:
+def _run(args: argparse.Namespace) -> int:
     from ..server import PtyServer, TcpServer
 
     proxy = build_proxy(args)

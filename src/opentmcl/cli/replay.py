@@ -8,10 +8,12 @@ summary. Exit status 0 when all replies agree, 1 when any diverge, 2 on bad inpu
 """
 from __future__ import annotations
 
+import argparse
+
 from . import CliError
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("replay", help="replay a capture against a virtual module and list divergences",
                               description=__doc__.split("\n\n")[0])
     p.add_argument("file", metavar="FILE", help="capture file written by opentmcl proxy --log")
@@ -27,7 +29,7 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from ..capture import CaptureError, ReplayError, replay
     from .serve import load_scenario
 

@@ -19,9 +19,18 @@ gpN[.B]); default: state, the module's outputs and the position of motor 0.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from . import CliError
 from .load import add_connection_options, check_connection_options, module_name, read_program
+
+if TYPE_CHECKING:
+    from ..host import Client
+    from ..host.debugger import Watch
+    from ..host.loader import Loader
+    from ..modules.profile import ModuleProfile
+    from ..motion.scenario import Scenario
 
 DEFAULT_MODULE = "TMCM-6212"
 MAX_SAMPLES = 1_000_000  # more looks than this is a typo in --seconds / --sample
@@ -45,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _scenario(path: str | None):
+def _scenario(path: str | None) -> Scenario | None:
     """The --scenario file, read here so that a bad file is a one-line error (docs/scenarios.md)."""
     if path is None:
         return None
@@ -57,7 +66,7 @@ def _scenario(path: str | None):
         raise CliError(f"cannot load scenario {path}: {exc}") from None
 
 
-def open_target(args: argparse.Namespace):
+def open_target(args: argparse.Namespace) -> tuple[Client, str | None]:
     """(client, module name) for --to URL, or for a new in-process virtual module."""
     from ..host import Client, TmclError, open_bus
     from ..host.transports.inprocess import InProcessTransport
@@ -86,7 +95,7 @@ def open_target(args: argparse.Namespace):
     return Client(InProcessTransport(vm, clock="virtual"), address=args.address, timeout=args.timeout), name
 
 
-def default_watches(profile) -> list[str]:
+def default_watches(profile: ModuleProfile) -> list[str]:
     outs = sorted(port for (bank, port), p in profile.io.items() if bank == 2 and p.kind == "output")
     return ["state", *(f"out{port}" for port in outs), "pos0"]
 
@@ -142,7 +151,8 @@ def _check_csv(args: argparse.Namespace) -> None:
             raise CliError(f"--csv {args.csv} would overwrite the {option} {given}")
 
 
-def _trace(loader, watches, read_watch, args) -> None:
+def _trace(loader: Loader, watches: list[Watch], read_watch: Callable[[Loader, Watch], int | str],
+           args: argparse.Namespace) -> None:
     print(f"{'time [s]':>9}  changes", flush=True)
     last: dict[str, object] = {}
     elapsed, steps = 0.0, 0

@@ -9,8 +9,14 @@ from __future__ import annotations
 
 import argparse
 import os
+from typing import TYPE_CHECKING
 
 from . import CliError
+
+if TYPE_CHECKING:
+    from ..host import VersionReply
+    from ..protocol.frame import Reply
+    from ..protocol.replies import MemoryReply
 
 ENV_URL = "OPENTMCL_URL"
 
@@ -42,7 +48,7 @@ def parse(text: str) -> tuple[int, int, int, int]:
         raise CliError(str(exc)) from None
 
 
-def _show(reply, verbose: bool) -> str:
+def _show(reply: Reply | VersionReply | MemoryReply | None, verbose: bool) -> str:
     from ..host import VersionReply
     from ..protocol.replies import MemoryReply
     from ..protocol.status import message

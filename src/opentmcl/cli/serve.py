@@ -12,16 +12,27 @@ the EEPROM files. See docs/endpoints.md.
 """
 from __future__ import annotations
 
+import argparse
 import signal
 import sys
 import threading
+from types import FrameType
+from typing import TYPE_CHECKING, TextIO
 
 from . import CliError
+
+if TYPE_CHECKING:
+    import logging
+
+    from ..firmware.vm import VirtualModule
+    from ..motion.scenario import Scenario
+    from ..server import Server
+    from ..web.server import DashboardHandle
 
 DEFAULT_TCP = "127.0.0.1:2323"
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("serve", help="host virtual modules on TCP, a pty or CAN in real time",
                               description=__doc__.split("\n\n")[0])
     p.add_argument("--module", "-m", action="append", required=True, metavar="NAME|FILE",
@@ -62,8 +73,6 @@ def register(subparsers) -> None:
 
 
 def _address(text: str) -> int:
-    import argparse
-
     try:
         value = int(text, 0)
     except ValueError:
@@ -115,12 +124,12 @@ def assign_addresses(count: int, given: list[int]) -> list[int]:
     return out
 
 
-def load_scenario(path: str | None):
+def load_scenario(path: str | None) -> Scenario | None:
     """A scenario file loaded by opentmcl.motion.scenario (the same hook as `opentmcl run`)."""
     if path is None:
         return None
     try:
-        from ..motion.scenario import load_scenario as load  # type: ignore[attr-defined]
+        from ..motion.scenario import load_scenario as load
     except ImportError:
         raise CliError("scenario files are not supported by this version") from None
     try:
@@ -129,7 +138,7 @@ def load_scenario(path: str | None):
         raise CliError(f"cannot load scenario {path}: {exc}") from None
 
 
-def build_modules(args) -> list:
+def build_modules(args: argparse.Namespace) -> list:
     """The modules of the bus. The n-th --address wins; a module without one keeps the address its
     EEPROM file stores (GP66), else gets the next free address (docs/endpoints.md)."""
     from ..firmware.eeprom import EepromError
@@ -163,7 +172,7 @@ def build_modules(args) -> list:
     return modules
 
 
-def check_listen_options(args) -> None:
+def check_listen_options(args: argparse.Namespace) -> None:
     """--gap, --max-clients and --idle-timeout, shared by `serve` and `proxy`."""
     from ..server.tcp import check_idle_timeout
 
@@ -177,10 +186,9 @@ def check_listen_options(args) -> None:
         raise CliError(str(exc)) from None
 
 
-def build_server(args, out=sys.stdout, err=sys.stderr):
+def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO = sys.stderr) -> Server:
     """The Server with its endpoints, not started."""
-    from ..server import CanServer, PtyServer, Server, TcpServer
-    from ..server.tcp import is_loopback
+    from ..server import Server
 
     check_listen_options(args)
     if args.link and not args.pty:
@@ -192,45 +200,71 @@ def build_server(args, out=sys.stdout, err=sys.stderr):
         tcp_spec = DEFAULT_TCP
     modules = build_modules(args)
     if len(modules) > 1:
-        # Several modules on one CAN bus need distinct CAN IDs (GP 71, default 1 on every
-        # module): each gets its serial address as CAN ID, in RAM only (docs/assumptions.md).
-        from ..server import vmapi
-
-        for vm in modules:
-            if vm.stored_global(0, vmapi.GP_CAN_ID) is None:  # a CAN ID stored in the EEPROM stays
-                vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+        _give_can_ids(modules)
     server = Server(modules)
     if tcp_spec is not None or args.host:
-        host, port = parse_hostport(tcp_spec or DEFAULT_TCP)
-        if args.host:
-            host = args.host
-        host = host or "127.0.0.1"
-        if not is_loopback(host):
-            if not args.host:
-                raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
-            print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
-                  "anyone who can connect can move the motors", file=err)
-        server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
-                             pace_bytes=args.pace, idle_timeout=args.idle_timeout))
+        _add_tcp(server, args, tcp_spec or DEFAULT_TCP, err)
     if args.pty:
-        if sys.platform == "win32":
-            raise CliError("--pty needs a POSIX system")
-        from ..server.bus import interface_error
-
-        problem = args.interface and interface_error(args.interface, len(modules), args.pace)
-        if problem:
-            raise CliError(f"--interface {args.interface}: {problem}")
-        server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
-                             interface=args.interface))
+        _add_pty(server, args, len(modules))
     if args.can:
-        interface, sep, channel = args.can.partition(":")
-        if not sep or not interface or not channel:
-            raise CliError(f"bad --can {args.can!r}; use INTERFACE:CHANNEL, e.g. virtual:opentmcl")
-        server.add(CanServer(server.bus, interface, channel))
+        _add_can(server, args.can)
     return server
 
 
-def describe(server) -> list[str]:
+def _give_can_ids(modules: list[VirtualModule]) -> None:
+    """Several modules on one CAN bus need distinct CAN IDs (GP 71, default 1 on every module):
+    each gets its serial address as CAN ID, in RAM only (docs/assumptions.md)."""
+    from ..server import vmapi
+
+    for vm in modules:
+        if vm.stored_global(0, vmapi.GP_CAN_ID) is None:  # a CAN ID stored in the EEPROM stays
+            vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
+
+
+def _add_tcp(server: Server, args: argparse.Namespace, spec: str, err: TextIO) -> None:
+    """--tcp [HOST:]PORT and --host: loopback unless --host names another address (with a warning)."""
+    from ..server import TcpServer
+    from ..server.tcp import is_loopback
+
+    host, port = parse_hostport(spec)
+    if args.host:
+        host = args.host
+    host = host or "127.0.0.1"
+    if not is_loopback(host):
+        if not args.host:
+            raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
+        print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
+              "anyone who can connect can move the motors", file=err)
+    server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
+                         pace_bytes=args.pace, idle_timeout=args.idle_timeout))
+
+
+def _add_pty(server: Server, args: argparse.Namespace, module_count: int) -> None:
+    """--pty [--link PATH] [--interface]: the interface must suit the modules and --pace."""
+    from ..server import PtyServer
+
+    if sys.platform == "win32":
+        raise CliError("--pty needs a POSIX system")
+    from ..server.bus import interface_error
+
+    problem = args.interface and interface_error(args.interface, module_count, args.pace)
+    if problem:
+        raise CliError(f"--interface {args.interface}: {problem}")
+    server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
+                         interface=args.interface))
+
+
+def _add_can(server: Server, spec: str) -> None:
+    """--can INTERFACE:CHANNEL (python-can)."""
+    from ..server import CanServer
+
+    interface, sep, channel = spec.partition(":")
+    if not sep or not interface or not channel:
+        raise CliError(f"bad --can {spec!r}; use INTERFACE:CHANNEL, e.g. virtual:opentmcl")
+    server.add(CanServer(server.bus, interface, channel))
+
+
+def describe(server: Server) -> list[str]:
     """Lines telling the user how to connect."""
     from ..server import CanServer, PtyServer, TcpServer, vmapi
 
@@ -254,7 +288,7 @@ def describe(server) -> list[str]:
     return lines
 
 
-def _log_to_stderr(tool: str = "serve"):
+def _log_to_stderr(tool: str = "serve") -> tuple[logging.Logger, logging.Handler]:
     """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl TOOL: ...`` lines."""
     import logging
 
@@ -265,7 +299,7 @@ def _log_to_stderr(tool: str = "serve"):
     return logger, handler
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     if getattr(args, "allow_host", None) and not getattr(args, "web", None):
         raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
     logger, handler = _log_to_stderr()
@@ -275,7 +309,7 @@ def run(args) -> int:
         logger.removeHandler(handler)
 
 
-def _run(args) -> int:
+def _run(args: argparse.Namespace) -> int:
     try:
         server = build_server(args)
         server.start()
@@ -289,7 +323,7 @@ def _run(args) -> int:
         raise
     stop = threading.Event()
 
-    def on_signal(_signum, _frame):
+    def on_signal(_signum: int, _frame: FrameType | None) -> None:
         stop.set()
 
     previous = {}
@@ -324,7 +358,7 @@ def _run(args) -> int:
     return 0
 
 
-def _start_web(server, spec: str, allow_host: list[str]):
+def _start_web(server: Server, spec: str, allow_host: list[str]) -> DashboardHandle:
     """The dashboard (opentmcl.web) for every served module on HOST:PORT (--allow-host names too)."""
     from .dashboard import allowed_hosts
 

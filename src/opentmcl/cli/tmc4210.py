@@ -11,12 +11,13 @@
 """
 from __future__ import annotations
 
+import argparse
 import math
 
 from . import CliError, float_arg, int_arg
 
 
-def register(subparsers) -> None:
+def register(subparsers: argparse._SubParsersAction) -> None:
     p = subparsers.add_parser("tmc4210", help="TMC4210 chip model: PMUL/PDIV calculator, converters, trace",
                               description="Tools around the register-exact TMC4210 model.")
     sub = p.add_subparsers(dest="tmc4210_command", metavar="SUBCOMMAND")
@@ -48,7 +49,7 @@ def register(subparsers) -> None:
     tr.set_defaults(func=cmd_trace)
 
 
-def _help(parser) -> int:
+def _help(parser: argparse.ArgumentParser) -> int:
     parser.print_help()
     return 0
 
@@ -58,7 +59,7 @@ def _range(name: str, value: int, lo: int, hi: int) -> None:
         raise CliError(f"{name} must be {lo}..{hi}, got {value}")
 
 
-def cmd_pmulpdiv(args) -> int:
+def cmd_pmulpdiv(args: argparse.Namespace) -> int:
     _range("A_MAX (-a)", args.a_max, 0, 2047)
     _range("RAMP_DIV (-r)", args.ramp_div, 0, 13)
     _range("PULSE_DIV (-p)", args.pulse_div, 0, 13)
@@ -97,7 +98,7 @@ def format_pmulpdiv(a_max: int, ramp_div: int, pulse_div: int, p_reduction: floa
     return "".join(out)
 
 
-def cmd_convert(args) -> int:
+def cmd_convert(args: argparse.Namespace) -> int:
     from ..chips.tmc4210 import units
 
     try:
@@ -129,7 +130,7 @@ def cmd_convert(args) -> int:
     return 0
 
 
-def cmd_trace(args) -> int:
+def cmd_trace(args: argparse.Namespace) -> int:
     from ..chips.tmc4210 import TMC4210, ChipError
     from ..chips.tmc4210.script import ScriptError, format_trace, run_file
 

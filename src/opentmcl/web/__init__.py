@@ -11,7 +11,7 @@ __all__ = ["Dashboard", "DashboardError", "DashboardHandle", "DashboardStartErro
            "start_dashboard", "start_dashboard_for_bus"]
 
 
-def __getattr__(name: str):
+def __getattr__(name: str) -> object:
     # Lazy: importing opentmcl.web must not import the web stack until it is used.
     if name in ("Dashboard", "DashboardError"):
         from . import service

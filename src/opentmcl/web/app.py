@@ -26,7 +26,7 @@ import asyncio
 import contextlib
 import json
 import logging
-from collections.abc import Sequence
+from collections.abc import Awaitable, Callable, Sequence
 from importlib import resources
 
 from starlette.applications import Starlette
@@ -34,7 +34,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, RedirectResponse, Response
-from starlette.routing import Mount, Route, WebSocketRoute
+from starlette.routing import BaseRoute, Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
@@ -42,6 +42,12 @@ from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
 from .service import FAST_HZ, Dashboard, DashboardError
 
 log = logging.getLogger("opentmcl.web")
+
+Json = dict[str, object]
+ApiHandler = Callable[[Request], Awaitable[object]]   # returns the JSON answer, None for {"ok": true}
+Endpoint = Callable[[Request], Awaitable[Response]]
+# A WebSocket that ends, however it ends: the browser left, the server closes, the socket broke.
+CLOSED = (WebSocketDisconnect, RuntimeError, ConnectionError)
 
 
 def static_dir() -> str:
@@ -52,7 +58,9 @@ class BadRequest(ValueError):
     pass
 
 
-async def _body(request: Request) -> dict:
+# --- the request body ------------------------------------------------------------------------
+
+async def _body(request: Request) -> Json:
     # Only JSON: a cross-site page cannot send it without a CORS preflight, which is never granted,
     # so another web site open in the same browser cannot drive the motors (CSRF).
     if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":
@@ -71,10 +79,9 @@ def _one_line(text: str, limit: int = 200) -> str:
     return text if len(text) <= limit else text[:limit] + "..."
 
 
-def _int(data: dict, key: str, *, optional: bool = False) -> int | None:
+def _int(data: Json, key: str) -> int:
+    """`data[key]` as an integer: a JSON number or a string in Python's literal syntax (0x10)."""
     value = data.get(key)
-    if value is None and optional:
-        return None
     if isinstance(value, str):
         try:
             value = int(value.strip(), 0)
@@ -85,12 +92,45 @@ def _int(data: dict, key: str, *, optional: bool = False) -> int | None:
     return value
 
 
-def _str(data: dict, key: str) -> str:
+def _optional_int(data: Json, key: str) -> int | None:
+    """Like `_int`, but a missing key or null is None."""
+    return None if data.get(key) is None else _int(data, key)
+
+
+def _str(data: Json, key: str) -> str:
     value = data.get(key)
     if not isinstance(value, str):
         raise BadRequest(f"{key} must be a string")
     return value
 
+
+def _line_numbers(data: Json, key: str) -> list[int]:
+    value = data.get(key)
+    if not isinstance(value, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in value):
+        raise BadRequest(f"{key} must be a list of line numbers")
+    return value
+
+
+# --- answers ---------------------------------------------------------------------------------
+
+def json_api(handler: ApiHandler) -> Endpoint:
+    """An endpoint answering `handler`'s result as JSON; the caller's mistakes are a 400 with
+    {"error": "<one line>"}."""
+    async def endpoint(request: Request) -> Response:
+        try:
+            result = await handler(request)
+        except (BadRequest, DashboardError) as exc:
+            return JSONResponse({"error": str(exc)}, status_code=400)
+        except ValueError as exc:  # e.g. a number literal too long to convert: still the input's fault
+            return JSONResponse({"error": _one_line(f"bad request: {exc}")}, status_code=400)
+        except RecursionError:
+            return JSONResponse({"error": "bad request: input nested too deeply"}, status_code=400)
+        return JSONResponse(result if result is not None else {"ok": True})
+    endpoint.__name__ = getattr(handler, "__name__", "endpoint")  # the route's name
+    return endpoint
+
+
+# --- the app -----------------------------------------------------------------------------------
 
 def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Sequence[str] = (),
                token: str | None = None, max_body: int = MAX_BODY,
@@ -101,36 +141,12 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
     `token`: required on every request when given; `max_body`: the largest request body in bytes,
     `body_timeout`: seconds within which it must have arrived.
     (Starlette's TestClient sends Host "testserver": give it base_url="http://127.0.0.1".)"""
-    if isinstance(dashboards, Dashboard):
-        dashboards = [dashboards]
-    by_address: dict[int, Dashboard] = {}
-    for d in dashboards:
-        if d.module.address in by_address:
-            raise ValueError(f"two dashboards for module address {d.module.address}")
-        by_address[d.module.address] = d
-    if not by_address:
-        raise ValueError("the dashboard needs at least one module")
-
-    def listing(request: Request) -> list[dict]:
-        root = request.scope.get("root_path", "")
-        return [{"address": a, "module": d.profile.name, "url": f"{root}/m/{a}/"} for a, d in by_address.items()]
-
-    async def modules(request: Request) -> Response:
-        return JSONResponse(listing(request))
-
-    async def home(request: Request) -> Response:
-        return RedirectResponse(listing(request)[0]["url"])
-
-    async def unknown(request: Request) -> Response:
-        known = ", ".join(map(str, by_address))
-        return JSONResponse({"error": f"no module at address {request.path_params['address']} "
-                                      f"(addresses: {known})"}, status_code=404)
-
-    routes = [
-        Route("/", home),
-        Route("/api/modules", modules),
-        *(Mount(f"/m/{a}", routes=_module_routes(d)) for a, d in by_address.items()),
-        Route("/m/{address}/{rest:path}", unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
+    index = ModuleIndex([dashboards] if isinstance(dashboards, Dashboard) else dashboards)
+    routes: list[BaseRoute] = [
+        Route("/", index.home),
+        Route("/api/modules", index.modules),
+        *(Mount(f"/m/{a}", routes=ModuleApi(d).routes()) for a, d in index.by_address.items()),
+        Route("/m/{address}/{rest:path}", index.unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
         Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
     ]
     guard = Middleware(Guard, allowed_hosts=allowed_hosts, token=token, max_body=max_body,
@@ -138,152 +154,199 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
     return Starlette(routes=routes, middleware=[guard])
 
 
-def _module_routes(d: Dashboard) -> list:
-    """The page, API and WebSocket of one module, relative to its /m/{address} prefix."""
+class ModuleIndex:
+    """The modules served, by address: the listing, the root redirect and the 404 of an unknown one."""
 
-    def api(handler):
-        async def endpoint(request: Request) -> Response:
-            try:
-                result = await handler(request)
-            except (BadRequest, DashboardError) as exc:
-                return JSONResponse({"error": str(exc)}, status_code=400)
-            except ValueError as exc:  # e.g. a number literal too long to convert: still the input's fault
-                return JSONResponse({"error": _one_line(f"bad request: {exc}")}, status_code=400)
-            except RecursionError:
-                return JSONResponse({"error": "bad request: input nested too deeply"}, status_code=400)
-            return JSONResponse(result if result is not None else {"ok": True})
-        return endpoint
+    def __init__(self, dashboards: Sequence[Dashboard]) -> None:
+        self.by_address: dict[int, Dashboard] = {}
+        for d in dashboards:
+            if d.module.address in self.by_address:
+                raise ValueError(f"two dashboards for module address {d.module.address}")
+            self.by_address[d.module.address] = d
+        if not self.by_address:
+            raise ValueError("the dashboard needs at least one module")
 
-    async def index(_request: Request) -> Response:
+    def listing(self, request: Request) -> list[Json]:
+        root = request.scope.get("root_path", "")
+        return [{"address": a, "module": d.profile.name, "url": f"{root}/m/{a}/"}
+                for a, d in self.by_address.items()]
+
+    async def modules(self, request: Request) -> Response:
+        return JSONResponse(self.listing(request))
+
+    async def home(self, request: Request) -> Response:
+        return RedirectResponse(str(self.listing(request)[0]["url"]))
+
+    async def unknown(self, request: Request) -> Response:
+        known = ", ".join(map(str, self.by_address))
+        return JSONResponse({"error": f"no module at address {request.path_params['address']} "
+                                      f"(addresses: {known})"}, status_code=404)
+
+
+class ModuleApi:
+    """The page, JSON API and WebSocket of one module (its `Dashboard`), relative to its
+    /m/{address} prefix. Each API method reads the request and answers a JSON object (None: ok);
+    the `Dashboard` calls talk to the module, so they run in the thread pool."""
+
+    def __init__(self, dashboard: Dashboard) -> None:
+        self.d = dashboard
+
+    def routes(self) -> list[BaseRoute]:
+        post = ["POST"]
+        return [
+            Route("/", self.index),
+            Route("/api/overview", json_api(self.overview)),
+            Route("/api/state", json_api(self.state)),
+            Route("/api/params/axis/{axis}", json_api(self.axis_parameters)),
+            Route("/api/params/global", json_api(self.global_parameters)),
+            Route("/api/params/axis", json_api(self.set_axis_parameter), methods=post),
+            Route("/api/params/global", json_api(self.set_global_parameter), methods=post),
+            Route("/api/params/store", json_api(self.store), methods=post),
+            Route("/api/console", json_api(self.console), methods=post),
+            Route("/api/io/output", json_api(self.set_output), methods=post),
+            Route("/api/io/force", json_api(self.force_input), methods=post),
+            Route("/api/program", json_api(self.program)),
+            Route("/api/program/assemble", json_api(self.assemble), methods=post),
+            Route("/api/program/download", json_api(self.download), methods=post),
+            Route("/api/program/breakpoints", json_api(self.set_breakpoints), methods=post),
+            Route("/api/program/run", json_api(self.run), methods=post),
+            Route("/api/program/stop", json_api(self.stop), methods=post),
+            Route("/api/program/step", json_api(self.step), methods=post),
+            Route("/api/program/reset", json_api(self.reset), methods=post),
+            WebSocketRoute("/ws", self.live),
+        ]
+
+    async def index(self, _request: Request) -> Response:
         return FileResponse(f"{static_dir()}/index.html", headers={"Cache-Control": "no-store"})
 
-    async def overview(_r):
-        return await run_in_threadpool(d.overview)
+    # --- module and parameters ---
+    async def overview(self, _request: Request) -> object:
+        return await run_in_threadpool(self.d.overview)
 
-    async def state(_r):
-        return d.state or await run_in_threadpool(d.sample_slow)
+    async def state(self, _request: Request) -> object:
+        return self.d.state or await run_in_threadpool(self.d.sample_slow)
 
-    async def axis_params(r: Request):
+    async def axis_parameters(self, request: Request) -> object:
         try:
-            n = int(r.path_params["axis"])
+            n = int(request.path_params["axis"])
         except ValueError:
             raise BadRequest("axis must be a number") from None
-        return {"axis": n, "params": await run_in_threadpool(d.axis_parameters, n)}
+        return {"axis": n, "params": await run_in_threadpool(self.d.axis_parameters, n)}
 
-    async def global_params(_r):
-        return {"params": await run_in_threadpool(d.global_parameters)}
+    async def global_parameters(self, _request: Request) -> object:
+        return {"params": await run_in_threadpool(self.d.global_parameters)}
 
-    async def set_axis_param(r):
-        b = await _body(r)
-        value = await run_in_threadpool(d.set_axis_parameter, _int(b, "axis"), _int(b, "number"), _int(b, "value"))
-        return {"value": value}
+    async def set_axis_parameter(self, request: Request) -> object:
+        b = await _body(request)
+        axis, number, value = _int(b, "axis"), _int(b, "number"), _int(b, "value")
+        return {"value": await run_in_threadpool(self.d.set_axis_parameter, axis, number, value)}
 
-    async def set_global_param(r):
-        b = await _body(r)
-        value = await run_in_threadpool(d.set_global_parameter, _int(b, "bank"), _int(b, "number"), _int(b, "value"))
-        return {"value": value}
+    async def set_global_parameter(self, request: Request) -> object:
+        b = await _body(request)
+        bank, number, value = _int(b, "bank"), _int(b, "number"), _int(b, "value")
+        return {"value": await run_in_threadpool(self.d.set_global_parameter, bank, number, value)}
 
-    async def store(r):
-        b = await _body(r)
-        await run_in_threadpool(d.store, _str(b, "kind"), _int(b, "number"), _int(b, "index"),
-                                bool(b.get("restore", False)))
+    async def store(self, request: Request) -> object:
+        b = await _body(request)
+        kind, number, index = _str(b, "kind"), _int(b, "number"), _int(b, "index")
+        await run_in_threadpool(self.d.store, kind, number, index, bool(b.get("restore", False)))
+        return None
 
-    async def console(r):
-        b = await _body(r)
-        return await run_in_threadpool(d.console, _str(b, "line"))
+    async def console(self, request: Request) -> object:
+        b = await _body(request)
+        return await run_in_threadpool(self.d.console, _str(b, "line"))
 
-    async def output(r):
-        b = await _body(r)
-        return {"value": await run_in_threadpool(d.set_output, _int(b, "bank"), _int(b, "port"), _int(b, "value"))}
+    # --- I/O ---
+    async def set_output(self, request: Request) -> object:
+        b = await _body(request)
+        bank, port, value = _int(b, "bank"), _int(b, "port"), _int(b, "value")
+        return {"value": await run_in_threadpool(self.d.set_output, bank, port, value)}
 
-    async def force(r):
-        b = await _body(r)
-        await run_in_threadpool(d.force_input, _int(b, "bank"), _int(b, "port"), _int(b, "value", optional=True))
+    async def force_input(self, request: Request) -> object:
+        b = await _body(request)
+        bank, port, value = _int(b, "bank"), _int(b, "port"), _optional_int(b, "value")
+        await run_in_threadpool(self.d.force_input, bank, port, value)
+        return None
 
-    async def assemble(r):
-        b = await _body(r)
-        result = await run_in_threadpool(d.assemble, _str(b, "source"))
+    # --- the program ---
+    async def program(self, _request: Request) -> object:
+        state = await run_in_threadpool(self.d.program_state)
+        program = self.d.program
+        lines = None if program is None else \
+            [s.line if s is not None and s.file == "<editor>" else None for s in program.source]
+        return {"source": self.d.source, "state": state, "lines": lines}
+
+    async def assemble(self, request: Request) -> object:
+        b = await _body(request)
+        result = await run_in_threadpool(self.d.assemble, _str(b, "source"))
         result.pop("_program", None)
         return result
 
-    async def download(r):
-        b = await _body(r)
-        return await run_in_threadpool(d.download, _str(b, "source"))
+    async def download(self, request: Request) -> object:
+        b = await _body(request)
+        return await run_in_threadpool(self.d.download, _str(b, "source"))
 
-    async def breakpoints(r):
-        b = await _body(r)
-        lines = b.get("lines")
-        if not isinstance(lines, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in lines):
-            raise BadRequest("lines must be a list of line numbers")
-        return {"addresses": await run_in_threadpool(d.set_breakpoints, lines)}
+    async def set_breakpoints(self, request: Request) -> object:
+        lines = _line_numbers(await _body(request), "lines")
+        return {"addresses": await run_in_threadpool(self.d.set_breakpoints, lines)}
 
-    def action(fn):
-        async def handler(_r):
-            out = await run_in_threadpool(fn)
-            return out if isinstance(out, dict) else await run_in_threadpool(d.program_state)
-        return handler
+    async def run(self, _request: Request) -> object:
+        return await self._program_action(self.d.run)
 
-    async def program(_r):
-        st = await run_in_threadpool(d.program_state)
-        return {"source": d.source, "state": st,
-                "lines": None if d.program is None else
-                [s.line if s is not None and s.file == "<editor>" else None for s in d.program.source]}
+    async def stop(self, _request: Request) -> object:
+        return await self._program_action(self.d.stop)
 
-    async def ws(websocket: WebSocket) -> None:
+    async def step(self, _request: Request) -> object:
+        return await self._program_action(self.d.step)
+
+    async def reset(self, _request: Request) -> object:
+        return await self._program_action(self.d.reset)
+
+    async def _program_action(self, action: Callable[[], object]) -> object:
+        """Run `action`; its own answer when it has one (step), else the program state."""
+        out = await run_in_threadpool(action)
+        return out if isinstance(out, dict) else await run_in_threadpool(self.d.program_state)
+
+    # --- the live WebSocket ---
+    async def live(self, websocket: WebSocket) -> None:
+        """hello with the overview, then samples and state as they come, until either side leaves."""
         await websocket.accept(subprotocol=SUBPROTOCOL)  # Guard checked Origin and the subprotocol
         gone = asyncio.Event()
-
-        async def reader() -> None:
-            # The page sends nothing; reading notices the browser going away.
-            try:
-                while (await websocket.receive())["type"] != "websocket.disconnect":
-                    pass
-            except (WebSocketDisconnect, RuntimeError, ConnectionError):
-                pass
-            gone.set()
-
-        reading = asyncio.create_task(reader())
-        last_seq = d.samples[-1].seq - 1 if d.samples else 0
-        last_state = None
+        watching = asyncio.create_task(_watch_for_disconnect(websocket, gone))
+        last_seq = self.d.samples[-1].seq - 1 if self.d.samples else 0  # the latest sample is sent too
         try:
-            await websocket.send_json({"type": "hello", "overview": await run_in_threadpool(d.overview)})
-            while not gone.is_set() and not d.closed.is_set():
-                new = d.samples_since(last_seq)
-                if new:
-                    last_seq = new[-1].seq
-                    await websocket.send_json({"type": "samples", "samples": [
-                        {"seq": s.seq, "t": s.t, "p": s.position, "v": s.velocity} for s in new]})
-                if d.state and d.state is not last_state:
-                    last_state = d.state
-                    await websocket.send_json({"type": "state", "state": last_state})
-                await asyncio.sleep(1.0 / (FAST_HZ * 2))
-        except (WebSocketDisconnect, RuntimeError, ConnectionError):
+            await websocket.send_json({"type": "hello", "overview": await run_in_threadpool(self.d.overview)})
+            await self._push_updates(websocket, gone, last_seq)
+        except CLOSED:
             pass
         finally:
-            reading.cancel()
+            watching.cancel()
             if not gone.is_set():
                 with contextlib.suppress(RuntimeError, ConnectionError):
                     await websocket.close(1001)
 
-    return [
-        Route("/", index),
-        Route("/api/overview", api(overview)),
-        Route("/api/state", api(state)),
-        Route("/api/params/axis/{axis}", api(axis_params)),
-        Route("/api/params/global", api(global_params)),
-        Route("/api/params/axis", api(set_axis_param), methods=["POST"]),
-        Route("/api/params/global", api(set_global_param), methods=["POST"]),
-        Route("/api/params/store", api(store), methods=["POST"]),
-        Route("/api/console", api(console), methods=["POST"]),
-        Route("/api/io/output", api(output), methods=["POST"]),
-        Route("/api/io/force", api(force), methods=["POST"]),
-        Route("/api/program", api(program)),
-        Route("/api/program/assemble", api(assemble), methods=["POST"]),
-        Route("/api/program/download", api(download), methods=["POST"]),
-        Route("/api/program/breakpoints", api(breakpoints), methods=["POST"]),
-        Route("/api/program/run", api(action(d.run)), methods=["POST"]),
-        Route("/api/program/stop", api(action(d.stop)), methods=["POST"]),
-        Route("/api/program/step", api(action(d.step)), methods=["POST"]),
-        Route("/api/program/reset", api(action(d.reset)), methods=["POST"]),
-        WebSocketRoute("/ws", ws),
-    ]
+    async def _push_updates(self, websocket: WebSocket, gone: asyncio.Event, last_seq: int) -> None:
+        """Samples after `last_seq` and a changed state, polled at twice the sample rate, until the
+        browser is `gone` or the dashboard closes."""
+        d = self.d
+        last_state = None
+        while not gone.is_set() and not d.closed.is_set():
+            new = d.samples_since(last_seq)
+            if new:
+                last_seq = new[-1].seq
+                await websocket.send_json({"type": "samples", "samples": [
+                    {"seq": s.seq, "t": s.t, "p": s.position, "v": s.velocity} for s in new]})
+            if d.state and d.state is not last_state:
+                last_state = d.state
+                await websocket.send_json({"type": "state", "state": last_state})
+            await asyncio.sleep(1.0 / (FAST_HZ * 2))
+
+
+async def _watch_for_disconnect(websocket: WebSocket, gone: asyncio.Event) -> None:
+    """The page sends nothing; reading notices the browser going away and sets `gone`."""
+    try:
+        while (await websocket.receive())["type"] != "websocket.disconnect":
+            pass
+    except CLOSED:
+        pass
+    gone.set()

@@ -9,15 +9,19 @@ from __future__ import annotations
 
 import threading
 import time
+from typing import TYPE_CHECKING
 
 from ..host.errors import TmclConnectionError, TmclTimeout
 from ..host.transport import Transport
+
+if TYPE_CHECKING:
+    from ..server.bus import ModuleBus
 
 
 class BusTransport(Transport):
     frame_format = "serial"
 
-    def __init__(self, bus) -> None:
+    def __init__(self, bus: ModuleBus) -> None:
         self.bus = bus
         self._rx = bytearray()
         self._cond = threading.Condition()

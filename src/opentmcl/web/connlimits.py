@@ -14,6 +14,7 @@ Both log one warning line, at most one per `LOG_EVERY` seconds (with the count o
 """
 from __future__ import annotations
 
+import asyncio
 import logging
 import time
 
@@ -35,7 +36,7 @@ class _RareLog:
         self.last = -LOG_EVERY
         self.quiet = 0
 
-    def warn(self, text: str, *args) -> None:
+    def warn(self, text: str, *args: object) -> None:
         now = time.monotonic()
         if now - self.last < LOG_EVERY:
             self.quiet += 1
@@ -45,14 +46,18 @@ class _RareLog:
         self.last, self.quiet = now, 0
 
 
-def protocol_class(head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS):
+def protocol_class(head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS) -> type[H11Protocol]:
     """uvicorn's h11 protocol with the two bounds above (a class per server: the limits differ)."""
     if not head_timeout > 0 or max_connections < 1:
         raise ValueError("head_timeout must be > 0 and max_connections >= 1")
     too_many, too_slow = _RareLog(), _RareLog()
 
     class LimitedH11Protocol(H11Protocol):
-        def connection_made(self, transport) -> None:
+        _head_timer: asyncio.TimerHandle | None
+        _last_scope: object  # the request head seen at the last look, compared by identity
+
+        # uvicorn's H11Protocol already narrows BaseProtocol's BaseTransport to Transport; same here
+        def connection_made(self, transport: asyncio.Transport) -> None:  # type: ignore[override]
             super().connection_made(transport)
             self._head_timer = None
             if len(self.connections) > max_connections:
@@ -63,7 +68,7 @@ def protocol_class(head_timeout: float = HEAD_TIMEOUT, max_connections: int = MA
             self._last_scope = None
             self._head_timer = self.loop.call_later(head_timeout, self._check_head)
 
-        def connection_lost(self, exc) -> None:
+        def connection_lost(self, exc: Exception | None) -> None:
             if self._head_timer is not None:
                 self._head_timer.cancel()
                 self._head_timer = None
@@ -85,5 +90,5 @@ def protocol_class(head_timeout: float = HEAD_TIMEOUT, max_connections: int = MA
     return LimitedH11Protocol
 
 
-def _peer(client) -> str:
+def _peer(client: tuple[str, int] | None) -> str:
     return f"{client[0]}:{client[1]}" if client else "?"

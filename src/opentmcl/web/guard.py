@@ -16,6 +16,7 @@ Refusals are 403, 408 or 413 with ``{"error": "<one line>"}`` and a log line.
 from __future__ import annotations
 
 import asyncio
+import enum
 import logging
 import secrets
 import urllib.parse
@@ -23,6 +24,7 @@ from collections.abc import Iterable
 
 from starlette.requests import HTTPConnection
 from starlette.responses import JSONResponse, RedirectResponse
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 log = logging.getLogger("opentmcl.web")
 
@@ -33,7 +35,13 @@ TOKEN_HEADER = "x-opentmcl-token"
 SUBPROTOCOL = "opentmcl"
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "[::1]")
 SAFE_METHODS = ("GET", "HEAD")
-GONE = object()  # read_body(): the client disconnected
+
+
+class _Gone(enum.Enum):
+    GONE = "gone"
+
+
+GONE = _Gone.GONE  # read_body(): the client disconnected
 
 
 def host_name(name: str) -> str:
@@ -69,7 +77,7 @@ def new_token() -> str:
 class Guard:
     """ASGI middleware: see the module docstring. `allowed_hosts` extends the loopback names."""
 
-    def __init__(self, app, allowed_hosts: Iterable[str] = (), token: str | None = None,
+    def __init__(self, app: ASGIApp, allowed_hosts: Iterable[str] = (), token: str | None = None,
                  max_body: int = MAX_BODY, body_timeout: float = BODY_TIMEOUT) -> None:
         self.app = app
         self.body_timeout = body_timeout
@@ -77,7 +85,7 @@ class Guard:
         self.token = token
         self.max_body = max_body
 
-    async def __call__(self, scope, receive, send) -> None:
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
@@ -88,7 +96,7 @@ class Guard:
             return
         if scope["type"] == "http" and self.token and conn.query_params.get("token") and \
                 scope["method"] in SAFE_METHODS:
-            await self.set_cookie(conn, scope, receive, send)
+            await self.set_cookie(conn, self.token, scope, receive, send)
             return
         if scope["type"] == "http":
             length = conn.headers.get("content-length", "")
@@ -113,7 +121,7 @@ class Guard:
     def too_large(self) -> str:
         return f"request body larger than {self.max_body} bytes"
 
-    def refusal(self, conn: HTTPConnection, scope) -> str | None:
+    def refusal(self, conn: HTTPConnection, scope: Scope) -> str | None:
         """Why this request is refused, or None."""
         raw_host = conn.headers.get("host")
         if raw_host is None:
@@ -122,7 +130,7 @@ class Guard:
         if authority is None or authority[0] not in self.allowed:
             return (f"Host {_shown(raw_host)} is not allowed (DNS rebinding?); to serve under that name "
                     "start the dashboard with --allow-host NAME")
-        if self.token and not self.has_token(conn):
+        if self.token and not self.has_token(conn, self.token):
             return "missing or wrong token: open the dashboard with the ?token=... URL printed at start-up"
         websocket = scope["type"] == "websocket"
         if not websocket and scope["method"] in SAFE_METHODS:
@@ -138,22 +146,25 @@ class Guard:
             return "missing header X-OpenTMCL: 1 (the dashboard page sends it; scripts must too)"
         return None
 
-    def has_token(self, conn: HTTPConnection) -> bool:
+    @staticmethod
+    def has_token(conn: HTTPConnection, token: str) -> bool:
         given = (conn.headers.get(TOKEN_HEADER) or conn.query_params.get("token")
                  or conn.cookies.get(cookie_name(conn.scope)) or "")
-        return secrets.compare_digest(given.encode(), self.token.encode())
+        return secrets.compare_digest(given.encode(), token.encode())
 
-    async def set_cookie(self, conn: HTTPConnection, scope, receive, send) -> None:
+    @staticmethod
+    async def set_cookie(conn: HTTPConnection, token: str, scope: Scope, receive: Receive, send: Send) -> None:
         """The page opened with ?token=...: keep the token in a cookie, drop it from the address bar."""
         query = urllib.parse.urlencode([(k, v) for k, v in conn.query_params.multi_items() if k != "token"])
         target = scope.get("root_path", "") + scope["path"] + (f"?{query}" if query else "")
         response = RedirectResponse(target, status_code=303, headers={"Cache-Control": "no-store"})
-        response.set_cookie(cookie_name(scope), self.token, httponly=True, samesite="strict", path="/")
+        response.set_cookie(cookie_name(scope), token, httponly=True, samesite="strict", path="/")
         await response(scope, receive, send)
 
-    async def read_body(self, receive) -> bytes | object | None:
+    async def read_body(self, receive: Receive) -> bytes | _Gone | None:
         """The whole body, None as soon as it passes the limit (the rest is never read), or GONE."""
-        chunks, size = [], 0
+        chunks: list[bytes] = []
+        size = 0
         while True:
             message = await receive()
             if message["type"] != "http.request":
@@ -166,7 +177,7 @@ class Guard:
             if not message.get("more_body", False):
                 return b"".join(chunks)
 
-    async def refuse(self, scope, receive, send, status: int, reason: str) -> None:
+    async def refuse(self, scope: Scope, receive: Receive, send: Send, status: int, reason: str) -> None:
         client = scope.get("client") or ("?", 0)
         log.warning("refused %s %s from %s: %s", scope.get("method", "WEBSOCKET"), scope["path"],
                     client[0], reason)
@@ -192,17 +203,17 @@ def same_origin(origin: str, authority: tuple[str, str]) -> bool:
     return (parsed[0], parsed[1] or default) == (authority[0], authority[1] or default)
 
 
-def cookie_name(scope) -> str:
+def cookie_name(scope: Scope) -> str:
     """One cookie per port: cookies do not tell ports apart, two dashboards on a host must not clash."""
     server = scope.get("server") or (None, 0)
     return f"opentmcl_token_{server[1] or 0}"
 
 
-def replay(body: bytes, receive):
+def replay(body: bytes, receive: Receive) -> Receive:
     """A receive() that gives `body` once, then what the server sends (a disconnect)."""
     sent = False
 
-    async def again():
+    async def again() -> Message:
         nonlocal sent
         if sent:
             return await receive()

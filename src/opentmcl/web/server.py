@@ -12,10 +12,20 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, TextIO
 
 from .connlimits import HEAD_MAX, HEAD_TIMEOUT, KEEP_ALIVE, MAX_CONNECTIONS, protocol_class
 from .guard import BODY_TIMEOUT
 from .service import Dashboard, Poller
+
+if TYPE_CHECKING:
+    import socket
+
+    import uvicorn
+
+    from ..host import Module
+    from ..server.bus import ModuleBus
 
 WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's default is 16 MiB
 
@@ -25,8 +35,8 @@ class DashboardHandle:
     `token`, `dashboards` (one service per module, the first also as `dashboard`),
     `module_url(address)`, `stop()`."""
 
-    def __init__(self, dashboards: list[Dashboard], server, thread: threading.Thread, pollers: list[Poller],
-                 on_stop=None, token: str | None = None, allowed_hosts: tuple[str, ...] = ()):
+    def __init__(self, dashboards: list[Dashboard], server: uvicorn.Server, thread: threading.Thread,
+                 pollers: list[Poller], on_stop: Callable[[], None] | None = None, token: str | None = None, allowed_hosts: tuple[str, ...] = ()):
         self.dashboards = list(dashboards)
         self.token = token  # required on every request when set (LAN use); None on loopback
         self.allowed_hosts = tuple(allowed_hosts)
@@ -83,7 +93,7 @@ class DashboardHandle:
     def __enter__(self) -> DashboardHandle:
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, *exc: object) -> None:
         self.stop()
 
 
@@ -112,7 +122,7 @@ class DashboardStartError(OSError):
     """The web server could not start (port in use, bad address)."""
 
 
-def warn_if_exposed(host: str, err=None) -> None:
+def warn_if_exposed(host: str, err: TextIO | None = None) -> None:
     """Anyone who has the token can move the motors: say so when it is not loopback-only."""
     import sys
 
@@ -123,13 +133,13 @@ def warn_if_exposed(host: str, err=None) -> None:
               "anyone who has its token can move the motors", file=err or sys.stderr)
 
 
-def check_allowed_hosts(names) -> tuple[str, ...]:
+def check_allowed_hosts(names: Iterable[object]) -> tuple[str, ...]:
     """--allow-host values: host names or IP addresses (IPv6 with or without brackets), no scheme,
     port or path; ValueError with a one-line message otherwise."""
     import ipaddress
     import re
 
-    out = []
+    out: list[str] = []
     for name in names:
         text = str(name).strip().lower()
         bare = text[1:-1] if text.startswith("[") and text.endswith("]") else text
@@ -143,22 +153,25 @@ def check_allowed_hosts(names) -> tuple[str, ...]:
     return tuple(out)
 
 
-def start_dashboard(module, host: str = "127.0.0.1", port: int = 8080, *, vm=None, vm_lock=None,
-                    url: str = "", on_stop=None, poll: bool = True, allow_hosts=(),
-                    token: str | None = None, **limits) -> DashboardHandle:
+def start_dashboard(module: Module, host: str = "127.0.0.1", port: int = 8080, *, vm: object = None,
+                    vm_lock: object = None, url: str = "", on_stop: Callable[[], None] | None = None,
+                    poll: bool = True, allow_hosts: Iterable[str] = (), token: str | None = None,
+                    head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS,
+                    body_timeout: float = BODY_TIMEOUT) -> DashboardHandle:
     """Serve the dashboard for a host `Module` at http://host:port/m/ADDRESS/ (the root redirects
     there) from a daemon thread.
 
     `vm`/`vm_lock`: the in-process VirtualModule behind `module` and the lock that guards it, for
     the virtual-only features (forcing inputs). `port` 0 picks a free port (see `handle.port`).
-    `allow_hosts`, `token` and the connection `limits`: see `serve_dashboards`.
+    `allow_hosts`, `token`, `head_timeout`, `max_connections` and `body_timeout`: see `serve_dashboards`.
     """
     dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
     return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll, allow_hosts=allow_hosts,
-                            token=token, **limits)
+                            token=token, head_timeout=head_timeout, max_connections=max_connections,
+                            body_timeout=body_timeout)
 
 
-def _bind(host: str, port: int):
+def _bind(host: str, port: int) -> socket.socket:
     """The listening socket, bound here so a port in use is a clear DashboardStartError."""
     import socket
 
@@ -179,7 +192,8 @@ def _bind(host: str, port: int):
 
 
 def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port: int = 8080, *,
-                     on_stop=None, poll: bool = True, allow_hosts=(), token: str | None = None,
+                     on_stop: Callable[[], None] | None = None, poll: bool = True,
+                     allow_hosts: Iterable[str] = (), token: str | None = None,
                      head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS,
                      body_timeout: float = BODY_TIMEOUT) -> DashboardHandle:
     """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each.
@@ -197,10 +211,10 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     from .app import create_app
     from .guard import new_token
 
-    allow_hosts = check_allowed_hosts(allow_hosts)
-    if token is None and (allow_hosts or not is_loopback(host)):
+    hosts = check_allowed_hosts(allow_hosts)
+    if token is None and (hosts or not is_loopback(host)):
         token = new_token()
-    app = create_app(dashboards, allowed_hosts=(host, *allow_hosts), token=token, body_timeout=body_timeout)
+    app = create_app(dashboards, allowed_hosts=(host, *hosts), token=token, body_timeout=body_timeout)
     warn_if_exposed(host)
     sock = _bind(host, port)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
@@ -209,7 +223,6 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
                             timeout_keep_alive=KEEP_ALIVE)
     server = uvicorn.Server(config)
     logging.getLogger("uvicorn.error").addFilter(_HANDSHAKE_FILTER)  # idempotent: one filter object
-    server.install_signal_handlers = lambda: None  # older uvicorn; the caller owns the signals
     failure: list[BaseException] = []
 
     def serve() -> None:
@@ -234,10 +247,11 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     if poll:
         for poller in pollers:
             poller.start()
-    return DashboardHandle(dashboards, server, thread, pollers, on_stop, token, allow_hosts)
+    return DashboardHandle(dashboards, server, thread, pollers, on_stop, token, hosts)
 
 
-def bus_dashboards(bus, *, address: int | None = None, timeout: float = 2.0) -> tuple[list[Dashboard], object]:
+def bus_dashboards(bus: ModuleBus, *, address: int | None = None,
+                   timeout: float = 2.0) -> tuple[list[Dashboard], Callable[[], None]]:
     """One `Dashboard` per module of a `ModuleBus` (or only the one at `address`), each talking to
     its module through the bus (BusTransport). Returns the dashboards and a function that closes
     their clients."""
@@ -251,7 +265,7 @@ def bus_dashboards(bus, *, address: int | None = None, timeout: float = 2.0) -> 
         if address not in vms:
             raise ValueError(f"no served module at address {address} (addresses: {sorted(vms)})")
         vms = {address: vms[address]}
-    clients = []
+    clients: list[Client] = []
 
     def close() -> None:
         for client in clients:
@@ -270,8 +284,9 @@ def bus_dashboards(bus, *, address: int | None = None, timeout: float = 2.0) -> 
     return dashboards, close
 
 
-def start_dashboard_for_bus(bus, host: str = "127.0.0.1", port: int = 8080, *, address: int | None = None,
-                            timeout: float = 2.0, allow_hosts=(), token: str | None = None) -> DashboardHandle:
+def start_dashboard_for_bus(bus: ModuleBus, host: str = "127.0.0.1", port: int = 8080, *,
+                            address: int | None = None, timeout: float = 2.0,
+                            allow_hosts: Iterable[str] = (), token: str | None = None) -> DashboardHandle:
     """Dashboard for every module of a running server's `ModuleBus` (or only the one at `address`),
     each at /m/ADDRESS/. Requests go through the bus like any client's; the bus lock guards the
     in-process modules."""
