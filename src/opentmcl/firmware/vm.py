@@ -19,7 +19,7 @@ from ..protocol.frame import FRAME_LEN, Reply, Request, to_int32
 from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .axis import Axis
-from .commands import NO_SUPPRESS, execute
+from .commands import NO_SUPPRESS, StatusReply, execute
 from .eeprom import Eeprom
 from .globals import GlobalParameters
 from .interpreter import Interpreter
@@ -316,10 +316,10 @@ class VirtualModule:
         """CLE: 0 all, 1 ETO, 2 EAL, 3 EDV, 4 EPO, 5 ESD (flag bit = 1 << (which - 1))."""
         self.flags &= ~0x1F if which == 0 else ~(1 << (which - 1))  # arithmetic flags stay (flags.py)
 
-    def program_control(self, command: int, type: int, value: int):
+    def program_control(self, command: int, type: int, value: int) -> StatusReply | bytes:
         return program_control(self, command, type, value)
 
-    def store_instruction(self, command: int, type: int, motor: int, value: int):
+    def store_instruction(self, command: int, type: int, motor: int, value: int) -> StatusReply:
         return store_instruction(self, command, type, motor, value)
 
     def erase_program(self) -> None:

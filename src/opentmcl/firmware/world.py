@@ -53,7 +53,6 @@ class World:
         self.axes_world: list[AxisWorld] = []
         self.inputs: dict[tuple[int, int], Profile] = {(i.bank, i.port): i.signal for i in self.scenario.inputs}
         self.shutdown = self.scenario.shutdown
-        self._shutdown_level = 0
         self._input_cache: tuple | None = None
 
     # --- API ----------------------------------------------------------------------------------------
@@ -64,7 +63,9 @@ class World:
         """Drive an input with a constant or a Profile over time (seconds since power-up of the world)."""
         if (bank, port) not in self.vm.io.ports:
             raise ScenarioError(f"input bank {bank} port {port}: {self.vm.profile.name} has no such port")
-        self.inputs.pop(self.vm.io.twins.get((bank, port)), None)  # one line: the newest drive wins
+        twin = self.vm.io.twins.get((bank, port))
+        if twin is not None:  # one line: the newest drive wins
+            self.inputs.pop(twin, None)
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
         self._input_cache = None
         self._drive_input((bank, port))
