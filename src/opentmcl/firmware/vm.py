@@ -27,7 +27,7 @@ from .interrupts import Interrupts
 from .io import IOBanks
 from .program import ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
-from .world import World
+from .world import ScenarioSource, World
 
 TICKS_PER_MS = CLOCK_HZ // 1000
 _REQUEST = struct.Struct(">BBBBiB")
@@ -42,7 +42,7 @@ class VirtualModule:
     """A TMCL module in software: TMCM-6212, PD28-1021 (TMCM-1021) or PD86-1180 (TMCM-1180)."""
 
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
-                 eeprom: str | os.PathLike | None = None, scenario=None) -> None:
+                 eeprom: str | os.PathLike | None = None, scenario: ScenarioSource = None) -> None:
         self.profile: ModuleProfile = load_profile(name)
         if address is not None and not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
             raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")

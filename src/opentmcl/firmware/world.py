@@ -16,6 +16,7 @@ The world persists across power cycles (`power_up` rebinds it to the new axes). 
 """
 from __future__ import annotations
 
+import os
 from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
@@ -29,7 +30,10 @@ if TYPE_CHECKING:
     from .axis import Axis
     from .vm import VirtualModule
 
-__all__ = ["AxisWorld", "World"]
+__all__ = ["AxisWorld", "ScenarioSource", "World"]
+
+ScenarioSource = Scenario | dict[str, object] | str | os.PathLike[str] | None
+"""What `load_scenario` takes: a Scenario, its parsed dict, a .toml/.yaml path, or None (empty world)."""
 
 
 class World:
@@ -38,7 +42,7 @@ class World:
     axis_numbers: frozenset[int] = frozenset({9, 10, 11, 29, 180, 206, 208, 209, 215})
     """Axis parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
 
-    def __init__(self, vm: VirtualModule, scenario=None) -> None:
+    def __init__(self, vm: VirtualModule, scenario: ScenarioSource = None) -> None:
         self.vm = vm
         self.scenario: Scenario = load_scenario(scenario)
         if self.scenario.module is not None:

@@ -199,7 +199,7 @@ def lookup(name: str) -> Field:
     raise RegisterError(f"unknown TMC4210 register or field {name!r}")
 
 
-def whole_register(name) -> Register | None:
+def whole_register(name: object) -> Register | None:
     """The register called `name` when that name is not also a field (PMUL_PDIV, INTERRUPT, ...):
     read and written as its 24 raw data bits."""
     if not isinstance(name, str):
