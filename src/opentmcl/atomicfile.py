@@ -32,13 +32,13 @@ def _read_umask() -> int:
 _UMASK = _read_umask()
 
 
-def write_atomic(path: str | os.PathLike, data: bytes) -> None:
+def write_atomic(path: str | os.PathLike[str], data: bytes) -> None:
     with open_atomic(path) as fh:
         fh.write(data)
 
 
 @contextlib.contextmanager
-def open_atomic(path: str | os.PathLike, text: bool = False) -> Iterator[IO[Any]]:
+def open_atomic(path: str | os.PathLike[str], text: bool = False) -> Iterator[IO[Any]]:
     """A file to write `path` through: the temporary file, renamed over `path` when the block
     ends without an exception, deleted otherwise (`path` keeps its old content). `text=True`:
     a UTF-8 text file without newline translation. A symbolic link is followed (the file it names
@@ -78,12 +78,12 @@ def open_atomic(path: str | os.PathLike, text: bool = False) -> Iterator[IO[Any]
         raise
 
 
-def stale_pattern(path: str | os.PathLike) -> re.Pattern[str]:
+def stale_pattern(path: str | os.PathLike[str]) -> re.Pattern[str]:
     """Names of the temporary files `write_atomic(path, ...)` creates."""
     return re.compile(rf"\.{re.escape(Path(path).name)}\.{_RANDOM}\.tmp")
 
 
-def remove_stale(path: str | os.PathLike) -> list[Path]:
+def remove_stale(path: str | os.PathLike[str]) -> list[Path]:
     """Delete the temporary files of `path` that a killed writer left next to it (same folder,
     our own name pattern, no writer holding its lock); returns those deleted. Like `open_atomic`,
     it follows a symbolic link to the image."""

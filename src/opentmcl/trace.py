@@ -121,7 +121,7 @@ class Trace:
         self._append(row)
         return row
 
-    def _append(self, row: dict) -> None:
+    def _append(self, row: Row) -> None:
         if not self._data:
             self._names, self._data = list(row), [Column() for _ in row]
         elif list(row) != self._names:
@@ -143,7 +143,7 @@ class Trace:
             self.sample(vm)
         return self.rows
 
-    def to_csv(self, target: str | os.PathLike | None = None) -> str:
+    def to_csv(self, target: str | os.PathLike[str] | None = None) -> str:
         """The rows as CSV text; written to `target` when given."""
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")

@@ -50,7 +50,7 @@ def _empty() -> dict:
 class Eeprom:
     """Dictionary-shaped EEPROM image; `flush()` persists it when file-backed."""
 
-    def __init__(self, path: str | os.PathLike | None = None, module: str = "") -> None:
+    def __init__(self, path: str | os.PathLike[str] | None = None, module: str = "") -> None:
         self.path = Path(path) if path is not None else None
         self.module = module
         self.data = _empty()

@@ -42,7 +42,7 @@ class VirtualModule:
     """A TMCL module in software: TMCM-6212, PD28-1021 (TMCM-1021) or PD86-1180 (TMCM-1180)."""
 
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
-                 eeprom: str | os.PathLike | None = None, scenario: ScenarioSource = None) -> None:
+                 eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None) -> None:
         self.profile: ModuleProfile = load_profile(name)
         if address is not None and not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
             raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")

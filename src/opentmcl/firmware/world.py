@@ -57,7 +57,7 @@ class World:
         self.axes_world: list[AxisWorld] = []
         self.inputs: dict[tuple[int, int], Profile] = {(i.bank, i.port): i.signal for i in self.scenario.inputs}
         self.shutdown = self.scenario.shutdown
-        self._input_cache: tuple | None = None
+        self._input_cache: tuple[tuple[int, int, Profile | None], int | None] | None = None  # (inputs key, next change)
 
     # --- API ----------------------------------------------------------------------------------------
     def axis(self, index: int) -> AxisWorld:
