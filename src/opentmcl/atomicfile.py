@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
-import io
 import os
 import re
 import stat
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+from typing import IO, Any
 
 _RANDOM = r"[a-z0-9_]{8}"   # tempfile's name alphabet
 
@@ -32,40 +32,40 @@ def _read_umask() -> int:
 _UMASK = _read_umask()
 
 
-def write_atomic(path: str | os.PathLike, data: bytes) -> None:
+def write_atomic(path: str | os.PathLike[str], data: bytes) -> None:
     with open_atomic(path) as fh:
         fh.write(data)
 
 
 @contextlib.contextmanager
-def open_atomic(path: str | os.PathLike, text: bool = False) -> Iterator[io.IOBase]:
+def open_atomic(path: str | os.PathLike[str], text: bool = False) -> Iterator[IO[Any]]:
     """A file to write `path` through: the temporary file, renamed over `path` when the block
     ends without an exception, deleted otherwise (`path` keeps its old content). `text=True`:
     a UTF-8 text file without newline translation. A symbolic link is followed (the file it names
     is replaced, the link stays); a target that exists but is no regular file (/dev/null, a FIFO,
     a terminal) is written straight through, never replaced."""
-    kind = {"mode": "w", "encoding": "utf-8", "newline": ""} if text else {"mode": "wb"}
+    mode, encoding, newline = ("w", "utf-8", "") if text else ("wb", None, None)
     target = Path(os.path.realpath(path))
     try:
         special = not stat.S_ISREG(target.stat().st_mode)
     except OSError:
         special = False
     if special:
-        with open(target, **kind) as fh:
+        with open(target, mode, encoding=encoding, newline=newline) as fh:
             yield fh
         return
     directory = target.parent
     if not directory.is_dir():
         raise FileNotFoundError(2, f"folder {directory} does not exist", str(target))
     try:
-        mode = target.stat().st_mode & 0o7777
+        permissions = target.stat().st_mode & 0o7777
     except OSError:
-        mode = 0o666 & ~_UMASK
+        permissions = 0o666 & ~_UMASK
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=directory)
     try:
         fcntl.flock(fd, fcntl.LOCK_EX)   # "a writer is alive" for remove_stale
-        os.chmod(tmp, mode)
-        with os.fdopen(fd, **kind) as fh:
+        os.chmod(tmp, permissions)
+        with os.fdopen(fd, mode, encoding=encoding, newline=newline) as fh:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
@@ -78,12 +78,12 @@ def open_atomic(path: str | os.PathLike, text: bool = False) -> Iterator[io.IOBa
         raise
 
 
-def stale_pattern(path: str | os.PathLike) -> re.Pattern[str]:
+def stale_pattern(path: str | os.PathLike[str]) -> re.Pattern[str]:
     """Names of the temporary files `write_atomic(path, ...)` creates."""
     return re.compile(rf"\.{re.escape(Path(path).name)}\.{_RANDOM}\.tmp")
 
 
-def remove_stale(path: str | os.PathLike) -> list[Path]:
+def remove_stale(path: str | os.PathLike[str]) -> list[Path]:
     """Delete the temporary files of `path` that a killed writer left next to it (same folder,
     our own name pattern, no writer holding its lock); returns those deleted. Like `open_atomic`,
     it follows a symbolic link to the image."""

@@ -16,13 +16,18 @@ _INTS = ("b", "h", "i", "q")
 _LIMITS = {code: 1 << (array(code).itemsize * 8 - 1) for code in _INTS}   # 2**(bits-1)
 
 
+def _array(code: str, values: Iterable[float] = ()) -> array[float]:
+    """An array of type `code` ("b" ... "q" or "d"); typed array[float], which holds ints too."""
+    return array(code, values)
+
+
 class Column:
     """A growing sequence of int / float / None values."""
 
     __slots__ = ("_a",)
 
     def __init__(self, values: Iterable[float | int | None] = ()) -> None:
-        self._a = array("b")
+        self._a = _array("b")
         for v in values:
             self.append(v)
 
@@ -37,7 +42,7 @@ class Column:
     def _widen(self, code: str) -> None:
         old, none = self._a, -_LIMITS[self._a.typecode]
         new_none = math.nan if code == "d" else -_LIMITS[code]
-        self._a = array(code, (new_none if x == none else x for x in old))
+        self._a = _array(code, (new_none if x == none else x for x in old))
 
     def append(self, v: float | int | None) -> None:
         a = self._a
@@ -52,7 +57,7 @@ class Column:
                     self._widen(_INTS[_INTS.index(self._a.typecode) + 1])
         self._a.append(v)
 
-    def _get(self, x):
+    def _get(self, x: float) -> float | int | None:
         if self._a.typecode == "d":
             return None if x != x else x
         return None if x == -_LIMITS[self._a.typecode] else x

@@ -32,7 +32,7 @@ def size_text(n: int) -> str:
     return f"{n // MIB} MiB" if n % MIB == 0 else f"{n // KIB} KiB" if n % KIB == 0 else f"{n} bytes"
 
 
-def read_bytes(path: str | os.PathLike, cap: int, what: str = "file", *, stdin: bool = False) -> bytes:
+def read_bytes(path: str | os.PathLike[str], cap: int, what: str = "file", *, stdin: bool = False) -> bytes:
     """The whole content of `path` (with stdin=True, '-' is stdin), at most `cap` bytes, else
     InputTooLarge (its message names `what` and the cap, not the path). OSError as open() raises it."""
     if stdin and str(path) == "-":
@@ -45,7 +45,7 @@ def read_bytes(path: str | os.PathLike, cap: int, what: str = "file", *, stdin: 
     return data
 
 
-def read_text(path: str | os.PathLike, cap: int, what: str = "file", errors: str = "strict", *,
+def read_text(path: str | os.PathLike[str], cap: int, what: str = "file", errors: str = "strict", *,
               stdin: bool = False) -> str:
     """`read_bytes` decoded as UTF-8 (UnicodeDecodeError with errors='strict')."""
     return read_bytes(path, cap, what, stdin=stdin).decode("utf-8", errors=errors)

@@ -14,14 +14,24 @@ read; at most MAX_ROWS rows (TraceFull beyond).
 """
 from __future__ import annotations
 
+import argparse
 import csv
 import io
 import math
 import os
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, overload
 
 from .atomicfile import open_atomic
 from .columns import Column
+
+if TYPE_CHECKING:
+    from .firmware.vm import VirtualModule
+
+Row = dict[str, float | int | None]
+"""One sample: column name -> value (None: the module has no such value)."""
+ErrorType = Callable[[str], Exception]
+"""The exception the CLI raises for bad input (its CliError), built from a one-line message."""
 
 FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("load", 206),
           ("current", 180), ("encoder", 209))
@@ -38,7 +48,7 @@ class TraceFull(ValueError):
     """A trace that already holds max_rows rows."""
 
 
-class _Rows(Sequence):
+class _Rows(Sequence[Row]):
     """The rows of a Trace as dicts, made on demand from its columns."""
 
     def __init__(self, trace: Trace) -> None:
@@ -47,7 +57,13 @@ class _Rows(Sequence):
     def __len__(self) -> int:
         return len(self._t._data[0]) if self._t._data else 0
 
-    def __getitem__(self, i):
+    @overload
+    def __getitem__(self, i: int) -> Row: ...
+
+    @overload
+    def __getitem__(self, i: slice) -> list[Row]: ...
+
+    def __getitem__(self, i: int | slice) -> Row | list[Row]:
         if isinstance(i, slice):
             return [self[k] for k in range(*i.indices(len(self)))]
         names, data = self._t._names, self._t._data
@@ -72,7 +88,7 @@ class Trace:
         """Bytes held by the values (column arrays)."""
         return sum(c.nbytes() for c in self._data)
 
-    def _axes(self, vm) -> list[int]:
+    def _axes(self, vm: VirtualModule) -> list[int]:
         n = len(vm.axes)
         if self.axes is None:
             return list(range(n))
@@ -81,13 +97,13 @@ class Trace:
             raise ValueError(f"{vm.profile.name} has no axis {bad[0]}")
         return self.axes
 
-    def columns(self, vm) -> list[str]:
+    def columns(self, vm: VirtualModule) -> list[str]:
         cols = ["time"]
         for a in self._axes(vm):
             cols += [f"{name}{a}" for name, _ in FIELDS] + [f"stage{a}"]
         return cols
 
-    def sample(self, vm) -> dict[str, float | int | None]:
+    def sample(self, vm: VirtualModule) -> Row:
         """Read one row from the virtual module at its present time (no time passes)."""
         from .firmware.status import TmclStatus
 
@@ -105,7 +121,7 @@ class Trace:
         self._append(row)
         return row
 
-    def _append(self, row: dict) -> None:
+    def _append(self, row: Row) -> None:
         if not self._data:
             self._names, self._data = list(row), [Column() for _ in row]
         elif list(row) != self._names:
@@ -115,7 +131,7 @@ class Trace:
         for col, v in zip(self._data, row.values(), strict=True):
             col.append(v)
 
-    def record(self, vm, seconds: float, interval: float) -> _Rows:
+    def record(self, vm: VirtualModule, seconds: float, interval: float) -> _Rows:
         """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
         check_interval(seconds, interval)
         steps = round(seconds / interval)
@@ -127,7 +143,7 @@ class Trace:
             self.sample(vm)
         return self.rows
 
-    def to_csv(self, target: str | os.PathLike | None = None) -> str:
+    def to_csv(self, target: str | os.PathLike[str] | None = None) -> str:
         """The rows as CSV text; written to `target` when given."""
         buf = io.StringIO()
         w = csv.writer(buf, lineterminator="\n")
@@ -153,7 +169,8 @@ class Trace:
         return "\n".join(lines)
 
 
-def world_demo(args, plan, error) -> int:
+def world_demo(args: argparse.Namespace, plan: Callable[[VirtualModule], Iterable[tuple[int, int, int, int]]],
+               error: ErrorType) -> int:
     """`opentmcl demo --scenario FILE [--csv OUT]`: the demo moves (`plan(vm)`) in a world;
     prints the trace table or writes it as CSV. Bad input raises `error` (the CLI's CliError)."""
     from .firmware.vm import VirtualModule
@@ -191,7 +208,7 @@ def world_demo(args, plan, error) -> int:
 class _CliRecorder:
     """`opentmcl run --csv FILE`: samples the in-process module at each look of the run."""
 
-    def __init__(self, vm, path: str, error) -> None:
+    def __init__(self, vm: VirtualModule, path: str, error: ErrorType) -> None:
         self.vm, self.path, self.error = vm, path, error
         self.trace = Trace()
 
@@ -209,7 +226,7 @@ class _CliRecorder:
         print(f"world trace: {len(self.trace.rows)} rows written to {self.path}")
 
 
-def cli_recorder(client, args, error) -> _CliRecorder | None:
+def cli_recorder(client: object, args: argparse.Namespace, error: ErrorType) -> _CliRecorder | None:
     """The recorder for `run --csv`, or None without --csv (needs the in-process module)."""
     path = getattr(args, "csv", None)
     if not path:

@@ -89,7 +89,7 @@ class AsciiInterface:
             cmd = codec.parse_command(line)
         except codec.AsciiError as exc:
             return self._reply(int(exc.status), 0)
-        if cmd.is_bin:
+        if cmd.command is None:  # BIN, the one command without a binary form
             vm.ascii_mode = False
             return self._reply(int(Status.OK), 0)
         vm.touch()

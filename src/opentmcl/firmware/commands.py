@@ -11,32 +11,46 @@ running program).
 """
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import TYPE_CHECKING
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Protocol
 
 from ..protocol.frame import to_int32
 from ..protocol.status import Status
 from .status import TmclStatus
 
 if TYPE_CHECKING:
+    from ..modules.profile import Param
+    from .axis import Axis
     from .vm import VirtualModule
 
-Result = tuple[int, int] | bytes | None
-Handler = Callable[["VirtualModule", int, int, int, bool], Result]
+StatusReply = tuple[int, int]
+"""(status, value) of a normal reply (manual 3.2.1)."""
+Result = StatusReply | bytes | None
+"""What a command answers: a normal reply, the raw bytes of a special reply (136 type 0, 134),
+or None when no reply is due (137)."""
+
+
+class CommandHandler(Protocol):
+    """The signature every entry of HANDLERS has: the request's type, motor (or bank, port,
+    coordinate number) and value fields, and whether a TMCL program runs the command; the
+    handler answers a Result or raises TmclStatus (docs/architecture.md, "Request path")."""
+
+    def __call__(self, vm: VirtualModule, type: int, motor: int, value: int, program: bool, /) -> Result: ...
+
 
 NO_SUPPRESS = frozenset({6, 10, 15})  # GP255 never suppresses GAP, GGP, GIO
 OK = int(Status.OK)
 _INVALID_COMMAND = int(Status.INVALID_COMMAND)
 
 
-def _axis(vm: VirtualModule, motor: int):
+def _axis(vm: VirtualModule, motor: int) -> Axis:
     if not 0 <= motor < len(vm.axes):
         raise TmclStatus(4)
     return vm.axes[motor]
 
 
 # --- motion (3.6.1-3.6.4) --------------------------------------------------------
-def _rotate(vm, motor, value, sign):
+def _rotate(vm: VirtualModule, motor: int, value: int, sign: int) -> StatusReply:
     ax = _axis(vm, motor)
     velocity = to_int32(sign * value)
     ax.check_value(ax.param(2), velocity)
@@ -44,20 +58,20 @@ def _rotate(vm, motor, value, sign):
     return OK, 0
 
 
-def cmd_ror(vm, type, motor, value, program):
+def cmd_ror(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     return _rotate(vm, motor, value, 1)
 
 
-def cmd_rol(vm, type, motor, value, program):
+def cmd_rol(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     return _rotate(vm, motor, value, -1)
 
 
-def cmd_mst(vm, type, motor, value, program):
+def cmd_mst(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     _axis(vm, motor).stop()
     return OK, 0
 
 
-def cmd_mvp(vm, type, motor, value, program):
+def cmd_mvp(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     ax = _axis(vm, motor)
     if type == 0:
         target = value
@@ -75,16 +89,16 @@ def cmd_mvp(vm, type, motor, value, program):
 
 
 # --- axis parameters (3.6.5, 3.6.6; STAP/RSAP PD86-1180 4.6.7, 4.6.8) -----------------
-def cmd_sap(vm, type, motor, value, program):
+def cmd_sap(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     _axis(vm, motor).set(type, value)
     return OK, 0
 
 
-def cmd_gap(vm, type, motor, value, program):
+def cmd_gap(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     return OK, _axis(vm, motor).get(type)
 
 
-def _storable_axis_param(vm, type, motor):
+def _storable_axis_param(vm: VirtualModule, type: int, motor: int) -> tuple[Axis, Param]:
     ax = _axis(vm, motor)
     p = ax.param(type)
     if not p.storable:
@@ -92,7 +106,7 @@ def _storable_axis_param(vm, type, motor):
     return ax, p
 
 
-def cmd_stap(vm, type, motor, value, program):
+def cmd_stap(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     ax, p = _storable_axis_param(vm, type, motor)
     if vm.globals.eeprom_locked:
         raise TmclStatus(5)
@@ -100,7 +114,7 @@ def cmd_stap(vm, type, motor, value, program):
     return OK, 0
 
 
-def cmd_rsap(vm, type, motor, value, program):
+def cmd_rsap(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     ax, p = _storable_axis_param(vm, type, motor)
     stored = vm.eeprom.get_axis(motor, type)
     ax.set(type, p.default if stored is None else stored)
@@ -108,33 +122,33 @@ def cmd_rsap(vm, type, motor, value, program):
 
 
 # --- global parameters (3.6.7-3.6.10) -----------------------------------------------
-def _bank(vm, bank):
+def _bank(vm: VirtualModule, bank: int) -> int:
     if bank not in {b for b, _ in vm.profile.global_parameters} | {2}:
         raise TmclStatus(4)
     return bank
 
 
-def cmd_sgp(vm, type, bank, value, program):
+def cmd_sgp(vm: VirtualModule, type: int, bank: int, value: int, program: bool) -> Result:
     vm.globals.set(_bank(vm, bank), type, value)
     return OK, 0
 
 
-def cmd_ggp(vm, type, bank, value, program):
+def cmd_ggp(vm: VirtualModule, type: int, bank: int, value: int, program: bool) -> Result:
     return OK, vm.globals.get(_bank(vm, bank), type)
 
 
-def cmd_stgp(vm, type, bank, value, program):
+def cmd_stgp(vm: VirtualModule, type: int, bank: int, value: int, program: bool) -> Result:
     vm.globals.store(_bank(vm, bank), type)
     return OK, 0
 
 
-def cmd_rsgp(vm, type, bank, value, program):
+def cmd_rsgp(vm: VirtualModule, type: int, bank: int, value: int, program: bool) -> Result:
     vm.globals.restore(_bank(vm, bank), type)
     return OK, 0
 
 
 # --- reference search (3.6.11) --------------------------------------------------------
-def cmd_rfs(vm, type, motor, value, program):
+def cmd_rfs(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     ax = _axis(vm, motor)
     if type == 0:
         vm.reference_search(ax).start()
@@ -148,36 +162,36 @@ def cmd_rfs(vm, type, motor, value, program):
 
 
 # --- I/O (3.6.12, 3.6.13) ----------------------------------------------------------------
-def cmd_sio(vm, port, bank, value, program):
+def cmd_sio(vm: VirtualModule, port: int, bank: int, value: int, program: bool) -> Result:
     vm.io.set(port, bank, value)
     return OK, 0
 
 
-def cmd_gio(vm, port, bank, value, program):
+def cmd_gio(vm: VirtualModule, port: int, bank: int, value: int, program: bool) -> Result:
     return OK, vm.io.get(port, bank)
 
 
 # --- coordinates (3.6.22-3.6.25) ------------------------------------------------------------
-def _coord(vm, number, lowest=0):
+def _coord(vm: VirtualModule, number: int, lowest: int = 0) -> int:
     if not lowest <= number <= vm.profile.coordinates:
         raise TmclStatus(3)
     return number
 
 
-def _eeprom_coords(vm, number):
+def _eeprom_coords(vm: VirtualModule, number: int) -> Sequence[int]:
     """The coordinates selected by `number` for the 255 forms: 0 = all (except #0)."""
     if number == 0:
         return range(1, vm.profile.coordinates + 1)
     return [_coord(vm, number, 1)]
 
 
-def _set_coord(vm, number, motor, value):
+def _set_coord(vm: VirtualModule, number: int, motor: int, value: int) -> None:
     vm.coords[motor][number] = to_int32(value)
     if number and vm.globals.get_raw(0, 84) == 1:  # GP84: coordinates always also in EEPROM
         vm.eeprom.set_coord(motor, number, vm.coords[motor][number])
 
 
-def cmd_sco(vm, number, motor, value, program):
+def cmd_sco(vm: VirtualModule, number: int, motor: int, value: int, program: bool) -> Result:
     if motor == 255:  # "SCO <n>, 255, 0": copy RAM -> EEPROM
         for c in _eeprom_coords(vm, number):
             for a in range(len(vm.axes)):
@@ -188,7 +202,7 @@ def cmd_sco(vm, number, motor, value, program):
     return OK, 0
 
 
-def cmd_gco(vm, number, motor, value, program):
+def cmd_gco(vm: VirtualModule, number: int, motor: int, value: int, program: bool) -> Result:
     if motor == 255:  # "GCO <n>, 255, 0": copy EEPROM -> RAM
         for c in _eeprom_coords(vm, number):
             for a in range(len(vm.axes)):
@@ -199,54 +213,54 @@ def cmd_gco(vm, number, motor, value, program):
     return OK, vm.coords[motor][_coord(vm, number)]
 
 
-def cmd_cco(vm, number, motor, value, program):
+def cmd_cco(vm: VirtualModule, number: int, motor: int, value: int, program: bool) -> Result:
     ax = _axis(vm, motor)
     position = ax.engine.position
     _set_coord(vm, _coord(vm, number), motor, position)
     return OK, position
 
 
-def cmd_aco(vm, number, motor, value, program):
+def cmd_aco(vm: VirtualModule, number: int, motor: int, value: int, program: bool) -> Result:
     _axis(vm, motor)
     _set_coord(vm, _coord(vm, number), motor, vm.accumulator)
     return OK, 0
 
 
 # --- accumulator to parameter (3.6.27, 3.6.28) ------------------------------------------------
-def cmd_aap(vm, type, motor, value, program):
+def cmd_aap(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     _axis(vm, motor).set(type, vm.accumulator)
     return OK, 0
 
 
-def cmd_agp(vm, type, bank, value, program):
+def cmd_agp(vm: VirtualModule, type: int, bank: int, value: int, program: bool) -> Result:
     vm.globals.set(_bank(vm, bank), type, vm.accumulator)
     return OK, 0
 
 
 # --- error flags and interrupts (3.6.29-3.6.33) ------------------------------------------------
-def cmd_cle(vm, type, motor, value, program):
+def cmd_cle(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     if not 0 <= type <= 5:
         raise TmclStatus(3)
     vm.clear_error_flags(type)
     return OK, 0
 
 
-def cmd_ei(vm, type, motor, value, program):
+def cmd_ei(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     vm.interrupts.enable(type, True)
     return OK, 0
 
 
-def cmd_di(vm, type, motor, value, program):
+def cmd_di(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     vm.interrupts.enable(type, False)
     return OK, 0
 
 
-def cmd_vect(vm, type, motor, value, program):
+def cmd_vect(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     vm.interrupts.set_vector(type, value)
     return OK, 0
 
 
-def cmd_calc(vm, type, motor, value, program):
+def cmd_calc(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """CALC in direct mode: the accumulator is untouched, the reply carries "the operand"
     (TMCM-6212 3.6.14, reply example 02 01 64 13 FF FF EC 78 DC for CALC MUL, -5000)."""
     if not 0 <= type <= 9:  # ADD .. LOAD
@@ -254,14 +268,14 @@ def cmd_calc(vm, type, motor, value, program):
     return OK, to_int32(value)
 
 
-def cmd_no_effect(vm, type, motor, value, program):
+def cmd_no_effect(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """Program-flow and accumulator commands sent in direct mode: accepted,
     without touching the program's accumulator or flow (TMCM-6212 manual 7.6)."""
     return OK, 0
 
 
 # --- control commands (3.6.35, 3.6.36) --------------------------------------------------------
-def cmd_138(vm, type, motor, value, program):
+def cmd_138(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     if type not in (0, 1):
         raise TmclStatus(3)
     mask = value & ((1 << len(vm.axes)) - 1)
@@ -273,7 +287,7 @@ def cmd_138(vm, type, motor, value, program):
     return OK, mask
 
 
-def cmd_136(vm, type, motor, value, program):
+def cmd_136(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     if type == 0:  # special reply: host address + 8 characters, no checksum
         text = vm.profile.firmware_version.encode("ascii")[:8].ljust(8, b" ")
         return bytes([vm.host_address & 0xFF]) + text
@@ -282,19 +296,19 @@ def cmd_136(vm, type, motor, value, program):
     raise TmclStatus(3)
 
 
-def cmd_137(vm, type, motor, value, program):
+def cmd_137(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     if value != 1234:
         raise TmclStatus(4)
     vm.restore_factory_defaults()
     return None
 
 
-def cmd_139(vm, type, motor, value, program):
+def cmd_139(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     vm.ascii_mode = True
     return OK, 0
 
 
-HANDLERS: dict[int, Handler] = {
+HANDLERS: dict[int, CommandHandler] = {
     1: cmd_ror, 2: cmd_rol, 3: cmd_mst, 4: cmd_mvp, 5: cmd_sap, 6: cmd_gap, 7: cmd_stap, 8: cmd_rsap,
     9: cmd_sgp, 10: cmd_ggp, 11: cmd_stgp, 12: cmd_rsgp, 13: cmd_rfs, 14: cmd_sio, 15: cmd_gio, 19: cmd_calc,
     30: cmd_sco, 31: cmd_gco, 32: cmd_cco, 34: cmd_aap, 35: cmd_agp, 36: cmd_cle, 37: cmd_vect,

@@ -24,11 +24,11 @@ class EepromError(Exception):
     """The EEPROM file exists but cannot be used (not ours, unreadable)."""
 
 
-def _int(v, lo: int = -(2 ** 31), hi: int = 2 ** 31 - 1) -> bool:
+def _int(v: object, lo: int = -(2 ** 31), hi: int = 2 ** 31 - 1) -> bool:
     return type(v) is int and lo <= v <= hi
 
 
-def _flat(d) -> bool:
+def _flat(d: object) -> bool:
     return isinstance(d, dict) and all(_int(v) for v in d.values())
 
 
@@ -50,7 +50,7 @@ def _empty() -> dict:
 class Eeprom:
     """Dictionary-shaped EEPROM image; `flush()` persists it when file-backed."""
 
-    def __init__(self, path: str | os.PathLike | None = None, module: str = "") -> None:
+    def __init__(self, path: str | os.PathLike[str] | None = None, module: str = "") -> None:
         self.path = Path(path) if path is not None else None
         self.module = module
         self.data = _empty()

@@ -22,7 +22,7 @@ the debugger.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from ..protocol.frame import to_int32
 from ..protocol.status import Status
@@ -54,6 +54,14 @@ class Context:
     x_register: int
     flags: int
     wait: wait.Wait | None
+
+
+class FlowHandler(Protocol):
+    """The signature every entry of FLOW has: an Interpreter method taking the instruction's
+    type, motor (or variable) and value fields. True: the handler set the program counter
+    itself (jump, WAIT, STOP); False or None: the program goes on with the next instruction."""
+
+    def __call__(self, interpreter: Interpreter, type: int, motor: int, value: int, /) -> bool | None: ...
 
 
 class Interpreter:
@@ -116,7 +124,7 @@ class Interpreter:
         if vm.application_status not in (RUNNING, STEPPING):
             return
         if self.wait is not None:
-            self._check_wait()
+            self._check_wait(self.wait)
         if vm.application_status != RUNNING:
             return
         if self.wait is not None or (self.next_time is not None and self.next_time <= now):
@@ -237,9 +245,9 @@ class Interpreter:
         else:
             self.next_time = None
 
-    def _check_wait(self) -> None:
+    def _check_wait(self, w: wait.Wait) -> None:
+        """End the WAIT `w` (the one in progress) when its condition is met or it timed out."""
         vm = self.vm
-        w = self.wait
         if wait.satisfied(vm, w):
             pass
         elif wait.expired(vm, w):
@@ -325,13 +333,13 @@ class Interpreter:
         return True
 
     # --- flow and calculation commands ---------------------------------------------------------
-    def _calc(self, type, motor, value):  # 19 CALC (3.6.14)
+    def _calc(self, type: int, motor: int, value: int) -> None:  # 19 CALC (3.6.14)
         vm = self.vm
         if not calc.ADD <= type <= calc.LOAD:
             raise TmclStatus(3)
-        self._load(calc.binary(type, vm.accumulator, value))
+        self._load(self._calc_into(type, vm.accumulator, value))
 
-    def _comp(self, type, motor, value):  # 20 COMP (3.6.15)
+    def _comp(self, type: int, motor: int, value: int) -> None:  # 20 COMP (3.6.15)
         vm = self.vm
         vm.flags = flags.after_compare(vm.flags, vm.accumulator, to_int32(value))
 
@@ -341,15 +349,15 @@ class Interpreter:
             raise TmclStatus(3)
         return met
 
-    def _jc(self, type, motor, value):  # 21 JC (3.6.16)
+    def _jc(self, type: int, motor: int, value: int) -> bool:  # 21 JC (3.6.16)
         if self._condition(type):
             return self._jump(value)
         return False
 
-    def _ja(self, type, motor, value):  # 22 JA (3.6.17)
+    def _ja(self, type: int, motor: int, value: int) -> bool:  # 22 JA (3.6.17)
         return self._jump(value)
 
-    def _csub(self, type, motor, value):  # 23 CSUB (3.6.18): ignored when the stack is full
+    def _csub(self, type: int, motor: int, value: int) -> bool:  # 23 CSUB (3.6.18): ignored when the stack is full
         vm = self.vm
         if len(self.stack) >= STACK_DEPTH:
             return False
@@ -358,17 +366,17 @@ class Interpreter:
         self.stack.append(vm.program_counter + 1)
         return self._jump(value)
 
-    def _rsub(self, type, motor, value):  # 24 RSUB (3.6.19): ignored when the stack is empty
+    def _rsub(self, type: int, motor: int, value: int) -> bool:  # 24 RSUB (3.6.19): ignored when the stack is empty
         if not self.stack:
             return False
         return self._jump(self.stack.pop())
 
-    def _wait(self, type, motor, value):  # 27 WAIT (3.6.20)
+    def _wait(self, type: int, motor: int, value: int) -> bool:  # 27 WAIT (3.6.20)
         vm = self.vm
         w = wait.start(vm, type, motor, value)
         self.wait = w
         self.next_time = None
-        if w.condition == wait.TICKS and w.deadline <= vm.now:  # WAIT TICKS, 0, 0
+        if w.condition == wait.TICKS and w.deadline is not None and w.deadline <= vm.now:  # WAIT TICKS, 0, 0
             self.wait = None
             return False
         if wait.satisfied(vm, w):
@@ -376,12 +384,12 @@ class Interpreter:
             return False
         return True  # the PC stays at the WAIT
 
-    def _stop(self, type, motor, value):  # 28 STOP (3.6.21): the PC stays at the STOP
+    def _stop(self, type: int, motor: int, value: int) -> bool:  # 28 STOP (3.6.21): the PC stays at the STOP
         self.vm.application_status = STOPPED
         self.next_time = None
         return True
 
-    def _calcx(self, type, motor, value):  # 33 CALCX (3.6.26)
+    def _calcx(self, type: int, motor: int, value: int) -> None:  # 33 CALCX (3.6.26)
         vm = self.vm
         a, x = vm.accumulator, vm.x_register
         if type == calc.NOT:          # "logical invert X register"
@@ -392,11 +400,11 @@ class Interpreter:
             vm.x_register = a
             self._load(x)
         elif calc.ADD <= type <= calc.XOR:
-            self._load(calc.binary(type, a, x))
+            self._load(self._calc_into(type, a, x))
         else:
             raise TmclStatus(3)
 
-    def _reti(self, type, motor, value):  # 38 RETI (3.6.33); ignored outside an ISR
+    def _reti(self, type: int, motor: int, value: int) -> bool:  # 38 RETI (3.6.33); ignored outside an ISR
         vm = self.vm
         ctx = self.saved
         if ctx is None:
@@ -426,14 +434,14 @@ class Interpreter:
             raise TmclStatus(3)
         return result
 
-    def _calc_vv(self, op, v1, v2):  # 40 CALCVV op, var1, var2: var1 = var1 op var2
+    def _calc_vv(self, op: int, v1: int, v2: int) -> None:  # 40 CALCVV op, var1, var2: var1 = var1 op var2
         vm, a, b = self.vm, self._var(v1), self._var(v2)
         if op == calc.SWAP:
             vm.user_vars[a], vm.user_vars[b] = vm.user_vars[b], vm.user_vars[a]
         else:
             vm.user_vars[a] = self._calc_into(op, vm.user_vars[a], vm.user_vars[b])
 
-    def _calc_va(self, op, var, value):  # 41 CALCVA op, var: var = var op A
+    def _calc_va(self, op: int, var: int, value: int) -> None:  # 41 CALCVA op, var: var = var op A
         vm, v = self.vm, self._var(var)
         if op == calc.SWAP:
             a = vm.accumulator
@@ -442,42 +450,42 @@ class Interpreter:
         else:
             vm.user_vars[v] = self._calc_into(op, vm.user_vars[v], vm.accumulator)
 
-    def _calc_av(self, op, var, value):  # 42 CALCAV op, var: A = A op var
+    def _calc_av(self, op: int, var: int, value: int) -> None:  # 42 CALCAV op, var: A = A op var
         vm, v = self.vm, self._var(var)
         if op == calc.SWAP:
             return self._calc_va(op, var, value)
         self._load(self._calc_into(op, vm.accumulator, vm.user_vars[v]))
 
-    def _calc_vx(self, op, var, value):  # 43 CALCVX op, var: var = var op X
+    def _calc_vx(self, op: int, var: int, value: int) -> None:  # 43 CALCVX op, var: var = var op X
         vm, v = self.vm, self._var(var)
         if op == calc.SWAP:
             vm.user_vars[v], vm.x_register = vm.x_register, vm.user_vars[v]
         else:
             vm.user_vars[v] = self._calc_into(op, vm.user_vars[v], vm.x_register)
 
-    def _calc_xv(self, op, var, value):  # 44 CALCXV op, var: X = X op var
+    def _calc_xv(self, op: int, var: int, value: int) -> None:  # 44 CALCXV op, var: X = X op var
         vm, v = self.vm, self._var(var)
         if op == calc.SWAP:
             return self._calc_vx(op, var, value)
         vm.x_register = self._calc_into(op, vm.x_register, vm.user_vars[v])
 
-    def _calc_v(self, op, var, value):  # 45 CALCV op, var, value: var = var op value
+    def _calc_v(self, op: int, var: int, value: int) -> None:  # 45 CALCV op, var, value: var = var op value
         vm, v = self.vm, self._var(var)
         vm.user_vars[v] = self._calc_into(op, vm.user_vars[v], value)
 
     def _with_accu(self, command: int, type: int, motor: int) -> None:
         self._generic(command, type, motor, self.vm.accumulator)
 
-    def _mvpa(self, type, motor, value):  # 46 MVPA ABS|REL|COORD, motor: MVP with A
+    def _mvpa(self, type: int, motor: int, value: int) -> None:  # 46 MVPA ABS|REL|COORD, motor: MVP with A
         self._with_accu(4, type, motor)
 
-    def _rola(self, type, motor, value):  # 50 ROLA motor
+    def _rola(self, type: int, motor: int, value: int) -> None:  # 50 ROLA motor
         self._with_accu(2, 0, motor)
 
-    def _rora(self, type, motor, value):  # 51 RORA motor
+    def _rora(self, type: int, motor: int, value: int) -> None:  # 51 RORA motor
         self._with_accu(1, 0, motor)
 
-    def _rst(self, type, motor, value):  # 48 RST label: restart there, stack and ISR dropped
+    def _rst(self, type: int, motor: int, value: int) -> bool:  # 48 RST label: restart there, stack and ISR dropped
         vm = self.vm
         if not 0 <= value < vm.program.size:
             raise TmclStatus(4)
@@ -486,32 +494,32 @@ class Interpreter:
         vm.interrupts.active = None
         return self._jump(value)
 
-    def _djnz(self, var, motor, value):  # 49 DJNZ var, label: var -= 1, jump unless 0
+    def _djnz(self, var: int, motor: int, value: int) -> bool:  # 49 DJNZ var, label: var -= 1, jump unless 0
         vm, v = self.vm, self._var(var)
         vm.user_vars[v] = to_int32(vm.user_vars[v] - 1)
         if vm.user_vars[v] != 0:
             return self._jump(value)
         return False
 
-    def _call(self, type, motor, value):  # 80 CALL cond, label: CSUB if the JC condition holds
+    def _call(self, type: int, motor: int, value: int) -> bool:  # 80 CALL cond, label: CSUB if the JC condition holds
         if self._condition(type):
             return self._csub(type, motor, value)
         return False
 
-    def _siv(self, type, motor, value):  # 55 SIV value: variable[X] = value
+    def _siv(self, type: int, motor: int, value: int) -> None:  # 55 SIV value: variable[X] = value
         vm = self.vm
         vm.user_vars[self._var(vm.x_register)] = to_int32(value)
 
-    def _giv(self, type, motor, value):  # 56 GIV: A = variable[X]
+    def _giv(self, type: int, motor: int, value: int) -> None:  # 56 GIV: A = variable[X]
         vm = self.vm
         self._load(vm.user_vars[self._var(vm.x_register)])
 
-    def _aiv(self, type, motor, value):  # 57 AIV: variable[X] = A
+    def _aiv(self, type: int, motor: int, value: int) -> None:  # 57 AIV: variable[X] = A
         vm = self.vm
         vm.user_vars[self._var(vm.x_register)] = vm.accumulator
 
 
-FLOW = {
+FLOW: dict[int, FlowHandler] = {
     19: Interpreter._calc, 20: Interpreter._comp, 21: Interpreter._jc, 22: Interpreter._ja,
     23: Interpreter._csub, 24: Interpreter._rsub, 27: Interpreter._wait, 28: Interpreter._stop,
     33: Interpreter._calcx, 38: Interpreter._reti,

@@ -43,6 +43,10 @@ LOW_HIGH, HIGH_LOW = 1, 2
 class Interrupts:
     def __init__(self, vm: VirtualModule) -> None:
         self.vm = vm
+        self._power_up()
+
+    def _power_up(self) -> None:
+        """Everything off: no vectors, enables, pending interrupts or timer phases."""
         self.vectors: dict[int, int] = {}
         self.enabled: set[int] = set()
         self.global_enable = False
@@ -79,7 +83,7 @@ class Interrupts:
 
     def reset(self) -> None:
         """Everything off, as after power-up (command 131 reset application)."""
-        self.__init__(self.vm)
+        self._power_up()
 
     # --- occurrence ------------------------------------------------------------------
     def accepting(self, number: int) -> bool:
@@ -114,10 +118,10 @@ class Interrupts:
 
     def _run_timers(self, now: int) -> None:
         for n in TIMERS:
-            due = self._due[n]
-            if due is None or due > now:
+            due, period = self._due[n], self._periods[n]
+            if due is None or due > now or not period:  # a timer is due only with a period
                 continue
-            step = self._periods[n] * TICKS_PER_MS
+            step = period * TICKS_PER_MS
             self._due[n] = due + ((now - due) // step + 1) * step
             self.trigger(n)
 

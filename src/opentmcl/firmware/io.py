@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 from .status import TmclStatus
 
 if TYPE_CHECKING:
+    from ..modules.profile import IOPort
     from .vm import VirtualModule
 
 ALL_PORTS = 255
@@ -40,7 +41,7 @@ class IOBanks:
     def _bank_ports(self, bank: int, kind: str | None = None) -> list[tuple[int, int]]:
         return sorted(k for k, p in self.ports.items() if k[0] == bank and (kind is None or p.kind == kind))
 
-    def port(self, port: int, bank: int):
+    def port(self, port: int, bank: int) -> IOPort:
         p = self.ports.get((bank, port))
         if p is None:
             if not any(b == bank for b, _ in self.ports):
@@ -120,12 +121,12 @@ class IOBanks:
             self.values[twin] = _twin_level(self.ports[key], self.ports[twin], value)
 
 
-def threshold(port) -> int:
+def threshold(port: IOPort) -> int:
     """Smallest level of a digital input or of an ADIN line's analog side that reads as 1."""
     return 1 if port.kind == "digital" else (port.max + 2) // 2
 
 
-def _adin_twins(ports) -> dict[tuple[int, int], tuple[int, int]]:
+def _adin_twins(ports: dict[tuple[int, int], IOPort]) -> dict[tuple[int, int], tuple[int, int]]:
     """Digital input port <-> analog input port of the same line (same name), both ways."""
     analog = {p.name: key for key, p in ports.items() if p.kind == "analog"}
     twins = {}
@@ -136,7 +137,7 @@ def _adin_twins(ports) -> dict[tuple[int, int], tuple[int, int]]:
     return twins
 
 
-def _twin_level(driven, twin, value: int) -> int:
+def _twin_level(driven: IOPort, twin: IOPort, value: int) -> int:
     """The other reading of one line: analog -> digital at mid-scale, digital -> 0 or full scale."""
     if driven.kind == "analog":
         return 1 if value >= threshold(driven) else 0

@@ -16,6 +16,7 @@ from ..protocol.status import Status
 from .status import TmclStatus
 
 if TYPE_CHECKING:
+    from .commands import StatusReply
     from .vm import VirtualModule
 
 STOPPED, RUNNING, STEPPING, RESET = 0, 1, 2, 3
@@ -27,8 +28,8 @@ class ProgramMemory:
         self.vm = vm
         self.size = vm.profile.program_memory
         self.code: list[tuple[int, int, int, int]] = [EMPTY] * self.size
-        for addr, ins in enumerate(vm.eeprom.program[: self.size]):
-            self.code[addr] = tuple(ins)
+        for addr, (command, type, motor, value) in enumerate(vm.eeprom.program[: self.size]):
+            self.code[addr] = (command, type, motor, value)
         self.length = len(vm.eeprom.program)
 
     @property
@@ -48,7 +49,7 @@ class ProgramMemory:
         self.save()
 
 
-def store_instruction(vm: VirtualModule, command: int, type: int, motor: int, value: int):
+def store_instruction(vm: VirtualModule, command: int, type: int, motor: int, value: int) -> StatusReply:
     mem = vm.program
     if vm.download_pointer >= mem.size:
         raise TmclStatus(4)
@@ -57,7 +58,7 @@ def store_instruction(vm: VirtualModule, command: int, type: int, motor: int, va
     return int(Status.LOADED), 0
 
 
-def program_control(vm: VirtualModule, command: int, type: int, value: int):
+def program_control(vm: VirtualModule, command: int, type: int, value: int) -> StatusReply | bytes:
     """Commands 128-135."""
     mem = vm.program
     if command == 128:

@@ -19,7 +19,7 @@ from ..protocol.frame import FRAME_LEN, Reply, Request, to_int32
 from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .axis import Axis
-from .commands import NO_SUPPRESS, execute
+from .commands import NO_SUPPRESS, StatusReply, execute
 from .eeprom import Eeprom
 from .globals import GlobalParameters
 from .interpreter import Interpreter
@@ -27,7 +27,7 @@ from .interrupts import Interrupts
 from .io import IOBanks
 from .program import ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
-from .world import World
+from .world import ScenarioSource, World
 
 TICKS_PER_MS = CLOCK_HZ // 1000
 _REQUEST = struct.Struct(">BBBBiB")
@@ -42,7 +42,7 @@ class VirtualModule:
     """A TMCL module in software: TMCM-6212, PD28-1021 (TMCM-1021) or PD86-1180 (TMCM-1180)."""
 
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
-                 eeprom: str | os.PathLike | None = None, scenario=None) -> None:
+                 eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None) -> None:
         self.profile: ModuleProfile = load_profile(name)
         if address is not None and not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
             raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
@@ -316,10 +316,10 @@ class VirtualModule:
         """CLE: 0 all, 1 ETO, 2 EAL, 3 EDV, 4 EPO, 5 ESD (flag bit = 1 << (which - 1))."""
         self.flags &= ~0x1F if which == 0 else ~(1 << (which - 1))  # arithmetic flags stay (flags.py)
 
-    def program_control(self, command: int, type: int, value: int):
+    def program_control(self, command: int, type: int, value: int) -> StatusReply | bytes:
         return program_control(self, command, type, value)
 
-    def store_instruction(self, command: int, type: int, motor: int, value: int):
+    def store_instruction(self, command: int, type: int, motor: int, value: int) -> StatusReply:
         return store_instruction(self, command, type, motor, value)
 
     def erase_program(self) -> None:

@@ -16,6 +16,7 @@ The world persists across power cycles (`power_up` rebinds it to the new axes). 
 """
 from __future__ import annotations
 
+import os
 from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
@@ -29,7 +30,10 @@ if TYPE_CHECKING:
     from .axis import Axis
     from .vm import VirtualModule
 
-__all__ = ["AxisWorld", "World"]
+__all__ = ["AxisWorld", "ScenarioSource", "World"]
+
+ScenarioSource = Scenario | dict[str, object] | str | os.PathLike[str] | None
+"""What `load_scenario` takes: a Scenario, its parsed dict, a .toml/.yaml path, or None (empty world)."""
 
 
 class World:
@@ -38,7 +42,7 @@ class World:
     axis_numbers: frozenset[int] = frozenset({9, 10, 11, 29, 180, 206, 208, 209, 215})
     """Axis parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
 
-    def __init__(self, vm: VirtualModule, scenario=None) -> None:
+    def __init__(self, vm: VirtualModule, scenario: ScenarioSource = None) -> None:
         self.vm = vm
         self.scenario: Scenario = load_scenario(scenario)
         if self.scenario.module is not None:
@@ -53,8 +57,7 @@ class World:
         self.axes_world: list[AxisWorld] = []
         self.inputs: dict[tuple[int, int], Profile] = {(i.bank, i.port): i.signal for i in self.scenario.inputs}
         self.shutdown = self.scenario.shutdown
-        self._shutdown_level = 0
-        self._input_cache: tuple | None = None
+        self._input_cache: tuple[tuple[int, int, Profile | None], int | None] | None = None  # (inputs key, next change)
 
     # --- API ----------------------------------------------------------------------------------------
     def axis(self, index: int) -> AxisWorld:
@@ -64,7 +67,9 @@ class World:
         """Drive an input with a constant or a Profile over time (seconds since power-up of the world)."""
         if (bank, port) not in self.vm.io.ports:
             raise ScenarioError(f"input bank {bank} port {port}: {self.vm.profile.name} has no such port")
-        self.inputs.pop(self.vm.io.twins.get((bank, port)), None)  # one line: the newest drive wins
+        twin = self.vm.io.twins.get((bank, port))
+        if twin is not None:  # one line: the newest drive wins
+            self.inputs.pop(twin, None)
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
         self._input_cache = None
         self._drive_input((bank, port))

@@ -7,6 +7,8 @@
 
 See docs/tmc4210.md.
 """
+from typing import TYPE_CHECKING
+
 from .registers import (
     INTERRUPTS,
     REGISTERS,
@@ -21,12 +23,15 @@ from .registers import (
 )
 from .stepdir import Edge
 
+if TYPE_CHECKING:  # loaded lazily at run time (__getattr__)
+    from .chip import TMC4210, ChipError
+
 __all__ = ["TMC4210", "ChipError", "Datagram", "DatagramError", "Edge", "INTERRUPTS", "REGISTERS",
            "RegisterError", "TYPE_VERSION_4210", "describe_reply", "describe_request", "read_datagram",
            "write_datagram"]
 
 
-def __getattr__(name):  # the chip pulls in the ramp core; registers and units stand alone
+def __getattr__(name: str) -> type:  # the chip pulls in the ramp core; registers and units stand alone
     if name in ("TMC4210", "ChipError"):
         from . import chip
         return getattr(chip, name)

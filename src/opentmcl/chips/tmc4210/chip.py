@@ -336,6 +336,13 @@ class TMC4210(ChipEvents):
     # ------------------------------------------------------------------------------------
     # register file
     def _read(self, a: int) -> int:
+        """The 24 data bits a read of address `a` answers (5.3); unused addresses read as zero."""
+        if a < 0x10:  # SMDA = %00
+            return self._read_axis_register(a)
+        return self._read_global_register(a)
+
+    def _read_axis_register(self, a: int) -> int:
+        """Axis parameter registers, IDX %0000 - %1111 (6.1)."""
         r = self._ramp
         if a == 0x00:
             return r.x_target & R.DATA_MASK
@@ -367,6 +374,11 @@ class TMC4210(ChipEvents):
             return self.x_latched & R.DATA_MASK
         if a == 0x0F:
             return self.ustep_count
+        return 0  # IDX %1000 is unused
+
+    def _read_global_register(self, a: int) -> int:
+        """Global parameter registers, SMDA = %11 (6.2); the other SMDA values (the TMC429's
+        axes 2 and 3) and POWER_DOWN read as zero."""
         if a == 0x34:
             return self.if_conf
         if a == 0x35:
@@ -380,7 +392,7 @@ class TMC4210(ChipEvents):
                     | self._pins["gp_in"] << 3)
         if a == 0x3F:
             return self.stpdiv << 8 | self.mot1r << 21
-        return 0  # unused addresses (and POWER_DOWN) read as zero
+        return 0
 
     def _read_ram(self, a: int) -> int:
         return self.ram[2 * a] | self.ram[2 * a + 1] << 8
@@ -391,6 +403,15 @@ class TMC4210(ChipEvents):
         return (self._ustep_base + self._ramp.x_actual - self._ustep_x) & 0xFF
 
     def _write(self, a: int, data: int) -> None:
+        """A write of the 24 data bits `data` to address `a` (5.3); a write to a read-only or
+        unused address has no effect."""
+        if a < 0x10:  # SMDA = %00
+            self._write_axis_register(a, data)
+        else:
+            self._write_global_register(a, data)
+
+    def _write_axis_register(self, a: int, data: int) -> None:
+        """Axis parameter registers, IDX %0000 - %1111 (6.1)."""
         r = self._ramp
         if a == 0x00:
             r.set(x_target=_s24(data))
@@ -429,7 +450,12 @@ class TMC4210(ChipEvents):
         elif a == 0x0F:
             self._ustep_base = data & 0xFF
             self._ustep_x = r.x_actual
-        elif a == 0x34:
+        # A_ACTUAL (IDX %0111) is read-only, IDX %1000 unused
+
+    def _write_global_register(self, a: int, data: int) -> None:
+        """Global parameter registers, SMDA = %11 (6.2); TYPE_VERSION_4210 and REFERENCE
+        SWITCHES are read-only, the other SMDA values (the TMC429's axes 2 and 3) unused."""
+        if a == 0x34:
             self.if_conf = data & 0x1FF
             self._apply_stepdir()
         elif a == 0x35:
@@ -444,7 +470,6 @@ class TMC4210(ChipEvents):
             self.stpdiv = data >> 8 & 0xF
             self.mot1r = data >> 21 & 1
             self._apply_stepdir()
-        # read-only and unused addresses: a write has no effect
 
     def _apply_stepdir(self) -> None:
         c = self.if_conf

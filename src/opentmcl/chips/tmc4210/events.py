@@ -7,12 +7,23 @@ position latch - and it plans the next jump so that no such event is jumped over
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from . import registers as R
+
+if TYPE_CHECKING:
+    from ...motion.tmc429 import Tmc429Ramp
+    from .stepdir import StepDirOutput
 
 POS_BITS = 24
 POS_MOD = 1 << POS_BITS
 HOLD_MODE = 3
 VELOCITY_MODE = 2
+
+
+Observation = dict[str, int]
+"""What `_observe` saw: the position ("x", "xt") and the conditions whose change raises an
+event ("xeq", "comp", "zero", "ref_active", "ref_out", "tol", "ref_l", "ref_r": 0/1 or bool)."""
 
 
 def _s24(value: int) -> int:
@@ -21,6 +32,36 @@ def _s24(value: int) -> int:
 
 class ChipEvents:
     """Switches, interrupts, latch and the event-driven time loop of the TMC4210 model."""
+
+    # The chip state this mixin works on; TMC4210 (chip.py) sets it in __init__ and reset().
+    _ramp: Tmc429Ramp
+    stepdir: StepDirOutput
+    ref_conf: int           # REF_CONF (6.1.10.2)
+    lp: int                 # position latch armed (6.1.14)
+    int_mask: int           # INTERRUPT_MASK (6.1.11)
+    int_flags: int          # INTERRUPT_FLAGS (6.1.11)
+    dx_ref_tolerance: int   # DX_REF_TOLERANCE (6.1.13)
+    x_latched: int          # X_LATCHED (6.1.14)
+    pos_comp: int           # POS_COMP_4210 (6.2.1.1)
+    pos_comp_m: int         # POS_COMP_INT_4210 mask and flag (6.2.1.2)
+    pos_comp_i: int
+    mot1r: int              # STEPPER MOTOR GLOBAL PARAMETER register bit (6.2.2)
+    powered_down: bool      # POWER_DOWN (6.2.1.3)
+    _windows: dict[str, list[tuple[int, int]]]  # switch windows per pin, in axis positions
+    _axis_offset: int       # axis position = X_ACTUAL + _axis_offset
+    _ext: int               # external time in CLK cycles
+    _offset: int            # _ext - ramp time
+    _seen: Observation
+    _stopping: bool         # a soft stop at a switch is running
+
+    if TYPE_CHECKING:  # defined by TMC4210 (chip.py)
+        @property
+        def x_actual(self) -> int: ...
+
+        @property
+        def x_target(self) -> int: ...
+
+        def _active(self, pin: str) -> bool: ...
 
     def _ref_pin(self) -> str | None:
         """The reference switch chosen by ref_RnL (6.1.10.2)."""
@@ -32,10 +73,10 @@ class ChipEvents:
         """Inside the DX_REF_TOLERANCE range around the origin (6.1.13)."""
         return abs(x) < self.dx_ref_tolerance
 
-    def _observe(self) -> dict:
+    def _observe(self) -> Observation:
         x = self.x_actual
         ref = self._ref_pin()
-        ref_active = bool(ref) and self._active(ref)
+        ref_active = ref is not None and self._active(ref)
         return {
             "x": x,
             "ref_active": ref_active,
@@ -83,15 +124,30 @@ class ChipEvents:
     def _evaluate(self) -> None:
         """Compare the present state with the last one seen and raise the chip's events."""
         old, new = self._seen, self._observe()
-        moving = self._ramp.v_actual != 0
-        if new["xeq"] and not old["xeq"] and new["x"] != old["x"] and new["xt"] == old["xt"]:
+        self._arrival_events(old, new)
+        self._switch_events(old, new)
+        self._seen = new
+        self._automatic_stop()
+
+    def _arrival_events(self, old: Observation, new: Observation) -> None:
+        """Events of a motion onto a position: X_TARGET (pos_end, 6.1.11), POS_COMP_4210
+        (6.2.1.2), the origin while the reference switch is off (ref_miss, 6.1.11). A register
+        write that makes the position equal is no arrival: the position itself must change."""
+        if new["x"] == old["x"]:
+            return
+        if new["xeq"] and not old["xeq"] and new["xt"] == old["xt"]:
             self._flag("pos_end")  # motion reached X_TARGET (not a switch stop moving X_TARGET)
-        if new["comp"] and not old["comp"] and new["x"] != old["x"] and self.pos_comp_m:
+        if new["comp"] and not old["comp"] and self.pos_comp_m:
             self.pos_comp_i = 1
-        ref_active = new["ref_active"]
-        ref = self._ref_pin()
-        if new["zero"] and not old["zero"] and new["x"] != old["x"] and not ref_active:
+        if new["zero"] and not old["zero"] and not new["ref_active"]:
             self._flag("ref_miss")
+
+    def _switch_events(self, old: Observation, new: Observation) -> None:
+        """Edges of REF_L / REF_R (stop_left/right_high/low, 6.1.11), the position latch on the
+        reference switch's edge while moving (6.1.14), and ref_wrong: the reference switch
+        active outside the DX_REF_TOLERANCE range (6.1.11)."""
+        ref = self._ref_pin()
+        moving = self._ramp.v_actual != 0
         for pin, side in (("ref_l", "left"), ("ref_r", "right")):
             if new[pin] != old[pin]:
                 self._flag(f"stop_{side}_{'high' if new[pin] else 'low'}")
@@ -99,28 +155,29 @@ class ChipEvents:
                     self.x_latched = new["x"]  # 6.1.14
                     self.lp = 0
         if new["ref_out"] and not old["ref_out"]:
-            self._flag("ref_wrong")  # 6.1.11: reference switch active outside the tolerance range
-        self._seen = new
-        # automatic stop in the direction of motion
+            self._flag("ref_wrong")
+
+    def _automatic_stop(self) -> None:
+        """Stop at an active stop switch in the direction of motion (6.1.10.2): hard, or soft
+        when REF_CONF selects soft_stop (never in hold_mode)."""
         r = self._ramp
-        blocked = self._blocked()
         v = r.v_actual
         direction = (v > 0) - (v < 0)
-        if direction and direction in blocked:
-            if not self._stopping:
-                self._flag("stop")
-                soft = bool(self.ref_conf >> 2 & 1) and r.mode != HOLD_MODE
-                r.stop(soft=soft)
-                self._stopping = soft and r.v_actual != 0
-        else:
+        if not direction or direction not in self._blocked():
             self._stopping = False
+            return
+        if not self._stopping:
+            self._flag("stop")
+            soft = bool(self.ref_conf >> 2 & 1) and r.mode != HOLD_MODE
+            r.stop(soft=soft)
+            self._stopping = soft and r.v_actual != 0
 
     # ------------------------------------------------------------------------------------
     def _position_events(self) -> list[int]:
         """Positions at which the chip must look again (24-bit signed); only those that
         can raise a flag or change a switch are watched."""
         m = self.int_mask
-        pts = set()
+        pts: set[int] = set()
         if m & R.INT_BIT["pos_end"]:
             pts.add(self.x_target)
         if self.pos_comp_m:
@@ -136,7 +193,7 @@ class ChipEvents:
             for lo, hi in wins:
                 pts.update((lo - off, hi - off, lo - off - 1, hi - off + 1))
         x = self.x_actual
-        out = []
+        out: list[int] = []
         for p in pts:
             p = _s24(p)
             if p == x:  # look again when the motor leaves this position

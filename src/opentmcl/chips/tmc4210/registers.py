@@ -11,6 +11,7 @@ SMDA = %11 (chapter 6.2).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TypedDict, Unpack
 
 DATA_MASK = 0xFFFFFF
 TYPE_VERSION_4210 = 0x429101
@@ -109,12 +110,27 @@ class Register:
         return self.address << 1
 
 
-def _reg(name, address, doc, *fields, read_only=False):
+class _FieldOptions(TypedDict, total=False):
+    signed: bool
+    access: str
+    reset: int
+    doc: str
+
+
+class _FieldSpec(_FieldOptions):
+    """The arguments of a Field but its address, which `_reg` adds."""
+
+    name: str
+    shift: int
+    width: int
+
+
+def _reg(name: str, address: int, doc: str, *fields: _FieldSpec, read_only: bool = False) -> Register:
     return Register(name, address, tuple(Field(address=address, **f) for f in fields), doc, read_only)
 
 
-def _f(name, shift, width, **kw):
-    return dict(name=name, shift=shift, width=width, **kw)
+def _f(name: str, shift: int, width: int, **options: Unpack[_FieldOptions]) -> _FieldSpec:
+    return _FieldSpec(name=name, shift=shift, width=width, **options)
 
 
 REGISTERS: tuple[Register, ...] = (
@@ -199,7 +215,7 @@ def lookup(name: str) -> Field:
     raise RegisterError(f"unknown TMC4210 register or field {name!r}")
 
 
-def whole_register(name) -> Register | None:
+def whole_register(name: object) -> Register | None:
     """The register called `name` when that name is not also a field (PMUL_PDIV, INTERRUPT, ...):
     read and written as its 24 raw data bits."""
     if not isinstance(name, str):

@@ -89,23 +89,33 @@ def run_line(chip: TMC4210, line: str) -> None:
         elif cmd == "advance" and len(args) == 1:
             chip.advance(parse_seconds(args[0]))
         elif cmd == "inputs" and args:
-            levels = {}
-            for a in args:
-                name, _, value = a.partition("=")
-                if name not in ("ref_l", "ref_r", "gp_in") or not value:
-                    raise ScriptError(f"inputs takes ref_l=, ref_r=, gp_in=, got {a!r}")
-                levels[name] = parse_int(value)
-            chip.set_inputs(**levels)
+            _inputs(chip, args)
         elif cmd == "until" and len(args) in (3, 4) and args[1] in _OPS:
-            want, test = parse_int(args[2]), _OPS[args[1]]
-            limit = parse_seconds(args[3]) if len(args) == 4 else 60.0
-            chip.peek(args[0])  # unknown names fail before any time passes
-            if not run_until(chip, lambda: test(chip.peek(args[0]), want), limit):
-                raise ScriptError(f"{args[0]} {args[1]} {want} not reached within {limit:g} s")
+            _until(chip, *args)
         else:
             raise ScriptError(f"cannot understand {line.strip()!r}")
     except ChipError as exc:
         raise ScriptError(str(exc)) from None
+
+
+def _inputs(chip: TMC4210, args: list[str]) -> None:
+    """`inputs ref_l=1 gp_in=0`: drive the named pins."""
+    levels = {}
+    for a in args:
+        name, _, value = a.partition("=")
+        if name not in ("ref_l", "ref_r", "gp_in") or not value:
+            raise ScriptError(f"inputs takes ref_l=, ref_r=, gp_in=, got {a!r}")
+        levels[name] = parse_int(value)
+    chip.set_inputs(**levels)
+
+
+def _until(chip: TMC4210, name: str, op: str, value: str, limit: str | None = None) -> None:
+    """`until NAME OP VALUE [LIMIT]`: advance until the register or field compares true."""
+    want, test = parse_int(value), _OPS[op]
+    limit_s = parse_seconds(limit) if limit is not None else 60.0
+    chip.peek(name)  # unknown names fail before any time passes
+    if not run_until(chip, lambda: test(chip.peek(name), want), limit_s):
+        raise ScriptError(f"{name} {op} {want} not reached within {limit_s:g} s")
 
 
 def run_until(chip: TMC4210, done: Callable[[], bool], limit_s: float, step_s: float = 0.001) -> bool:

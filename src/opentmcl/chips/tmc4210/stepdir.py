@@ -40,7 +40,7 @@ class StepDirOutput:
         self.dir_level = 1
         self._direction = 1  # logical direction of the last step (+1 / -1)
         self._busy_until = -1  # cycle at which the running pulse (or dir delay) has ended
-        self._pending: list[Edge] = []
+        self._pending: list[tuple[int, int, Edge]] = []  # (cycle, sequence, edge): a heap in time order
         self._seq = 0
         self.steps_out = 0
         self.lost_steps = 0

@@ -20,7 +20,7 @@ class UnitError(ValueError):
     """A value that cannot be converted (out of range, not a number)."""
 
 
-def check_f_clk(f_clk) -> int | float:
+def check_f_clk(f_clk: object) -> int | float:
     if isinstance(f_clk, bool) or not isinstance(f_clk, (int, float)) or not math.isfinite(f_clk):
         raise UnitError(f"f_clk must be a number of Hz, got {f_clk!r}")
     if not 0 < f_clk <= F_CLK_MAX:
@@ -28,19 +28,19 @@ def check_f_clk(f_clk) -> int | float:
     return f_clk
 
 
-def _div(name: str, value) -> int:
+def _div(name: str, value: object) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 13:
         raise UnitError(f"{name} must be an integer 0..13 (6.1.12), got {value!r}")
     return value
 
 
-def _number(name: str, value) -> float:
+def _number(name: str, value: object) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise UnitError(f"{name} must be a finite number, got {value!r}")
     return value
 
 
-def step_rate(velocity: int, pulse_div: int, f_clk=16_000_000) -> float:
+def step_rate(velocity: int, pulse_div: int, f_clk: float = 16_000_000) -> float:
     """Step pulse rate R in Hz for a velocity register value (6.1.12.1); keeps the sign."""
     _number("velocity", velocity)
     if abs(velocity) > V_LIMIT:
@@ -48,7 +48,7 @@ def step_rate(velocity: int, pulse_div: int, f_clk=16_000_000) -> float:
     return check_f_clk(f_clk) * velocity / (2 ** _div("PULSE_DIV", pulse_div) * 2048 * 32)
 
 
-def velocity_for_rate(rate_hz: float, pulse_div: int, f_clk=16_000_000) -> int:
+def velocity_for_rate(rate_hz: float, pulse_div: int, f_clk: float = 16_000_000) -> int:
     """The velocity register value (rounded) whose step rate is nearest `rate_hz`."""
     v = round(_number("rate", rate_hz) * 2 ** _div("PULSE_DIV", pulse_div) * 2048 * 32 / check_f_clk(f_clk))
     if abs(v) > V_LIMIT:
@@ -56,7 +56,7 @@ def velocity_for_rate(rate_hz: float, pulse_div: int, f_clk=16_000_000) -> int:
     return v
 
 
-def rate_change(a_max: int, pulse_div: int, ramp_div: int, f_clk=16_000_000) -> float:
+def rate_change(a_max: int, pulse_div: int, ramp_div: int, f_clk: float = 16_000_000) -> float:
     """Change of step rate dR in Hz/s for an A_MAX register value (6.1.12.1)."""
     _number("A_MAX", a_max)
     if not 0 <= a_max <= A_LIMIT:
@@ -65,7 +65,7 @@ def rate_change(a_max: int, pulse_div: int, ramp_div: int, f_clk=16_000_000) -> 
     return f * f * a_max / 2 ** (_div("PULSE_DIV", pulse_div) + _div("RAMP_DIV", ramp_div) + 29)
 
 
-def a_max_for_rate_change(hz_per_s: float, pulse_div: int, ramp_div: int, f_clk=16_000_000) -> int:
+def a_max_for_rate_change(hz_per_s: float, pulse_div: int, ramp_div: int, f_clk: float = 16_000_000) -> int:
     """The A_MAX register value (rounded) nearest to a change of step rate of `hz_per_s` Hz/s."""
     f = check_f_clk(f_clk)
     if _number("acceleration", hz_per_s) < 0:
@@ -87,7 +87,7 @@ def steps_during_acceleration(velocity: int, a_max: int, pulse_div: int, ramp_di
     return 0.5 * velocity * velocity / a_max * 2 ** _div("RAMP_DIV", ramp_div) / 2 ** _div("PULSE_DIV", pulse_div) / 8
 
 
-def step_pulse_length(stpdiv: int, f_clk=16_000_000) -> float:
+def step_pulse_length(stpdiv: int, f_clk: float = 16_000_000) -> float:
     """Length t_STEP of one step pulse in seconds (8.1); also the direction-to-step delay."""
     return step_pulse_cycles(stpdiv) / check_f_clk(f_clk)
 
@@ -99,7 +99,7 @@ def step_pulse_cycles(stpdiv: int) -> int:
     return 16 * (1 + stpdiv)
 
 
-def max_step_rate(f_clk=16_000_000) -> float:
+def max_step_rate(f_clk: float = 16_000_000) -> float:
     """f_STEP_MAX = f_CLK / 32 (1.4.1, 8.1)."""
     return check_f_clk(f_clk) / 32
 

@@ -1,0 +1,73 @@
+"""The command handlers' one typed signature (issue 12: "the handlers get a typed signature (a
+Protocol)"), after TMCM-6212 manual 3.1: "Every command consists of a one-byte command field, a
+one-byte type field, a one-byte motor/bank field and a four-byte value field."
+
+HANDLERS (direct mode and programs) is typed by commands.CommandHandler, FLOW (program flow) by
+interpreter.FlowHandler; mypy checks every handler against them (docs/virtual-module.md)."""
+import inspect
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from opentmcl.firmware import commands, interpreter, program
+from opentmcl.firmware.vm import VirtualModule
+
+ROOT = Path(__file__).resolve().parents[2]
+EMPTY = inspect.Parameter.empty
+
+
+def _handlers():
+    yield from ((f"HANDLERS[{n}]", h) for n, h in sorted(commands.HANDLERS.items()))
+    yield from ((f"FLOW[{n}]", h) for n, h in sorted(interpreter.FLOW.items()))
+    yield "program_control", program.program_control
+    yield "store_instruction", program.store_instruction
+    yield "VirtualModule.program_control", VirtualModule.program_control
+    yield "VirtualModule.store_instruction", VirtualModule.store_instruction
+
+
+@pytest.mark.parametrize(("name", "handler"), list(_handlers()), ids=lambda v: v if isinstance(v, str) else "")
+def test_every_handler_is_annotated(name, handler):
+    """Annotated functions are the ones mypy checks (default mode): each field of the request
+    (command, type, motor/bank, value) and the result are declared."""
+    sig = inspect.signature(handler)
+    untyped = [p.name for p in sig.parameters.values() if p.name != "self" and p.annotation is EMPTY]
+    assert not untyped, f"{name} ({handler.__qualname__}): parameters without a type: {untyped}"
+    assert sig.return_annotation is not EMPTY, f"{name} ({handler.__qualname__}) has no return type"
+
+
+def test_tables_refuse_a_handler_of_another_signature(tmp_path):
+    """A handler without the `program` flag, or a flow handler answering an int, is a type error
+    at the table (mypy, as `.ci/run` runs it); one with the right signature is accepted."""
+    probe = tmp_path / "probe_handlers.py"
+    probe.write_text(textwrap.dedent("""\
+        from opentmcl.firmware.commands import HANDLERS, Result
+        from opentmcl.firmware.interpreter import FLOW, Interpreter
+        from opentmcl.firmware.vm import VirtualModule
+
+
+        def cmd_no_flag(vm: VirtualModule, type: int, motor: int, value: int) -> Result:
+            return 100, 0
+
+
+        def cmd_fine(vm: VirtualModule, port: int, bank: int, value: int, program: bool) -> Result:
+            return 100, 0
+
+
+        def flow_int(self: Interpreter, type: int, motor: int, value: int) -> int:
+            return 1
+
+
+        HANDLERS[200] = cmd_no_flag
+        HANDLERS[201] = cmd_fine
+        FLOW[99] = flow_int
+        """), encoding="utf-8")
+    cache = tmp_path / "cache"  # a cache of its own: a shared one may report a stale path
+    run = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--no-error-summary",
+                          "--cache-dir", str(cache), str(probe)], cwd=ROOT, capture_output=True, text=True,
+                         timeout=300, env={"MYPYPATH": str(ROOT / "src"), "PATH": "/usr/bin:/bin"})
+    errors = sorted(line.split(":")[1] for line in run.stdout.splitlines()
+                    if line.startswith(str(probe)) and ": error:" in line)
+    assert errors == ["18", "20"], run.stdout + run.stderr
