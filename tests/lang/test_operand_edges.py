@@ -145,11 +145,14 @@ def test_program_fills_memory_to_the_last_address(module):
 @pytest.mark.parametrize("module", sorted(MEMORY))
 def test_first_instruction_beyond_memory_is_refused_where_it_stands(module):
     """One instruction more than the memory holds is an error naming that instruction's line (the
-    first that does not fit); when it is the appended STOP, the last source line is named."""
+    first that does not fit, also when more follow); when it is the appended STOP, the last source
+    line is named."""
     size = MEMORY[module]
     e = refused("#nostop\n" + program(size) + "Over: ROL 0, 1\n", module=module)
     assert (e.line, e.column) == (size + 2, 7), str(e)
     assert f"program has {size + 1} instructions; {module} program memory holds {size}" in e.message
+    e = refused("#nostop\n" + program(size) + "Over: ROL 0, 1\nROL 0, 2\n", module=module)
+    assert (e.line, e.column) == (size + 2, 7), str(e)
     e = refused(program(size), module=module)
     assert (e.line, e.column) == (size, 1), str(e)
     assert f"program has {size + 1} instructions;" in e.message
