@@ -33,6 +33,27 @@ def test_field_ranges():
         Instruction(4, 256, 0, 0).encode()
 
 
+@pytest.mark.parametrize(("name", "index"), [("command", 0), ("type", 1), ("motor", 2)])
+def test_byte_field_last_valid_and_first_invalid(name, index):
+    """TMCM-6212 manual 3.1: "a one-byte command field, a one-byte type field, a one-byte
+    motor/bank field": 0 and 255 are written as that byte of the record; 256 and -1 are refused."""
+    for v in (0, 255):
+        fields = [0, 0, 0, 0]
+        fields[index] = v
+        assert Instruction(*fields).encode()[index] == v
+    for v in (256, -1):
+        fields = [0, 0, 0, 0]
+        fields[index] = v
+        with pytest.raises(BinFileError, match=f"{name} must be 0..255, got {v}"):
+            Instruction(*fields).encode()
+
+
+def test_value_field_edges():
+    """TMCM-6212 manual 3.1: "4 | Value (MSB first!)" - -2^31 and 2^31-1 are the signed edges."""
+    assert Instruction(4, 0, 0, -(2 ** 31)).encode()[3:7] == bytes.fromhex("80000000")
+    assert Instruction(4, 0, 0, 2 ** 31 - 1).encode()[3:7] == bytes.fromhex("7FFFFFFF")
+
+
 def test_write_read(tmp_path):
     path = tmp_path / "p.bin"
     binfile.write(path, [Instruction(22, 0, 0, 0)])
