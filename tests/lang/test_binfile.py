@@ -1,4 +1,4 @@
-"""TMCL-IDE binary file format (FACTS.md): 8-byte records, checksum of the first seven bytes."""
+"""TMCL-IDE binary file format (docs/tmcl-assembler.md): 8-byte records, checksum of the first seven bytes."""
 from __future__ import annotations
 
 import pytest
@@ -9,7 +9,7 @@ from opentmcl.protocol.frame import Request
 
 
 def test_record_is_serial_frame_without_address():
-    """FACTS.md: opcode, type, motor/bank, value (signed 32-bit big-endian), checksum = sum of the
+    """docs/tmcl-assembler.md: opcode, type, motor/bank, value (signed 32-bit big-endian), checksum = sum of the
     first seven bytes - the TMCM-6212 3.6.4 MVP REL, 0, -10000 example without its address byte
     (and so with checksum CCh - 01h)."""
     rec = Instruction(4, 1, 0, -10000).encode()

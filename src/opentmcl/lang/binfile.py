@@ -1,4 +1,5 @@
-"""TMCL-IDE binary program files: a plain sequence of 8-byte records, no header (FACTS.md).
+"""TMCL-IDE binary program files: a plain sequence of 8-byte records, no header
+(docs/tmcl-assembler.md "Binary file format").
 
 Each record is one instruction: command, type, motor/bank, value (signed 32 bit, MSB first) and a
 checksum, the 8-bit sum of the first seven bytes - the 9-byte frame of TMCM-6212 manual 3.1 without

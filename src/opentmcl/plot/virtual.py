@@ -1,6 +1,6 @@
 """Record a trace from a virtual run: a TMCL program and/or a scenario on an in-process module.
 
-The run uses virtual time (DESIGN.md "Time"): the module advances only while the recorder
+The run uses virtual time (docs/architecture.md "Time"): the module advances only while the recorder
 waits, so a ten-second program is recorded in a fraction of that and always gives the same
 trace. The program is downloaded (132, instructions, 133) and started with 129 (TMCM-6212
 manual 3.6.36), as `opentmcl run` does.
