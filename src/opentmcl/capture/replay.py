@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
 from ..protocol.frame import FRAME_LEN
@@ -27,6 +27,7 @@ from .format import Capture, read_capture
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
+    from ..motion.scenario import Scenario
 
 CLASSES = {
     "position": ("actual_position", "encoder_position", "absolute_encoder_value", "last_reference_position"),
@@ -336,7 +337,7 @@ def _captured_module(cap: Capture, address: int | None) -> str:
 
 
 def _virtual_module(module: str | os.PathLike, address: int, eeprom: str | os.PathLike | None,
-                    scenario: Any) -> VirtualModule:
+                    scenario: Scenario | str | os.PathLike | None) -> VirtualModule:
     """A fresh virtual module for the replay; ReplayError (one line) if it cannot be built."""
     from ..firmware.eeprom import EepromError
     from ..firmware.vm import VirtualModule
