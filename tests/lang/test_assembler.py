@@ -21,7 +21,7 @@ def err(src: str, **kw) -> AsmError:
 
 
 def test_trailing_stop_is_appended():
-    """FACTS.md (TMCL-IDE .bin): a STOP follows the last source instruction - even an explicit one."""
+    """docs/tmcl-assembler.md (TMCL-IDE .bin): a STOP follows the last source instruction - even an explicit one."""
     assert ins("ROL 0, 1") == [(2, 0, 0, 1), STOP]
     assert ins("STOP") == [STOP, STOP]
     assert ins("") == [STOP]

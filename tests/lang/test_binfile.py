@@ -1,4 +1,4 @@
-"""TMCL-IDE binary file format (FACTS.md): 8-byte records, checksum of the first seven bytes."""
+"""TMCL-IDE binary file format (docs/tmcl-assembler.md): 8-byte records, checksum of the first seven bytes."""
 from __future__ import annotations
 
 import pytest
@@ -9,7 +9,7 @@ from opentmcl.protocol.frame import Request
 
 
 def test_record_is_serial_frame_without_address():
-    """FACTS.md: opcode, type, motor/bank, value (signed 32-bit big-endian), checksum = sum of the
+    """docs/tmcl-assembler.md: opcode, type, motor/bank, value (signed 32-bit big-endian), checksum = sum of the
     first seven bytes - the TMCM-6212 3.6.4 MVP REL, 0, -10000 example without its address byte
     (and so with checksum CCh - 01h)."""
     rec = Instruction(4, 1, 0, -10000).encode()
@@ -31,6 +31,27 @@ def test_decode_checks_length_and_checksums():
 def test_field_ranges():
     with pytest.raises(BinFileError, match="type"):
         Instruction(4, 256, 0, 0).encode()
+
+
+@pytest.mark.parametrize(("name", "index"), [("command", 0), ("type", 1), ("motor", 2)])
+def test_byte_field_last_valid_and_first_invalid(name, index):
+    """TMCM-6212 manual 3.1: "a one-byte command field, a one-byte type field, a one-byte
+    motor/bank field": 0 and 255 are written as that byte of the record; 256 and -1 are refused."""
+    for v in (0, 255):
+        fields = [0, 0, 0, 0]
+        fields[index] = v
+        assert Instruction(*fields).encode()[index] == v
+    for v in (256, -1):
+        fields = [0, 0, 0, 0]
+        fields[index] = v
+        with pytest.raises(BinFileError, match=f"{name} must be 0..255, got {v}"):
+            Instruction(*fields).encode()
+
+
+def test_value_field_edges():
+    """TMCM-6212 manual 3.1: "4 | Value (MSB first!)" - -2^31 and 2^31-1 are the signed edges."""
+    assert Instruction(4, 0, 0, -(2 ** 31)).encode()[3:7] == bytes.fromhex("80000000")
+    assert Instruction(4, 0, 0, 2 ** 31 - 1).encode()[3:7] == bytes.fromhex("7FFFFFFF")
 
 
 def test_write_read(tmp_path):

@@ -31,8 +31,8 @@ def ins(p) -> list[tuple[int, int, int, int]]:
 
 @pytest.mark.parametrize("path", sorted(EXAMPLES.glob("*.tmc")), ids=lambda p: p.stem)
 def test_every_example_assembles_and_round_trips(path):
-    """Each manual example assembles for its module, ends with the appended STOP (FACTS.md
-    TMCL-IDE format), and its disassembly re-assembles to identical bytes."""
+    """Each manual example assembles for its module, ends with the appended STOP (TMCL-IDE format,
+    docs/tmcl-assembler.md), and its disassembly re-assembles to identical bytes."""
     p = assemble_file(path, module=module_of(path))
     assert tuple(p.instructions[-1]) == STOP
     again = assemble(disassemble(p.image(), labels=p.labels))

@@ -12,7 +12,16 @@ import sys
 
 import pytest
 
-from opentmcl.lang.assembler import MAX_CONSTANT_DEPTH, MAX_EXPR_TOKENS, AsmError, assemble
+from opentmcl.lang.assembler import (
+    MAX_CONSTANT_DEPTH,
+    MAX_EXPR_DEPTH,
+    MAX_EXPR_TOKENS,
+    MAX_INCLUDE_DEPTH,
+    MAX_INTERMEDIATE,
+    AsmError,
+    assemble,
+    assemble_file,
+)
 
 
 def chain(terms: int) -> str:
@@ -26,6 +35,58 @@ def value(source: str) -> int:
 
 def test_the_bounds_are_the_documented_ones():
     assert (MAX_EXPR_TOKENS, MAX_CONSTANT_DEPTH) == (1000, 100)
+    assert (MAX_EXPR_DEPTH, MAX_INCLUDE_DEPTH, MAX_INTERMEDIATE) == (100, 32, 2 ** 64)
+
+
+@pytest.mark.parametrize("prefix", ["(", "-", "~", "+"])
+def test_deepest_nesting_is_computed_one_level_more_is_an_error(prefix):
+    """docs/assumptions.md "Expression bounds": 100 levels of nesting. A number under 99 prefix
+    operators or parentheses is 100 levels (the number is the innermost); one more is refused at
+    the number's column."""
+    def nested(n: int) -> str:
+        return prefix * n + "5" + (")" * n if prefix == "(" else "")
+    assert value(f"MVP ABS, 0, {nested(99)}") == {"(": 5, "+": 5, "-": -5, "~": ~5}[prefix]  # 99 is odd
+    with pytest.raises(AsmError, match="nested deeper than 100 levels") as info:
+        assemble(f"MVP ABS, 0, {nested(100)}")
+    assert info.value.column == len("MVP ABS, 0, ") + 101
+
+
+@pytest.mark.parametrize("op", ["<<", ">>"])
+def test_shift_count_edges(op):
+    """docs/assumptions.md "Expression bounds": a shift count is 0..63; 64 and -1 are refused."""
+    assert value(f"MVP ABS, 0, (1 << 31) {op} 0") == -(2 ** 31)
+    assert assemble(f"X = 1 {op} 63\nSTOP").constants["X"] == (2 ** 63 if op == "<<" else 0)
+    for count in ("64", "-1"):
+        with pytest.raises(AsmError, match=rf"shift count {count} out of range 0\.\.63"):
+            assemble(f"X = 1 {op} {count}\nSTOP")
+
+
+def test_intermediate_values_up_to_64_bits():
+    """docs/assumptions.md "Expression bounds": results beyond 64 bits are errors - +-2^64 is the
+    last value computed, one more either way is refused."""
+    top = "(1 << 63) * 2"
+    assert assemble(f"X = {top}\nY = -{top}\nSTOP").constants == {"X": 2 ** 64, "Y": -(2 ** 64)}
+    for text in (f"{top} + 1", f"-{top} - 1"):
+        with pytest.raises(AsmError, match="more than 64 bits"):
+            assemble(f"X = {text}\nSTOP")
+
+
+def include_chain(tmp_path, depth: int):
+    """main.tmc includes f1.inc, which includes f2.inc, ... down to f<depth>.inc."""
+    for i in range(1, depth + 1):
+        nxt = f"#include f{i + 1}.inc\n" if i < depth else "Deepest = 1\n"
+        (tmp_path / f"f{i}.inc").write_text(nxt)
+    (tmp_path / "main.tmc").write_text("#include f1.inc\nMVP ABS, 0, Deepest\n")
+    return tmp_path / "main.tmc"
+
+
+def test_deepest_include_nesting_one_more_is_an_error(tmp_path):
+    """docs/assumptions.md "#include": nesting limit 32 - 32 files included inside each other are
+    read; the 33rd #include is refused on its own line."""
+    assert assemble_file(include_chain(tmp_path, 32)).instructions[0].value == 1
+    with pytest.raises(AsmError, match="includes nested deeper than 32") as info:
+        assemble_file(include_chain(tmp_path, 33))
+    assert info.value.file.endswith("f32.inc") and info.value.line == 1
 
 
 def test_longest_expression_is_computed_one_token_more_is_an_error():

@@ -38,7 +38,7 @@ def test_move_reaches_target_at_max_speed(move_trace):
 
 def test_move_takes_three_seconds_and_recording_ends_when_idle(move_trace):
     """Accelerating to 51200 pps at 51200 pps² takes 1 s (25600 µsteps), so the trapezoid is
-    1 s up, 1 s at speed, 1 s down (manual 6.5 units; FACTS.md six-point ramp with V1 = 0)."""
+    1 s up, 1 s at speed, 1 s down (manual 6.5 units; docs/motion.md six-point ramp with V1 = 0)."""
     t, vel = move_trace.time, move_trace.column(0, "velocity")
     moving = [ti for ti, v in zip(t, vel, strict=True) if v]
     assert moving[-1] - moving[0] == pytest.approx(3.0, abs=0.05)

@@ -10,7 +10,9 @@ import datetime
 import json
 import os
 import threading
+from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import Any, TextIO
 
 FORMAT = "opentmcl-capture"
 VERSION = 1
@@ -28,7 +30,7 @@ class CaptureWriter:
     """Appends records to a JSON Lines file; thread-safe; `close()` writes the end record."""
 
     def __init__(self, path: str | os.PathLike, *, target: str, gap: float, tool: str) -> None:
-        self._fh = open(path, "w", encoding="utf-8")  # noqa: SIM115 - closed by close()
+        self._fh: TextIO | None = open(path, "w", encoding="utf-8")  # noqa: SIM115 - closed by close()
         self._lock = threading.Lock()
         self.frames = 0
         self.size = 0
@@ -83,7 +85,7 @@ class Capture:
         return None
 
 
-def _lines(path: str):
+def _lines(path: str) -> Iterator[tuple[int, bytes]]:
     try:
         size = os.path.getsize(path)
     except OSError as exc:
@@ -105,7 +107,7 @@ def _lines(path: str):
         raise CaptureError(f"{path}: cannot read: {exc.strerror or exc}") from None
 
 
-_FRAME_KEYS = {"t": (int, float), "dir": str, "kind": str, "raw": str}
+_FRAME_KEYS: dict[str, type | tuple[type, ...]] = {"t": (int, float), "dir": str, "kind": str, "raw": str}
 _KIND_KEYS = {  # the decoded fields replay and `log show` rely on, per kind (all integers)
     "request": ("address", "command", "type", "motor", "value"),
     "reply": ("address", "status", "command", "value"),
@@ -114,47 +116,61 @@ _KIND_KEYS = {  # the decoded fields replay and `log show` rely on, per kind (al
 }
 
 
-def read_capture(path: str | os.PathLike) -> Capture:
+def _record(line: bytes, path: str, number: int) -> dict[str, Any]:
+    """One line as a JSON object."""
+    try:
+        rec = json.loads(line)
+    except (ValueError, UnicodeDecodeError):
+        raise CaptureError(f"{path}:{number}: not a JSON record") from None
+    if not isinstance(rec, dict):
+        raise CaptureError(f"{path}:{number}: not a JSON object")
+    return rec
+
+
+def _check_header(rec: dict[str, Any], path: str, number: int) -> None:
+    """The first record: the header of a capture of this format version."""
+    if rec.get("record") != "header" or rec.get("format") != FORMAT:
+        raise CaptureError(f"{path}:{number}: not an {FORMAT} file (the first record must be its header)")
+    if rec.get("version") != VERSION:
+        raise CaptureError(f"{path}:{number}: capture format version {rec.get('version')!r}, "
+                           f"this tool reads version {VERSION}")
+
+
+def _check_frame(rec: dict[str, Any], path: str, number: int) -> None:
+    """A frame record with the keys replay and `log show` rely on; adds its `bytes`."""
+    for key, types in _FRAME_KEYS.items():
+        if not isinstance(rec.get(key), types) or isinstance(rec.get(key), bool):
+            raise CaptureError(f"{path}:{number}: frame record without a valid {key!r}")
+    if not 0 <= rec["t"] < float("inf"):  # also NaN: seconds since the proxy started
+        raise CaptureError(f"{path}:{number}: 't' must be a finite number of seconds >= 0, got {rec['t']!r}")
+    for key in _KIND_KEYS.get(rec["kind"], ()):
+        if type(rec.get(key)) is not int:
+            raise CaptureError(f"{path}:{number}: {rec['kind']} record without an integer {key!r}")
+    if "request" in rec and type(rec["request"]) is not int:
+        raise CaptureError(f"{path}:{number}: 'request' is not a record number")
+    if rec["dir"] not in ("host", "module"):
+        raise CaptureError(f"{path}:{number}: 'dir' must be \"host\" or \"module\"")
+    try:
+        rec["bytes"] = bytes.fromhex(rec["raw"])
+    except ValueError:
+        raise CaptureError(f"{path}:{number}: 'raw' is not hex") from None
+
+
+def read_capture(path: str | os.PathLike[str]) -> Capture:
     """Read and check a capture file; CaptureError (one line) if it is not one."""
     path = os.fspath(path)
     capture: Capture | None = None
     for number, line in _lines(path):
         if not line.strip():
             continue
-        try:
-            rec = json.loads(line)
-        except (ValueError, UnicodeDecodeError):
-            raise CaptureError(f"{path}:{number}: not a JSON record") from None
-        if not isinstance(rec, dict):
-            raise CaptureError(f"{path}:{number}: not a JSON object")
-        kind = rec.get("record")
+        rec = _record(line, path, number)
         if capture is None:
-            if kind != "header" or rec.get("format") != FORMAT:
-                raise CaptureError(f"{path}:{number}: not an {FORMAT} file (the first record must be its header)")
-            if rec.get("version") != VERSION:
-                raise CaptureError(f"{path}:{number}: capture format version {rec.get('version')!r}, "
-                                   f"this tool reads version {VERSION}")
+            _check_header(rec, path, number)
             capture = Capture(path, rec)
-            continue
-        if kind == "frame":
-            for key, types in _FRAME_KEYS.items():
-                if not isinstance(rec.get(key), types) or isinstance(rec.get(key), bool):
-                    raise CaptureError(f"{path}:{number}: frame record without a valid {key!r}")
-            if not 0 <= rec["t"] < float("inf"):  # also NaN: seconds since the proxy started
-                raise CaptureError(f"{path}:{number}: 't' must be a finite number of seconds >= 0, got {rec['t']!r}")
-            for key in _KIND_KEYS.get(rec["kind"], ()):
-                if type(rec.get(key)) is not int:
-                    raise CaptureError(f"{path}:{number}: {rec['kind']} record without an integer {key!r}")
-            if "request" in rec and type(rec["request"]) is not int:
-                raise CaptureError(f"{path}:{number}: 'request' is not a record number")
-            if rec["dir"] not in ("host", "module"):
-                raise CaptureError(f"{path}:{number}: 'dir' must be \"host\" or \"module\"")
-            try:
-                rec["bytes"] = bytes.fromhex(rec["raw"])
-            except ValueError:
-                raise CaptureError(f"{path}:{number}: 'raw' is not hex") from None
+        elif rec.get("record") == "frame":
+            _check_frame(rec, path, number)
             capture.frames.append(rec)
-        elif kind == "identity":
+        elif rec.get("record") == "identity":
             capture.identities.append(rec)
     if capture is None:
         raise CaptureError(f"{path}: empty, not a capture file")

@@ -235,7 +235,8 @@ class Proxy:
     def start(self) -> None:
         self.upstream.start()
         if self.writer is not None:
-            self._writer_thread = threading.Thread(target=self._write_loop, name="opentmcl-capture", daemon=True)
+            self._writer_thread = threading.Thread(target=self._write_loop, args=(self.writer,),
+                                                   name="opentmcl-capture", daemon=True)
             self._writer_thread.start()
         try:
             start_all(self.endpoints)
@@ -266,7 +267,7 @@ class Proxy:
     def _profile_for(self, address: int):
         return self._profiles.get(address) or self.upstream.profile_for(address)
 
-    def _write_loop(self) -> None:
+    def _write_loop(self, writer: CaptureWriter) -> None:
         while True:
             item = self._queue.get()
             if item is None:
@@ -275,13 +276,13 @@ class Proxy:
             self.chunks += 1
             try:
                 for rec in self.decoder.feed(t - self.t0, direction, data):
-                    self.writer.write({"record": "frame", **rec})
+                    writer.write({"record": "frame", **rec})
                     if rec["kind"] == "version":
-                        self._identify(rec)
+                        self._identify(rec, writer)
             except Exception:  # a decoder bug must not stop the capture (the relay never depends on it)
                 logging.getLogger("opentmcl.capture").exception("cannot decode %s", data.hex(" "))
 
-    def _identify(self, rec: dict) -> None:
+    def _identify(self, rec: dict, writer: CaptureWriter) -> None:
         from ..modules.profile import load_profile, module_names
 
         ident = {"record": "identity", "t": rec["t"], "address": rec["address"],
@@ -294,4 +295,4 @@ class Proxy:
         sim = self.upstream.profile_for(rec["address"])
         if "module" not in ident and sim is not None:
             ident["module"] = sim.name
-        self.writer.write(ident)
+        writer.write(ident)

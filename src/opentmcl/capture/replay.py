@@ -17,12 +17,17 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
 from ..protocol.frame import FRAME_LEN
 from ..protocol.opcodes import format_instruction
 from ..protocol.status import Status, message
 from .format import Capture, read_capture
+
+if TYPE_CHECKING:
+    from ..firmware.vm import VirtualModule
+    from ..motion.scenario import Scenario
 
 CLASSES = {
     "position": ("actual_position", "encoder_position", "absolute_encoder_value", "last_reference_position"),
@@ -310,44 +315,60 @@ def _sim_profile_file(target, address: int | None) -> str | None:
     return None
 
 
+def _tolerance(tolerance: Tolerance | dict | list | None) -> Tolerance:
+    """A Tolerance from itself, a {key: value} dict or "KEY=VALUE" strings (default: None)."""
+    if isinstance(tolerance, dict):
+        return Tolerance.parse([f"{k}={v}" for k, v in tolerance.items()])
+    if isinstance(tolerance, Tolerance):
+        return tolerance
+    return Tolerance.parse(tolerance)
+
+
+def _captured_module(cap: Capture, address: int | None) -> str:
+    """The module the capture identified, or the profile file of its `sim://` target."""
+    from ..modules.profile import module_names
+
+    module = cap.module_name()
+    if module is None or module not in module_names():  # e.g. proxy --to sim:///path/my.toml
+        module = _sim_profile_file(cap.header.get("target"), address) or module
+    if module is None:
+        raise ReplayError(f"{cap.path}: the capture does not identify its module; name one (--module)")
+    return module
+
+
+def _virtual_module(module: str | os.PathLike, address: int, eeprom: str | os.PathLike | None,
+                    scenario: Scenario | str | os.PathLike | None) -> VirtualModule:
+    """A fresh virtual module for the replay; ReplayError (one line) if it cannot be built."""
+    from ..firmware.eeprom import EepromError
+    from ..firmware.vm import VirtualModule
+
+    if isinstance(scenario, (str, os.PathLike)):
+        from ..motion.scenario import load_scenario
+
+        scenario = load_scenario(scenario)
+    try:
+        return VirtualModule(os.fspath(module), address=address, eeprom=eeprom, scenario=scenario)
+    except KeyError as exc:
+        raise ReplayError(str(exc.args[0]) if exc.args else f"unknown module {module!r}") from None
+    except (EepromError, ValueError) as exc:
+        raise ReplayError(str(exc)) from None
+
+
 def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | None = None, *,
            address: int | None = None, eeprom: str | os.PathLike | None = None, scenario=None,
            tolerance: Tolerance | dict | list | None = None) -> ReplayReport:
     """Replay `capture` (a path or a read `Capture`) against a fresh virtual `module` (a name or a
     profile file; default: the module the capture identified). Returns a `ReplayReport`.
     Raises ReplayError (bad module, address or tolerance) or CaptureError (bad file)."""
-    from ..firmware.eeprom import EepromError
-    from ..firmware.vm import VirtualModule
-
     cap = capture if isinstance(capture, Capture) else read_capture(capture)
-    if isinstance(tolerance, dict):
-        tol = Tolerance.parse([f"{k}={v}" for k, v in tolerance.items()])
-    elif isinstance(tolerance, Tolerance):
-        tol = tolerance
-    else:
-        tol = Tolerance.parse(tolerance)
+    tol = _tolerance(tolerance)
     if module is None:
-        module = cap.module_name()
-        from ..modules.profile import module_names
-
-        if module is None or module not in module_names():  # e.g. proxy --to sim:///path/my.toml
-            module = _sim_profile_file(cap.header.get("target"), address) or module
-    if module is None:
-        raise ReplayError(f"{cap.path}: the capture does not identify its module; name one (--module)")
+        module = _captured_module(cap, address)
     if address is None:
         address = first_address(cap)
         if address is None:
             raise ReplayError(f"{cap.path}: no host request in the capture")
-    if isinstance(scenario, (str, os.PathLike)):
-        from ..motion.scenario import load_scenario
-
-        scenario = load_scenario(scenario)
-    try:
-        vm = VirtualModule(os.fspath(module), address=address, eeprom=eeprom, scenario=scenario)
-    except KeyError as exc:
-        raise ReplayError(str(exc.args[0]) if exc.args else f"unknown module {module!r}") from None
-    except (EepromError, ValueError) as exc:
-        raise ReplayError(str(exc)) from None
+    vm = _virtual_module(module, address, eeprom, scenario)
     report = ReplayReport(cap.path, vm.profile.name, address)
     try:
         _Replayer(cap, vm, address, tol, report).run()

@@ -22,15 +22,19 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING, NoReturn
 
 from ..limits import TEXT_MAX, InputTooLarge, LiteralTooLong, read_text
 from ..protocol import opcodes
 from ..protocol.frame import to_int32
 from ..protocol.opcodes import MOTOR, TYPE, VALUE, Command
 from .binfile import Instruction, encode
+
+if TYPE_CHECKING:
+    from ..modules.profile import ModuleProfile
 
 STOP = Instruction(28, 0, 0, 0)
 RAW = "RAW"
@@ -125,9 +129,12 @@ class _Expr:
 
 _BINARY_LEVELS = (("|",), ("^",), ("&",), ("<<", ">>"), ("+", "-"), ("*", "/", "%"))
 
+_Fail = Callable[[int, str], NoReturn]
+"""Raises AsmError at a column of the line being read."""
+
 
 class _ExprParser:
-    def __init__(self, text: str, col0: int, err):
+    def __init__(self, text: str, col0: int, err: _Fail):
         self.tokens: list[tuple[str, str, int]] = []
         self.err = err
         pos = 0
@@ -141,6 +148,7 @@ class _ExprParser:
                 bad = len(text) - len(text[pos:].lstrip())
                 err(col0 + bad, f"unexpected character {text[bad]!r} in expression")
             kind = m.lastgroup
+            assert kind is not None, "every alternative of _TOKEN_RE is a named group"
             self.tokens.append((kind, m.group(kind), col0 + m.start(kind)))
             pos = m.end()
         self.i = 0
@@ -195,13 +203,14 @@ class _ExprParser:
             return e
         if kind == "num":
             try:
-                return _Expr("num", col, value=opcodes.parse_number(tok))
+                value = opcodes.parse_number(tok)
             except LiteralTooLong as exc:
                 self.err(col, str(exc))
+            assert value is not None, "the num group of _TOKEN_RE only matches literals"
+            return _Expr("num", col, value=value)
         if kind == "name":
             return _Expr("name", col, name=tok)
         self.err(col, f"unexpected {tok!r} in expression")
-        raise AssertionError  # pragma: no cover
 
 
 def _apply(op: str, a: int, b: int | None = None) -> int:
@@ -270,7 +279,7 @@ class _State:
     resolving: list[str] = field(default_factory=list)
 
 
-def _fail(where: _Where, column: int, message: str):
+def _fail(where: _Where, column: int, message: str) -> NoReturn:
     raise AsmError(where.file, where.line, column, message)
 
 
@@ -403,6 +412,8 @@ def _directive(raw: str, where: _Where, path: Path | None, st: _State, depth: in
     col = len(raw) - len(body) + 1
     m = re.match(r"#\s*(\w+)", body)
     word = m.group(1).lower() if m else ""
+    if m is None or word not in ("include", "nostop"):
+        _fail(where, col, f"unknown directive {body.split()[0]!r}; expected #include <file> or #nostop")
     if word == "include":
         arg = body[m.end():]
         arg_stripped = arg.strip()
@@ -424,12 +435,10 @@ def _directive(raw: str, where: _Where, path: Path | None, st: _State, depth: in
                   f"the include path and the bundled includes)")
         display = f"<bundled>/{found.name}" if found.parent == INCLUDE_DIR else str(found)
         _read_file(found, display, st, where, depth + 1)
-    elif word == "nostop":
+    else:  # nostop
         if _strip_comment(body[m.end():]).strip():
             _fail(where, col, "#nostop takes no argument")
         st.append_stop = False
-    else:
-        _fail(where, col, f"unknown directive {body.split()[0]!r}; expected #include <file> or #nostop")
 
 
 def _define_label(name: str, col: int, where: _Where, st: _State) -> None:
@@ -483,7 +492,6 @@ def _lookup(name: str, col: int, where: _Where, st: _State) -> int:
     hint = _names_like(name, st)
     extra = f" (names are case-sensitive; did you mean {hint[0]!r}?)" if hint else ""
     _fail(where, col, f"undefined symbol {name!r}{extra}")
-    raise AssertionError  # pragma: no cover
 
 
 def _eval(e: _Expr, where: _Where, st: _State) -> int:
@@ -517,7 +525,6 @@ def _combine(e: _Expr, vals: list[int], where: _Where) -> int:
         _fail(where, e.column, "division by zero")
     except ValueError as exc:
         _fail(where, e.column, str(exc))
-    raise AssertionError  # pragma: no cover
 
 
 def _operand_value(stmt: _Stmt, op: _Operand, fld: str, st: _State) -> int:
@@ -539,7 +546,7 @@ def _operand_value(stmt: _Stmt, op: _Operand, fld: str, st: _State) -> int:
     return to_int32(v) if fld == VALUE else v
 
 
-def _encode_stmt(stmt: _Stmt, st: _State, profile) -> Instruction:
+def _encode_stmt(stmt: _Stmt, st: _State, profile: ModuleProfile | None) -> Instruction:
     if stmt.command is None:  # RAW
         if len(stmt.operands) != 4:
             col = stmt.operands[-1].column if stmt.operands else stmt.column
@@ -562,8 +569,9 @@ def _encode_stmt(stmt: _Stmt, st: _State, profile) -> Instruction:
     return Instruction(cmd.number, fields[TYPE], fields[MOTOR], fields[VALUE])
 
 
-def _finish(st: _State, profile) -> Program:
-    instructions, sources = [], []
+def _finish(st: _State, profile: ModuleProfile | None) -> Program:
+    instructions: list[Instruction] = []
+    sources: list[SourceLine | None] = []
     for stmt in st.statements:
         instructions.append(_encode_stmt(stmt, st, profile))
         sources.append(SourceLine(stmt.where.file, stmt.where.line, stmt.where.text))
@@ -583,7 +591,7 @@ def _finish(st: _State, profile) -> Program:
                    st.filename, st.origin)
 
 
-def _profile(module: str | None):
+def _profile(module: str | None) -> ModuleProfile | None:
     if module is None:
         return None
     from ..modules.profile import load_profile
@@ -593,7 +601,7 @@ def _profile(module: str | None):
         raise AsmError("<options>", 0, 0, str(exc.args[0])) from None
 
 
-def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[str | os.PathLike] = (),
+def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[str | os.PathLike[str]] = (),
              module: str | None = None, append_stop: bool = True,
              defines: Mapping[str, int] | None = None, origin: int = 0) -> Program:
     """Assemble TMCL source text.
@@ -622,7 +630,7 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
     return _finish(st, profile)
 
 
-def assemble_file(path: str | os.PathLike, *, include_path: Iterable[str | os.PathLike] = (),
+def assemble_file(path: str | os.PathLike[str], *, include_path: Iterable[str | os.PathLike[str]] = (),
                   module: str | None = None, append_stop: bool = True,
                   defines: Mapping[str, int] | None = None, origin: int = 0) -> Program:
     """Assemble a source file; AsmError (line 0) if it cannot be read."""

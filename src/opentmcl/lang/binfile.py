@@ -1,4 +1,5 @@
-"""TMCL-IDE binary program files: a plain sequence of 8-byte records, no header (FACTS.md).
+"""TMCL-IDE binary program files: a plain sequence of 8-byte records, no header
+(docs/tmcl-assembler.md "Binary file format").
 
 Each record is one instruction: command, type, motor/bank, value (signed 32 bit, MSB first) and a
 checksum, the 8-bit sum of the first seven bytes - the 9-byte frame of TMCM-6212 manual 3.1 without
@@ -44,7 +45,7 @@ def encode(program: list[Instruction] | tuple[Instruction, ...]) -> bytes:
     return b"".join(Instruction(*i).encode() for i in program)
 
 
-def decode(data: bytes, *, verify: bool = True) -> list[Instruction]:
+def decode(data: bytes | bytearray | memoryview, *, verify: bool = True) -> list[Instruction]:
     """Instructions of a binary file image; BinFileError names the first bad record."""
     data = bytes(data)
     if len(data) % RECORD_LEN:
@@ -60,7 +61,7 @@ def decode(data: bytes, *, verify: bool = True) -> list[Instruction]:
     return out
 
 
-def read(path: str | os.PathLike) -> list[Instruction]:
+def read(path: str | os.PathLike[str]) -> list[Instruction]:
     """The instructions of a binary file; BinFileError also for a file over IMAGE_MAX bytes."""
     try:
         return decode(read_bytes(path, IMAGE_MAX, "binary program image"))
@@ -68,6 +69,6 @@ def read(path: str | os.PathLike) -> list[Instruction]:
         raise BinFileError(str(exc)) from None
 
 
-def write(path: str | os.PathLike, program: list[Instruction] | tuple[Instruction, ...]) -> None:
+def write(path: str | os.PathLike[str], program: list[Instruction] | tuple[Instruction, ...]) -> None:
     """Write atomically (temporary file, fsync, rename), so a killed process leaves no half file."""
     write_atomic(path, encode(program))

@@ -13,7 +13,7 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cache
 
@@ -73,32 +73,45 @@ def _module_names(module: str) -> _Names:
     return names
 
 
+def _type_name(cmd: opcodes.Command, ins: Instruction, names: _Names) -> str | None:
+    """The type operand as a symbol: the command's own names, then the module's parameter names."""
+    text = opcodes.symbol_name(cmd, ins.type)
+    if text is None and cmd.number in AXIS_COMMANDS:
+        text = names.axis.get(ins.type)
+    elif text is None and cmd.number in GLOBAL_COMMANDS:
+        text = names.globals.get((ins.motor, ins.type))
+    elif text is None and cmd.number in INTERRUPT_COMMANDS:
+        text = names.interrupts.get(ins.type)
+    return text
+
+
+def _operand_text(cmd: opcodes.Command, fld: str, ins: Instruction, labels: Mapping[int, str],
+                  names: _Names) -> str:
+    num = {TYPE: ins.type, MOTOR: ins.motor, VALUE: ins.value}[fld]
+    text = None
+    if fld == TYPE:
+        text = _type_name(cmd, ins, names)
+    elif fld == MOTOR and cmd.number in MOTOR_COMMANDS:
+        text = names.motors.get(num)
+    elif fld == VALUE and cmd.label:
+        text = labels.get(num)
+    return text if text is not None else str(num)
+
+
 def _text(ins: Instruction, labels: Mapping[int, str], names: _Names) -> str:
     cmd = opcodes.COMMANDS.get(ins.command)
     form = opcodes.choose_form(cmd, ins.type, ins.motor, ins.value) if cmd and cmd.mnemonic else None
-    if form is None:
+    if cmd is None or form is None:
         return f"{RAW} {ins.command}, {ins.type}, {ins.motor}, {ins.value}"
-    parts = []
-    for fld in form:
-        num = {TYPE: ins.type, MOTOR: ins.motor, VALUE: ins.value}[fld]
-        text = None
-        if fld == TYPE:
-            text = opcodes.symbol_name(cmd, num)
-            if text is None and cmd.number in AXIS_COMMANDS:
-                text = names.axis.get(num)
-            elif text is None and cmd.number in GLOBAL_COMMANDS:
-                text = names.globals.get((ins.motor, num))
-            elif text is None and cmd.number in INTERRUPT_COMMANDS:
-                text = names.interrupts.get(num)
-        elif fld == MOTOR and cmd.number in MOTOR_COMMANDS:
-            text = names.motors.get(num)
-        elif fld == VALUE and cmd.label:
-            text = labels.get(num)
-        parts.append(text if text is not None else str(num))
+    parts = [_operand_text(cmd, fld, ins, labels, names) for fld in form]
     return f"{cmd.mnemonic} {', '.join(parts)}".rstrip()
 
 
-def _instructions(program) -> list[Instruction]:
+ProgramData = bytes | bytearray | memoryview | Iterable[Sequence[int]]
+"""A binary image, or instructions as (command, type, motor, value) sequences."""
+
+
+def _instructions(program: ProgramData) -> list[Instruction]:
     """The instructions of a binary image or of a sequence of (command, type, motor, value)."""
     if isinstance(program, (bytes, bytearray, memoryview)):
         return decode(program)
@@ -115,26 +128,18 @@ def _instructions(program) -> list[Instruction]:
     return out
 
 
-def disassemble(program: bytes | list[Instruction], *, labels: Mapping[str, int] | None = None,
-                comments: bool = True, module: str | None = None) -> str:
-    """TMCL source for a binary image (8-byte records) or a list of instructions.
-
-    `labels` (name -> address, e.g. from Program.labels) names the jump targets; other targets
-    get ``L<address>``. With `comments`, each line ends with ``// <address>``. With `module`, the
-    text includes that module's bundled names (the output then needs the bundled include files).
-    """
-    instrs = _instructions(program)
-    tail_stop = bool(instrs) and instrs[-1] == STOP
-    body = instrs[:-1] if tail_stop else instrs
-    try:
-        names = _module_names(module) if module else _Names()
-    except (KeyError, AsmError) as exc:
-        raise ValueError(f"cannot use the names of module {module!r}: {exc}") from None
-
+def _given_labels(labels: Mapping[str, int] | None, names: _Names) -> dict[int, str]:
+    """Address -> the caller's label name (the first by name), for names the assembler accepts."""
     given: dict[int, str] = {}
     for name, addr in sorted((labels or {}).items(), key=lambda kv: kv[0]):
         if _IDENT.fullmatch(name) and name.upper() not in _RESERVED and name not in names.constants:
             given.setdefault(addr, name)
+    return given
+
+
+def _jump_targets(body: list[Instruction], given: dict[int, str], names: _Names) -> dict[int, str]:
+    """Address -> label for every jump target inside the program and every given label there;
+    ``L<address>`` (with ``_`` appended until unique) where no name was given."""
     targets: dict[int, str] = {}
     taken = set(given.values()) | names.constants
     for ins in body:
@@ -150,12 +155,13 @@ def disassemble(program: bytes | list[Instruction], *, labels: Mapping[str, int]
     for addr, name in given.items():  # keep every given label that lies inside the program
         if 0 <= addr <= len(body):
             targets.setdefault(addr, name)
+    return targets
 
+
+def _source_lines(body: list[Instruction], targets: Mapping[int, str], names: _Names,
+                  comments: bool) -> list[str]:
+    """One line per instruction, indented, with label lines before their addresses."""
     lines = []
-    if not tail_stop:
-        lines.append("#nostop")
-    if names.include:
-        lines.append(f"#include {names.include}")
     texts = [_text(i, targets, names) for i in body]
     width = max((len(t) for t in texts), default=0)
     for addr, text in enumerate(texts):
@@ -164,4 +170,27 @@ def disassemble(program: bytes | list[Instruction], *, labels: Mapping[str, int]
         lines.append(f"    {text:<{width}}  // {addr}" if comments else f"    {text}")
     if len(body) in targets:
         lines.append(f"{targets[len(body)]}:")
+    return lines
+
+
+def disassemble(program: ProgramData, *, labels: Mapping[str, int] | None = None,
+                comments: bool = True, module: str | None = None) -> str:
+    """TMCL source for a binary image (8-byte records) or a list of instructions.
+
+    `labels` (name -> address, e.g. from Program.labels) names the jump targets; other targets
+    get ``L<address>``. With `comments`, each line ends with ``// <address>``. With `module`, the
+    text includes that module's bundled names (the output then needs the bundled include files).
+    """
+    instrs = _instructions(program)
+    tail_stop = bool(instrs) and instrs[-1] == STOP
+    body = instrs[:-1] if tail_stop else instrs
+    try:
+        names = _module_names(module) if module else _Names()
+    except (KeyError, AsmError) as exc:
+        raise ValueError(f"cannot use the names of module {module!r}: {exc}") from None
+    targets = _jump_targets(body, _given_labels(labels, names), names)
+    lines = [] if tail_stop else ["#nostop"]
+    if names.include:
+        lines.append(f"#include {names.include}")
+    lines += _source_lines(body, targets, names, comments)
     return "\n".join(lines) + "\n"
