@@ -19,7 +19,7 @@ from ..motion.units import (
     round_half_away,
 )
 from ..protocol.frame import to_int32
-from .engines import ENGINE_PARAMS, make_engine
+from .engines import make_engine
 from .status import TmclStatus
 
 VELOCITY_PARAMS = {2, 3, 4, 16, 19, 20, 22, 23, 29, 181, 182, 186, 194, 195}
@@ -36,7 +36,8 @@ class Axis:
         self.params = profile.axis_parameters
         self.ram = ram
         self.engine: RampEngine = make_engine(profile.engine)
-        self.engine_keys = ENGINE_PARAMS[profile.engine]
+        self.engine_keys = profile.engine_params
+        self._unit_mode = profile.capabilities.unit_mode
         self.readable = frozenset(n for n, p in self.params.items() if p.readable)
         self.last_target = 0
         self.error_flags = 0
@@ -48,7 +49,7 @@ class Axis:
     @property
     def internal_units(self) -> bool:
         """TMCM-6212 AP255 = 0: velocities and accelerations in TMC5130 units."""
-        return self.profile.engine == "sixpoint" and self.ram.get(255, 1) == 0
+        return self._unit_mode and self.ram.get(255, 1) == 0
 
     def to_engine(self, number: int, value: int) -> int | float:
         if self.internal_units:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..modules.profile import Capabilities
 from ..motion import CLOCK_HZ
 from ..motion.scenario import AxisSpec
 from ..motion.stage import Load, Profile, ceil_ticks
@@ -52,7 +53,8 @@ class AxisWorld:
         self._due_streak = 0
         self._cache: tuple | None = None
         self._static = False
-        self._null_channel_possible = False
+        self.caps: Capabilities = world.vm.profile.capabilities
+        self._null_channel_possible = self.caps.null_channel
         self._engine_wake: int | None = None
 
     # --- binding ----------------------------------------------------------------------------
@@ -63,7 +65,6 @@ class AxisWorld:
         self.slipping = 0
         self.enc_offset = -self._quantized(self.phys)   # the encoder counter starts at 0
         self.current = CurrentModel()
-        self._null_channel_possible = self.vm.profile.engine != "sixpoint"
         self._update_static()
         self._update_raw()
 
@@ -150,7 +151,7 @@ class AxisWorld:
 
     @property
     def three_switch_wiring(self) -> bool:
-        return self.has(141) and self.stage.home is not None
+        return self.caps.reference_input == "REFL" and self.stage.home is not None
 
     def logical(self) -> tuple[bool, bool, bool]:
         """Logical (left, right, home) states after swap (AP14) and polarity (AP24/25 or GP79)."""
@@ -198,7 +199,7 @@ class AxisWorld:
         value of the encoder. 0... 255"), from the physical position; AP209 writes and the
         prescaler do not change it."""
         self._follow()
-        cpr = self.spec.encoder_counts or (256 if self.vm.profile.engine == "tmc429" else 1024)
+        cpr = self.spec.encoder_counts or self.caps.encoder_counts
         counts = (self.phys * cpr) // self._steps_per_round()
         return (counts % cpr) * (top + 1) // cpr
 
@@ -215,7 +216,7 @@ class AxisWorld:
     def _quantized(self, phys: int) -> int:
         """Encoder reading (in microsteps) of a physical position, before the offset."""
         spr = self._steps_per_round()
-        if self.vm.profile.engine == "sixpoint":
+        if self.caps.encoder == "resolution":
             # TMCM-6212 manual 6.2: counts per round AP210 converted with AP202 and AP140. The
             # encoder itself has the scenario's counts per round on a motor of its full steps
             # (without them: exactly what AP210 / AP202 say, so the conversion always matches).
@@ -231,7 +232,7 @@ class AxisWorld:
             counts = (phys * real) // real_spr
             return (counts * spr) // res
         # PD86-1180 manual 7.2: prescaler p/512 applied to the encoder's own counts
-        cpr = self.spec.encoder_counts or (256 if self.vm.profile.engine == "tmc429" else 1024)
+        cpr = self.spec.encoder_counts or self.caps.encoder_counts
         p = self.p(210, 6400) & ~4
         counts = (phys * cpr) // spr
         return (counts * p) // 512
@@ -253,7 +254,7 @@ class AxisWorld:
 
     def _pps(self, v) -> float:
         e = self.engine
-        if self.vm.profile.engine == "tmc429":
+        if self.caps.velocity_unit == "tmc429":
             div = e._params.get("pulse_divisor", 0) if hasattr(e, "_params") else 0
             return float(v) * CLOCK_HZ / ((1 << div) * 2048 * 32)
         return float(v)
@@ -388,7 +389,7 @@ class AxisWorld:
 
     def _null_channel(self) -> None:
         """PD86-1180 7.2: p + 4 clears the encoder at the next null channel (once per round)."""
-        if not (self.has(141) or self.vm.profile.engine == "linear") or not self.p(210) & 4:
+        if not self.caps.null_channel or not self.p(210) & 4:
             self.clear_on_null_armed = False
             return
         spr = self._steps_per_round()
@@ -490,7 +491,7 @@ class AxisWorld:
                             counters.append(c - offset)
             lo, hi = self.stage.ends
             counters += [x - offset for x in (lo, hi) if x is not None and x != phys]
-            if self.p(210) & 4 and self.vm.profile.engine != "sixpoint":
+            if self.p(210) & 4 and self._null_channel_possible:
                 spr = self._steps_per_round()
                 base = phys - phys % spr
                 counters += [x - offset for x in (base, base + spr) if x != phys]

@@ -119,7 +119,7 @@ class ReferenceSearch:
         """Logical switch state for the search (AP12/AP13 do not apply, manual 6.1)."""
         left, right, home = self.aw.logical()
         if self.mode & 128:
-            if self.aw.has(141):      # PD86-1180: the reference input is REFL
+            if self.aw.caps.reference_input == "REFL":   # PD86-1180 manual 7.1
                 left = not left
             else:
                 home = not home

@@ -104,7 +104,7 @@ class CurrentModel:
         e, now = aw.engine, aw.vm.now
         if not e.moving:
             still = 0 if self.still_since is None else now - self.still_since
-            if aw.vm.profile.engine != "sixpoint" and aw.p(204) and still >= aw.p(204) * TICKS_PER_MS:
+            if aw.vm.profile.capabilities.freewheel_delay and aw.p(204) and still >= aw.p(204) * TICKS_PER_MS:
                 return 0                         # PD86-1180 AP204: power cut after the freewheeling time
             if still >= aw.p(214, 200) * TICKS_PER_10MS:
                 return aw.p(7, 8)                # standby current after the power-down delay
