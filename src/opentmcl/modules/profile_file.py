@@ -215,18 +215,26 @@ def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
     """Ranges and letters of well-typed fields."""
     errors = [f"{path}.{f}: must be 0..255, got {entry[f]}" for f in ("number", "bank", "port")
               if f in entry and not 0 <= entry[f] <= 255]
-    ranged = "min" in entry and "max" in entry   # both required in parameter tables, optional in io
-    ordered = ranged and entry["min"] <= entry["max"]
-    if ranged and not ordered:
-        errors.append(f"{path}: min {entry['min']} is greater than max {entry['max']}")
+    lo, hi = _range(table, entry) or (0, 0)
+    if lo > hi:
+        errors.append(f"{path}: min {lo} is greater than max {hi}")
     if "access" in entry and (not entry["access"] or set(entry["access"]) - set("RWEA")):
         errors.append(f"{path}.access: letters R, W, E, A only, got {entry['access']!r}")
-    if table != "interrupt" and "default" in entry and ordered and not entry.get("values") \
-            and not entry["min"] <= entry["default"] <= entry["max"]:
-        errors.append(f"{path}.default: {entry['default']} outside min..max {entry['min']}..{entry['max']}")
+    if table != "interrupt" and "default" in entry and lo <= hi and not entry.get("values") \
+            and not lo <= entry["default"] <= hi:
+        errors.append(f"{path}.default: {entry['default']} outside min..max {lo}..{hi}")
     if table == "io" and entry["kind"] not in ("digital", "analog", "output"):
         errors.append(f"{path}.kind: must be digital, analog or output, got {entry['kind']!r}")
     return errors + _engine_field(table, path, entry)
+
+
+def _range(table: str, entry: RawProfile) -> tuple[int, int] | None:
+    """(min, max) of an entry: required in parameter tables, 0 and 1 unless given in io (IOPort)."""
+    if table == "io":
+        return entry.get("min", 0), entry.get("max", 1)
+    if "min" in entry and "max" in entry:
+        return entry["min"], entry["max"]
+    return None
 
 
 def _engine_field(table: str, path: str, entry: RawProfile) -> list[str]:
