@@ -177,3 +177,26 @@ def test_an_io_range_with_only_min_is_checked_not_a_crash(tmp_path):
     assert "io[bank=0,port=99]: min 5 is greater than max 1" in done.stderr
     path.write_text(f'extends = "PD86-1180"\n{new_port}min = 1\n')   # the last valid min
     assert cli("profile", "check", str(path)).returncode == 0
+
+
+def test_a_probed_module_without_a_built_in_match_declares_capabilities(tmp_path):
+    """docs/profiles.md `profile probe`: with no built-in of that module number the skeleton is a
+    standalone profile (a linear engine); it declares the PD28-1021's capabilities and loads."""
+    from opentmcl.host.probe import ProbeResult, skeleton
+
+    path = tmp_path / "probed.toml"
+    path.write_text(skeleton(ProbeResult("9999V100", None, 1, {0: {4: 1000}}), "sim://"))
+    prof = load_profile(str(path))
+    assert prof.engine == "linear" and prof.capabilities == load_profile("PD28-1021").capabilities
+
+
+@pytest.mark.parametrize("parent", ["TMCM-6212", "PD28-1021", "PD86-1180"])
+def test_an_engine_keyword_the_engine_lacks_is_a_profile_error(tmp_path, parent):
+    """docs/profiles.md: the engine refuses a keyword it does not have when the module is built; the
+    CLI prints one line (exit 1), no internal error."""
+    path = derived(tmp_path, parent, rest='[[axis_parameter]]\nnumber = 4\nengine = "warp"\n')
+    with pytest.raises(ProfileError, match="ramp engine refuses the profile's settings.*warp"):
+        VirtualModule(path)
+    done = cli("demo", "--module", path, "--duration", "0.1")
+    assert done.returncode == 1 and "warp" in done.stderr and "internal error" not in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1

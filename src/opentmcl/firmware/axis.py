@@ -13,6 +13,7 @@ from fractions import Fraction
 from typing import TYPE_CHECKING
 
 from ..modules.profile import ModuleProfile, Param
+from ..modules.profile_file import ProfileError
 from ..motion import Mode, RampEngine
 from ..motion.units import (
     internal_acceleration_from_pps2,
@@ -51,7 +52,11 @@ class Axis:
         self.last_target = 0
         self.error_flags = 0
         self.reference_search_active = False
-        self._configure_all()
+        try:
+            self._configure_all()
+        except (TypeError, ValueError) as exc:   # an engine keyword or default of the profile it refuses
+            raise ProfileError([f"{profile.name}: the {profile.engine} ramp engine refuses the profile's "
+                                f"settings: {exc}"]) from None
 
     # --- units --------------------------------------------------------------
     @property

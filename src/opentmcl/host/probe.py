@@ -8,8 +8,9 @@ Every request has a time-out and the whole probe a deadline, so it always ends.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
+from ..modules.profile import load_profile
 from .errors import TmclError, TmclStatusError, TmclTimeout
 
 GAP, GGP, GIO, VERSION = 6, 10, 15, 136
@@ -142,7 +143,9 @@ def skeleton(result: ProbeResult, url: str) -> str:
                   f"axes = {max(1, result.axes)}", 'engine = "linear"',
                   f'firmware_version = {_toml(result.firmware_version)}',
                   f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
-                  "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139)))]
+                  "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139))),
+                  "", "[module.capabilities]  # as the linear-engine PD28-1021 (docs/profiles.md)",
+                  *(f"{k} = {_toml(v)}" for k, v in asdict(load_profile("PD28-1021").capabilities).items())]
         known_axis, known_global, known_io = {}, {}, {}
     comments, body = [], []
     for number, value in sorted(axis0.items()):
