@@ -119,6 +119,12 @@ def _table(name: str, fields: dict) -> list[str]:
 _UNKNOWN = {"min": -2147483648, "max": 2147483647, "access": "R"}
 
 
+def _linear_capabilities() -> list[str]:
+    """[module.capabilities] of a standalone skeleton: the linear-engine PD28-1021's (docs/profiles.md)."""
+    caps = asdict(load_profile("PD28-1021").capabilities)
+    return ["", "[module.capabilities]", *(f"{k} = {_toml(v)}" for k, v in caps.items())]
+
+
 def skeleton(result: ProbeResult, url: str) -> str:
     """A profile file for the probed module: `extends` the closest built-in profile and overrides
     what differs, or a standalone profile when none matches. Marked unverified."""
@@ -144,8 +150,7 @@ def skeleton(result: ProbeResult, url: str) -> str:
                   f'firmware_version = {_toml(result.firmware_version)}',
                   f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
                   "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139))),
-                  "", "[module.capabilities]  # as the linear-engine PD28-1021 (docs/profiles.md)",
-                  *(f"{k} = {_toml(v)}" for k, v in asdict(load_profile("PD28-1021").capabilities).items())]
+                  *_linear_capabilities()]
         known_axis, known_global, known_io = {}, {}, {}
     comments, body = [], []
     for number, value in sorted(axis0.items()):
