@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 def _plan(vm: VirtualModule) -> list[tuple[int, int, int, int]]:
     """Requests (command, type, motor, value): each axis gets its own ramp and target."""
     reqs = []
-    fast = vm.profile.engine != "tmc429"
+    fast = vm.profile.capabilities.velocity_unit == "pps"
     for axis in range(vm.profile.axes):
         speed = (20000 + 10000 * axis) if fast else 400 + 200 * axis
         accel = (40000 + 20000 * axis) if fast else 100 + 50 * axis
@@ -85,7 +85,7 @@ def _start_moves(module: str) -> VirtualModule:
 
 def _print_table(vm: VirtualModule, duration: float, interval: float) -> None:
     """Position and velocity of every axis each `interval` virtual seconds, then who reached AP8."""
-    unit = "pps" if vm.profile.engine != "tmc429" else "internal"
+    unit = "pps" if vm.profile.capabilities.velocity_unit == "pps" else "internal"
     print(f"Virtual {vm.profile.name} (firmware {vm.profile.firmware_version}), virtual time; "
           f"position in microsteps, velocity in {unit}")
     head = "  time/s" + "".join(f"  {f'axis{a} pos':>11} {'vel':>7}" for a in range(vm.profile.axes))

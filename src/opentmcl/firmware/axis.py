@@ -9,7 +9,11 @@ internal units on the TMCM-6212), TMC429 internal units on the PD86-1180.
 """
 from __future__ import annotations
 
+from fractions import Fraction
+from typing import TYPE_CHECKING
+
 from ..modules.profile import ModuleProfile, Param
+from ..modules.profile_file import ProfileError
 from ..motion import Mode, RampEngine
 from ..motion.units import (
     internal_acceleration_from_pps2,
@@ -19,8 +23,11 @@ from ..motion.units import (
     round_half_away,
 )
 from ..protocol.frame import to_int32
-from .engines import ENGINE_PARAMS, make_engine
+from .engines import make_engine
 from .status import TmclStatus
+
+if TYPE_CHECKING:
+    from .world import World
 
 VELOCITY_PARAMS = {2, 3, 4, 16, 19, 20, 22, 23, 29, 181, 182, 186, 194, 195}
 ACCEL_PARAMS = {5, 15, 17, 18}
@@ -30,27 +37,35 @@ INTERNAL_AMAX = 2**16 - 1
 
 
 class Axis:
+    world: World
+    """The module's world, set by VirtualModule at power-up (firmware/world.py)."""
+
     def __init__(self, index: int, profile: ModuleProfile, ram: dict[int, int]) -> None:
         self.index = index
         self.profile = profile
         self.params = profile.axis_parameters
         self.ram = ram
         self.engine: RampEngine = make_engine(profile.engine)
-        self.engine_keys = ENGINE_PARAMS[profile.engine]
+        self.engine_keys = profile.engine_params
+        self._unit_mode = profile.capabilities.unit_mode
         self.readable = frozenset(n for n, p in self.params.items() if p.readable)
         self.last_target = 0
         self.error_flags = 0
         self.reference_search_active = False
-        self.world = None  # set by VirtualModule (firmware/world.py)
-        self._configure_all()
+        try:
+            self._configure_all()
+        except (TypeError, ValueError) as exc:   # an engine keyword or default of the profile it refuses
+            raise ProfileError([f"{profile.name}: the {profile.engine} ramp engine refuses the profile's "
+                                f"settings: {exc}"]) from None
 
     # --- units --------------------------------------------------------------
     @property
     def internal_units(self) -> bool:
         """TMCM-6212 AP255 = 0: velocities and accelerations in TMC5130 units."""
-        return self.profile.engine == "sixpoint" and self.ram.get(255, 1) == 0
+        return self._unit_mode and self.ram.get(255, 1) == 0
 
-    def to_engine(self, number: int, value: int) -> int | float:
+    def to_engine(self, number: int, value: int) -> int | Fraction:
+        """A parameter value in the engine's unit (exact: a Fraction of pps in internal units)."""
         if self.internal_units:
             if number in VELOCITY_PARAMS:
                 return pps_from_internal_velocity(value)
@@ -58,7 +73,12 @@ class Axis:
                 return pps2_from_internal_acceleration(value)
         return value
 
-    def from_engine(self, number: int, value: int | float) -> int:
+    def engine_speed(self, number: int, value: int) -> int | Fraction:
+        """|to_engine|: a speed threshold (AP181, AP182) as a magnitude in engine units."""
+        v = self.to_engine(number, value)
+        return -v if v < 0 else v
+
+    def from_engine(self, number: int, value: int | float | Fraction) -> int:
         if self.internal_units and number in VELOCITY_PARAMS:
             return internal_velocity_from_pps(value)
         if self.internal_units and number in ACCEL_PARAMS:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from ..modules.profile import Capabilities
 from ..motion import CLOCK_HZ
 from ..motion.scenario import AxisSpec
 from ..motion.stage import Load, Profile, ceil_ticks
@@ -11,6 +12,7 @@ from ..motion.stallguard import CurrentModel, load_value
 from . import flags as fl
 
 if TYPE_CHECKING:
+    from ..motion import RampEngine
     from .axis import Axis
     from .world import World
 
@@ -32,6 +34,10 @@ FULLSTEPS = 200
 class AxisWorld:
     """Stage, load, encoder and drive currents of one axis."""
 
+    _axis: Axis
+    """The bound axis (`axis` once `bind` ran; the checks and scans run only then)."""
+    engine: RampEngine
+
     def __init__(self, world: World, index: int, spec: AxisSpec) -> None:
         self.world = world
         self.index = index
@@ -52,18 +58,19 @@ class AxisWorld:
         self._due_streak = 0
         self._cache: tuple | None = None
         self._static = False
-        self._null_channel_possible = False
+        self.caps: Capabilities = world.vm.profile.capabilities
+        self._null_channel_possible = self.caps.null_channel
         self._engine_wake: int | None = None
 
     # --- binding ----------------------------------------------------------------------------
     def bind(self, axis: Axis) -> None:
         self.axis = axis
+        self._axis = axis
         self.engine = axis.engine
         self.offset = self.phys - self.engine.position
         self.slipping = 0
         self.enc_offset = -self._quantized(self.phys)   # the encoder counter starts at 0
         self.current = CurrentModel()
-        self._null_channel_possible = self.vm.profile.engine != "sixpoint"
         self._update_static()
         self._update_raw()
 
@@ -72,10 +79,10 @@ class AxisWorld:
         return self.world.vm
 
     def p(self, number: int, default: int = 0) -> int:
-        return self.axis.ram.get(number, default) if number in self.axis.params else default
+        return self._axis.ram.get(number, default) if number in self._axis.params else default
 
     def has(self, number: int) -> bool:
-        return number in self.axis.params
+        return number in self._axis.params
 
     # --- Python API -------------------------------------------------------------------------------
     def force_switch(self, name: str, level: int | None) -> None:
@@ -150,7 +157,7 @@ class AxisWorld:
 
     @property
     def three_switch_wiring(self) -> bool:
-        return self.has(141) and self.stage.home is not None
+        return self.caps.reference_input == "REFL" and self.stage.home is not None
 
     def logical(self) -> tuple[bool, bool, bool]:
         """Logical (left, right, home) states after swap (AP14) and polarity (AP24/25 or GP79)."""
@@ -182,7 +189,7 @@ class AxisWorld:
         """SAP 167: the stage follows up to now under the old setting; after re-enabling it
         continues from where it stands."""
         self._follow()
-        self.axis.ram[167] = value
+        self._axis.ram[167] = value
         self._follow()
 
     def speed(self) -> int:
@@ -191,14 +198,14 @@ class AxisWorld:
         self._follow()
         if self.slipping or self.driver_off():
             return 0
-        return self.axis.from_engine(29, self.engine.velocity)
+        return self._axis.from_engine(29, self.engine.velocity)
 
     def absolute_encoder(self, top: int) -> int:
         """AP215: the angle of the rotor within one round in 0..top (PD86-1180 5: "Absolute
         value of the encoder. 0... 255"), from the physical position; AP209 writes and the
         prescaler do not change it."""
         self._follow()
-        cpr = self.spec.encoder_counts or (256 if self.vm.profile.engine == "tmc429" else 1024)
+        cpr = self.spec.encoder_counts or self.caps.encoder_counts
         counts = (self.phys * cpr) // self._steps_per_round()
         return (counts % cpr) * (top + 1) // cpr
 
@@ -215,7 +222,7 @@ class AxisWorld:
     def _quantized(self, phys: int) -> int:
         """Encoder reading (in microsteps) of a physical position, before the offset."""
         spr = self._steps_per_round()
-        if self.vm.profile.engine == "sixpoint":
+        if self.caps.encoder == "resolution":
             # TMCM-6212 manual 6.2: counts per round AP210 converted with AP202 and AP140. The
             # encoder itself has the scenario's counts per round on a motor of its full steps
             # (without them: exactly what AP210 / AP202 say, so the conversion always matches).
@@ -231,7 +238,7 @@ class AxisWorld:
             counts = (phys * real) // real_spr
             return (counts * spr) // res
         # PD86-1180 manual 7.2: prescaler p/512 applied to the encoder's own counts
-        cpr = self.spec.encoder_counts or (256 if self.vm.profile.engine == "tmc429" else 1024)
+        cpr = self.spec.encoder_counts or self.caps.encoder_counts
         p = self.p(210, 6400) & ~4
         counts = (phys * cpr) // spr
         return (counts * p) // 512
@@ -253,7 +260,7 @@ class AxisWorld:
 
     def _pps(self, v) -> float:
         e = self.engine
-        if self.vm.profile.engine == "tmc429":
+        if self.caps.velocity_unit == "tmc429":
             div = e._params.get("pulse_divisor", 0) if hasattr(e, "_params") else 0
             return float(v) * CLOCK_HZ / ((1 << div) * 2048 * 32)
         return float(v)
@@ -290,7 +297,7 @@ class AxisWorld:
         self._follow()
         self._update_raw()
         self.current.update(self)
-        search = self.vm.reference_search(self.axis)
+        search = self.vm.reference_search(self._axis)
         if search.active:
             search.poll()
         else:
@@ -346,18 +353,18 @@ class AxisWorld:
         if not limit or not self.engine.moving:
             return
         v = abs(self.engine.velocity)
-        if v < abs(self.axis.to_engine(181, limit)):
+        if v < self._axis.engine_speed(181, limit):
             return
         if self.load_value() == 0:
             self.engine.hard_stop()
-            self.axis.error_flags |= SG_EXTENDED
+            self._axis.error_flags |= SG_EXTENDED
             self.vm.interpreter.set_error_flag(fl.EPO)
             self.vm.interrupts.trigger(STALL + self.index)
             self._end_search()
 
     def _end_search(self) -> None:
         """A stall or deviation stop ends a running reference search (docs/world.md)."""
-        search = self.vm.reference_search(self.axis)
+        search = self.vm.reference_search(self._axis)
         if search.active:
             search.abort()
 
@@ -380,15 +387,15 @@ class AxisWorld:
         if abs(self.engine.position - self.encoder()) > limit:
             if self.engine.moving:
                 self.engine.hard_stop()
-            if not self.axis.error_flags & DEV_EXTENDED:
-                self.axis.error_flags |= DEV_EXTENDED
+            if not self._axis.error_flags & DEV_EXTENDED:
+                self._axis.error_flags |= DEV_EXTENDED
                 self.vm.interpreter.set_error_flag(fl.EDV)
                 self.vm.interrupts.trigger(DEVIATION + self.index)
             self._end_search()
 
     def _null_channel(self) -> None:
         """PD86-1180 7.2: p + 4 clears the encoder at the next null channel (once per round)."""
-        if not (self.has(141) or self.vm.profile.engine == "linear") or not self.p(210) & 4:
+        if not self.caps.null_channel or not self.p(210) & 4:
             self.clear_on_null_armed = False
             return
         spr = self._steps_per_round()
@@ -398,7 +405,7 @@ class AxisWorld:
             return
         if self.phys % spr == 0 and self.phys != self._null_from:
             self.set_encoder(0)
-            self.axis.ram[210] = self.p(210) & ~4
+            self._axis.ram[210] = self.p(210) & ~4
             self.clear_on_null_armed = False
 
     def due_now(self) -> bool:
@@ -406,7 +413,7 @@ class AxisWorld:
         active switch or into an overload)?"""
         if self.axis is None or not self.heading():
             return False
-        if not self.vm.reference_search(self.axis).active and self._limit_due():
+        if not self.vm.reference_search(self._axis).active and self._limit_due():
             return True
         e = self.engine
         if not self.slipping and not self.driver_off() and (self._blocked(self.heading()) or self._overloaded()):
@@ -417,7 +424,7 @@ class AxisWorld:
         if dev and abs(e.position - self.encoder()) > dev:
             return True
         limit = self.p(181)
-        return bool(limit and not self.driver_off() and abs(e.velocity) >= abs(self.axis.to_engine(181, limit))
+        return bool(limit and not self.driver_off() and abs(e.velocity) >= self._axis.engine_speed(181, limit)
                     and self.load_value() == 0)
 
     # --- events -------------------------------------------------------------------------------------
@@ -425,7 +432,7 @@ class AxisWorld:
         """Can anything happen on this axis that needs an event? (cheap; checked very often)"""
         if self._static or self.forced or self.watch is not None:
             return True
-        ram = self.axis.ram
+        ram = self._axis.ram
         return bool(ram.get(181) or ram.get(212) or (self._null_channel_possible and ram.get(210, 0) & 4))
 
     def _update_static(self) -> None:
@@ -438,8 +445,8 @@ class AxisWorld:
     def _signature(self) -> tuple:
         """Everything the next world event depends on besides time (for the cache)."""
         eng = self.engine.plan_token
-        ram = self.axis.ram
-        search = self.vm.reference_search(self.axis)
+        ram = self._axis.ram
+        search = self.vm.reference_search(self._axis)
         gp79 = self.vm.globals.ram.get((0, 79), 0)
         return (eng, self.offset, self.slipping, tuple(self.raw.values()), tuple(sorted(self.forced.items())),
                 self.watch, self.load, tuple(ram.get(n, 0) for n in self.SIGNATURE_PARAMS), gp79,
@@ -469,37 +476,82 @@ class AxisWorld:
         return now == self._cache[1] or now == self._engine_wake
 
     def _next_event(self, now: int) -> int | None:
-        e = self.engine
+        """The earliest tick after `now` at which a check can change something: a position the
+        counter reaches (switch edges, load steps, ends, null channel, deviation limit, the
+        reference search's watch), a step of a load over time, or the stop-on-stall speed."""
         self._follow()
-        if self.due_now():
-            self._due_streak = self._due_streak + 1 if self._due_at == now - 1 else 0
-            self._due_at = now
-            if self._due_streak < 4:   # a check that cannot resolve it must not stall time
-                return now + 1
-        counters: list[int] = []
+        if self._due_again(now):
+            return now + 1
         off = self.driver_off()
         if not self.slipping and not off:
-            phys, offset = self.phys, self.offset
-            for name, sw in self.stage.switches().items():
-                if name not in self.forced:
-                    counters += [x - offset for x in self.stage.edge_candidates(phys, sw, self.raw[name])]
-            if self.load.by == "position":
-                for x in self.load.profile.breakpoints():
-                    for c in (int(-(-x // 1)), int(-(-x // 1)) - 1):
-                        if c != phys:
-                            counters.append(c - offset)
-            lo, hi = self.stage.ends
-            counters += [x - offset for x in (lo, hi) if x is not None and x != phys]
-            if self.p(210) & 4 and self.vm.profile.engine != "sixpoint":
-                spr = self._steps_per_round()
-                base = phys - phys % spr
-                counters += [x - offset for x in (base, base + spr) if x != phys]
-        elif self.p(212):  # the stage stands: only the deviation limit can be crossed
-            enc, lim = self.encoder(), self.p(212)
-            counters += [enc + lim + 1, enc - lim - 1]
+            counters = self._stage_counters()
+        else:
+            counters = self._deviation_counters()
         if self.watch is not None:
             counters.append(self.watch)
+        best = self._first_arrival(counters, now)
+        if self.load.by == "time":
+            t = self._next_time(self.load.profile)
+            if t is not None and (best is None or t < best):
+                best = t
+        t = None if off else self._stall_speed_time()
+        if t is not None and t > now and (best is None or t < best):
+            best = t
+        return best
+
+    def _due_again(self, now: int) -> bool:
+        """A check is due at the next tick; not more than 4 ticks in a row, since a check that
+        cannot resolve it must not stall time."""
+        if not self.due_now():
+            return False
+        self._due_streak = self._due_streak + 1 if self._due_at == now - 1 else 0
+        self._due_at = now
+        return self._due_streak < 4
+
+    def _stage_counters(self) -> list[int]:
+        """Counter positions at which the stage, following the counter, meets something: a switch
+        edge, a step of a load over position, a mechanical end, the encoder's null channel."""
+        phys, offset = self.phys, self.offset
+        out = self._switch_edges(phys)
+        if self.load.by == "position":
+            out += self._load_steps(phys)
+        lo, hi = self.stage.ends
+        out += [x for x in (lo, hi) if x is not None and x != phys]
+        if self._null_channel_possible and self.p(210) & 4:
+            spr = self._steps_per_round()
+            base = phys - phys % spr
+            out += [x for x in (base, base + spr) if x != phys]
+        return [x - offset for x in out]
+
+    def _switch_edges(self, phys: int) -> list[int]:
+        """Physical positions of the next edges of the switches not forced."""
+        out: list[int] = []
+        for name, sw in self.stage.switches().items():
+            if name not in self.forced:
+                out += self.stage.edge_candidates(phys, sw, self.raw[name])
+        return out
+
+    def _load_steps(self, phys: int) -> list[int]:
+        """Physical positions on both sides of each breakpoint of a load over position."""
+        out = []
+        for x in self.load.profile.breakpoints():
+            for c in (int(-(-x // 1)), int(-(-x // 1)) - 1):
+                if c != phys:
+                    out.append(c)
+        return out
+
+    def _deviation_counters(self) -> list[int]:
+        """The stage stands (steps lost, driver off): only the deviation limit AP212 can be crossed."""
+        lim = self.p(212)
+        if not lim:
+            return []
+        enc = self.encoder()
+        return [enc + lim + 1, enc - lim - 1]
+
+    def _first_arrival(self, counters: list[int], now: int) -> int | None:
+        """First tick after `now` at which the counter reaches one of `counters`."""
         best = None
+        e = self.engine
         here = e.position
         for c in counters:
             if c == here or not -2**31 <= c < 2**31:
@@ -507,16 +559,14 @@ class AxisWorld:
             t = e.time_at_position(c)
             if t is not None and t > now and (best is None or t < best):
                 best = t
-        if self.load.by == "time":
-            t = self._next_time(self.load.profile)
-            if t is not None and (best is None or t < best):
-                best = t
-        limit = 0 if off else self.p(181)
-        if limit:                            # the speed reaching the stop-on-stall limit AP181
-            t = e.time_at_speed(abs(self.axis.to_engine(181, limit)))
-            if t is not None and t > now and (best is None or t < best):
-                best = t
         return best
+
+    def _stall_speed_time(self) -> int | None:
+        """Tick at which the speed reaches the stop-on-stall limit AP181 (None: off or never)."""
+        limit = self.p(181)
+        if not limit:
+            return None
+        return self.engine.time_at_speed(self._axis.engine_speed(181, limit))
 
     def _next_time(self, profile: Profile) -> int | None:
         """Next tick at which a load given over time changes (steps: breakpoints; ramps: every ms)."""

@@ -20,7 +20,10 @@ from collections.abc import Callable, Generator
 from fractions import Fraction
 
 Cond = Callable[[], bool]
-Steps = Generator[Cond, None, 'int | Fraction']
+Steps = Generator[Cond, None, int]
+"""A phase of a search: yields the conditions it waits for, returns a direction or a position."""
+Point = Generator[Cond, None, Fraction]
+"""A switching point calibration: returns the reference point (a half microstep possible)."""
 
 LEFT, RIGHT, HOME = "left", "right", "home"
 
@@ -119,7 +122,7 @@ class ReferenceSearch:
         """Logical switch state for the search (AP12/AP13 do not apply, manual 6.1)."""
         left, right, home = self.aw.logical()
         if self.mode & 128:
-            if self.aw.has(141):      # PD86-1180: the reference input is REFL
+            if self.aw.caps.reference_input == "REFL":   # PD86-1180 manual 7.1
                 left = not left
             else:
                 home = not home
@@ -176,7 +179,7 @@ class ReferenceSearch:
         yield self._stopped
         return self.pos
 
-    def edge(self, name: str, direction: int) -> Steps:
+    def edge(self, name: str, direction: int) -> Point:
         """Switching point calibration of the switch edge met while moving in `direction`:
         the centre of leaving it (against `direction`) and re-entering it (along it)."""
         if not self.state(name):             # stopped beyond a narrow switch: come back into it
@@ -185,7 +188,7 @@ class ReferenceSearch:
         second = yield from self._slow_until(name, direction, True)
         return Fraction(first + second, 2)
 
-    def middle(self, name: str, direction: int) -> Steps:
+    def middle(self, name: str, direction: int) -> Point:
         """Both edges of switch `name` (the first met moving in `direction`); their centre."""
         near = yield from self.edge(name, direction)
         first = yield from self._slow_until(name, direction, False)
@@ -193,21 +196,21 @@ class ReferenceSearch:
         far = Fraction(first + second, 2)
         return (near + far) / 2
 
-    def goto(self, target) -> Steps:
+    def goto(self, target: int | Fraction) -> Steps:
         """Drive at AP195 to the reference point (rounded to a whole microstep)."""
-        target = round(target)
+        point = round(target)
         here = self.pos
-        if here != target:
-            d = 1 if target > here else -1
-            self.aw.watch = target
+        if here != point:
+            d = 1 if point > here else -1
+            self.aw.watch = point
             self._rotate(d, 195)
-            yield lambda: (self.pos - target) * d >= 0
+            yield lambda: (self.pos - point) * d >= 0
             self._command(self.axis.engine.hard_stop)
             self.aw.watch = None
             yield self._stopped
         return self.pos
 
-    def zero(self, reference: int) -> Steps:
+    def zero(self, reference: int | Fraction) -> Steps:
         yield from self.goto(reference)
         ax = self.axis
         self.log.append(("zero", None, self.pos))

@@ -9,9 +9,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
+from ..modules.profile import load_profile
 from .client import Client, VersionReply
 from .errors import TmclError, TmclStatusError, TmclTimeout
 
@@ -190,7 +191,8 @@ def _standalone_module(result: ProbeResult) -> list[str]:
             f"axes = {max(1, result.axes)}", 'engine = "linear"',
             f"firmware_version = {_toml(result.firmware_version)}",
             f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
-            "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139)))]
+            "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139))),
+            *_linear_capabilities()]
 
 
 def _overrides_default(p: Param, value: int) -> bool:
@@ -250,6 +252,12 @@ def _removed(result: ProbeResult, known: _Known) -> list[str]:
     }
     removed = {k: v for k, v in removed.items() if v}
     return ["", "[remove]", *(f"{k} = {_toml(v)}" for k, v in removed.items())] if removed else []
+
+
+def _linear_capabilities() -> list[str]:
+    """[module.capabilities] of a standalone skeleton: the linear-engine PD28-1021's (docs/profiles.md)."""
+    caps = asdict(load_profile("PD28-1021").capabilities)
+    return ["", "[module.capabilities]", *(f"{k} = {_toml(v)}" for k, v in caps.items())]
 
 
 def skeleton(result: ProbeResult, url: str) -> str:

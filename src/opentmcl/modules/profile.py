@@ -1,4 +1,4 @@
-"""Module profiles as data (docs/architecture.md "Capabilities").
+"""Module profiles as data (docs/profiles.md; docs/architecture.md "Capabilities").
 
 A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
 
@@ -6,7 +6,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     name = "TMCM-6212"            # canonical name
     aliases = ["..."]             # other accepted names
     axes = 6
-    engine = "sixpoint"           # sixpoint | linear | tmc429
+    engine = "sixpoint"           # the ramp engine (firmware/engines.py): sixpoint | linear | tmc429
     firmware_version = "6212V105" # string reply of command 136 type 0 (8 chars)
     firmware_binary = 0x...       # value of the reply of command 136 type 1
     program_memory = 6144         # TMCL program memory size in commands
@@ -15,6 +15,15 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     coordinates = 20              # coordinates per axis (coordinate 0 is RAM only)
     user_variables = 256          # bank 2 size
     storable_user_variables = 56  # variables 0..N-1 can be stored in EEPROM
+
+    [module.capabilities]         # what the firmware has; every key required (docs/profiles.md)
+    velocity_unit = "pps"         # pps | tmc429: unit of the velocity and acceleration parameters
+    unit_mode = true              # AP255 switches to TMC5130 internal units (TMCM-6212 4.1)
+    encoder = "resolution"        # resolution (AP210 counts per round) | prescaler (AP210 = p/512)
+    encoder_counts = 1024         # encoder counts per round unless the scenario gives its own
+    null_channel = false          # AP210 + 4 clears the encoder at the next null channel
+    reference_input = "HOME"      # HOME | REFL: where the home switch is wired
+    freewheel_delay = false       # AP204 is a delay in ms after which the motor current is cut
 
     [[axis_parameter]]            # one per axis parameter of the manual
     number = 4
@@ -28,6 +37,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     access = "RWE"                # letters of the manual: R read, W write, E storable (STAP), A auto-stored
     default = 51200
     unit = "pps"
+    engine = "max_positioning_speed" # optional: the ramp engine setting this parameter drives
 
     [[global_parameter]]          # same fields plus `bank`
     bank = 0
@@ -52,9 +62,10 @@ from __future__ import annotations
 
 import os
 import sys
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from functools import cache
 from importlib import resources
+from typing import Any
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -76,6 +87,8 @@ class Param:
     values: tuple[int, ...] = ()
     bank: int | None = None
     excluded: tuple[int, ...] = ()
+    engine: str = ""
+    """Keyword of the ramp engine setting this axis parameter drives ("" for none)."""
 
     @property
     def readable(self) -> bool:
@@ -118,6 +131,43 @@ class Interrupt:
     description: str = ""
 
 
+RawProfile = dict[str, Any]
+"""A profile as read from TOML (values are TOML values)."""
+
+CAPABILITY_VALUES: dict[str, tuple[str, ...] | type] = {
+    "velocity_unit": ("pps", "tmc429"),
+    "unit_mode": bool,
+    "encoder": ("resolution", "prescaler"),
+    "encoder_counts": int,
+    "null_channel": bool,
+    "reference_input": ("HOME", "REFL"),
+    "freewheel_delay": bool,
+}
+"""Every capability a profile declares: its allowed strings, or its TOML type (docs/profiles.md)."""
+
+
+@dataclass(frozen=True, slots=True)
+class Capabilities:
+    """What a module's firmware has, beyond its parameter tables (docs/profiles.md "Capabilities")."""
+
+    velocity_unit: str
+    """"pps", or "tmc429": TMC429 internal units scaled by the pulse divisor AP154 (PD86-1180 5)."""
+    unit_mode: bool
+    """AP255 = 0 selects TMC5130 internal units for velocities and accelerations (TMCM-6212 4.1)."""
+    encoder: str
+    """"resolution": AP210 is the encoder's counts per round, converted with AP202 and AP140
+    (TMCM-6212 6.2); "prescaler": AP210 is a prescaler p/512 (PD86-1180 7.2)."""
+    encoder_counts: int
+    """Counts per round of the encoder when the scenario does not give them."""
+    null_channel: bool
+    """AP210 + 4 clears the encoder at the next null channel (PD86-1180 7.2)."""
+    reference_input: str
+    """"HOME": a home switch input of its own; "REFL": the home switch is wired in series with the
+    left limit switch (three-switch wiring, PD86-1180 7.1) and search mode + 128 inverts REFL."""
+    freewheel_delay: bool
+    """AP204 is a time in ms after which the current of a standing motor is cut (PD86-1180 5)."""
+
+
 @dataclass(frozen=True)
 class ModuleProfile:
     name: str
@@ -136,7 +186,14 @@ class ModuleProfile:
     global_parameters: dict[tuple[int, int], Param]  # (bank, number) -> Param
     io: dict[tuple[int, int], IOPort]  # (bank, port) -> IOPort
     interrupts: dict[int, Interrupt]
-    extra: dict = field(default_factory=dict)
+    capabilities: Capabilities
+    extra: dict[str, Any] = field(default_factory=dict)
+    """Other [module] keys (e.g. `based_on`, `pullups`), as read."""
+
+    @property
+    def engine_params(self) -> dict[int, str]:
+        """Axis parameter number -> the ramp engine keyword it drives (the `engine` field)."""
+        return {n: p.engine for n, p in self.axis_parameters.items() if p.engine}
 
     def axis_parameter(self, name_or_number: str | int) -> Param:
         if isinstance(name_or_number, int):
@@ -155,19 +212,24 @@ class ModuleProfile:
         raise KeyError(name_or_number)
 
 
-def _param(d: dict) -> Param:
+def _param(d: RawProfile) -> Param:
     return Param(
-        number=d["number"], name=d["name"], title=d.get("title", d["name"]), min=d["min"], max=d["max"],
+        number=d["number"], name=d["name"], title=d["title"] if "title" in d else d["name"], min=d["min"], max=d["max"],
         access=d["access"], default=d.get("default", 0), unit=d.get("unit", ""),
         description=d.get("description", ""), values=tuple(d.get("values", ())), bank=d.get("bank"),
-        excluded=tuple(d.get("excluded", ())),
+        excluded=tuple(d.get("excluded", ())), engine=d.get("engine", ""),
     )
 
 
-def parse_profile(data: dict) -> ModuleProfile:
+def _capabilities(d: RawProfile) -> Capabilities:
+    return Capabilities(**{f.name: d[f.name] for f in fields(Capabilities)})
+
+
+def parse_profile(data: RawProfile) -> ModuleProfile:
     m = data["module"]
     known = {"name", "aliases", "axes", "engine", "firmware_version", "firmware_binary", "program_memory",
-             "opcodes", "ascii_mode", "coordinates", "user_variables", "storable_user_variables"}
+             "opcodes", "ascii_mode", "coordinates", "user_variables", "storable_user_variables",
+             "capabilities"}
     return ModuleProfile(
         name=m["name"], aliases=tuple(m.get("aliases", ())), axes=m["axes"], engine=m["engine"],
         firmware_version=m["firmware_version"], firmware_binary=m["firmware_binary"],
@@ -181,6 +243,7 @@ def parse_profile(data: dict) -> ModuleProfile:
                                            p.get("min", 0), p.get("max", 1)) for p in data.get("io", [])},
         interrupts={i["number"]: Interrupt(i["number"], i["name"], i.get("description", ""))
                     for i in data.get("interrupt", [])},
+        capabilities=_capabilities(m["capabilities"]),
         extra={k: v for k, v in m.items() if k not in known},
     )
 
@@ -193,9 +256,9 @@ def _normalise(name: str) -> str:
 
 
 @cache
-def _builtin_raw(fname: str) -> dict:
+def _builtin_raw(fname: str) -> RawProfile:
     text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
-    return tomllib.loads(text)
+    return tomllib.loads(text)  # a TOML document is a table
 
 
 @cache
@@ -208,13 +271,13 @@ def _all() -> dict[str, ModuleProfile]:
     return out
 
 
-def builtin_raw(name: str) -> dict:
+def builtin_raw(name: str) -> RawProfile:
     """The raw TOML dict of a built-in profile by name or alias (KeyError if unknown)."""
     prof = load_profile(name)
     return _builtin_raw(_FILES[prof.name])
 
 
-def raw_profile(name_or_path: str) -> dict:
+def raw_profile(name_or_path: str) -> RawProfile:
     """The resolved raw dict of a built-in name or a profile file (`extends` applied, checked)."""
     from .profile_file import ProfileError, looks_like_path, resolve, validate
 
@@ -227,7 +290,7 @@ def raw_profile(name_or_path: str) -> dict:
     return data
 
 
-def load_profile(name: str) -> ModuleProfile:
+def load_profile(name: str | os.PathLike[str]) -> ModuleProfile:
     """Profile by module name or alias ("TMCM-6212", "PD28-1021", "TMCM-1021", "PD86-1180", "TMCM-1180"),
     or by the path of a profile file (ending in .toml or containing a path separator; docs/profiles.md).
     A bad file raises profile_file.ProfileError (a ValueError) with one line per problem."""

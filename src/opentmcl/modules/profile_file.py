@@ -17,7 +17,10 @@ Every error is one line naming its key path, e.g. ``axis_parameter[2].max: expec
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from pathlib import Path
+
+from .profile import CAPABILITY_VALUES, RawProfile
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -36,6 +39,7 @@ _REQUIRED = {"axis_parameter": ("number", "name", "min", "max", "access"),
              "global_parameter": ("bank", "number", "name", "min", "max", "access"),
              "io": ("bank", "port", "name", "kind", "access"), "interrupt": ("number", "name")}
 _INT_FIELDS = ("number", "bank", "port", "min", "max", "default")
+_STR_FIELDS = ("name", "kind", "access", "title", "unit", "description", "engine")
 _TOP = {"extends", "module", "remove", *_TABLES}
 _FILE_INDEX = "_file_index"  # of a keyless entry after merging: its index in the user's file
 
@@ -53,7 +57,7 @@ def looks_like_path(name: str) -> bool:
     return name.lower().endswith(".toml") or "/" in name or "\\" in name
 
 
-def read_toml(path: Path) -> dict:
+def read_toml(path: Path) -> RawProfile:
     try:
         size = path.stat().st_size
     except OSError as exc:
@@ -71,18 +75,22 @@ def read_toml(path: Path) -> dict:
         raise ProfileError([f"{path}: cannot read: {exc.strerror or exc}"]) from None
 
 
-def _key(table: str, entry: dict) -> tuple | None:
+def _key(table: str, entry: RawProfile) -> tuple[int, ...] | None:
     try:
         return tuple(int(entry[k]) for k in _TABLES[table])
     except (KeyError, TypeError, ValueError):
         return None
 
 
-def merge(base: dict, child: dict, where: str = "") -> tuple[dict, list[str]]:
-    """`child` applied on `base` (both raw TOML dicts): module keys replace, table entries with a
-    known key merge field by field, new entries are appended, [remove] drops entries."""
+def merge(base: RawProfile, child: RawProfile, where: str = "") -> tuple[RawProfile, list[str]]:
+    """`child` applied on `base` (both raw TOML dicts): module keys replace, capabilities and table
+    entries with a known key merge field by field, new entries are appended, [remove] drops entries."""
     errors: list[str] = []
-    out = {"module": {**base.get("module", {}), **child.get("module", {})}}
+    base_module, child_module = base.get("module", {}), child.get("module", {})
+    out: RawProfile = {"module": {**base_module, **child_module}}
+    caps = base_module.get("capabilities"), child_module.get("capabilities")
+    if isinstance(caps[0], dict) and isinstance(caps[1], dict):
+        out["module"]["capabilities"] = {**caps[0], **caps[1]}
     removals = child.get("remove", {})
     if not isinstance(removals, dict):
         errors.append(f"{where}remove: expected a table")
@@ -91,7 +99,7 @@ def merge(base: dict, child: dict, where: str = "") -> tuple[dict, list[str]]:
         if name not in _TABLES:
             errors.append(f"{where}remove.{name}: unknown table (use {', '.join(_TABLES)})")
     for table, key_fields in _TABLES.items():
-        entries = {}
+        entries: dict[tuple[object, ...] | None, RawProfile] = {}
         for entry in base.get(table, []):
             entries[_key(table, entry)] = dict(entry)
         drop = removals.get(table, [])
@@ -105,38 +113,51 @@ def merge(base: dict, child: dict, where: str = "") -> tuple[dict, list[str]]:
         for i, entry in enumerate(child.get(table, [])):
             if not isinstance(entry, dict):
                 continue  # reported by validate
-            key = _key(table, entry)
-            if key is None:  # no usable key: kept apart (never merged into another) and named by its index in the file
+            own = _key(table, entry)
+            if own is None:  # no usable key: kept apart (never merged into another) and named by its index in the file
                 entries[("?", i)] = {**entry, _FILE_INDEX: i}
                 continue
-            entries[key] = {**entries.get(key, {}), **entry}
+            entries[own] = {**entries.get(own, {}), **entry}
         out[table] = list(entries.values())
     return out, errors
 
 
-def validate(data: dict) -> list[str]:
+def validate(data: RawProfile) -> list[str]:
     """Schema errors of a resolved profile dict, one line each with its key path."""
-    errors: list[str] = []
-    for key in data:
-        if key not in _TOP:
-            errors.append(f"{key}: unknown key (a profile has {', '.join(sorted(_TOP))})")
+    errors = [f"{key}: unknown key (a profile has {', '.join(sorted(_TOP))})" for key in data if key not in _TOP]
     m = data.get("module")
     if not isinstance(m, dict):
         return errors + ["module: missing table [module]"]
-    for key in ("name", "firmware_version"):
-        if not isinstance(m.get(key), str) or not m.get(key):
-            errors.append(f"module.{key}: expected a non-empty string")
+    errors += _check_module(m)
+    errors += _check_capabilities(m.get("capabilities"))
+    for table in _TABLES:
+        entries = data.get(table, [])
+        if not isinstance(entries, list):
+            errors.append(f"{table}: expected an array of tables [[{table}]]")
+            continue
+        seen: dict[tuple[int, ...], int] = {}
+        for i, entry in enumerate(entries):
+            errors += _check_entry(table, i, entry, seen)
+    return errors
+
+
+def _check_module(m: RawProfile) -> list[str]:
+    """The keys of [module] (without its capabilities)."""
+    errors = [f"module.{key}: expected a non-empty string" for key in ("name", "firmware_version")
+              if not isinstance(m.get(key), str) or not m.get(key)]
     fw = m.get("firmware_version")
     if isinstance(fw, str) and (len(fw) != 8 or not fw.isascii()):
         errors.append(f"module.firmware_version: must be 8 ASCII characters (command 136 type 0), got {fw!r}")
-    for key in _MODULE_INT:
-        if key in m and not _is_int(m[key]):
-            errors.append(f"module.{key}: expected an integer")
-    for key in ("axes", "firmware_binary", "program_memory"):
-        if key not in m:
-            errors.append(f"module.{key}: missing")
+    errors += [f"module.{key}: expected an integer" for key in _MODULE_INT if key in m and not _is_int(m[key])]
+    errors += [f"module.{key}: missing" for key in ("axes", "firmware_binary", "program_memory") if key not in m]
     if _is_int(m.get("axes")) and not 1 <= m["axes"] <= 255:
         errors.append(f"module.axes: must be 1..255, got {m['axes']}")
+    return errors + _check_module_choices(m)
+
+
+def _check_module_choices(m: RawProfile) -> list[str]:
+    """The engine name and the lists of [module]."""
+    errors = []
     if m.get("engine") not in ENGINES:
         errors.append(f"module.engine: must be one of {', '.join(ENGINES)}, got {m.get('engine')!r}")
     ops = m.get("opcodes")
@@ -144,54 +165,106 @@ def validate(data: dict) -> list[str]:
         errors.append("module.opcodes: expected a list of command numbers 0..255")
     if "aliases" in m and not (isinstance(m["aliases"], list) and all(isinstance(a, str) for a in m["aliases"])):
         errors.append("module.aliases: expected a list of strings")
-    for table in _TABLES:
-        entries = data.get(table, [])
-        if not isinstance(entries, list):
-            errors.append(f"{table}: expected an array of tables [[{table}]]")
-            continue
-        seen: dict[tuple, int] = {}
-        for i, entry in enumerate(entries):
-            errors += _check_entry(table, i, entry, seen)
     return errors
 
 
-def _is_int(value) -> bool:
+def _check_capabilities(caps: object) -> list[str]:
+    """[module.capabilities]: every capability of CAPABILITY_VALUES, of its type or one of its values."""
+    where = "module.capabilities"
+    if not isinstance(caps, dict):
+        return [f"{where}: missing table [module.capabilities] (docs/profiles.md)"]
+    errors = [f"{where}.{key}: unknown capability (known: {', '.join(CAPABILITY_VALUES)})"
+              for key in caps if key not in CAPABILITY_VALUES]
+    for key, allowed in CAPABILITY_VALUES.items():
+        if key not in caps:
+            errors.append(f"{where}.{key}: missing")
+            continue
+        value = caps[key]
+        if isinstance(allowed, tuple):
+            if value not in allowed:
+                errors.append(f"{where}.{key}: must be one of {', '.join(allowed)}, got {value!r}")
+        elif type(value) is not allowed:
+            errors.append(f"{where}.{key}: expected {'true or false' if allowed is bool else 'an integer'}, "
+                          f"got {value!r}")
+        elif allowed is int and isinstance(value, int) and value <= 0:
+            errors.append(f"{where}.{key}: must be positive, got {value}")
+    return errors
+
+
+def _is_int(value: object) -> bool:
     return type(value) is int
 
 
-def _check_entry(table: str, i: int, entry, seen: dict) -> list[str]:
-    if not isinstance(entry, dict):
-        return [f"{table}[{i}]: expected a table"]
-    key = _key(table, entry)  # entries are named by their key: the index of a merged table means little
-    path = f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key, strict=True))}]" if key else f"{table}[{entry.get(_FILE_INDEX, i)}]"
+def _entry_path(table: str, i: int, entry: RawProfile, key: tuple[int, ...] | None) -> str:
+    """An entry is named by its key (the index of a merged table means little), else by its index."""
+    if key is None:
+        return f"{table}[{entry.get(_FILE_INDEX, i)}]"
+    return f"{table}[{','.join(f'{k}={v}' for k, v in zip(_TABLES[table], key, strict=True))}]"
+
+
+def _field_types(table: str, path: str, entry: RawProfile) -> list[str]:
+    """Required fields present, integers and strings where the schema says so."""
     errors = [f"{path}.{f}: missing" for f in _REQUIRED[table] if f not in entry]
-    for f in _INT_FIELDS:
-        if f in entry and not _is_int(entry[f]):
-            errors.append(f"{path}.{f}: expected an integer, got {entry[f]!r}")
-    for f in ("name", "kind", "access", "title", "unit", "description"):
-        if f in entry and not isinstance(entry[f], str):
-            errors.append(f"{path}.{f}: expected a string")
-    if errors:
-        return errors
-    for f in ("number", "bank", "port"):
-        if f in entry and not 0 <= entry[f] <= 255:
-            errors.append(f"{path}.{f}: must be 0..255, got {entry[f]}")
-    if "min" in entry and entry["min"] > entry["max"]:
-        errors.append(f"{path}: min {entry['min']} is greater than max {entry['max']}")
+    errors += [f"{path}.{f}: expected an integer, got {entry[f]!r}" for f in _INT_FIELDS
+               if f in entry and not _is_int(entry[f])]
+    errors += [f"{path}.{f}: expected a string" for f in _STR_FIELDS if f in entry and not isinstance(entry[f], str)]
+    return errors
+
+
+def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
+    """Ranges and letters of well-typed fields."""
+    errors = [f"{path}.{f}: must be 0..255, got {entry[f]}" for f in ("number", "bank", "port")
+              if f in entry and not 0 <= entry[f] <= 255]
+    lo, hi = _range(table, entry) or (0, 0)
+    if lo > hi:
+        errors.append(f"{path}: min {lo} is greater than max {hi}")
     if "access" in entry and (not entry["access"] or set(entry["access"]) - set("RWEA")):
         errors.append(f"{path}.access: letters R, W, E, A only, got {entry['access']!r}")
-    if table != "interrupt" and "default" in entry and entry["min"] <= entry["max"] and not entry.get("values"):
-        if not entry["min"] <= entry["default"] <= entry["max"]:
-            errors.append(f"{path}.default: {entry['default']} outside min..max {entry['min']}..{entry['max']}")
+    if table != "interrupt" and "default" in entry and lo <= hi and not entry.get("values") \
+            and not lo <= entry["default"] <= hi:
+        errors.append(f"{path}.default: {entry['default']} outside min..max {lo}..{hi}")
     if table == "io" and entry["kind"] not in ("digital", "analog", "output"):
         errors.append(f"{path}.kind: must be digital, analog or output, got {entry['kind']!r}")
+    return errors + _engine_field(table, path, entry)
+
+
+def _range(table: str, entry: RawProfile) -> tuple[int, int] | None:
+    """(min, max) of an entry: required in parameter tables, 0 and 1 unless given in io (IOPort)."""
+    if table == "io":
+        return entry.get("min", 0), entry.get("max", 1)
+    if "min" in entry and "max" in entry:
+        return entry["min"], entry["max"]
+    return None
+
+
+def _engine_field(table: str, path: str, entry: RawProfile) -> list[str]:
+    """`engine`: the ramp engine keyword an axis parameter drives ("" none)."""
+    errors = []
+    if "engine" in entry and table != "axis_parameter":
+        errors.append(f"{path}.engine: only an axis parameter drives the ramp engine")
+    elif entry.get("engine") and not entry["engine"].isidentifier():
+        errors.append(f"{path}.engine: expected a ramp engine keyword (a name like max_acceleration), "
+                      f"got {entry['engine']!r}")
+    return errors
+
+
+def _check_entry(table: str, i: int, entry: object, seen: dict[tuple[int, ...], int]) -> list[str]:
+    if not isinstance(entry, dict):
+        return [f"{table}[{i}]: expected a table"]
+    key = _key(table, entry)
+    path = _entry_path(table, i, entry, key)
+    errors = _field_types(table, path, entry)
+    if errors or key is None:   # a well-typed entry has its key
+        return errors
+    errors += _field_values(table, path, entry)
     if key in seen:
         errors.append(f"{path}: same {'/'.join(_TABLES[table])} {list(key)} as {table}[{seen[key]}]")
     seen[key] = i
     return errors
 
 
-def resolve(path: str | Path, builtin, _depth: int = 0, _via: Path | None = None) -> dict:
+def resolve(path: str | Path, builtin: Callable[[str], RawProfile], _depth: int = 0,
+            _via: Path | None = None) -> RawProfile:
     """The raw dict of the profile file at `path` with its `extends` chain applied; `builtin(name)`
     returns the raw dict of a built-in profile (KeyError if unknown). ProfileError on any problem."""
     path = Path(path)

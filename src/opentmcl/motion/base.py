@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from enum import Enum
+from fractions import Fraction
 
 CLOCK_HZ = 16_000_000
 """The modules' controller clock (TMC5130 and TMC429 at 16 MHz); one virtual tick."""
@@ -91,7 +92,7 @@ class RampEngine(ABC):
         """Positioning mode towards `target` (32-bit wrap: the shorter way round)."""
 
     @abstractmethod
-    def rotate(self, velocity: int | float) -> None:
+    def rotate(self, velocity: int | float | Fraction) -> None:
         """Velocity mode with signed target velocity."""
 
     def stop(self) -> None:
@@ -120,7 +121,7 @@ class RampEngine(ABC):
         """Absolute tick of the next ramp phase change or arrival, or None when
         nothing will change without a new command (standing still or cruising)."""
 
-    def time_at_speed(self, speed: int | float) -> int | None:
+    def time_at_speed(self, speed: int | float | Fraction) -> int | None:
         """First tick >= now at which |velocity| >= `speed` (engine units) if no command intervenes,
         or None when unknown or never (used for the stop-on-stall speed AP181)."""
         return None

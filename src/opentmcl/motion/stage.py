@@ -78,9 +78,9 @@ class Stage:
 
     def active(self, sw: Switch, p: int, was: bool) -> bool:
         """State of `sw` at position `p` (a circular axis repeats every turn)."""
-        if not self.circular:
-            return sw.active(p, was)
         n = self.steps_per_turn
+        if n is None:
+            return sw.active(p, was)
         q = p % n
         return sw.active(q, was) or sw.active(q - n, was) or sw.active(q + n, was)
 
@@ -89,14 +89,14 @@ class Stage:
 
     def local(self, p: int) -> int:
         """Position on the stage (modulo one turn on a circular axis)."""
-        return p % self.steps_per_turn if self.circular else p
+        return p if self.steps_per_turn is None else p % self.steps_per_turn
 
     def edge_candidates(self, p: int, sw: Switch, was: bool) -> list[int]:
         """Absolute positions (in the frame of `p`) where `sw` can change state next."""
         out = []
+        n = self.steps_per_turn
         for e in sw.edges(was):
-            if self.circular:
-                n = self.steps_per_turn
+            if n is not None:
                 base = p - p % n + e % n
                 out += [base - n, base, base + n]
             else:

@@ -68,35 +68,35 @@ class CurrentModel:
             self._microsteps = 0
             return
         cs = self.cs(aw)
-        if self.cs_act is None:
-            self.cs_act = cs
         per = (1 << aw.p(140, 8)) * (4 if aw.p(173) else 1)   # AP173: one measurement per 4 fullsteps
         self._microsteps += moved
         n, self._microsteps = divmod(self._microsteps, per)
-        self._regulate(aw, n, cs)
+        self.cs_act = self._regulate(aw, n, cs, cs if self.cs_act is None else self.cs_act)
 
-    def _regulate(self, aw, n: int, cs: int) -> None:
+    def _regulate(self, aw, n: int, cs: int, cs_act: int) -> int:
+        """`n` stallGuard2 measurements: the coolStep current scale after them, from `cs_act`."""
         semin, semax = aw.p(172), aw.p(170)
         lower, upper = semin * 32, (semin + semax + 1) * 32
         up, down = SEUP[aw.p(171) & 3], SEDN[aw.p(169) & 3]
         cs_min = max(0, (cs + 1) // (4 if aw.p(168) else 2) - 1)
         load = aw.load_now()
         while n > 0:
-            sg = load_value(load, (self.cs_act + 1) / 32 * aw.falloff(), aw.p(174))
-            if sg < lower and self.cs_act < cs:
-                self.cs_act = min(cs, self.cs_act + up)
+            sg = load_value(load, (cs_act + 1) / 32 * aw.falloff(), aw.p(174))
+            if sg < lower and cs_act < cs:
+                cs_act = min(cs, cs_act + up)
                 self._down = 0
                 n -= 1
-            elif sg >= upper and self.cs_act > cs_min:
+            elif sg >= upper and cs_act > cs_min:
                 need = down - self._down
                 if n < need:
                     self._down += n
-                    return
+                    return cs_act
                 n -= need
                 self._down = 0
-                self.cs_act -= 1
+                cs_act -= 1
             else:
-                return
+                return cs_act
+        return cs_act
 
     # --- readings ---------------------------------------------------------------------------------
     def in_use(self, aw) -> int:
@@ -104,7 +104,7 @@ class CurrentModel:
         e, now = aw.engine, aw.vm.now
         if not e.moving:
             still = 0 if self.still_since is None else now - self.still_since
-            if aw.vm.profile.engine != "sixpoint" and aw.p(204) and still >= aw.p(204) * TICKS_PER_MS:
+            if aw.vm.profile.capabilities.freewheel_delay and aw.p(204) and still >= aw.p(204) * TICKS_PER_MS:
                 return 0                         # PD86-1180 AP204: power cut after the freewheeling time
             if still >= aw.p(214, 200) * TICKS_PER_10MS:
                 return aw.p(7, 8)                # standby current after the power-down delay

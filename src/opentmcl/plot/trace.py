@@ -215,7 +215,7 @@ class Sampler:
             module.axis(ax)  # UnknownParameterError for an axis the module does not have
         self.params = {ch: num for ch, (num, _) in CHANNELS.items()
                        if num is not None and num in prof.axis_parameters}
-        self.tmc429 = prof.engine == "tmc429"
+        self.tmc429 = prof.capabilities.velocity_unit == "tmc429"
         self.pulse_div: dict[int, int] = {}
         self.microsteps: dict[int, tuple[int, int]] = {}
         for ax in self.axes:
