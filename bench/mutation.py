@@ -6,7 +6,8 @@
     python bench/mutation.py --report                 # only print the results already recorded
 
 mutmut reads [tool.mutmut] in pyproject.toml, copies the tree into mutants/ and records each
-mutant's result there, so an interrupted run continues where it stopped. The script runs mutmut
+mutant's result there; mutants that have a result are not run again (unless --rerun), so an
+interrupted run continues where it stopped. The script runs mutmut
 under `nice -n 19` with one child (`--max-children`), then prints killed / survived / timeout and
 the score (killed + timeout over all mutants that were tried) per layer, and the survivors.
 Outside CI: a full run takes hours on a small machine.
@@ -61,8 +62,14 @@ def choose(layers: list[str], sample: int | None, seed: int) -> list[str]:
     return names
 
 
+def pending(names: list[str], layers: list[str]) -> list[str]:
+    """The names among `names` that have no result yet (mutmut reruns every name it is given)."""
+    codes = {k: v for layer in layers for k, v in recorded(layer).items()}
+    return [n for n in names if codes.get(n) is None]
+
+
 def run(names: list[str], layers: list[str], children: int, log: Path) -> int:
-    """mutmut run on `names` (a whole layer as one pattern), niced, its noisy output to `log`."""
+    """mutmut run on `names` (a whole untouched layer as one pattern), niced, output to `log`."""
     whole = [f"opentmcl.{layer}.*" for layer in layers]
     args = whole if len(names) == sum(len(recorded(layer)) for layer in layers) else names
     cmd = ["nice", "-n", "19", *MUTMUT, "run", "--max-children", str(children), *args]
@@ -96,6 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=12, help="seed of the sample (default 12)")
     ap.add_argument("--max-children", type=int, default=1, help="parallel mutmut workers (default 1)")
     ap.add_argument("--report", action="store_true", help="print recorded results, run nothing")
+    ap.add_argument("--rerun", action="store_true", help="run mutants that already have a result again")
     ap.add_argument("--survivors", action="store_true", help="list the surviving mutants")
     args = ap.parse_args(argv)
     if args.sample is not None and args.sample < 1:
@@ -103,8 +111,9 @@ def main(argv: list[str] | None = None) -> int:
     layers = args.layer or list(LAYERS)
     generate()
     names = choose(layers, args.sample, args.seed)
-    if not args.report:
-        code = run(names, layers, args.max_children, ROOT / "mutants" / "mutation-run.log")
+    todo = names if args.rerun else pending(names, layers)
+    if todo and not args.report:
+        code = run(todo, layers, args.max_children, ROOT / "mutants" / "mutation-run.log")
         if code:
             print(f"mutmut exited with {code}; see mutants/mutation-run.log", file=sys.stderr)
             return code
