@@ -81,8 +81,8 @@ def run(names: list[str], layers: list[str], children: int, log: Path) -> int:
 def report(layers: list[str], only: set[str] | None) -> list[str]:
     """Print the outcome per layer (restricted to `only` when given); return the survivors."""
     survivors: list[str] = []
-    print(f"{'layer':10} {'mutants':>7} {'killed':>7} {'survived':>8} {'timeout':>7} {'no tests':>8}"
-          f" {'other':>5} {'score':>7}")
+    print(f"{'layer':10} {'mutants':>7} {'tried':>6} {'killed':>7} {'survived':>8} {'timeout':>7}"
+          f" {'no tests':>8} {'other':>5} {'score':>7}")
     for layer in layers:
         codes = {k: v for k, v in recorded(layer).items() if only is None or k in only}
         counts = Counter(OUTCOME.get(v, "suspicious") for v in codes.values())
@@ -90,7 +90,7 @@ def report(layers: list[str], only: set[str] | None) -> list[str]:
         caught = counts["killed"] + counts["timeout"]
         other = tried - caught - counts["survived"] - counts["no tests"]
         score = f"{100 * caught / tried:6.1f}%" if tried else "     -"
-        print(f"{layer:10} {len(codes):7} {counts['killed']:7} {counts['survived']:8} {counts['timeout']:7}"
+        print(f"{layer:10} {len(codes):7} {tried:6} {counts['killed']:7} {counts['survived']:8} {counts['timeout']:7}"
               f" {counts['no tests']:8} {other:5} {score:>7}")
         survivors += sorted(k for k, v in codes.items() if OUTCOME.get(v) in ("survived", "no tests"))
     return survivors

@@ -153,3 +153,20 @@ def test_unknown_status_message():
     """TMCM-6212 3.2.1 lists the status codes; any other code is reported as unknown, with its number."""
     assert message(4) == "Invalid value"
     assert message(99) == "Unknown status 99"
+
+
+def test_instruction_values_span_32_bit_and_refuse_one_beyond():
+    """TMCM-6212 3.1 "Value (MSB first)", four bytes: "SAP 4, 0, -2147483648" and "... 4294967295"
+    (the same 32 bits as -1) are instructions, one beyond either end is refused with a message
+    that names the operand; so are a literal that is too long and a word that is no operand."""
+    from opentmcl.protocol.opcodes import OperandError, parse_instruction
+
+    assert parse_instruction("SAP 4, 0, -2147483648") == (5, 4, 0, -2**31)
+    assert parse_instruction("SAP 4, 0, 4294967295") == (5, 4, 0, -1)
+    for value in (-2147483649, 4294967296):
+        with pytest.raises(OperandError, match=rf"^'SAP 4, 0, {value}': value out of 32-bit range: {value}$"):
+            parse_instruction(f"SAP 4, 0, {value}")
+    with pytest.raises(OperandError, match=r"^value operand: "):
+        parse_instruction("SAP 4, 0, " + "1" * 5000)
+    with pytest.raises(OperandError, match=r"^'SAP 4, 0, x': cannot read value operand 'x'$"):
+        parse_instruction("SAP 4, 0, x")
