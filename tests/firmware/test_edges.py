@@ -140,3 +140,11 @@ def test_unsigned_32_bit_parameters_take_the_top_bit(name):
             assert host.ok(10, n, bank) == wire
     signed = [k for k, p in host.vm.profile.global_parameters.items() if p.max == 2**31 - 1 and p.writable]
     assert signed and {k: host(9, k[1], k[0], -1).status for k in signed} == {k: 4 for k in signed}
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_cle_takes_flags_0_to_5_and_refuses_6(name):
+    """TMCM-6212 3.6.29 CLE: type "0 ALL - all flags ... 5 - (ESD) shutdown flag": 5 is the last
+    flag (status 100), 6 is "3 Wrong type"."""
+    host = Host(VirtualModule(name, address=1))
+    assert (host(36, 5).status, host(36, 6).status) == (100, 3)
