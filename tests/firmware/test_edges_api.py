@@ -68,3 +68,13 @@ def test_csub_may_call_address_0():
     """
     w = run_program(src, 40 * T)
     assert (w.var(5), w.state) == (2, 0)
+
+
+@pytest.mark.parametrize("name", ["PD28-1021", "PD86-1180"])
+def test_a_non_ascii_byte_in_an_ascii_line_is_a_status_not_a_crash(name):
+    """PD28-1021 3.4.2: a command line is ASCII text; a byte that is no ASCII character makes the
+    operand unreadable: the reply carries status 4 (house rule: bad input -> a status on the wire)."""
+    vm = VirtualModule(name)
+    vm.request(139)
+    vm.globals.set(0, 67, 0x20)  # 3.4.4 "When bit 5 is set ... there will be no echo"
+    assert vm.feed_ascii(b"AGAP 1, \xff0\r") == b"BA 4 0\r"
