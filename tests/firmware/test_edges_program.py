@@ -75,3 +75,11 @@ def test_a_jump_to_the_last_address_runs_it_and_one_beyond_is_ignored(name):
     w.run()
     w.vm.advance(20 * T)
     assert (w.var(1), w.var(2), w.state) == (11, 22, 0)
+
+
+def test_wait_pos_takes_the_last_motor_and_refuses_the_next():
+    """TMCM-6212 3.6.20 WAIT POS, <motor>: motors 0..5; the next one is "4 Invalid value", which a
+    program records as its last error and goes on (docs/assumptions.md)."""
+    w = run_program("WAIT POS, 6, 0\nSGP 0, 2, 1\nWAIT POS, 5, 0\nSGP 1, 2, 1\nSTOP", 20 * T)
+    assert (w.var(0), w.var(1)) == (1, 1)
+    assert w.vm.interpreter.last_error == (0, 27, 4)
