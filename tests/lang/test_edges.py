@@ -80,3 +80,10 @@ def test_includes_nest_32_deep_and_not_33(tmp_path):
     with pytest.raises(AsmError, match="includes nested deeper than 32") as err:
         assemble(src, filename=chain(33))
     assert err.value.file.endswith("i31.inc")
+
+
+@pytest.mark.parametrize("form", ["Interrupts.inc", '"Interrupts.inc"', "<Interrupts.inc>"])
+def test_include_accepts_the_three_spellings(form):
+    """docs/assumptions.md (Assembler): "#include accepts `file`, `"file"` or `<file>`": each form
+    finds the bundled Interrupts.inc (TI_GLOBAL = 255, TMCM-6212 Table 12)."""
+    assert assemble(f"#include {form}\nEI TI_GLOBAL").instructions[0] == (25, 255, 0, 0)
