@@ -148,3 +148,21 @@ def test_cle_takes_flags_0_to_5_and_refuses_6(name):
     flag (status 100), 6 is "3 Wrong type"."""
     host = Host(VirtualModule(name, address=1))
     assert (host(36, 5).status, host(36, 6).status) == (100, 3)
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_types_outside_the_tables_are_wrong_type(name):
+    """TMCM-6212 3.2.1 "3 Wrong type": GGP of a bank-0 number the table does not list (0) and
+    command 129 with a type other than 0 and 1 (3.6.36: "0 - run from current address, 1 - run
+    from specified address") answer status 3, not 4."""
+    host = Host(VirtualModule(name, address=1))
+    assert (host(10, 0, 0).status, host(129, 2, 0, 0).status) == (3, 3)
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_protected_program_memory_refuses_download_and_read_with_status_4(name):
+    """GP81 "TMCL code protection" 3 (protected against disassembling and overwriting): 132 and
+    134 answer status 4 at the first address, as beyond the end (docs/assumptions.md)."""
+    host = Host(VirtualModule(name, address=1))
+    host.ok(9, 81, 0, 3)
+    assert (host(132, 0, 0, 0).status, host(134, 0, 0, 0).status) == (4, 4)
