@@ -87,3 +87,19 @@ def test_include_accepts_the_three_spellings(form):
     """docs/assumptions.md (Assembler): "#include accepts `file`, `"file"` or `<file>`": each form
     finds the bundled Interrupts.inc (TI_GLOBAL = 255, TMCM-6212 Table 12)."""
     assert assemble(f"#include {form}\nEI TI_GLOBAL").instructions[0] == (25, 255, 0, 0)
+
+
+def test_an_expression_that_stops_after_an_operator_names_the_problem():
+    """Errors name line, column and cause (docs/tmcl-assembler.md): an operand ending in an
+    operator is "expression ends too early"."""
+    with pytest.raises(AsmError, match="expression ends too early"):
+        assemble("SAP 4, 0, 1 +")
+
+
+def test_an_unreadable_file_is_an_error_at_line_0_column_0(tmp_path):
+    """assemble_file: "AsmError (line 0) if it cannot be read" - no line, no column."""
+    from opentmcl.lang.assembler import assemble_file
+
+    with pytest.raises(AsmError, match="cannot read file") as err:
+        assemble_file(tmp_path / "missing.tmc")
+    assert (err.value.line, err.value.column) == (0, 0)
