@@ -112,6 +112,8 @@ class _Follow:
 
 _FOLLOW_MEMO: dict[tuple, tuple] = {}
 _FOLLOW_MEMO_SIZE = 4096
+_FOREVER = 1 << 80
+"""Cycles past any `limit` (a walk without one)."""
 
 
 @dataclass
@@ -770,40 +772,56 @@ class Tmc429Ramp:
         return event
 
     def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
-                     limit: int | None, floor: int) -> tuple:
+                     limit: int | None, floor: int) -> tuple[int, int, int, bool, int | None]:
         """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
         same rules inlined; hands back (event None) before a run worth jumping (one
         velocity on the target, or many ticks falling inside one level), at `limit`, or
         when done."""
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
-        low = floor << 8
+        low, a8 = floor << 8, a << 3
+        lag_walk = a >= 32 and vmin <= vmax     # then only the three tests below decide
+        left = units - total
         c = (t // rp + 1) * rp
-        while limit is None or c <= limit:
-            left = units - total
+        last = c + _FOREVER if limit is None else limit
+        while c <= last:
+            if lag_walk:
+                # lagging: |v| falls by A_MAX with the target at or below it (6.1.9); no
+                # arrival, no V_MIN, never a run inside one level (A_MAX >= 32)
+                nw = w - a
+                n = nw >> 8
+                while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
+                    left -= n
+                    w, t, moved = nw, c, True
+                    c += rp
+                    nw -= a
+                    n = nw >> 8
+                if c > last:
+                    break
             sp = isqrt(pm * left >> sh)
             sp = vmax if sp > vmax else (vmin if sp < vmin else sp)
             tgt = sp << 8
             if w == tgt:
                 n = w >> 8
                 if n and w > low and left + (-(n * n << sh) // pm) >= n << 2:
-                    return t, w, total, moved, None        # a run: `_follow` jumps it
+                    return t, w, units - left, moved, None     # a run: `_follow` jumps it
                 nw = w
             elif w < tgt:
                 nw = w + a if w + a < tgt else tgt
-            elif w - a > tgt and (w - a) & 255 > a << 3:
-                return t, w, total, moved, None            # braking run: `_follow` jumps it
+            elif w - a > tgt and (w - a) & 255 > a8:
+                return t, w, units - left, moved, None         # braking run: `_follow` jumps it
             else:
                 nw = w - a if w - a > tgt else tgt
             n = nw >> 8
-            if n and total + n >= units:                   # the arrival step at c
-                return c - 1, w, total, moved, c
-            w, total, t = nw, total + n, c
+            if n and n >= left:                                # the arrival step at c
+                return c - 1, w, units - left, moved, c
+            w, t = nw, c
+            left -= n
             moved = moved or w > 0
             if w == low or w == 0:
-                return t, w, total, moved, t + 1
+                return t, w, units - left, moved, t + 1
             c += rp
-        return t, w, total, moved, None
+        return t, w, units - left, moved, None
 
     def _brake_run(self, c: int, w: int, left: int, limit: int | None) -> tuple[int, int, int]:
         """Ramp ticks from tick c on (pulses before c done, `left` units to go) over which |v|
