@@ -64,6 +64,22 @@ class RampParameterError(ValueError):
     """A ramp parameter value the engine cannot use (negative, not a number)."""
 
 
+class PlanInvariantError(AssertionError):
+    """A planner loop did not end where its invariant says it must (a bug, not bad input)."""
+
+
+PLAN_ROUNDS = 16
+"""Rounds a planner loop may take. Each round moves the speed into another band (below
+V1, V1..VMAX, above VMAX: three at most) or holds it until the braking curve (one hold
+per band), so a correct plan needs far fewer; more means the invariant broke."""
+
+
+def _no_end(loop: str, run: _Run) -> PlanInvariantError:
+    return PlanInvariantError(f"{loop}: no end after {PLAN_ROUNDS} rounds at tick {run.t}, speed "
+                              f"{run.u}: a round moved the speed to no other band and the "
+                              "motor not onto the braking curve")
+
+
 def _real(name: str, value: object) -> Fraction:
     if type(value) is int:  # the common case, without the numbers-ABC checks
         return Fraction(value)
@@ -247,7 +263,7 @@ def _from_rest(r: Ramp, t: int, p: int, rest: int | None, target: int, out: list
 def _drive(r: Ramp, run: _Run, target: int) -> None:
     """Accelerate / cruise (or slow to a lowered VMAX) until the first tick on
     which the remaining distance is at most the braking distance."""
-    while True:
+    for _ in range(PLAN_ROUNDS):
         u = run.u
         if u < r.vmax:
             alpha, top = r.accel_band(u)
@@ -277,6 +293,7 @@ def _drive(r: Ramp, run: _Run, target: int) -> None:
         if top == 0:  # slowed down to VMAX = 0 short of the target
             run.rest_here()
             return
+    raise _no_end("_drive", run)
 
 
 def _decel_offset(r: Ramp, run: _Run, target: int, alpha: int, n: int | None) -> int | None:
@@ -299,7 +316,7 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
     """Decelerate (DMAX to V1, D1 to VSTOP) until the target is reached: the
     motor stops on the first tick whose position reaches the target."""
     s = run.s
-    while True:
+    for _ in range(PLAN_ROUNDS):
         rem = s * (target - run.p)
         if rem <= 0:
             break
@@ -335,18 +352,24 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
                 run.emit(run.t + ceil_div(rem, 2 * run.u), 0)
             break
         run.u = low  # V1 reached (jump < DMAX per tick)
+    else:
+        raise _no_end("_final", run)
     run.out.append(_new(Segment, (run.t, None, target, 0, 0, run.t)))  # arrival: stop on the target
 
 
 def _stop_then(r: Ramp, run: _Run, target: int) -> None:
     """Ramp down to VSTOP, stop, wait, and start again towards the target."""
-    while run.u > r.vstop:
+    for _ in range(PLAN_ROUNDS):
+        if run.u <= r.vstop:
+            break
         rate, low = r.decel_band(run.u, r.vstop)
         if rate:
             n = (run.u - low) // rate
             if n:
                 run.emit(run.t + n, -rate)
         run.u = low
+    else:
+        raise _no_end("_stop_then", run)
     _from_rest(r, run.t, snap(run.p, run.s), run.t, target, run.out)
 
 
