@@ -9,6 +9,8 @@ internal units on the TMCM-6212), TMC429 internal units on the PD86-1180.
 """
 from __future__ import annotations
 
+from fractions import Fraction
+
 from ..modules.profile import ModuleProfile, Param
 from ..motion import Mode, RampEngine
 from ..motion.units import (
@@ -58,7 +60,7 @@ class Axis:
                 return pps2_from_internal_acceleration(value)
         return value
 
-    def from_engine(self, number: int, value: int | float) -> int:
+    def from_engine(self, number: int, value: int | float | Fraction) -> int:
         if self.internal_units and number in VELOCITY_PARAMS:
             return internal_velocity_from_pps(value)
         if self.internal_units and number in ACCEL_PARAMS:

@@ -1,4 +1,4 @@
-"""Common interface of the per-axis ramp generators (DESIGN.md "Time").
+"""Common interface of the per-axis ramp generators (docs/architecture.md "Time").
 
 Every engine lives on an integer clock: `now` counts ticks of `clock_hz` since
 power-up. Positions are integer microsteps held in a 32-bit two's complement
@@ -13,9 +13,15 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from enum import Enum
+from fractions import Fraction
 
 CLOCK_HZ = 16_000_000
 """The modules' controller clock (TMC5130 and TMC429 at 16 MHz); one virtual tick."""
+
+
+Velocity = int | Fraction | float
+"""A velocity in engine units as an engine reports it: an int, or exact (a Fraction) where
+the engine keeps fractions of its unit (the TMC5130-style engine's pps)."""
 
 
 class Mode(Enum):
@@ -52,7 +58,7 @@ class RampEngine(ABC):
 
     @property
     @abstractmethod
-    def target_velocity(self) -> int | float:
+    def target_velocity(self) -> Velocity:
         """Target velocity in velocity mode (AP2)."""
 
     @property

@@ -28,9 +28,9 @@ is bit-identical to planning from scratch (tests/motion/test_sixpoint_golden.py)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
-from numbers import Integral, Real
+from numbers import Integral, Rational
 
 from .base import CLOCK_HZ, Mode, RampEngine
 from .segments import (
@@ -83,7 +83,7 @@ def _no_end(loop: str, run: _Run) -> PlanInvariantError:
 def _real(name: str, value: object) -> Fraction:
     if type(value) is int:  # the common case, without the numbers-ABC checks
         return Fraction(value)
-    if isinstance(value, bool) or not isinstance(value, Real):
+    if isinstance(value, bool) or not isinstance(value, (Rational, float)):
         raise RampParameterError(f"{name} must be a number, got {value!r}")
     if isinstance(value, float) and not math.isfinite(value):
         raise RampParameterError(f"{name} must be finite, got {value!r}")
@@ -130,6 +130,11 @@ class Ramp:
     vstart: int = 0
     vstop: int = 0
     wait: int = 0
+    # constants of `braking`, derived from the fields above (not part of the identity)
+    _low_rate: int = field(init=False, repr=False, compare=False)
+    _vstop2: int = field(init=False, repr=False, compare=False)
+    _v1_2: int = field(init=False, repr=False, compare=False)
+    _c1: int = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         # constants of `braking` (the band loop in closed form), set once per parameter set
@@ -265,6 +270,7 @@ def _drive(r: Ramp, run: _Run, target: int) -> None:
     which the remaining distance is at most the braking distance."""
     for _ in range(PLAN_ROUNDS):
         u = run.u
+        top: int | None
         if u < r.vmax:
             alpha, top = r.accel_band(u)
             if alpha == 0:
@@ -287,6 +293,8 @@ def _drive(r: Ramp, run: _Run, target: int) -> None:
                 run.emit(run.t + j, alpha)
             _final(r, run, target)
             return
+        if top is None:
+            raise PlanInvariantError(f"_drive: a cruise at speed {u} never reaches the braking point")
         if n:
             run.emit(run.t + n, alpha)
         run.u = top
@@ -339,6 +347,8 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
                 return (2 * u - rate * j) * j >= rem
 
             j = first_integer(reached, 1, n + 1, quadratic_guess(-float(rem), 2.0 * u, -float(rate)))
+            if j is None:
+                raise PlanInvariantError(f"_final: the target is reached by tick {n} yet at no tick")
             run.emit(run.t + j, -rate)
             break
         if n:
@@ -404,7 +414,7 @@ class RestPlans:
     def __init__(self, r: Ramp):
         self.ramp = r
         self.stuck = min(r.vstart, r.vmax) == 0 and (r.vmax == 0 or r.accel_band(0)[0] == 0)
-        self.plans: dict[tuple[int, int], tuple] = {}
+        self.plans: dict[tuple[int, int], tuple | None] = {}   # None: seen once
 
     def plan(self, t: int, p: int, rest: int | None, target: int) -> list[Segment]:
         dist = target - p

@@ -67,7 +67,7 @@ class Tmc429Engine(RampEngine):
 
     # --- clock --------------------------------------------------------------------
     @property
-    def now(self) -> int:  # type: ignore[override]
+    def now(self) -> int:
         return self.ramp.now
 
     @now.setter
