@@ -445,7 +445,7 @@ def test_arrives_exactly_and_never_overshoots(params, target, start):
 
 
 def test_one_hour_move_costs_a_handful_of_segments():
-    """DESIGN.md 'Time': a one-hour move is a few segment computations."""
+    """docs/architecture.md "Time": a one-hour move is a few segment computations."""
     e = plain(max_positioning_speed=1000, max_acceleration=100, max_deceleration=100)
     e.move_to(3600 * 1000)
     assert len(e.segments) <= 4

@@ -1,6 +1,6 @@
 """The fast event-driven TMC429 core agrees exactly with the per-tick oracle.
 
-DESIGN.md "Time": where the chip is integer-exact (TMC429/TMC4210: velocity
+docs/architecture.md "Time": where the chip is integer-exact (TMC429/TMC4210: velocity
 accumulates A_MAX/256 per ramp-clock tick, a step fires when the pulse
 accumulator overflows) the fast path must agree exactly with a slow per-tick
 reference model. Every test here drives both with the same register writes and
@@ -180,7 +180,7 @@ def test_arrival_cycle_and_next_event(regs, target, probe):
 
 
 def test_long_move_is_cheap_and_exact():
-    """DESIGN.md "Time": a long move costs a handful of phase computations — 200 000
+    """docs/architecture.md "Time": a long move costs a handful of phase computations — 200 000
     steps at V_MAX = 2047 in ramp_mode take a few events, and land where the
     per-tick model lands at the same cycle."""
     regs = {"v_max": 2047, "v_min": 1, "a_max": 100, "pmul": 198, "pdiv": 5}

@@ -4,7 +4,7 @@ TMC4210 datasheet 6.1.9: the chip calculates "the velocity required for stopping
 exactly reach the target position ... This calculation is done for each ramp step. ... Whenever
 V_TARGET falls below the actual velocity, the TMC4210 decelerates." With a small A_MAX ("the
 maximum acceleration A_MAX ... 0..2047", 6.1.7) that deceleration lasts |V| * 256 / A_MAX ramp
-ticks; DESIGN.md "Time" asks the event-driven core not to pay per tick. The cost is counted as
+ticks; docs/architecture.md "Time" asks the event-driven core not to pay per tick. The cost is counted as
 the number of target-velocity evaluations (integer square roots) the core does — the real
 `isqrt` wrapped by a counter, no wall clock — and the result must still be the per-tick oracle's.
 """

@@ -154,7 +154,7 @@ def test_v_target_reads_what_the_ramp_follows_and_a_actual_is_signed():
 
 
 def test_fast_core_and_oracle_agree_on_a_follow_stretch_sampled_every_tick():
-    """DESIGN.md "Time": the fast core walks the square-root deceleration in runs; at every ramp
+    """docs/architecture.md "Time": the fast core walks the square-root deceleration in runs; at every ramp
     tick of a move it holds the oracle's state (position, velocity with its fraction,
     accumulator), and V_MIN comes only at the end (6.1.9.2 hints: "reached a couple of steps
     before the target position"; the old latched ramp ran ~1 % of the deceleration at V_MIN)."""
