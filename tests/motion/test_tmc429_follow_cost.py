@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from contextlib import contextmanager
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -122,5 +123,37 @@ def test_first_braking_at_a_max_1_costs_levels_not_ticks():
     apply((ref,), regs)
     ref.now, ref.x_actual, ref.x_target = probe.now, probe.x_actual, probe.x_target
     ref.v, ref.acc, ref.acc_dir = probe.v_internal, probe._acc, probe._acc_dir
+    ref.advance(fast.now)
+    assert state(ref) == state(fast)
+
+
+@pytest.mark.parametrize("a_max, v_max", [(32, 300), (100, 2047), (300, 2047), (1000, 300),
+                                          (1000, 2047), (2047, 2047)])
+@pytest.mark.parametrize("div", [0, 2])
+def test_braking_at_equal_dividers_evaluates_the_target_on_few_ticks(a_max, v_max, div):
+    """TMC4210 6.1.9: V_TARGET is "calculated for each ramp step"; while |V| falls by A_MAX above
+    it ("Whenever V_TARGET falls below the actual velocity, the TMC4210 decelerates") the fast
+    core at PULSE_DIV = RAMP_DIV (6.1.12) and A_MAX >= 32 decides each such tick with integer
+    tests and evaluates the square root only on the other ticks: fewer than one braking tick in
+    four (V_MAX * 256 / A_MAX ticks), plus the phase planning. The move arrives on the per-tick
+    oracle's cycle. The move (10 * V_MAX steps) is long enough to reach V_MAX."""
+    pmul, pdiv = registers_for(a_max, div, div)
+    regs = {"pulse_div": div, "ramp_div": div, "v_max": v_max, "v_min": 1, "a_max": a_max,
+            "pmul": pmul, "pdiv": pdiv}
+    fast = Tmc429Ramp(position_bits=32)
+    apply((fast,), regs)
+    target = 10 * v_max
+    apply((fast,), {"x_target": target})
+    tmc429._FOLLOW_MEMO.clear()
+    with counted_isqrt() as calls:
+        while (e := fast.next_event()) is not None:
+            fast.advance(e)
+    assert fast.position_reached and fast.x_actual == target
+    assert calls[0] <= v_max * 256 // a_max // 4 + 50
+    ref = RecordingReference(position_bits=32)
+    apply((ref,), regs)
+    apply((ref,), {"x_target": target})
+    ref.advance(fast.now - 1)
+    assert not (ref.x_actual == target and ref.v == 0)
     ref.advance(fast.now)
     assert state(ref) == state(fast)

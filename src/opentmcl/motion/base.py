@@ -19,6 +19,11 @@ CLOCK_HZ = 16_000_000
 """The modules' controller clock (TMC5130 and TMC429 at 16 MHz); one virtual tick."""
 
 
+Velocity = int | Fraction | float
+"""A velocity in engine units as an engine reports it: an int, or exact (a Fraction) where
+the engine keeps fractions of its unit (the TMC5130-style engine's pps)."""
+
+
 class Mode(Enum):
     POSITION = "position"
     VELOCITY = "velocity"
@@ -53,7 +58,7 @@ class RampEngine(ABC):
 
     @property
     @abstractmethod
-    def target_velocity(self) -> int | float:
+    def target_velocity(self) -> Velocity:
         """Target velocity in velocity mode (AP2)."""
 
     @property
@@ -92,7 +97,7 @@ class RampEngine(ABC):
         """Positioning mode towards `target` (32-bit wrap: the shorter way round)."""
 
     @abstractmethod
-    def rotate(self, velocity: int | float | Fraction) -> None:
+    def rotate(self, velocity: Velocity) -> None:
         """Velocity mode with signed target velocity."""
 
     def stop(self) -> None:
@@ -121,7 +126,7 @@ class RampEngine(ABC):
         """Absolute tick of the next ramp phase change or arrival, or None when
         nothing will change without a new command (standing still or cruising)."""
 
-    def time_at_speed(self, speed: int | float | Fraction) -> int | None:
+    def time_at_speed(self, speed: Velocity) -> int | None:
         """First tick >= now at which |velocity| >= `speed` (engine units) if no command intervenes,
         or None when unknown or never (used for the stop-on-stall speed AP181)."""
         return None

@@ -107,12 +107,13 @@ def calc_pmul_pdiv(a_max: int, ramp_div: int, pulse_div: int,
         raise PmulPdivError(f"p_reduction must be a fraction 0 <= p < 1, got {p_reduction!r}")
     p_ideal = a_max / (2.0 ** (ramp_div - pulse_div) * 128.0)
     p_reduced = p_ideal * (1.0 - _single(float(p_reduction)))
-    pm = pd = None
+    best: tuple[int, int] | None = None       # (PMUL, PDIV), the last PDIV that fits
     for pdiv in range(PDIV_MAX + 1):
         pmul = int(p_reduced * 8.0 * 2.0 ** pdiv) - 128
         if 0 <= pmul <= 127:
-            pm, pd = pmul + 128, pdiv
-    p_best = None if pm is None else pm / 2.0 ** (pd + 3)
+            best = pmul + 128, pdiv
+    pm, pd = best if best is not None else (None, None)
+    p_best = None if best is None else best[0] / 2.0 ** (best[1] + 3)
     lower, upper = a_max_limits(ramp_div, pulse_div)
     return PmulPdiv(a_max, ramp_div, pulse_div, float(p_reduction), pm, pd, p_ideal, p_reduced,
                     p_best, lower, upper)
@@ -127,7 +128,7 @@ def registers_for(a_max: int, ramp_div: int, pulse_div: int,
     too small or A_MAX = 0) — the chip then over- resp. undershoots as 6.1.7.1.1 warns.
     """
     r = calc_pmul_pdiv(a_max, ramp_div, pulse_div, p_reduction)
-    if r.pmul is not None:
+    if r.pmul is not None and r.pdiv is not None:
         return r.pmul, r.pdiv
     if r.p_reduced >= PMUL_MAX / 8.0:
         return PMUL_MAX, 0

@@ -58,19 +58,19 @@ class Scenario:
 
 
 # --- parsing ---------------------------------------------------------------------------------
-def _int(value, where: str) -> int:
+def _int(value: object, where: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise ScenarioError(f"{where}: expected an integer, got {value!r}")
     return value
 
 
-def _num(value, where: str) -> float:
+def _num(value: object, where: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ScenarioError(f"{where}: expected a number, got {value!r}")
     return float(value)
 
 
-def _position(value, where: str) -> int:
+def _position(value: object, where: str) -> int:
     """A stage position: an integer the 32-bit position counter can reach."""
     p = _int(value, where)
     if not -2**31 <= p < 2**31:
@@ -78,7 +78,7 @@ def _position(value, where: str) -> int:
     return p
 
 
-def _table(value, where: str) -> dict:
+def _table(value: object, where: str) -> dict:
     if not isinstance(value, dict):
         raise ScenarioError(f"{where}: expected a table, got {value!r}")
     return value
@@ -140,56 +140,83 @@ AXIS_KEYS = {"type", "start", "steps_per_turn", "ends", "load", "encoder", "full
              "torque_falloff_speed", "driver_flags", "index", *SWITCH_NAMES}
 
 
-def parse_axis(d, where: str) -> AxisSpec:
-    d = _table(d, where)
-    _known(d, AXIS_KEYS, where)
+def _positive(value: object, where: str) -> int:
+    """An integer > 0."""
+    out = _int(value, where)
+    if out <= 0:
+        raise ScenarioError(f"{where} must be positive")
+    return out
+
+
+def _ends(value: object, where: str) -> tuple[int | None, int | None]:
+    """[left end, right end] of the mechanical travel, either may be absent (null)."""
+    if not isinstance(value, list) or len(value) != 2:
+        raise ScenarioError(f"{where}: expected [left end, right end]")
+    lo, hi = (None if e is None else _position(e, where) for e in value)
+    if lo is not None and hi is not None and lo >= hi:
+        raise ScenarioError(f"{where}: the left end must lie left of the right end")
+    return lo, hi
+
+
+def _stage(d: dict, where: str) -> Stage:
+    """The geometry keys of an axis table: type, start, steps_per_turn, switches, ends."""
     kind = d.get("type", "linear")
     if kind not in ("linear", "circular"):
         raise ScenarioError(f"{where}.type: 'linear' or 'circular', got {kind!r}")
-    spec = AxisSpec()
-    st = spec.stage
+    st = Stage()
     st.start = _position(d.get("start", 0), f"{where}.start")
     if kind == "circular":
         if "steps_per_turn" not in d:
             raise ScenarioError(f"{where}: a circular axis needs 'steps_per_turn'")
-        st.steps_per_turn = _int(d["steps_per_turn"], f"{where}.steps_per_turn")
-        if st.steps_per_turn <= 0:
-            raise ScenarioError(f"{where}.steps_per_turn must be positive")
+        st.steps_per_turn = _positive(d["steps_per_turn"], f"{where}.steps_per_turn")
         if "left" in d or "right" in d or "ends" in d:
             raise ScenarioError(f"{where}: a circular axis has a home switch only")
     for name in SWITCH_NAMES:
         if name in d:
             setattr(st, name, _switch(name, d[name], f"{where}.{name}"))
     if "ends" in d:
-        ends = d["ends"]
-        if not isinstance(ends, list) or len(ends) != 2:
-            raise ScenarioError(f"{where}.ends: expected [left end, right end]")
-        st.ends = tuple(None if e is None else _position(e, f"{where}.ends") for e in ends)  # type: ignore[assignment]
-        if None not in st.ends and st.ends[0] >= st.ends[1]:
-            raise ScenarioError(f"{where}.ends: the left end must lie left of the right end")
+        st.ends = _ends(d["ends"], f"{where}.ends")
     if st.left and st.right and st.left.hi >= st.right.lo:
         raise ScenarioError(f"{where}: the left switch must lie left of the right switch")
+    return st
+
+
+def _load(value: object, where: str) -> Load:
+    by = value.get("by", "position") if isinstance(value, dict) else "position"
+    if by not in ("position", "time"):
+        raise ScenarioError(f"{where}.by: 'position' or 'time', got {by!r}")
+    return Load(parse_profile(value, where), by)
+
+
+def _encoder_counts(value: object, where: str) -> int | None:
+    enc = _table(value, where)
+    _known(enc, {"counts_per_round"}, where)
+    if "counts_per_round" not in enc:
+        return None
+    return _positive(enc["counts_per_round"], f"{where}.counts_per_round")
+
+
+def _force(value: object, where: str) -> dict[str, int]:
+    force = _table(value, where)
+    _known(force, set(SWITCH_NAMES), where)
+    levels = {k: _int(v, f"{where}.{k}") for k, v in force.items()}
+    if any(v not in (0, 1) for v in levels.values()):
+        raise ScenarioError(f"{where}: levels are 0 or 1")
+    return levels
+
+
+def parse_axis(d, where: str) -> AxisSpec:
+    """One axis table of docs/scenarios.md."""
+    d = _table(d, where)
+    _known(d, AXIS_KEYS, where)
+    spec = AxisSpec(stage=_stage(d, where))
     if "load" in d:
-        by = d["load"].get("by", "position") if isinstance(d["load"], dict) else "position"
-        if by not in ("position", "time"):
-            raise ScenarioError(f"{where}.load.by: 'position' or 'time', got {by!r}")
-        spec.load = Load(parse_profile(d["load"], f"{where}.load"), by)
+        spec.load = _load(d["load"], f"{where}.load")
     if "encoder" in d:
-        enc = _table(d["encoder"], f"{where}.encoder")
-        _known(enc, {"counts_per_round"}, f"{where}.encoder")
-        if "counts_per_round" in enc:
-            spec.encoder_counts = _int(enc["counts_per_round"], f"{where}.encoder.counts_per_round")
-            if spec.encoder_counts <= 0:
-                raise ScenarioError(f"{where}.encoder.counts_per_round must be positive")
-    spec.fullsteps_per_round = _int(d.get("fullsteps_per_round", 200), f"{where}.fullsteps_per_round")
-    if spec.fullsteps_per_round <= 0:
-        raise ScenarioError(f"{where}.fullsteps_per_round must be positive")
+        spec.encoder_counts = _encoder_counts(d["encoder"], f"{where}.encoder")
+    spec.fullsteps_per_round = _positive(d.get("fullsteps_per_round", 200), f"{where}.fullsteps_per_round")
     if "force" in d:
-        force = _table(d["force"], f"{where}.force")
-        _known(force, set(SWITCH_NAMES), f"{where}.force")
-        spec.force = {k: _int(v, f"{where}.force.{k}") for k, v in force.items()}
-        if any(v not in (0, 1) for v in spec.force.values()):
-            raise ScenarioError(f"{where}.force: levels are 0 or 1")
+        spec.force = _force(d["force"], f"{where}.force")
     if "torque_falloff_speed" in d:
         spec.torque_falloff_speed = _num(d["torque_falloff_speed"], f"{where}.torque_falloff_speed")
         if spec.torque_falloff_speed <= 0:

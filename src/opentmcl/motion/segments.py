@@ -226,7 +226,7 @@ class SegmentQueue:
         """Forget every piece that ended at or before tick k."""
         pieces = self.pieces
         i = 0
-        while pieces[i].k1 is not None and pieces[i].k1 <= k:
+        while (k1 := pieces[i].k1) is not None and k1 <= k:
             i += 1
         if i:
             del pieces[:i]

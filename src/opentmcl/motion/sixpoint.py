@@ -28,9 +28,9 @@ is bit-identical to planning from scratch (tests/motion/test_sixpoint_golden.py)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from fractions import Fraction
-from numbers import Integral, Real
+from numbers import Integral, Rational
 
 from .base import CLOCK_HZ, Mode, RampEngine
 from .segments import (
@@ -64,10 +64,26 @@ class RampParameterError(ValueError):
     """A ramp parameter value the engine cannot use (negative, not a number)."""
 
 
+class PlanInvariantError(AssertionError):
+    """A planner loop did not end where its invariant says it must (a bug, not bad input)."""
+
+
+PLAN_ROUNDS = 16
+"""Rounds a planner loop may take. Each round moves the speed into another band (below
+V1, V1..VMAX, above VMAX: three at most) or holds it until the braking curve (one hold
+per band), so a correct plan needs far fewer; more means the invariant broke."""
+
+
+def _no_end(loop: str, run: _Run) -> PlanInvariantError:
+    return PlanInvariantError(f"{loop}: no end after {PLAN_ROUNDS} rounds at tick {run.t}, speed "
+                              f"{run.u}: a round moved the speed to no other band and the "
+                              "motor not onto the braking curve")
+
+
 def _real(name: str, value: object) -> Fraction:
     if type(value) is int:  # the common case, without the numbers-ABC checks
         return Fraction(value)
-    if isinstance(value, bool) or not isinstance(value, Real):
+    if isinstance(value, bool) or not isinstance(value, (Rational, float)):
         raise RampParameterError(f"{name} must be a number, got {value!r}")
     if isinstance(value, float) and not math.isfinite(value):
         raise RampParameterError(f"{name} must be finite, got {value!r}")
@@ -114,6 +130,11 @@ class Ramp:
     vstart: int = 0
     vstop: int = 0
     wait: int = 0
+    # constants of `braking`, derived from the fields above (not part of the identity)
+    _low_rate: int = field(init=False, repr=False, compare=False)
+    _vstop2: int = field(init=False, repr=False, compare=False)
+    _v1_2: int = field(init=False, repr=False, compare=False)
+    _c1: int = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         # constants of `braking` (the band loop in closed form), set once per parameter set
@@ -247,8 +268,9 @@ def _from_rest(r: Ramp, t: int, p: int, rest: int | None, target: int, out: list
 def _drive(r: Ramp, run: _Run, target: int) -> None:
     """Accelerate / cruise (or slow to a lowered VMAX) until the first tick on
     which the remaining distance is at most the braking distance."""
-    while True:
+    for _ in range(PLAN_ROUNDS):
         u = run.u
+        top: int | None
         if u < r.vmax:
             alpha, top = r.accel_band(u)
             if alpha == 0:
@@ -271,12 +293,15 @@ def _drive(r: Ramp, run: _Run, target: int) -> None:
                 run.emit(run.t + j, alpha)
             _final(r, run, target)
             return
+        if top is None:
+            raise PlanInvariantError(f"_drive: a cruise at speed {u} never reaches the braking point")
         if n:
             run.emit(run.t + n, alpha)
         run.u = top
         if top == 0:  # slowed down to VMAX = 0 short of the target
             run.rest_here()
             return
+    raise _no_end("_drive", run)
 
 
 def _decel_offset(r: Ramp, run: _Run, target: int, alpha: int, n: int | None) -> int | None:
@@ -299,7 +324,7 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
     """Decelerate (DMAX to V1, D1 to VSTOP) until the target is reached: the
     motor stops on the first tick whose position reaches the target."""
     s = run.s
-    while True:
+    for _ in range(PLAN_ROUNDS):
         rem = s * (target - run.p)
         if rem <= 0:
             break
@@ -322,6 +347,8 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
                 return (2 * u - rate * j) * j >= rem
 
             j = first_integer(reached, 1, n + 1, quadratic_guess(-float(rem), 2.0 * u, -float(rate)))
+            if j is None:
+                raise PlanInvariantError(f"_final: the target is reached by tick {n} yet at no tick")
             run.emit(run.t + j, -rate)
             break
         if n:
@@ -335,18 +362,24 @@ def _final(r: Ramp, run: _Run, target: int) -> None:
                 run.emit(run.t + ceil_div(rem, 2 * run.u), 0)
             break
         run.u = low  # V1 reached (jump < DMAX per tick)
+    else:
+        raise _no_end("_final", run)
     run.out.append(_new(Segment, (run.t, None, target, 0, 0, run.t)))  # arrival: stop on the target
 
 
 def _stop_then(r: Ramp, run: _Run, target: int) -> None:
     """Ramp down to VSTOP, stop, wait, and start again towards the target."""
-    while run.u > r.vstop:
+    for _ in range(PLAN_ROUNDS):
+        if run.u <= r.vstop:
+            break
         rate, low = r.decel_band(run.u, r.vstop)
         if rate:
             n = (run.u - low) // rate
             if n:
                 run.emit(run.t + n, -rate)
         run.u = low
+    else:
+        raise _no_end("_stop_then", run)
     _from_rest(r, run.t, snap(run.p, run.s), run.t, target, run.out)
 
 
@@ -381,7 +414,7 @@ class RestPlans:
     def __init__(self, r: Ramp):
         self.ramp = r
         self.stuck = min(r.vstart, r.vmax) == 0 and (r.vmax == 0 or r.accel_band(0)[0] == 0)
-        self.plans: dict[tuple[int, int], tuple] = {}
+        self.plans: dict[tuple[int, int], tuple | None] = {}   # None: seen once
 
     def plan(self, t: int, p: int, rest: int | None, target: int) -> list[Segment]:
         dist = target - p

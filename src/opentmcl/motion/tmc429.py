@@ -36,6 +36,7 @@ tests/motion/tmc429_reference.py defines the behaviour this must reproduce.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from math import isqrt
 
@@ -110,8 +111,60 @@ class _Follow:
     moved: bool         # a pulse tick saw a non-zero velocity
 
 
-_FOLLOW_MEMO: dict[tuple, tuple] = {}
+_FollowKey = tuple[int, int, int, int, int, int, int, int, int, int]
+_FOLLOW_MEMO: dict[_FollowKey, tuple[int, int, int, int, bool]] = {}
 _FOLLOW_MEMO_SIZE = 4096
+_FOREVER = 1 << 80
+"""Cycles past any `limit` (a walk without one)."""
+
+
+_Steps = list[tuple[int, int]]
+"""(cycle, +1 or -1) of each step made."""
+
+
+class _Walk:
+    """Pulse bookkeeping of one `Tmc429Ramp._follow` stretch."""
+
+    __slots__ = ("units", "made0", "total", "s", "pulse_period", "steps")
+
+    def __init__(self, units: int, made0: int, s: int, pulse_period: int,
+                 steps: _Steps | None) -> None:
+        self.units = units            # accumulator units still to add before the arrival step
+        self.made0 = made0            # accumulator counting towards the target at the start
+        self.total = 0                # units added in this stretch
+        self.s = s                    # direction of the target
+        self.pulse_period = pulse_period
+        self.steps = steps
+
+    @property
+    def left(self) -> int:
+        return self.units - self.total
+
+    def pulses(self, count: int, n: int, first: int) -> int:
+        """Add `count` pulses of n units from pulse index `first`. If the arrival step
+        comes among them, stop just before it and return its cycle; else 0."""
+        if count <= 0 or n == 0:
+            return 0
+        if self.total + count * n >= self.units:
+            k = _ceil_div(self.units - self.total, n)
+            self._record(n, k - 1, first)
+            self.total += (k - 1) * n
+            return (first + k - 1) * self.pulse_period
+        self._record(n, count, first)
+        self.total += count * n
+        return 0
+
+    def _record(self, n: int, count: int, first: int) -> None:
+        """Append (cycle, s) for each step of `count` pulses of n units from pulse index
+        `first`."""
+        if self.steps is None:
+            return
+        made = self.made0 + self.total
+        m = made // 2048 + 1
+        while m * 2048 <= made + count * n:
+            self.steps.append(((first + _ceil_div(m * 2048 - made, n) - 1) * self.pulse_period,
+                               self.s))
+            m += 1
 
 
 @dataclass
@@ -193,6 +246,10 @@ class _Phase:
         return lo * self.pulse_period
 
 
+_Plan = tuple[int | None, int | None, _Phase | _Follow]
+"""(event, clamp, phase) of `Tmc429Ramp._plan`."""
+
+
 class Tmc429Ramp:
     """One axis of the TMC429/TMC4210 ramp generator, integer exact, event-driven.
 
@@ -222,7 +279,7 @@ class Tmc429Ramp:
         self._pulse_div = 0
         self._ramp_div = 0
         self._mode = RAMP_MODE
-        self._cached_plan: tuple | None = None   # _plan(None) of the present state
+        self._cached_plan: _Plan | None = None   # _plan(None) of the present state
 
     # ------------------------------------------------------------------ registers
     @property
@@ -501,21 +558,39 @@ class Tmc429Ramp:
         return s * self._v_max * 256, True
 
     # ------------------------------------------------------------------ phases
-    def _plan(self, until: int | None) -> tuple[int | None, int | None, _Phase]:
+    def _plan(self, until: int | None) -> _Plan:
         """Closed form of the coming phase.
 
         Returns (event, clamp, phase): `event` is the first cycle > now that must
         be applied exactly (None: none ever), `clamp` the cycle where the ramp
         reaches its target (reported by next_event, also exact).
         """
+        target, binds = self._ramp_target()
+        dx_zero = target is None
+        vt = 0 if target is None else target
+        phase = self._linear_phase(vt)
+        units0 = 0
+        if binds and phase.direction != 0:
+            dx = self.dx
+            units0 = self._remaining(_sign(dx), abs(dx))
+            if self._fires(phase, units0, phase.j0 + 1):   # the computed target binds now
+                return self._follow_plan(until)
+        first_ramp, clamp = self._ramp_events(phase, vt, dx_zero)
+        bound = _min_opt(until, None if first_ramp is None else first_ramp - 1)
+        step_event = self._step_event(phase, dx_zero, bound)
+        trig = None
+        if binds and phase.direction != 0:
+            bound2 = _min_opt(bound, None if step_event is None else step_event - 1)
+            trig = self._find_trigger(phase, units0, bound2)
+        event = _min_opt(_min_opt(first_ramp, step_event), trig)
+        return event, clamp, phase
+
+    def _linear_phase(self, vt: int) -> _Phase:
+        """The phase from now in which |v| moves by A_MAX per ramp tick towards `vt`
+        (or stays, in hold_mode, at A_MAX = 0 or on the target), 6.1.9.2."""
         rp, pp = 32 << self._ramp_div, 32 << self._pulse_div
         v0, a = self._v, self._a_max
-        vt, binds = self._ramp_target()
-        dx_zero = vt is None
-        if dx_zero:
-            vt = 0
-        mode = self._mode
-        ramping = a > 0 and v0 != vt and mode != HOLD_MODE
+        ramping = a > 0 and v0 != vt and self._mode != HOLD_MODE
         direction = _sign(v0) if v0 != 0 else (_sign(vt) if ramping else 0)
         w0 = abs(v0)
         if not ramping:
@@ -531,48 +606,42 @@ class Tmc429Ramp:
                 acc0 = 2047 - acc0
             if v0 == 0:                     # v turns non-zero at the next ramp tick
                 i_dir = _ceil_div((j0 + 1) * rp, pp)
-        phase = _Phase(self.now, rp, pp, j0, i0, w0, delta, direction, acc0, i_dir)
-        units0 = 0
-        if binds and direction != 0:
-            dx = self.dx
-            units0 = self._remaining(_sign(dx), abs(dx))
-            if self._fires(phase, units0, j0 + 1):     # the computed target binds now
-                return self._follow_plan(until)
+        return _Phase(self.now, rp, pp, j0, i0, w0, delta, direction, acc0, i_dir)
 
-        ramp_events: list[int] = []
+    def _ramp_events(self, phase: _Phase, vt: int, dx_zero: bool) -> tuple[int | None, int | None]:
+        """(first ramp tick that changes the phase, clamp): the tick where |v| reaches
+        `vt` or changes sign, the release of a soft stop at standstill (6.1.10.2) and the
+        stop at the target once |v| <= V_MIN (6.1.3)."""
+        rp, a, j0, w0 = phase.ramp_period, self._a_max, phase.j0, phase.w0
+        events: list[int] = []
         clamp = None
-        if ramping:
-            if _sign(vt) == direction or vt == 0:
+        if phase.delta != 0:
+            if _sign(vt) == phase.direction or vt == 0:
                 k_end = _ceil_div(abs(abs(vt) - w0), a)       # reaches vt (or 0)
             else:
                 k_end = _ceil_div(w0, a)                       # changes sign
             clamp = (j0 + k_end) * rp
-            ramp_events.append(clamp)
-        if self._stopping and mode != HOLD_MODE and v0 == 0:
-            ramp_events.append((j0 + 1) * rp)                  # release at once
-        if dx_zero and not self._stopping and mode in (RAMP_MODE, SOFT_MODE):
+            events.append(clamp)
+        if self._stopping and self._mode != HOLD_MODE and w0 == 0:
+            events.append((j0 + 1) * rp)                       # release at once
+        if dx_zero and not self._stopping and self._mode in (RAMP_MODE, SOFT_MODE):
             limit = self._v_min * 256
             if w0 <= limit:
-                if v0 != 0:
-                    ramp_events.append((j0 + 1) * rp)
+                if w0 != 0:
+                    events.append((j0 + 1) * rp)
             elif a > 0:
-                ramp_events.append((j0 + _ceil_div(w0 - limit, a) + 1) * rp)
-        first_ramp = min(ramp_events) if ramp_events else None
+                events.append((j0 + _ceil_div(w0 - limit, a) + 1) * rp)
+        return (min(events) if events else None), clamp
 
-        bound = _min_opt(until, None if first_ramp is None else first_ramp - 1)
-        # steps that change the ramp target (or stop the motor)
-        n_steps = self._step_limit(direction, dx_zero)
-        step_event = None
-        if n_steps is not None and direction != 0:
-            if bound is None and delta != 0:
-                raise AssertionError("ramping phase without end")
-            step_event = phase.nth_step_cycle(n_steps, bound)
-        bound2 = _min_opt(bound, None if step_event is None else step_event - 1)
-        trig = None
-        if binds and direction != 0:
-            trig = self._find_trigger(phase, units0, bound2)
-        event = _min_opt(_min_opt(first_ramp, step_event), trig)
-        return event, clamp, phase
+    def _step_event(self, phase: _Phase, dx_zero: bool, bound: int | None) -> int | None:
+        """Cycle of the step, by `bound`, after which the ramp target changes or the
+        motor stops (`_step_limit`); None: none by then."""
+        n_steps = self._step_limit(phase.direction, dx_zero)
+        if n_steps is None or phase.direction == 0:
+            return None
+        if bound is None and phase.delta != 0:
+            raise AssertionError("ramping phase without end")
+        return phase.nth_step_cycle(n_steps, bound)
 
     def _step_limit(self, direction: int, dx_zero: bool) -> int | None:
         """Number of steps after which the ramp target may change (None: never)."""
@@ -651,7 +720,7 @@ class Tmc429Ramp:
         return _first_true(lambda j: self._fires(ph, units0, j), j_lo, t_hi // rp, rp)
 
     # ------------------------------------------------------------------ following the target
-    def _follow_plan(self, until: int | None) -> tuple[int | None, None, _Follow]:
+    def _follow_plan(self, until: int | None) -> tuple[int, None, _Follow]:
         """Plan of a stretch where the ramp_mode velocity follows its computed target:
         walked on a copy up to `until` (None: to its end, memoised by the start state)."""
         key = self._follow_key()
@@ -670,107 +739,98 @@ class Tmc429Ramp:
         seg = _Follow(self.now, *hit)
         return event, None, seg
 
-    def _follow_key(self) -> tuple:
+    def _follow_key(self) -> _FollowKey:
         dx = self.dx
         s, d = _sign(dx), abs(dx)
         period = max(32 << self._ramp_div, 32 << self._pulse_div)
         return (self._remaining(s, d), abs(self._v), self.now % period, self._ramp_div,
                 self._pulse_div, self._a_max, self._v_min, self._v_max, self._pmul, self._pdiv)
 
-    def _follow(self, limit: int | None, steps: list | None) -> int:
+    def _follow(self, limit: int | None, steps: _Steps | None) -> int:
         """Go through ramp_mode from now while the velocity heads for the target, tick by
-        tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at `limit`, just before the arrival
-        step, or after the tick that reaches V_MIN (or 0); returns the cycle to apply
-        exactly next. `steps` collects (cycle, direction) of each step made."""
-        rp, pp, a = 32 << self._ramp_div, 32 << self._pulse_div, self._a_max
+        tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at
+        `limit`, just before the arrival step, or after the tick that reaches V_MIN (or 0);
+        returns the cycle to apply exactly next. `steps` collects (cycle, direction) of
+        each step made."""
         dx = self.dx
         s, d = _sign(dx), abs(dx)
-        units = self._remaining(s, d)          # still to add before the arrival step
-        made0 = d * 2048 - units               # accumulator counting towards the target
-        total = 0                              # units added here
+        units = self._remaining(s, d)
+        walk = _Walk(units, d * 2048 - units, s, 32 << self._pulse_div, steps)
         w = abs(self._v)
         floor = min(self._v_min, self._v_max)
         t = self.now
         moved = False
-        event = None
-
-        def pulses(count: int, n: int, first: int) -> int:
-            """Add `count` pulses of n units from pulse index `first`; -1: arrival first."""
-            nonlocal total
-            if count <= 0 or n == 0:
-                return 0
-            if total + count * n >= units:      # the arrival step: stop just before it
-                k = _ceil_div(units - total, n)
-                if steps is not None:
-                    self._record(steps, made0 + total, n, k - 1, first, s)
-                total += (k - 1) * n
-                return (first + k - 1) * pp
-            if steps is not None:
-                self._record(steps, made0 + total, n, count, first, s)
-            total += count * n
-            return 0
-
-        fast = pp == rp and steps is None
-        while True:
+        event: int | None = None
+        fast = self._ramp_div == self._pulse_div and steps is None
+        while event is None:
             if fast:        # tick by tick inlined, back here for a run worth jumping
-                t, w, total, moved, event = self._follow_fast(t, w, units, total, moved, limit,
-                                                              floor)
+                t, w, walk.total, moved, event = self._follow_fast(t, w, units, walk.total,
+                                                                   moved, limit, floor)
                 if event is not None:
                     break
-            c = (t // rp + 1) * rp                         # next ramp tick
-            n = w >> 8
-            if n and w == self._speed(units - total) * 256 and floor * 256 < w:
-                # on the target: one velocity until the sqrt term drops below n
-                need = units - total - self._level_start(n) + 1
-                k = _ceil_div(need, n)
-                c_k = (t // pp + k) * pp
-                if limit is not None and c_k > limit:
-                    moved |= limit // pp > t // pp
-                    pulses(limit // pp - t // pp, n, t // pp + 1)
-                    t, event = limit, limit + 1
-                    break
-                moved = True
-                arrival = pulses(k, n, t // pp + 1)
-                if arrival:
-                    event, t = arrival, arrival - 1
-                    break
-                t = c_k
-                continue
-            end = c - 1 if limit is None else min(c - 1, limit)
-            count = end // pp - t // pp
-            moved |= count > 0 and w > 0
-            arrival = pulses(count, n, t // pp + 1)
-            if arrival:
-                event, t = arrival, arrival - 1
-                break
-            t = end
-            if limit is not None and t >= limit:
-                event = limit + 1
-                break
-            ticks, count, n = self._brake_run(c, w, units - total, limit)
-            if ticks:                               # falling by A_MAX at one pulse size
-                moved |= count > 0
-                pulses(count, n, (c - 1) // pp + 1)
-                w -= a * ticks
-                t = c + ticks * rp - 1
-                continue
-            before = w
-            w = _toward(w, self._speed(units - total) * 256, a)     # the ramp tick at c
-            t = c
-            if c % pp == 0 and w > 0:
-                moved = True
-                if pulses(1, w >> 8, c // pp):
-                    event, t, w = c, c - 1, before
-                    break
-            if w == floor * 256 or w == 0:
-                event = t + 1
-                break
-        self._units_made, self._moved = total, moved
-        self._settle(t, made0 + total, s * w, s, moved)
+            t, w, moved, event = self._follow_step(walk, t, w, moved, limit, floor)
+        self._units_made, self._moved = walk.total, moved
+        self._settle(t, walk.made0 + walk.total, s * w, s, moved)
         return event
 
+    def _follow_step(self, walk: _Walk, t: int, w: int, moved: bool, limit: int | None,
+                     floor: int) -> tuple[int, int, bool, int | None]:
+        """From cycle t (|v| = w) through the next ramp tick, or a run of them in one go:
+        (t, w, moved, event), event None while the stretch goes on."""
+        rp, pp, a = 32 << self._ramp_div, walk.pulse_period, self._a_max
+        c = (t // rp + 1) * rp                         # next ramp tick
+        n = w >> 8
+        if n and w == self._speed(walk.left) * 256 and floor * 256 < w:
+            return self._on_target_run(walk, t, w, moved, limit)
+        end = c - 1 if limit is None else min(c - 1, limit)
+        count = end // pp - t // pp
+        moved |= count > 0 and w > 0
+        arrival = walk.pulses(count, n, t // pp + 1)
+        if arrival:
+            return arrival - 1, w, moved, arrival
+        t = end
+        if limit is not None and t >= limit:
+            return t, w, moved, limit + 1
+        ticks, count, n = self._brake_run(c, w, walk.left, limit)
+        if ticks:                                      # falling by A_MAX at one pulse size
+            moved |= count > 0
+            walk.pulses(count, n, (c - 1) // pp + 1)
+            return c + ticks * rp - 1, w - a * ticks, moved, None
+        return self._follow_tick(walk, c, w, moved, floor)
+
+    def _on_target_run(self, walk: _Walk, t: int, w: int, moved: bool,
+                       limit: int | None) -> tuple[int, int, bool, int | None]:
+        """|v| = w on its computed target: one velocity until the square-root term drops
+        below it (6.1.9), pulses of w >> 8 units from cycle t; as `_follow_step`."""
+        pp, n = walk.pulse_period, w >> 8
+        k = _ceil_div(walk.left - self._level_start(n) + 1, n)
+        c_k = (t // pp + k) * pp
+        if limit is not None and c_k > limit:
+            moved |= limit // pp > t // pp
+            walk.pulses(limit // pp - t // pp, n, t // pp + 1)
+            return limit, w, moved, limit + 1
+        arrival = walk.pulses(k, n, t // pp + 1)
+        if arrival:
+            return arrival - 1, w, True, arrival
+        return c_k, w, True, None
+
+    def _follow_tick(self, walk: _Walk, c: int, w: int, moved: bool,
+                     floor: int) -> tuple[int, int, bool, int | None]:
+        """The ramp tick at c (|v| towards its computed target by A_MAX, 6.1.9.2) and its
+        pulse if one falls on c; as `_follow_step`."""
+        pp = walk.pulse_period
+        before = w
+        w = _toward(w, self._speed(walk.left) * 256, self._a_max)
+        if c % pp == 0 and w > 0:
+            moved = True
+            if walk.pulses(1, w >> 8, c // pp):
+                return c - 1, before, moved, c
+        if w == floor * 256 or w == 0:
+            return c, w, moved, c + 1
+        return c, w, moved, None
+
     def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
-                     limit: int | None, floor: int) -> tuple:
+                     limit: int | None, floor: int) -> tuple[int, int, int, bool, int | None]:
         """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
         same rules inlined; hands back (event None) before a run worth jumping (one
         velocity on the target, or many ticks falling inside one level), at `limit`, or
@@ -778,32 +838,58 @@ class Tmc429Ramp:
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
         low = floor << 8
+        lag_walk = a >= 32 and vmin <= vmax     # then the four tests below decide a lagging tick
+        left = units - total
         c = (t // rp + 1) * rp
-        while limit is None or c <= limit:
-            left = units - total
+        last = c + _FOREVER if limit is None else limit
+        while c <= last:
+            if lag_walk:
+                # lagging: |v| falls by A_MAX with the computed target at or below it
+                # (6.1.9); stops before an arrival, V_MIN or `last`
+                nw = w - a
+                n = nw >> 8
+                while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
+                    left -= n
+                    w, t, moved = nw, c, True
+                    c += rp
+                    nw -= a
+                    n = nw >> 8
+                if c > last:
+                    break
             sp = isqrt(pm * left >> sh)
             sp = vmax if sp > vmax else (vmin if sp < vmin else sp)
-            tgt = sp << 8
-            if w == tgt:
-                n = w >> 8
-                if n and w > low and left + (-(n * n << sh) // pm) >= n << 2:
-                    return t, w, total, moved, None        # a run: `_follow` jumps it
-                nw = w
-            elif w < tgt:
-                nw = w + a if w + a < tgt else tgt
-            elif w - a > tgt and (w - a) & 255 > a << 3:
-                return t, w, total, moved, None            # braking run: `_follow` jumps it
-            else:
-                nw = w - a if w - a > tgt else tgt
-            n = nw >> 8
-            if n and total + n >= units:                   # the arrival step at c
-                return c - 1, w, total, moved, c
-            w, total, t = nw, total + n, c
+            after = self._fast_velocity(w, sp << 8, left)
+            if after is None:
+                return t, w, units - left, moved, None     # `_follow` jumps the run
+            n = after >> 8
+            if n and n >= left:                                # the arrival step at c
+                return c - 1, w, units - left, moved, c
+            w, t = after, c
+            left -= n
             moved = moved or w > 0
             if w == low or w == 0:
-                return t, w, total, moved, t + 1
+                return t, w, units - left, moved, t + 1
             c += rp
-        return t, w, total, moved, None
+        return t, w, units - left, moved, None
+
+    def _fast_velocity(self, w: int, tgt: int, left: int) -> int | None:
+        """|v| after a `_follow_fast` ramp tick from w towards the computed target tgt
+        (by at most A_MAX, 6.1.9.2), `left` units before the arrival step; None before
+        a run `_follow` jumps: one velocity on the target for 4 pulses or more, or
+        |v| falling by A_MAX inside one level for 8 ticks or more."""
+        a = self._a_max
+        if w == tgt:
+            n = w >> 8
+            low = min(self._v_min, self._v_max) << 8
+            sh = 3 + self._pdiv
+            if n and w > low and left + (-(n * n << sh) // self._pmul) >= n << 2:
+                return None
+            return w
+        if w < tgt:
+            return w + a if w + a < tgt else tgt
+        if w - a > tgt and (w - a) & 255 > a << 3:
+            return None
+        return w - a if w - a > tgt else tgt
 
     def _brake_run(self, c: int, w: int, left: int, limit: int | None) -> tuple[int, int, int]:
         """Ramp ticks from tick c on (pulses before c done, `left` units to go) over which |v|
@@ -842,15 +928,6 @@ class Tmc429Ramp:
             self._acc = 2047 - self._acc
         self._v = v
         self.now = t
-
-    def _record(self, steps: list, made: int, n: int, count: int, first: int, s: int) -> None:
-        """Append (cycle, s) for each step of `count` pulses of n units from pulse index
-        `first`, the accumulator holding `made` units before them."""
-        pp = 32 << self._pulse_div
-        m = made // 2048 + 1
-        while m * 2048 <= made + count * n:
-            steps.append(((first + _ceil_div(m * 2048 - made, n) - 1) * pp, s))
-            m += 1
 
     def _follow_end(self, seg: _Follow) -> None:
         """Jump to the end of a planned `_follow` stretch (memoised result)."""
@@ -945,7 +1022,9 @@ class Tmc429Ramp:
         for _ in range(max_phases):
             event, _clamp, phase = probe._plan(None)
             if isinstance(phase, _Follow):
-                steps: list = []
+                if event is None:
+                    raise AssertionError("a follow stretch always ends")
+                steps: _Steps = []
                 probe.copy()._follow(event - 1, steps)
                 need = (target - probe._x) * _sign(probe.dx) % probe._modulus
                 if 0 < need <= len(steps):
@@ -979,7 +1058,7 @@ def _min_opt(a: int | None, b: int | None) -> int | None:
     return min(a, b)
 
 
-def _first_true(pred, lo: int, hi: int, period: int) -> int | None:
+def _first_true(pred: Callable[[int], bool], lo: int, hi: int, period: int) -> int | None:
     """Smallest j in lo..hi with pred(j) (pred monotone false..true), as cycle j*period."""
     if hi < lo or not pred(hi):
         return None

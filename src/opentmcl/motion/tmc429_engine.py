@@ -21,7 +21,7 @@ Choices the manual leaves open are listed in docs/assumptions.md.
 """
 from __future__ import annotations
 
-from .base import Mode, RampEngine
+from .base import Mode, RampEngine, Velocity
 from .pmulpdiv import registers_for
 from .tmc429 import HOLD_MODE, RAMP_MODE, SOFT_MODE, V_LIMIT, VELOCITY_MODE, Tmc429Ramp
 
@@ -67,7 +67,7 @@ class Tmc429Engine(RampEngine):
 
     # --- clock --------------------------------------------------------------------
     @property
-    def now(self) -> int:  # type: ignore[override]
+    def now(self) -> int:
         return self.ramp.now
 
     @now.setter
@@ -158,7 +158,7 @@ class Tmc429Engine(RampEngine):
             self._params["ramp_mode"] = 1 if mode == SOFT_MODE else 0
         self.ramp.set(**regs)
 
-    def rotate(self, velocity: int | float) -> None:
+    def rotate(self, velocity: Velocity) -> None:
         """ROR/ROL/MST (4.6.1-4.6.3): velocity mode, V_TARGET := velocity.
         V_MAX is opened to 2047 so that AP4 (the *positioning* speed) does not
         limit ROR/ROL (docs/assumptions.md)."""

@@ -12,7 +12,7 @@ r_microstep = 2^AP140 and r_fullstep = AP202 (manual 6.5).
 from __future__ import annotations
 
 from fractions import Fraction
-from numbers import Integral, Real
+from numbers import Integral, Rational
 
 from .base import CLOCK_HZ
 
@@ -33,7 +33,7 @@ class UnitError(ValueError):
 
 
 def _number(name: str, x: object) -> Fraction:
-    if isinstance(x, bool) or not isinstance(x, Real):
+    if isinstance(x, bool) or not isinstance(x, (Rational, float)):
         raise UnitError(f"{name} must be a number, got {x!r}")
     try:
         return Fraction(x)
