@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 VELOCITY_PARAMS = {2, 3, 4, 16, 19, 20, 22, 23, 29, 181, 182, 186, 194, 195}
 ACCEL_PARAMS = {5, 15, 17, 18}
-# Internal-unit ranges of the TMC5130 registers (FACTS.md) used when AP255 = 0.
+# Internal-unit ranges of the TMC5130 registers (TMC5130 datasheet; docs/motion.md) used when AP255 = 0.
 INTERNAL_VMAX = 2**23 - 512
 INTERNAL_AMAX = 2**16 - 1
 

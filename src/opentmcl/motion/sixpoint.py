@@ -1,7 +1,7 @@
 """Six-point ramp of the TMC5130 (TMCM-6212: one TMC5130 per axis).
 
-TMCM-6212 firmware manual 4.1, axis parameters 4, 5 and 15-21; FACTS.md
-"TMC5130". In positioning mode the motor starts at VSTART, accelerates with
+TMCM-6212 firmware manual 4.1, axis parameters 4, 5 and 15-21; TMC5130
+datasheet (docs/motion.md). In positioning mode the motor starts at VSTART, accelerates with
 A1 up to V1 and with AMAX up to VMAX, decelerates with DMAX down to V1 and
 with D1 down to VSTOP, then stops on the target; V1 = 0 disables the A1/D1
 phases. Before a move starts (and before a reversal) the motor rests for the

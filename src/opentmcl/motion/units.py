@@ -1,4 +1,4 @@
-"""Unit conversions of the TMCM-6212 (manual 6.5; FACTS.md "TMC5130").
+"""Unit conversions of the TMCM-6212 (manual 6.5; TMC5130 datasheet, docs/motion.md).
 
 With AP255 = 1 (default) velocities are in pps (microsteps per second) and
 accelerations in pps^2. With AP255 = 0 the TMC5130's internal units are used:

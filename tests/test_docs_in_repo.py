@@ -1,0 +1,47 @@
+"""A newcomer reads the design in the repository (issue 12 item 1, docs/architecture.md).
+
+docs/architecture.md: "Source docstrings cite the sections of this page as `docs/architecture.md
+"Section"`; the behaviour itself is specified by the manuals". The README's layout block names the
+packages of the layer contract (`[tool.importlinter]` in pyproject, docs/architecture.md "Layers").
+"""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+OUTSIDE = re.compile(r"DESIGN\.md|FACTS\.md|\bshared/")
+"""Files a clone does not contain: the design notes and facts kept next to the repository."""
+
+
+def test_no_source_file_cites_a_file_outside_the_repository():
+    """Code, profile data and include files cite the manuals or docs/*.md, never DESIGN.md,
+    FACTS.md or the shared/ directory beside the repository."""
+    found = [f"{path.relative_to(ROOT)}:{n}: {line.strip()}"
+             for path in sorted((ROOT / "src").rglob("*")) if path.is_file() and path.suffix != ".pyc"
+             for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1)
+             if OUTSIDE.search(line)]
+    assert found == []
+
+
+def _layout_block() -> str:
+    readme = (ROOT / "README.md").read_text()
+    section = readme.split("\n## Layout\n", 1)[1]
+    return section.split("```\n", 2)[1]
+
+
+def test_the_readme_layout_names_every_package_of_the_layer_contract():
+    """Every package of the "layers point downwards" contract is a line of the README layout,
+    in the contract's order (top first)."""
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["importlinter"]
+    (contract,) = [c for c in config["contracts"] if c["type"] == "layers"]
+    packages = [p.strip().removeprefix("opentmcl.") for layer in contract["layers"] for p in layer.split("|")]
+    named = [word for line in _layout_block().splitlines() if line and not line[0].isspace()
+             for word in re.split(r",\s*", line.split("  ")[0].strip())]
+    assert sorted(named) == sorted(packages)
+    order = {p: i for i, layer in enumerate(contract["layers"]) for p in
+             (q.strip().removeprefix("opentmcl.") for q in layer.split("|"))}
+    ranks = [order[w] for w in named]
+    assert ranks == sorted(ranks)
