@@ -166,6 +166,16 @@ def test_a_standalone_profile_declares_every_capability():
     assert validate(raw) == ["module.capabilities: missing table [module.capabilities] (docs/profiles.md)"]
 
 
+def test_capabilities_that_are_not_a_table_are_named_so(tmp_path):
+    """docs/profiles.md: "Every key is required in a resolved profile" and each error is one line
+    with its key path; `capabilities = 3` is there but is not the [module.capabilities] table."""
+    path = tmp_path / "flat.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "FLAT"\ncapabilities = 3\n')
+    done = cli("profile", "check", str(path))
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    assert done.stderr.strip().splitlines() == [f"{path}: module.capabilities: expected a table, got 3"]
+
+
 def test_an_io_range_with_only_min_is_checked_not_a_crash(tmp_path):
     """docs/profiles.md: io `min`/`max` are optional (0 and 1); a `min` alone above the default max
     is reported like any range (it used to raise KeyError out of `profile check`)."""

@@ -171,8 +171,10 @@ def _check_module_choices(m: RawProfile) -> list[str]:
 def _check_capabilities(caps: object) -> list[str]:
     """[module.capabilities]: every capability of CAPABILITY_VALUES, of its type or one of its values."""
     where = "module.capabilities"
-    if not isinstance(caps, dict):
+    if caps is None:
         return [f"{where}: missing table [module.capabilities] (docs/profiles.md)"]
+    if not isinstance(caps, dict):
+        return [f"{where}: expected a table, got {caps!r}"]
     errors = [f"{where}.{key}: unknown capability (known: {', '.join(CAPABILITY_VALUES)})"
               for key in caps if key not in CAPABILITY_VALUES]
     for key, allowed in CAPABILITY_VALUES.items():
