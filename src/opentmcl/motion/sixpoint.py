@@ -548,7 +548,7 @@ class SixPointRampEngine(RampEngine):
     def ramp(self) -> Ramp:
         return self._ramp
 
-    def configure(self, **params) -> None:
+    def configure(self, **params: object) -> None:
         """Change ramp parameters on the fly; the motion is re-planned from the
         present state (a deceleration in progress keeps its lateness)."""
         new = self._checked(params)
