@@ -1,8 +1,9 @@
 """The six-point planner loops end or fail fast (issue 12: no hang when an invariant breaks).
 
-TMCM-6212 firmware manual 4.1 (AP4, AP5, AP15-AP20): a positioning move "accelerates with A1
-up to V1 and with AMAX up to VMAX, decelerates with DMAX down to V1 and with D1 down to VSTOP".
-Each round of a planner loop therefore moves the speed into the next of at most three bands
+TMCM-6212 firmware manual 4.1: AP15 A1 is the "First acceleration between VSTART and V1", AP16 V1
+the "First acceleration / deceleration phase target velocity", AP17 DMAX is "Used to decelerate
+from maximum positioning speed (axis parameter 4) to velocity V1", AP18 D1 the "Deceleration
+between V1 and VSTOP". Each round of a planner loop therefore moves the speed into the next of at most three bands
 (below V1, V1..VMAX, above VMAX) or holds it until the braking curve. The helpers below are
 broken on purpose so that a round changes nothing: the planner must raise PlanInvariantError
 naming the loop, within the test's timeout, instead of looping forever.
@@ -25,8 +26,9 @@ def stuck_band(self: Ramp, u: int, floor: int) -> tuple[int, int]:
 
 @pytest.mark.timeout(20)
 def test_stop_then_fails_fast_when_a_band_does_not_lower_the_speed(monkeypatch):
-    """Manual 4.1: "decelerates with DMAX down to V1 and with D1 down to VSTOP" — stopping for a
-    target behind the motor walks the bands down to VSTOP; a band that keeps the speed is a bug."""
+    """Manual 4.1 AP17/AP18: DMAX decelerates "to velocity V1", D1 "between V1 and VSTOP" —
+    stopping for a target behind the motor walks the bands down to VSTOP; a band that keeps the
+    speed is a bug."""
     monkeypatch.setattr(Ramp, "decel_band", stuck_band)
     v = RAMP.vmax
     with pytest.raises(PlanInvariantError, match="_stop_then"):
@@ -35,8 +37,8 @@ def test_stop_then_fails_fast_when_a_band_does_not_lower_the_speed(monkeypatch):
 
 @pytest.mark.timeout(20)
 def test_drive_fails_fast_when_a_band_does_not_raise_the_speed(monkeypatch):
-    """Manual 4.1: "accelerates with A1 up to V1 and with AMAX up to VMAX" — a band whose top is
-    the present speed moves nothing."""
+    """Manual 4.1 AP15: A1 is the "First acceleration between VSTART and V1" (AMAX above it, up
+    to AP4) — a band whose top is the present speed moves nothing."""
     r = Ramp.from_pps(vmax=51200, amax=51200, dmax=51200, vstart=100, vstop=10)
     monkeypatch.setattr(Ramp, "accel_band", lambda self, u: (self.amax, u))
     with pytest.raises(PlanInvariantError, match="_drive"):
@@ -45,8 +47,8 @@ def test_drive_fails_fast_when_a_band_does_not_raise_the_speed(monkeypatch):
 
 @pytest.mark.timeout(20)
 def test_final_fails_fast_when_holding_does_not_reach_the_braking_curve(monkeypatch):
-    """Manual 4.1: the motor "decelerates ... down to VSTOP, then stops on the target"; a hold
-    ahead of the braking curve that lasts no tick never gets there."""
+    """Manual 4.1 AP18: D1 is the "Deceleration between V1 and VSTOP", the last band before the
+    target; a hold ahead of the braking curve that lasts no tick never gets there."""
     monkeypatch.setattr(sixpoint, "ceil_div", lambda a, b: 0)
     run = sixpoint._Run(0, 0, 1, RAMP.vmax // 2, None, [])     # far ahead of the braking curve
     with pytest.raises(PlanInvariantError, match="_final"):

@@ -9,7 +9,7 @@ follows ASCII mode from a successful command 139 to a ``BIN`` line (PD28-1021 ma
 """
 from __future__ import annotations
 
-from ..protocol.frame import FRAME_LEN, Reply, Request, checksum
+from ..protocol.frame import FRAME_LEN, Reply, Request, checksum_ok
 from ..protocol.opcodes import (
     COMMANDS,
     ENTER_ASCII_MODE,
@@ -113,7 +113,7 @@ class Decoder:
         req = Request.decode(frame, verify=False)
         rec = self._record(t, HOST, "request", frame)
         rec.update(address=req.address, command=req.command, mnemonic=mnemonic(req.command), type=req.type,
-                   motor=req.motor, value=req.value, checksum_ok=checksum(frame[:8]) == frame[8])
+                   motor=req.motor, value=req.value, checksum_ok=checksum_ok(frame))
         name = parameter_name(self.profile_for(req.address), req.command, req.type, req.motor)
         if name:
             rec["parameter"] = name
@@ -136,7 +136,7 @@ class Decoder:
             self._pending.pop(0)  # special reply format: the stored instruction (docs/assumptions.md)
             rec = self._record(t, MODULE, "memory", frame)
             rec.update(reply_address=frame[0], address=oldest["address"], request=oldest["n"],
-                       latency=round(t - oldest["t"], 6), checksum_ok=checksum(frame[:8]) == frame[8])
+                       latency=round(t - oldest["t"], 6), checksum_ok=checksum_ok(frame))
             return rec
         reply = Reply.decode(frame, verify=False)
         status, command = reply.status, reply.command
@@ -144,7 +144,7 @@ class Decoder:
         rec = self._record(t, MODULE, "event" if event else "reply", frame)
         rec.update(reply_address=reply.reply_address, address=reply.module_address, status=status,
                    status_text=message(status), command=command, mnemonic=mnemonic(command), value=reply.value,
-                   checksum_ok=checksum(frame[:8]) == frame[8])
+                   checksum_ok=checksum_ok(frame))
         if event:
             return rec
         for i, req in enumerate(self._pending):

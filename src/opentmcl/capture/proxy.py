@@ -148,7 +148,8 @@ class CanUpstream(_ThreadUpstream):
             self.transport.send(frame[1:])
 
     def _loop(self) -> None:
-        from ..protocol.frame import checksum
+        from ..protocol.can import decode_reply
+        from ..protocol.frame import Reply
 
         bus, reply_id = self.transport._bus, self.transport.reply_id
         while not self._stop.is_set():
@@ -160,11 +161,11 @@ class CanUpstream(_ThreadUpstream):
             if msg is None or msg.is_error_frame or msg.is_remote_frame or msg.arbitration_id != reply_id:
                 continue
             data = bytes(msg.data)
-            raw = bytes([reply_id & 0xFF]) + data
-            if len(data) == 7:
-                self.on_bytes(raw + bytes([checksum(raw)]))
+            if len(data) == 7:  # the serial reply: the CAN-ID as reply address (manual 3.2 note)
+                r = decode_reply(data)
+                self.on_bytes(Reply(reply_id & 0xFF, r.module_address, r.status, r.command, r.value).encode())
             elif len(data) == 8:  # 136 type 0: the version string, no checksum (PD86-1180 4.6.39)
-                self.on_bytes(raw)
+                self.on_bytes(bytes([reply_id & 0xFF]) + data)
 
 
 def open_upstream(url: str, on_bytes):

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol
 
 from ..protocol.frame import to_int32
+from ..protocol.replies import encode_version_string_reply
 from ..protocol.status import Status
 from .status import TmclStatus
 
@@ -289,8 +290,7 @@ def cmd_138(vm: VirtualModule, type: int, motor: int, value: int, program: bool)
 
 def cmd_136(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     if type == 0:  # special reply: host address + 8 characters, no checksum
-        text = vm.profile.firmware_version.encode("ascii")[:8].ljust(8, b" ")
-        return bytes([vm.host_address & 0xFF]) + text
+        return encode_version_string_reply(vm.host_address & 0xFF, vm.profile.firmware_version[:8].ljust(8))
     if type == 1:
         return OK, vm.profile.firmware_binary
     raise TmclStatus(3)

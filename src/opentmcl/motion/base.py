@@ -113,7 +113,7 @@ class RampEngine(ABC):
         """Overwrite the actual position counter (AP1)."""
 
     @abstractmethod
-    def configure(self, **params) -> None:
+    def configure(self, **params: object) -> None:
         """Change ramp parameters; motion in progress continues with the new values."""
 
     # --- time -------------------------------------------------------------

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from numbers import Integral, Rational
 
-from .base import CLOCK_HZ, Mode, RampEngine
+from .base import CLOCK_HZ, Mode, RampEngine, Velocity
 from .segments import (
     A_PER_PPS2,
     DEN,
@@ -157,8 +157,9 @@ class Ramp:
             return self.a1, min(self.v1, self.vmax)
         return self.amax, self.vmax
 
-    def decel_band(self, u: int, floor: int) -> tuple[int, int]:
-        """(rate, low) of the deceleration phase from speed u > floor."""
+    def decel_band(self, u: float, floor: int) -> tuple[int, int]:
+        """(rate, low) of the deceleration phase from speed u > floor (an int, or a float
+        in `braking_f`)."""
         if self.v1 > 0 and u > self.v1:
             return self.dmax, max(self.v1, floor)
         return (self.d1 if self.v1 > 0 else self.dmax), floor
@@ -199,7 +200,7 @@ class Ramp:
         b = 0.0
         uu = u
         while uu > self.vstop:
-            rate, low = self.decel_band(uu, self.vstop)  # type: ignore[arg-type]
+            rate, low = self.decel_band(uu, self.vstop)
             if rate:
                 b += (uu * uu - float(low) ** 2) / rate
             uu = low
@@ -493,7 +494,7 @@ class SixPointRampEngine(RampEngine):
         "ramp_wait_time": 0,
     }
 
-    def __init__(self, **params):
+    def __init__(self, **params: object) -> None:
         self.now = 0
         self._params: dict[str, Fraction] = {k: Fraction(v) for k, v in self.PARAMS.items()}
         self._params.update(self._checked(params))
@@ -506,7 +507,7 @@ class SixPointRampEngine(RampEngine):
         self._queue = SegmentQueue([Segment(0, None, 0, 0, 0, None)])
 
     # --- parameters -----------------------------------------------------
-    def _checked(self, params: dict) -> dict[str, Fraction]:
+    def _checked(self, params: dict[str, object]) -> dict[str, Fraction]:
         out = {}
         for name, value in params.items():
             if name not in self.PARAMS:
@@ -547,7 +548,7 @@ class SixPointRampEngine(RampEngine):
     def ramp(self) -> Ramp:
         return self._ramp
 
-    def configure(self, **params) -> None:
+    def configure(self, **params: object) -> None:
         """Change ramp parameters on the fly; the motion is re-planned from the
         present state (a deceleration in progress keeps its lateness)."""
         new = self._checked(params)
@@ -735,7 +736,7 @@ class SixPointRampEngine(RampEngine):
         """Every command builds a new segment queue; mode and targets complete the plan."""
         return (self._queue, self._mode, self._target_abs, self._vt_pps)
 
-    def time_at_speed(self, speed) -> int | None:
+    def time_at_speed(self, speed: Velocity) -> int | None:
         """First tick >= now at which |velocity| >= `speed` (pps), from the segment queue: the instant
         the speed crosses the stop-on-stall limit AP181 during an acceleration."""
         if speed <= 0:

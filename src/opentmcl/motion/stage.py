@@ -72,10 +72,6 @@ class Stage:
     start: int = 0          # physical position at first power-up (position counter 0)
     ends: tuple[int | None, int | None] = (None, None)   # mechanical hard stops
 
-    @property
-    def circular(self) -> bool:
-        return self.steps_per_turn is not None
-
     def active(self, sw: Switch, p: int, was: bool) -> bool:
         """State of `sw` at position `p` (a circular axis repeats every turn)."""
         n = self.steps_per_turn

@@ -208,10 +208,6 @@ class _Phase:
         total += m * self.ramp_sum(ja + 1 - self.j0, 1, jb - ja - 1)
         return total
 
-    def steps_until(self, t: int) -> int:
-        """Steps made on cycles t0+1 .. t."""
-        return (self.acc0 + self.pulse_sum(t // self.pulse_period)) >> 11
-
     def nth_step_cycle(self, n: int, t_hi: int | None) -> int | None:
         """Cycle of the n-th step after t0 (n >= 1), if it happens by t_hi."""
         if self.direction == 0:

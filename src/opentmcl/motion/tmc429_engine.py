@@ -210,7 +210,7 @@ class Tmc429Engine(RampEngine):
         else:
             r.set(x_actual=_s32(position))
 
-    def configure(self, **params) -> None:
+    def configure(self, **params: object) -> None:
         """Set AP4, AP5, AP130, AP138, AP153, AP154 by name (see module doc).
         A change of AP5, AP153 or AP154 recomputes PMUL/PDIV (datasheet 6.1.9.2)."""
         checked = {}

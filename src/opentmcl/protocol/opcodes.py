@@ -308,10 +308,6 @@ def symbol_name(command: Command, number: int) -> str | None:
     return None
 
 
-def mnemonics() -> list[str]:
-    return sorted(_BY_MNEMONIC)
-
-
 _NUMBER = re.compile(r"([+-]?)\s*(?:0[xX]([0-9A-Fa-f]+)|\$([0-9A-Fa-f]+)|0[bB]([01]+)|([0-9]+))\Z")
 
 
