@@ -17,13 +17,47 @@ OUTSIDE = re.compile(r"DESIGN\.md|FACTS\.md|\bshared/")
 
 
 def test_no_source_file_cites_a_file_outside_the_repository():
-    """Code, profile data and include files cite the manuals or docs/*.md, never DESIGN.md,
-    FACTS.md or the shared/ directory beside the repository."""
+    """Code, profile data and include files cite the manuals or docs/*.md, never the design notes,
+    the facts file or the shared directory beside the repository (the OUTSIDE pattern)."""
     found = [f"{path.relative_to(ROOT)}:{n}: {line.strip()}"
              for path in sorted((ROOT / "src" / "opentmcl").rglob("*")) if path.is_file() and path.suffix != ".pyc"
              for n, line in enumerate(path.read_text(errors="replace").splitlines(), 1)
              if OUTSIDE.search(line)]
     assert found == []
+
+
+NOT_IN_A_CLONE = re.compile(r"DESIGN\.md|FACTS\.md|\bshared/(?!manuals)")
+"""The notes beside the repository; shared/manuals is allowed: the manuals are the specification."""
+SOURCE_CITATION = re.compile(r'docs/sources\.md\s+"([^"]+)"')
+"""How docs and tests cite a section of docs/sources.md (its first line says so)."""
+
+
+def _docs_tests_bench_readme() -> list[Path]:
+    files = [ROOT / "README.md"]
+    for folder in ("docs", "tests", "bench"):
+        files += [p for p in sorted((ROOT / folder).rglob("*")) if p.suffix in (".md", ".py")]
+    return files
+
+
+def test_docs_tests_and_bench_cite_sources_in_the_repository():
+    """Issue 12 item 1: a newcomer can follow every citation. docs/, tests/, bench/ and README.md
+    name docs/sources.md and docs/architecture.md, never the design notes or the facts file kept
+    beside the repository."""
+    found = [f"{path.relative_to(ROOT)}:{n}: {line.strip()}" for path in _docs_tests_bench_readme()
+             for n, line in enumerate(path.read_text().splitlines(), 1) if NOT_IN_A_CLONE.search(line)]
+    assert found == []
+
+
+def test_every_sources_citation_names_a_section_of_docs_sources():
+    """docs/sources.md: "Docstrings and docs cite a section of this page as `docs/sources.md
+    "Section"`" - each cited section exists, and the README's docs table links the page."""
+    sections = {line[3:].strip() for line in (ROOT / "docs" / "sources.md").read_text().splitlines()
+                if line.startswith("## ")}
+    cited = {(str(path.relative_to(ROOT)), " ".join(name.split())) for path in _docs_tests_bench_readme()
+             for name in SOURCE_CITATION.findall(path.read_text())}
+    assert len(cited) > 10
+    assert sorted(c for c in cited if c[1] not in sections | {"Section"}) == []
+    assert "| [docs/sources.md](docs/sources.md) |" in (ROOT / "README.md").read_text()
 
 
 def _layout_block() -> str:

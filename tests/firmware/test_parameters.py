@@ -152,8 +152,9 @@ def test_invalid_bank(m6212, bank):
 
 
 def test_unit_mode_internal_units(m6212):
-    """TMCM-6212 4.1 AP255: "0 - the internal units of the TMC5130 are used directly"; FACTS: v_pps =
-    v*16 MHz/2^24. In internal units, velocity 2^24/16e6*51200 = 53687 moves about 51200 pps."""
+    """TMCM-6212 4.1 AP255: "0 - the internal units of the TMC5130 are used directly";
+    docs/sources.md "TMC5130": v_pps = v*16 MHz/2^24. In internal units, velocity
+    2^24/16e6*51200 = 53687 moves about 51200 pps."""
     m6212.ok(5, 255, 0, 0)
     m6212.ok(5, 5, 0, 60000)
     m6212.ok(1, 0, 0, 53687)

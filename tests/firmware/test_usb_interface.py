@@ -3,8 +3,8 @@
 TMCM-6212 manual 3.1: "When a command is to be sent via RS-232, RS-485, RS-422 or USB interface,
 it has to be enclosed by an address byte at the beginning and a checksum byte at the end";
 5.1 GP66 is the "RS485 serial address". Trinamic's open TMCL firmware reads a USB command with
-"Ignore address byte" and checks the address on RS-485/RS-232 only (FACTS.md,
-docs/assumptions.md)."""
+"Ignore address byte" and checks the address on RS-485/RS-232 only
+(docs/sources.md "USB address byte", docs/assumptions.md)."""
 from __future__ import annotations
 
 import pytest

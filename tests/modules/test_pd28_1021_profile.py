@@ -1,8 +1,9 @@
 """The PD28-1021 / TMCM-1021 profile (data/pd28_1021.toml).
 
 Sources: PD28-1021 TMCL firmware manual V1.46 (partial copy: chapters 1-3.6 only), the parameter
-numbers public clients use on this module (shared/FACTS.md), and for their definitions the TMCM-1180
-manual V4.45 (TMCM-6212 V1.05 where the 1180 lacks a number). Choices: docs/assumptions.md.
+numbers public clients use on this module (docs/sources.md "TMCM-1021 parameter numbers"), and
+for their definitions the TMCM-1180 manual V4.45 (TMCM-6212 V1.05 where the 1180 lacks a number).
+Choices: docs/assumptions.md.
 """
 from __future__ import annotations
 
@@ -34,7 +35,7 @@ def tmcm1180() -> ModuleProfile:
     return _load("pd86_1180.toml")
 
 
-# FACTS.md "Axis and global parameter numbers of the TMCM-1021": axis 0-13, 130, 140, 160-184, 193-197,
+# docs/sources.md "TMCM-1021 parameter numbers": axis 0-13, 130, 140, 160-184, 193-197,
 # 200, 204, 206-210, 212, 214, 215, 254; bank 0: 65, 66, 68, 69, 70, 71, 75, 76, 77, 79, 81, 82, 83, 84,
 # 85, 87, 90, 128, 130, 132, 133, 255; bank 3: 0, 1, 2, 27, 28, 39, 40, 41, 42; I/O: OUT0-OUT1, IN0-IN3.
 AXIS_NUMBERS = [*range(0, 14), 130, 140, *range(160, 185), *range(193, 198), 200, 204, *range(206, 211),
@@ -79,12 +80,14 @@ def test_ascii_interface(prof):
 
 
 def test_axis_numbers_are_the_public_set(prof):
-    """FACTS.md: axis parameters public clients address on the TMCM-1021."""
+    """docs/sources.md "TMCM-1021 parameter numbers": axis parameters public clients address on the
+    TMCM-1021."""
     assert sorted(prof.axis_parameters) == AXIS_NUMBERS
 
 
 def test_global_numbers_are_the_public_set_plus_ascii_mode(prof):
-    """FACTS.md bank 0 and bank 3 numbers, plus 67 which the manual's own 3.4.4 documents."""
+    """docs/sources.md "TMCM-1021 parameter numbers": bank 0 and bank 3 numbers, plus 67 which the
+    manual's own 3.4.4 documents."""
     assert sorted(n for b, n in prof.global_parameters if b == 0) == sorted([*BANK0_NUMBERS, 67])
     assert sorted(n for b, n in prof.global_parameters if b == 3) == BANK3_NUMBERS
 

@@ -1,4 +1,4 @@
-"""Six-point ramp engine of the TMCM-6212 (manual 4.1 AP0-AP21, 3.6.1-3.6.4; FACTS.md "TMC5130").
+"""Six-point ramp engine of the TMCM-6212 (manual 4.1 AP0-AP21, 3.6.1-3.6.4; docs/sources.md "TMC5130").
 
 Ramp parameters are chosen so that every phase lasts a whole number of
 16 MHz ticks; the analytic times below are then exact tick counts.

@@ -1,4 +1,4 @@
-"""Unit conversions (TMCM-6212 manual 6.5 and 4.1 ranges; FACTS.md "TMC5130")."""
+"""Unit conversions (TMCM-6212 manual 6.5 and 4.1 ranges; docs/sources.md "TMC5130")."""
 from __future__ import annotations
 
 from fractions import Fraction
@@ -45,7 +45,7 @@ def test_manual_acceleration_limit_from_internal_units():
 
 
 def test_scales_are_exact():
-    """FACTS.md TMC5130: v = v_int * f_CLK / 2^24, a = a_int * f_CLK^2 / 2^41, exactly."""
+    """docs/sources.md "TMC5130": v = v_int * f_CLK / 2^24, a = a_int * f_CLK^2 / 2^41, exactly."""
     assert units.VELOCITY_SCALE == Fraction(16_000_000, 2**24)
     assert units.ACCELERATION_SCALE == Fraction(16_000_000**2, 2**41)
     assert units.pps_from_internal_velocity(-1) == -units.VELOCITY_SCALE

@@ -17,9 +17,9 @@ choices where the datasheet is silent: docs/assumptions.md):
   +-2047"): the accumulator holds the fraction of a step made in the direction
   of the last motion, and when the motion reverses that fraction is walked back
   first (acc := 2047 - acc), so X_ACTUAL * 2048 + fraction is an up/down count.
-* ramp_mode (6.1.9, FACTS.md): on every ramp tick the chip computes the
-  velocity from which a deceleration at A_MAX just ends on target,
-  v_stop^2 = 2048 * p * D with p = PMUL / 2^(3+PDIV) and D the remaining
+* ramp_mode (6.1.9, docs/sources.md "TMC429 ramp generator"): on every ramp
+  tick the chip computes the velocity from which a deceleration at A_MAX
+  just ends on target, v_stop^2 = 2048 * p * D with p = PMUL / 2^(3+PDIV) and D the remaining
   distance in steps *including the fraction of a step already in the pulse
   accumulator* (D * 2048 = the accumulator units still to add before
   X_ACTUAL == X_TARGET). The ramp target is V_TARGET = s * min(V_MAX,

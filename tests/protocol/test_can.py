@@ -1,4 +1,4 @@
-"""CAN payloads (TMCM-6212 3.1/3.2 notes, PD86-1180 4.1/4.2/4.6.39, FACTS.md)."""
+"""CAN payloads (TMCM-6212 3.1/3.2 notes, PD86-1180 4.1/4.2/4.6.39, docs/sources.md "TMCL over CAN")."""
 from __future__ import annotations
 
 import pytest
@@ -24,8 +24,8 @@ def test_request_is_serial_frame_without_address_and_checksum(printed):
 
 @pytest.mark.parametrize("printed", [v[3] for v in TMCM6212])
 def test_pytrinamic_eight_byte_request(printed):
-    """FACTS.md: PyTrinamic sends the 9-byte frame without its address byte (8 bytes, trailing
-    checksum ignored by the module); both lengths must be accepted."""
+    """docs/sources.md "TMCL over CAN": PyTrinamic sends the 9-byte frame without its address byte
+    (8 bytes, trailing checksum ignored by the module); both lengths must be accepted."""
     raw = hexbytes(printed)
     req = Request.decode(raw)
     long = can.encode_request(req.command, req.type, req.motor, req.value, long=True, address=1)

@@ -22,7 +22,7 @@ def test_version_string_reply_has_no_checksum():
     assert raw == b"\x02" + b"1180V445" and len(raw) == 9
     assert raw[8] != checksum(raw[:8])  # last byte is the 8th character, not a checksum
     assert decode_version_string_reply(raw) == (2, "1180V445")
-    # FACTS.md: PyTrinamic decodes reply bytes 1..8 as ASCII
+    # docs/sources.md "Public host clients": PyTrinamic decodes reply bytes 1..8 as ASCII
     assert raw[1:9].decode("ascii") == "1180V445"
     assert is_version_request(136, 0) and not is_version_request(136, 1)
 

@@ -57,7 +57,8 @@ def test_second_module_on_the_same_can_bus(can_server):
 
 
 def test_eight_byte_request_with_checksum_is_accepted(can_server):
-    """FACTS.md: public clients send 8 bytes (trailing checksum); modules accept both."""
+    """docs/sources.md "TMCL over CAN": public clients send 8 bytes (trailing checksum); modules
+    accept both."""
     _, host, _ = can_server
     msg = exchange(host, 1, GGP_66[1:])
     assert bytes(msg.data) == bytes([1, 100, 10, 0, 0, 0, 1])

@@ -1,6 +1,7 @@
-"""Interop: unmodified python-tmcl (`pip install tmcl`) over pyserial ports (FACTS.md).
-Skipped when it is not installed. python-tmcl packs the checksum unmasked, so only requests
-whose byte sum stays below 256 can be sent with it - the values below respect that."""
+"""Interop: unmodified python-tmcl (`pip install tmcl`) over pyserial ports
+(docs/sources.md "Public host clients"). Skipped when it is not installed. python-tmcl packs the
+checksum unmasked, so only requests whose byte sum stays below 256 can be sent with it - the values
+below respect that."""
 import sys
 
 import pytest
