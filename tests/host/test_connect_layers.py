@@ -5,11 +5,6 @@ from __future__ import annotations
 import subprocess
 import sys
 
-import pytest
-
-from opentmcl import VirtualModule
-from opentmcl.server import Server, TcpServer
-
 
 def _child(code: str) -> list[str]:
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,
@@ -20,17 +15,6 @@ def test_importing_the_host_library_does_not_import_the_firmware():
     out = _child("import sys, opentmcl.host, opentmcl.host.transports.inprocess, opentmcl.cli.send; "
                  "print(sorted(m for m in sys.modules if m.startswith('opentmcl.firmware')))")
     assert out == ["[]"]
-
-
-@pytest.fixture
-def tcp_url():
-    srv = Server([VirtualModule("TMCM-6212", address=1)])
-    tcp = srv.add(TcpServer(srv.bus, "127.0.0.1", 0))
-    srv.start()
-    try:
-        yield tcp.url
-    finally:
-        srv.stop()
 
 
 def test_a_tcp_connection_loads_neither_firmware_nor_server(tcp_url):

@@ -4,23 +4,9 @@ from __future__ import annotations
 
 import threading
 
-import pytest
-
 from opentmcl import VirtualModule
 from opentmcl.host import connect
 from opentmcl.host.transports.inprocess import InProcessTransport
-from opentmcl.server import Server, TcpServer
-
-
-@pytest.fixture
-def tcp_url():
-    srv = Server([VirtualModule("TMCM-6212", address=1)])
-    tcp = srv.add(TcpServer(srv.bus, "127.0.0.1", 0))
-    srv.start()
-    try:
-        yield tcp.url
-    finally:
-        srv.stop()
 
 
 def _reentrant(lock) -> bool:

@@ -21,9 +21,9 @@ from collections.abc import Callable, Mapping
 from .. import registry
 from ..modules.profile import ModuleProfile
 from .client import Client, check_address
-from .errors import TmclConnectionError, TmclError, TmclValueError, check_timeout
+from .errors import TmclConnectionError, TmclError, check_timeout
 from .module import Module
-from .transport import Transport
+from .transport import Transport, register_checked
 
 TransportFactory = Callable[[urllib.parse.SplitResult], Transport]
 """What a URL scheme stands for: the split URL (scheme in lower case) -> an open `Transport`."""
@@ -38,12 +38,7 @@ def register_transport(scheme: str, factory: TransportFactory | str) -> None:
     """Make `connect` open ``scheme://`` URLs with `factory`, or with the object a lazy
     ``"package.module:attribute"`` reference names (imported on first use). A later registration
     of the same scheme replaces the earlier one (docs/architecture.md "Extension points")."""
-    if not (callable(factory) or isinstance(factory, str)):
-        raise TmclValueError(f"a transport factory must be callable or 'module:attribute', got {factory!r}")
-    try:
-        _TRANSPORTS.register(scheme, factory)
-    except ValueError as exc:
-        raise TmclValueError(str(exc)) from None
+    register_checked(_TRANSPORTS, scheme, factory, "transport factory")
 
 
 def transport_schemes() -> list[str]:

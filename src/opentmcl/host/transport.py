@@ -23,9 +23,12 @@ import threading
 import time
 import urllib.parse
 from abc import ABC, abstractmethod
-from typing import Self
+from typing import TYPE_CHECKING, Self
 
-from .errors import TmclConnectionError, TmclTimeout
+from .errors import TmclConnectionError, TmclTimeout, TmclValueError
+
+if TYPE_CHECKING:
+    from ..registry import Registry
 
 
 class Transport(ABC):
@@ -146,3 +149,14 @@ def url_query(url: urllib.parse.SplitResult, known: tuple[str, ...]) -> dict[str
                                   f"(it takes {', '.join(known)})")
     return query
 
+
+
+def register_checked(registry: Registry, scheme: str, target: object, what: str) -> None:
+    """Register `target` (callable or lazy ``"package.module:attribute"``) under `scheme`;
+    a bad target or scheme name is a `TmclValueError` naming `what` it should have been."""
+    if not (callable(target) or isinstance(target, str)):
+        raise TmclValueError(f"a {what} must be callable or 'module:attribute', got {target!r}")
+    try:
+        registry.register(scheme, target)
+    except ValueError as exc:
+        raise TmclValueError(str(exc)) from None

@@ -16,8 +16,8 @@ from collections.abc import Callable
 from typing import Protocol
 
 from ... import registry
-from ..errors import TmclConnectionError, TmclTypeError, TmclValueError
-from ..transport import StreamTransport, url_query
+from ..errors import TmclConnectionError, TmclTypeError
+from ..transport import StreamTransport, register_checked, url_query
 
 DEFAULT_BAUD = 9600
 
@@ -46,12 +46,7 @@ _PORT_HANDLERS = registry.of(registry.SERIAL_URL_HANDLERS)
 def register_port_handler(scheme: str, hook: Callable[[], object] | str) -> None:
     """Run `hook` (or the object a lazy ``"package.module:attribute"`` names) before pyserial opens a
     ``scheme://`` port URL, e.g. to add a package to ``serial.protocol_handler_packages``."""
-    if not (callable(hook) or isinstance(hook, str)):
-        raise TmclValueError(f"a port handler hook must be callable or 'module:attribute', got {hook!r}")
-    try:
-        _PORT_HANDLERS.register(scheme, hook)
-    except ValueError as exc:
-        raise TmclValueError(str(exc)) from None
+    register_checked(_PORT_HANDLERS, scheme, hook, "port handler hook")
 
 
 def prepare_port(port: str) -> None:
