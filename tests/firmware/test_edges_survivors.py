@@ -5,8 +5,14 @@ dropping a pending interrupt, GIO 255 on the analog bank, the erased program aft
 the assigned address after a reset."""
 from __future__ import annotations
 
-from opentmcl import VirtualModule
+import pytest
 
+from opentmcl import VirtualModule
+from opentmcl.firmware.eeprom import EepromError
+from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
+from opentmcl.motion import CLOCK_HZ
+
+from .conftest import Host
 from .test_program_support import T, Wire, module
 
 STOP = (28, 0, 0, 0)
@@ -124,3 +130,49 @@ def test_the_assigned_address_is_kept_across_a_restart():
     vm.assign_address(9)
     assert vm.request(137, 0, 0, 1234) is None   # no reply: the module restarts
     assert vm.address == 9 and Wire(vm, address=9).ok(10, 66, 0) == 9
+
+
+def test_wait_ticks_ends_exactly_one_tick_after_it_began():
+    """TMCM-6212 3.6.20 WAIT: "the TMCL program counter is set held at the address of this WAIT
+    command until the condition is met or the timeout has expired", "one tick is 10 milliseconds":
+    WAIT TICKS, 0, 1 still waits (135 wait flag, bit 16) 1/16 MHz before the 10 ms are up and no
+    longer waits when they are (the WAIT, the first instruction, begins after one instruction time,
+    100 us - docs/assumptions.md)."""
+    w = module()
+    w.download([(27, 0, 0, 1), (9, 0, 2, 1), STOP])
+    w.run()
+    w.vm.advance(0.001)
+    begun = INSTRUCTION_TICKS
+    assert w.ok(135, 0) >> 16 & 1
+    w.vm.advance_to(begun + CLOCK_HZ // 100 - 1)
+    assert w.ok(135, 0) >> 16 & 1
+    w.vm.advance_to(begun + CLOCK_HZ // 100)
+    assert not w.ok(135, 0) >> 16 & 1
+
+
+def test_request_defaults_type_motor_and_value_to_0():
+    """`VirtualModule.request(command, type=0, motor=0, value=0)`: GAP with only the command asks
+    type 0 - TMCM-6212 4.1 AP0 "Target (next) position" - of motor 0, not AP1 actual position."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    assert vm.request(4, 0, 0, 1000).status == 100      # MVP ABS 1000: the target moves at once
+    assert vm.request(6).value == 1000
+    assert vm.request(6, 1).value == 0
+
+
+def test_internal_units_bound_only_velocity_and_acceleration():
+    """TMCM-6212 4.1 AP255 "Units of velocity and acceleration/deceleration settings: 0 - the internal
+    units of the TMC5130 are used directly": only those parameters change their range; AP6 "Maximum
+    current 0...255" keeps its own (255 accepted, 256 status 4 "Invalid value")."""
+    host = Host(VirtualModule("TMCM-6212", address=1))
+    host.ok(5, 255, 0, 0)
+    assert (host(5, 6, 0, 255).status, host(5, 6, 0, 256).status) == (100, 4)
+
+
+def test_an_eeprom_file_of_one_module_is_refused_by_another(tmp_path):
+    """docs/assumptions.md "EEPROM images are checked when opened": the file a TMCM-6212 wrote (SGP 77,
+    bank 0 64..127 "automatically stored in the EEPROM", TMCM-6212 5.1) names its module, so a
+    PD86-1180 does not power up from it."""
+    ee = tmp_path / "ee.json"
+    Host(VirtualModule("TMCM-6212", address=1, eeprom=ee)).ok(9, 77, 0, 1)
+    with pytest.raises(EepromError, match="belongs to a TMCM-6212"):
+        VirtualModule("PD86-1180", eeprom=ee)
