@@ -1,5 +1,5 @@
-"""Edges of the world's Python API (docs/scenarios.md "Python API"), found unpinned by mutation
-testing (docs/mutation.md)."""
+"""Edges of the axis world and its Python API (docs/scenarios.md "Python API"), found unpinned by
+mutation testing (docs/mutation.md)."""
 from __future__ import annotations
 
 from opentmcl.firmware import flags
@@ -38,3 +38,15 @@ def test_set_shutdown_drives_the_shutdown_pin(rig):
     high.vm.world.set_shutdown(1)
     high.vm.advance(0.2)
     assert high.gap(3) == 0 and high.vm.flags & flags.ESD
+
+
+def test_1180_null_channel_clear_keeps_an_odd_prescaler(rig):
+    """PD86-1180 manual 7.2: "Other values between those given in the table can be used" for the
+    prescaler <p>, and "just add the following value to <p>: ... 4 Clear encoder with next null
+    channel event": once the encoder is cleared, AP210 is the prescaler 6401 without the adder."""
+    r = rig("TMCM-1180", {"axis": {"0": {"start": 100}}})
+    r.sap(210, 6401 + 4)
+    r.cmd(4, 0, 0, 5000)
+    r.vm.advance(30)
+    assert r.gap(1) == 5000
+    assert r.gap(210) == 6401
