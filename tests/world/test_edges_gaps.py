@@ -10,7 +10,7 @@ from .test_switches import STAGE
 
 
 def test_a_motion_started_into_an_active_switch_is_stopped_one_tick_later(rig):
-    """docs/world.md "Events": "A command that starts a motion into an active switch (or into an
+    """docs/world.md "Time: events, never steps": "A command that starts a motion into an active switch (or into an
     overload) is caught one tick (62.5 ns) later"; TMCM-6212 manual 4.1 AP26 = 0: the right limit
     switch stops the motor at once (AP2 target speed 0). ROR on the actuated right switch still has
     its target speed at the command's tick and none one 16 MHz tick later."""
