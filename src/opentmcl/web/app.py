@@ -2,6 +2,9 @@
 
     GET  /                         redirects to the first module's page
     GET  /api/modules              [{address, module, url}] of every module served
+    POST /api/stop-all             program stop (128) and MST on every axis of every module served
+    GET  /api/scan                 the module scan's progress and findings; POST starts one
+    POST /api/scan/cancel, /api/scan/open {address}: stop the scan; serve a module it found
     GET  /static/...               the page's script and style (no build step, no CDN)
 
 Each module lives under /m/{address}; these paths follow that prefix (the page uses relative paths,
@@ -10,6 +13,7 @@ so one page serves every module). An unknown address is a 404 with {"error": ...
     GET  /                         the module's page
     GET  /api/overview             module type, firmware version, address, connection, I/O map
     GET  /api/state                axis cards, I/O and program status (5 per second)
+    GET  /api/motion/{n}           velocity unit and range, positions, RFS STATUS of axis n
     GET  /api/params/axis/{n}      axis parameter table with values; POST /api/params/axis sets one
     GET  /api/params/global        global parameter table;              POST /api/params/global
     POST /api/params/store         STAP/RSAP/STGP/RSGP
@@ -34,12 +38,16 @@ from starlette.concurrency import run_in_threadpool
 from starlette.middleware import Middleware
 from starlette.requests import Request
 from starlette.responses import FileResponse, JSONResponse, RedirectResponse, Response
-from starlette.routing import BaseRoute, Mount, Route, WebSocketRoute
+from starlette.routing import BaseRoute, Mount, Route, Router, WebSocketRoute
 from starlette.staticfiles import StaticFiles
+from starlette.types import Receive, Scope, Send
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from ..host import TmclError
+from . import motion
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
-from .service import FAST_HZ, Dashboard, DashboardError
+from .scan import TIMEOUT_DEFAULT, Scanner
+from .service import FAST_HZ, Dashboard, DashboardError, Poller
 
 log = logging.getLogger("opentmcl.web")
 
@@ -97,6 +105,14 @@ def _optional_int(data: Json, key: str) -> int | None:
     return None if data.get(key) is None else _int(data, key)
 
 
+def _number(data: Json, key: str, default: float) -> float:
+    """`data[key]` as a finite number of seconds (a JSON number), `default` when missing."""
+    value = data.get(key, default)
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
+        raise BadRequest(f"{key} must be a number, got {value!r}")
+    return float(value)
+
+
 def _str(data: Json, key: str) -> str:
     value = data.get(key)
     if not isinstance(value, str):
@@ -142,29 +158,116 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
     `body_timeout`: seconds within which it must have arrived.
     (Starlette's TestClient sends Host "testserver": give it base_url="http://127.0.0.1".)"""
     index = ModuleIndex([dashboards] if isinstance(dashboards, Dashboard) else dashboards)
+    post = ["POST"]
     routes: list[BaseRoute] = [
         Route("/", index.home),
+        Route("/favicon.ico", favicon),
         Route("/api/modules", index.modules),
-        *(Mount(f"/m/{a}", routes=ModuleApi(d).routes()) for a, d in index.by_address.items()),
+        Route("/api/stop-all", json_api(index.stop_all), methods=post),
+        Route("/api/scan", json_api(index.scan_status)),
+        Route("/api/scan", json_api(index.scan_start), methods=post),
+        Route("/api/scan/cancel", json_api(index.scan_cancel), methods=post),
+        Route("/api/scan/open", json_api(index.scan_open), methods=post),
+        Mount("/m/{address:int}", app=index.dispatch),
         Route("/m/{address}/{rest:path}", index.unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
         Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
     ]
     guard = Middleware(Guard, allowed_hosts=allowed_hosts, token=token, max_body=max_body,
                        body_timeout=body_timeout)
-    return Starlette(routes=routes, middleware=[guard])
+    app = Starlette(routes=routes, middleware=[guard])
+    app.state.index = index
+    return app
+
+
+async def favicon(_request: Request) -> Response:
+    """Browsers ask for /favicon.ico whatever the page links: the page's own SVG icon."""
+    return FileResponse(f"{static_dir()}/favicon.svg", media_type="image/svg+xml")
 
 
 class ModuleIndex:
-    """The modules served, by address: the listing, the root redirect and the 404 of an unknown one."""
+    """The modules served, by address: the listing, the root redirect, the 404 of an unknown one,
+    stop-all over every module and the module scan of the link (that of the first module)."""
 
     def __init__(self, dashboards: Sequence[Dashboard]) -> None:
         self.by_address: dict[int, Dashboard] = {}
+        self.routers: dict[int, Router] = {}
         for d in dashboards:
-            if d.module.address in self.by_address:
-                raise ValueError(f"two dashboards for module address {d.module.address}")
-            self.by_address[d.module.address] = d
+            self.add(d)
         if not self.by_address:
             raise ValueError("the dashboard needs at least one module")
+        first = next(iter(self.by_address.values()))
+        self.scanner = Scanner(first.module.client, lambda: list(self.by_address))
+        self.opened: list[Poller] = []   # pollers of the modules opened from the scan
+
+    def add(self, d: Dashboard) -> None:
+        if d.module.address in self.by_address:
+            raise ValueError(f"two dashboards for module address {d.module.address}")
+        self.by_address[d.module.address] = d
+        self.routers[d.module.address] = Router(routes=ModuleApi(d).routes())
+
+    async def dispatch(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """/m/{address}/...: the module's own routes, or the 404 of an address not served."""
+        router = self.routers.get(scope["path_params"]["address"])
+        if router is None:
+            response = await self.unknown(Request(scope, receive))
+            await response(scope, receive, send)
+            return
+        await router(scope, receive, send)
+
+    def close(self) -> None:
+        """Stop the scan and the pollers of the modules opened from it."""
+        self.scanner.cancel()
+        self.scanner.join()
+        for poller in self.opened:
+            poller.dashboard.closed.set()
+            poller.stop()
+
+    # --- stop-all and the scan ---
+    async def stop_all(self, _request: Request) -> object:
+        return await run_in_threadpool(motion.stop_all, list(self.by_address.values()))
+
+    async def scan_status(self, _request: Request) -> object:
+        return self.scanner.status()
+
+    async def scan_start(self, request: Request) -> object:
+        b = await _body(request)
+        first, last = _int(b, "first"), _int(b, "last")
+        timeout = _number(b, "timeout", TIMEOUT_DEFAULT)
+        bauds = b.get("bauds", [])
+        if not isinstance(bauds, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in bauds):
+            raise BadRequest("bauds must be a list of baud rates")
+        self.scanner.start(first, last, timeout, bauds)
+        return self.scanner.status()
+
+    async def scan_cancel(self, _request: Request) -> object:
+        self.scanner.cancel()
+        return self.scanner.status()
+
+    async def scan_open(self, request: Request) -> object:
+        """Serve the module found at `address` on this link (a page of its own, polled)."""
+        address = _int(await _body(request), "address")
+        if address not in self.by_address:
+            found = [f for f in self.scanner.status()["found"] if f["address"] == address]  # type: ignore[attr-defined]
+            if not found:
+                raise DashboardError(f"the scan found no module at address {address}")
+            link = self.scanner.client.transport
+            if found[0]["baud"] not in (None, getattr(link, "baud", None)):
+                raise DashboardError(f"module {address} answered at {found[0]['baud']} baud; "
+                                     "connect the dashboard at that rate to open it")
+            d = await run_in_threadpool(self._open, address)
+            self.opened.append(Poller(d).start())
+        return {"address": address, "url": f"{request.scope.get('root_path', '')}/m/{address}/"}
+
+    def _open(self, address: int) -> Dashboard:
+        client = self.scanner.client
+        try:
+            d = Dashboard(client.module(address), url=f"scan (address {address})")
+            d.profile.name  # noqa: B018 - the profile from the version string, or the error now
+        except TmclError as exc:
+            raise DashboardError(f"cannot open module {address}: {exc}") from None
+        if address not in self.by_address:
+            self.add(d)
+        return self.by_address[address]
 
     def listing(self, request: Request) -> list[Json]:
         root = request.scope.get("root_path", "")
@@ -197,6 +300,7 @@ class ModuleApi:
             Route("/", self.index),
             Route("/api/overview", json_api(self.overview)),
             Route("/api/state", json_api(self.state)),
+            Route("/api/motion/{axis}", json_api(self.motion)),
             Route("/api/params/axis/{axis}", json_api(self.axis_parameters)),
             Route("/api/params/global", json_api(self.global_parameters)),
             Route("/api/params/axis", json_api(self.set_axis_parameter), methods=post),
@@ -225,6 +329,13 @@ class ModuleApi:
 
     async def state(self, _request: Request) -> object:
         return self.d.state or await run_in_threadpool(self.d.sample_slow)
+
+    async def motion(self, request: Request) -> object:
+        try:
+            n = int(request.path_params["axis"])
+        except ValueError:
+            raise BadRequest("axis must be a number") from None
+        return await run_in_threadpool(motion.motion_info, self.d, n)
 
     async def axis_parameters(self, request: Request) -> object:
         try:

@@ -79,6 +79,9 @@ class DashboardHandle:
         return f"{self.url}m/{address}/"
 
     def stop(self) -> None:
+        index = getattr(self._server.config.app.state, "index", None)
+        if index is not None:
+            index.close()  # the scan and the modules opened from it
         for d in self.dashboards:
             d.closed.set()
             d.cancel_run()

@@ -79,6 +79,15 @@ class SerialTransport(StreamTransport):
         except (serial.SerialException, ValueError, OSError) as exc:
             raise TmclConnectionError(f"cannot open serial port {port}: {exc}") from None
 
+    @property
+    def baud(self) -> int:
+        """The port's baud rate; settable (the dashboard's module scan tries several)."""
+        return int(getattr(self._ser, "baudrate", 0))
+
+    @baud.setter
+    def baud(self, value: int) -> None:
+        self._ser.baudrate = int(value)  # type: ignore[attr-defined]
+
     def _write(self, data: bytes) -> None:
         import serial
 

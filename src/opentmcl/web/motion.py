@@ -1,0 +1,89 @@
+"""Stop-all and the motion tools' read-outs (docs/dashboard.md "Stop all", "Motion").
+
+Stop-all stops the program (command 128, TMCM-6212 manual 3.6.36) and sends MST (3.6.3) to every
+axis of every module the dashboard serves, one module after the other; a module that fails does not
+keep the others from being stopped. The motion tools send their commands through the console
+(`Dashboard.console`), so the console log shows each instruction; `motion_info` gives the page the
+velocity unit, the velocity range and the reference search status (RFS STATUS, 3.6.11).
+"""
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from ..host import TmclError
+from .service import Dashboard, DashboardError
+
+MST, RFS, STOP_APPLICATION = 3, 13, 128
+RFS_STATUS = 2
+TARGET_SPEED, MAX_POSITIONING_SPEED, UNIT_MODE = 2, 4, 255
+POSITION_KEYS = {"target_position": 0, "position": 1, "actual_speed": 3}
+
+
+def stop_module(d: Dashboard) -> dict[str, object]:
+    """Stop `d`'s program (host-side stepping too), then MST on each axis. Every axis is tried even
+    after an error; `ok` is False with the first error's text when any command failed."""
+    errors: list[str] = []
+    d.cancel_run()
+    if STOP_APPLICATION in d.profile.opcodes:
+        try:
+            d._do(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
+        except DashboardError as exc:
+            errors.append(f"program stop: {exc}")
+    stopped = []
+    for axis in range(d.profile.axes):
+        try:
+            d._do(lambda a=axis: d.module.request(MST, 0, a, 0))
+            stopped.append(axis)
+        except DashboardError as exc:
+            errors.append(f"MST {axis}: {exc}")
+    return {"address": d.module.address, "module": d.profile.name, "ok": not errors,
+            "axes_stopped": stopped, "error": errors[0] if errors else "",
+            "errors": errors}
+
+
+def stop_all(dashboards: Iterable[Dashboard]) -> dict[str, object]:
+    """`stop_module` for every module; {"ok": all stopped, "modules": [...]}."""
+    modules = [stop_module(d) for d in dashboards]
+    return {"ok": all(m["ok"] for m in modules), "modules": modules}
+
+
+def velocity_unit(d: Dashboard, axis: int) -> str:
+    """"pps" or "internal": the profile's velocity_unit capability (docs/profiles.md); a module with
+    unit_mode reads AP255 ("0 - the internal units of the TMC5130", "1 - ... pps", manual 4.1)."""
+    caps = d.profile.capabilities
+    if caps.velocity_unit == "tmc429":
+        return "internal"
+    if caps.unit_mode and UNIT_MODE in d.profile.axis_parameters:
+        mode = d._try(lambda: d.module.reply(6, UNIT_MODE, axis).value)
+        if mode == 0:
+            return "internal"
+    return "pps"
+
+
+def motion_info(d: Dashboard, axis: int) -> dict[str, object]:
+    """What the motion tools show for `axis`: unit and range of the velocity (AP2's range), the
+    maximum positioning speed (AP4), positions and the reference search status."""
+    axis = d._axis(axis)
+    params = d.profile.axis_parameters
+    speed = params.get(TARGET_SPEED)
+    out: dict[str, object] = {
+        "axis": axis, "unit": velocity_unit(d, axis),
+        "velocity_min": 0 if speed is None else max(0, speed.min),
+        "velocity_max": 0 if speed is None else speed.max,
+        "max_positioning_speed": d._try(lambda: d.module.reply(6, MAX_POSITIONING_SPEED, axis).value),
+    }
+    for key, number in POSITION_KEYS.items():
+        out[key] = d._try(lambda n=number: d.module.reply(6, n, axis).value) if number in params else None
+    out["rfs_status"] = _rfs_status(d, axis)
+    return out
+
+
+def _rfs_status(d: Dashboard, axis: int) -> int | None:
+    """RFS STATUS: 0 "no ref. search active", other values "reference search active" (3.6.11)."""
+    if RFS not in d.profile.opcodes:
+        return None
+    try:
+        with d.lock:
+            return d.module.reply(RFS, RFS_STATUS, axis).value
+    except TmclError:
+        return None
