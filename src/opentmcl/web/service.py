@@ -30,7 +30,7 @@ USER_VARIABLES_SHOWN = 8  # variables 0..7 are always shown, plus those the prog
 
 # Axis parameters of the axis cards (TMCM-6212 manual 4.1, PD86-1180 manual 5).
 CARD_PARAMS = {"target_position": 0, "position": 1, "velocity": 3, "target_reached": 8, "home": 9,
-               "right": 10, "left": 11, "load": 206, "current": 180}
+               "right": 10, "left": 11, "load": 206, "current": 180, "max_current": 6}
 STAP, RSAP, STGP, RSGP = 7, 8, 11, 12
 USER_BANK = 2
 VARIABLE_COMMANDS = {9, 10, 11, 12, 35}  # SGP, GGP, STGP, RSGP, AGP with bank 2 name a user variable

@@ -33,6 +33,7 @@ window.dashboard = D;  // for the browser tests and the curious
 window.OpenTMCL = {
   registerView(name, view) { D.views[name] = view; },
   api, el, log,
+  send: line => sendConsole(line),  // one instruction through the console, logged with its reply
 };
 
 // ---------------------------------------------------------------- navigation between views
@@ -57,7 +58,7 @@ function showView(name) {
 
 function contextFor(name) {
   return {
-    api, log, el,
+    api, log, el, send: sendConsole,
     get overview() { return D.overview; },
     onState(cb) { D.stateSubs.push(cb); },
     onSamples(cb) { D.sampleSubs.push(cb); },
@@ -88,16 +89,18 @@ function showOverview(ov) {
   const cards = $("axis-cards");
   cards.replaceChildren();
   for (let i = 0; i < ov.axes; i++) {
-    const row = (label, key) => el("div", {class: "row"}, el("span", {}, label), el("span", {id: `axis-${i}-${key}`}, "-"));
+    const row = (label, key, title) => el("div", {class: "row", title},
+      el("span", {}, label), el("span", {id: `axis-${i}-${key}`}, "-"));
     cards.append(el("div", {class: "axis-card", id: `axis-${i}`},
       el("h3", {}, `Axis ${i}`),
       row("position", "position"), row("target", "target"), row(`velocity [${ov.velocity_unit}]`, "velocity"),
-      row("load value", "load"), row("current", "current"),
-      el("div", {class: "row"}, el("span", {}, "status"), el("span", {},
-        el("span", {class: "lamp reached", id: `axis-${i}-reached`, title: "target position reached (AP 8)"}, "TR"),
-        el("span", {class: "lamp", id: `axis-${i}-home`, title: "home switch (AP 9)"}, "H"),
-        el("span", {class: "lamp", id: `axis-${i}-left`, title: "left limit switch (AP 11)"}, "L"),
-        el("span", {class: "lamp", id: `axis-${i}-right`, title: "right limit switch (AP 10)"}, "R")))));
+      row("load value", "load"), row("run current", "max_current", "AP 6 maximum current: % of the module's maximum (raw value)"),
+      row("current", "current", "AP 180 actual current: (n+1)/32 of CS (raw value n)"),
+      el("div", {class: "lamps"},
+        el("span", {class: "lamp reached", id: `axis-${i}-reached`, title: "target position reached (AP 8)"}, "reached"),
+        el("span", {class: "lamp", id: `axis-${i}-home`, title: "home switch (AP 9)"}, "home"),
+        el("span", {class: "lamp", id: `axis-${i}-left`, title: "left limit switch (AP 11)"}, "left"),
+        el("span", {class: "lamp", id: `axis-${i}-right`, title: "right limit switch (AP 10)"}, "right"))));
   }
   buildIo(ov);
 }
@@ -117,14 +120,28 @@ function onSamples(samples) {
   last.v.forEach((v, i) => { const e = $(`axis-${i}-velocity`); if (e) e.textContent = v ?? "-"; });
 }
 
-function lamp(id, on) { const e = $(id); if (e) e.classList.toggle("on", !!on); }
+function lamp(id, on) {
+  const e = $(id);
+  if (!e) return;
+  e.classList.toggle("on", !!on);
+  e.setAttribute("aria-label", `${e.title}: ${on ? "on" : "off"}`);
+}
+
+// Currents in the manuals' terms, the raw value beside: AP 6 "255 means 100% of the module's maximum
+// current", AP 180 "0..31 = 1/32 .. 32/32 of CS" (TMCM-6212 manual 4.1).
+function currentText(key, v) {
+  if (v === null || v === undefined) return "n/a";
+  if (key === "max_current") return `${Math.round(v * 100 / 255)} % (${v})`;
+  return `${v + 1}/32 CS (${v})`;
+}
 
 function onState(st) {
   D.connected = st.connected;
   setConnection();
   st.axes.forEach((a, i) => {
     const set = (k, v) => { const e = $(`axis-${i}-${k}`); if (e) e.textContent = v ?? "n/a"; };
-    set("target", a.target_position); set("load", a.load); set("current", a.current);
+    set("target", a.target_position); set("load", a.load);
+    set("max_current", currentText("max_current", a.max_current)); set("current", currentText("current", a.current));
     lamp(`axis-${i}-reached`, a.target_reached); lamp(`axis-${i}-home`, a.home);
     lamp(`axis-${i}-left`, a.left); lamp(`axis-${i}-right`, a.right);
   });
@@ -170,7 +187,8 @@ async function sendConsole(line) {
   try {
     const r = await api("api/console", {line});
     log(`  [${r.request.join(", ")}] ${r.text}`, r.ok ? "ok" : "err");
-  } catch (e) { log(`  ${e.message}`, "err"); }
+    return r;
+  } catch (e) { log(`  ${e.message}`, "err"); return null; }
 }
 
 function setupConsole() {
@@ -238,8 +256,36 @@ function updateIo(io) {
   }
 }
 
+// ---------------------------------------------------------------- stop all
+// MST to every axis of every module on the bus and the program stopped (POST ../../api/stop-all).
+async function stopAll() {
+  const out = $("stop-all-result");
+  out.className = "busy"; out.textContent = "stopping…";
+  log("> STOP ALL: program stop (128) and MST on every axis of every module", "req");
+  try {
+    const r = await api("../../api/stop-all", {});
+    out.replaceChildren(...r.modules.map(m => el("span", {class: m.ok ? "ok" : "err", title: m.errors.join("; ")},
+      `${m.module} @${m.address}: ${m.ok ? "stopped" : "error"}`)));
+    out.className = r.ok ? "ok" : "err";
+    for (const m of r.modules) {
+      log(`  ${m.module} (address ${m.address}): ${m.ok ? `MST ${m.axes_stopped.join(", ")}` : m.error}`, m.ok ? "ok" : "err");
+    }
+  } catch (e) { out.className = "err"; out.textContent = `stop failed: ${e.message}`; log(`  ${e.message}`, "err"); }
+}
+
+function setupStopAll() {
+  $("btn-stop-all").addEventListener("click", stopAll);
+  // Capture phase: Escape stops everything wherever the focus is, inputs and the editor included.
+  window.addEventListener("keydown", ev => {
+    if (ev.key !== "Escape" || ev.repeat) return;
+    ev.preventDefault();
+    stopAll();
+  }, true);
+}
+
 // ---------------------------------------------------------------- start
 async function main() {
+  setupStopAll();
   setupConsole();
   try { showOverview(await api("api/overview")); } catch (e) { log(e.message, "err"); }
   mountViews();
