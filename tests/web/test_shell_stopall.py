@@ -1,0 +1,80 @@
+"""Stop-all (issue 14 item 1, docs/dashboard.md "Stop all"): the header's STOP ALL button and the
+Escape key stop the program and every axis of every module on the bus. The motors are watched
+through a TCP client of the same bus, as TMCL-IDE would watch them."""
+from __future__ import annotations
+
+import pytest
+
+from .shellkit import ACTUAL_SPEED, TIMEOUT_MS, bench, open_view, wait_until, watched_page
+
+# Keeps turning motor 2: a stop-all that left the program running would see it start again.
+PROGRAM = "Loop:\n    ROR 2, 30000\n    WAIT TICKS, 0, 5\n    JA Loop\n"
+
+
+def _program_running(module) -> None:
+    from opentmcl.host.loader import Loader
+    from opentmcl.lang import assemble
+
+    loader = Loader(module)
+    loader.download(assemble(PROGRAM, module="TMCM-6212").instructions)
+    loader.run()
+
+
+def _speed(module, axis: int) -> int:
+    return module.client.reply(6, ACTUAL_SPEED, axis, address=module.address).value
+
+
+@pytest.mark.parametrize("how", ["escape-in-input", "click"])
+def test_stop_all_stops_three_rotating_axes_and_the_program(browser, how):
+    """TMCM-6212 manual 3.6.1 ROR turns motors 0 and 1 of the TMCM-6212 and motor 0 of the
+    PD86-1180 (4.6.1); a program (3.6.36 command 129 runs it) keeps turning motor 2 (ROR in a loop).
+    Escape, with the focus in the console's input, or a click on STOP ALL: GAP 3 "actual speed"
+    (manual 4.1) falls to 0 on every axis of both modules and command 135 reports the program
+    stopped (mode 0); the header shows each module's result."""
+    with bench(("TMCM-6212", 1), ("PD86-1180", 2)) as b:
+        six, one = b.client(1), b.client(2)
+        six.request(1, 0, 0, 30000)
+        six.request(1, 0, 1, 20000)
+        one.request(1, 0, 0, 1000)
+        _program_running(six)
+        spinning = [(six, 0), (six, 1), (six, 2), (one, 0)]
+        wait_until(lambda: all(_speed(m, a) != 0 for m, a in spinning), "four axes turning")
+        messages: list[str] = []
+        page = watched_page(browser, b.handle.module_url(1), messages)
+        try:
+            if how == "click":
+                open_view(page, "charts")  # the button is there on every view
+                page.click("#btn-stop-all")
+            else:
+                page.click("#console-input")
+                page.keyboard.press("Escape")
+            page.wait_for_function("document.getElementById('stop-all-result').className === 'ok'",
+                                   timeout=TIMEOUT_MS)
+            shown = page.inner_text("#stop-all-result")
+            assert "TMCM-6212 @1: stopped" in shown and "PD86-1180 @2: stopped" in shown
+            assert "STOP ALL" in page.inner_text("#console-log")
+        finally:
+            page.close()
+        from opentmcl.host.loader import Loader
+
+        assert Loader(six).status().mode == 0  # 135 type 0: 0 = stop
+        wait_until(lambda: all(_speed(m, a) == 0 for m, a in [(six, n) for n in range(6)] + [(one, 0)]),
+                   "every axis at speed 0")
+        assert Loader(six).status().mode == 0
+        assert not messages, messages
+
+
+def test_stop_all_route_refuses_a_foreign_origin():
+    """docs/dashboard.md "Threat model": a POST with another site's Origin is refused with 403 before
+    the route runs; the motor (manual 3.6.1 ROR) keeps turning."""
+    import http.client
+
+    with bench(("TMCM-6212", 1)) as b:
+        six = b.client(1)
+        six.request(1, 0, 0, 30000)
+        conn = http.client.HTTPConnection(b.handle.host, b.handle.port, timeout=10)
+        conn.request("POST", "/api/stop-all", body=b"{}", headers={
+            "Content-Type": "application/json", "X-OpenTMCL": "1", "Origin": "http://evil.example"})
+        assert conn.getresponse().status == 403
+        conn.close()
+        assert six.client.reply(6, 2, 0).value == 30000  # target speed untouched
