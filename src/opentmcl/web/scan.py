@@ -6,6 +6,9 @@ address with its own time-out, one scan at a time, cancellable between two reque
 link the scan can also try baud rates (GP65's table, the rates a PC supports); other links (TCP,
 the server's bus, an in-process module) have no baud rate, and a CAN link reaches only the module
 of its CAN ID (manual 3.1), so there the scan tries only the connection's own address.
+A module that answers every address byte (a USB link, docs/endpoints.md) is listed once, at its
+own address: after each version answer GGP 66 (manual 3.6.8) is asked at the same address, and a
+reply carrying another module address (GP66) means the answer was not that address's own.
 """
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ from ..host.errors import TmclConnectionError, TmclTimeout
 from ..modules.profile import ModuleProfile
 from .service import DashboardError
 
-VERSION = 136
+VERSION, GGP, SERIAL_ADDRESS = 136, 10, 66
 ADDRESSES = range(1, 256)
 # GP65 "RS485 baud rate" 0..11 (TMCM-6212 manual 5.1) without the rows "Not supported by PCs".
 BAUD_RATES = (9600, 14400, 19200, 28800, 38400, 57600, 115200)
@@ -70,6 +73,7 @@ class Scanner:
 
     def _fresh(self, total: int, bauds: Sequence[int]) -> dict[str, object]:
         return {"running": False, "done": 0, "total": total, "found": [], "cancelled": False, "error": "",
+                "any_address": False,
                 "bauds": list(bauds), "link": self.kind, "baud": getattr(self.client.transport, "baud", None)}
 
     def status(self) -> dict[str, object]:
@@ -134,11 +138,16 @@ class Scanner:
             if self._cancel.is_set():
                 return
             version = self._ask(address, timeout)
+            foreign = version is not None and self._answers_for_another(address, timeout)
             with self._lock:
                 self._status["done"] = int(self._status["done"]) + 1  # type: ignore[call-overload]
-                if version is not None:
-                    self._status["found"].append(  # type: ignore[attr-defined]
-                        {"address": address, "baud": baud, "version": version, "module": _profile_name(version)})
+                if version is None:
+                    continue
+                if foreign:  # a module that answers any address byte (USB)
+                    self._status["any_address"] = True
+                    continue
+                self._status["found"].append(  # type: ignore[attr-defined]
+                    {"address": address, "baud": baud, "version": version, "module": _profile_name(version)})
 
     def _ask(self, address: int, timeout: float) -> str | None:
         try:
@@ -150,6 +159,18 @@ class Scanner:
         except TmclError:
             return None  # a garbled or refused answer: no module of ours there
         return reply.text if isinstance(reply, VersionReply) else None
+
+    def _answers_for_another(self, address: int, timeout: float) -> bool:
+        """GGP 66, 0 at `address` answered by a frame of another module address (which the client
+        counts as a stray reply) or with another value than `address`."""
+        strays = self.client.stray_replies
+        try:
+            value = self.client.reply(GGP, SERIAL_ADDRESS, 0, address=address, timeout=timeout).value
+        except TmclConnectionError:
+            raise
+        except TmclError:
+            return self.client.stray_replies > strays
+        return value != address
 
     def _set(self, **values: object) -> None:
         with self._lock:

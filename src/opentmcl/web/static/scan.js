@@ -43,6 +43,7 @@ function show(st) {
   $("scan-progress").textContent = st.running ? `scanning… ${st.done}/${st.total}` :
     st.total ? `${st.cancelled ? "cancelled" : "done"}: ${st.found.length} found (${st.done}/${st.total} asked)` : "";
   if (st.error) $("scan-progress").textContent += ` — ${st.error}`;
+  if (st.any_address) $("scan-progress").textContent += " — a module here answers every address (USB): listed at its own address only";
   const rows = [el("tr", {}, ...["address", "module", "firmware", "baud", ""].map(h => el("th", {}, h)))];
   for (const f of st.found) {
     const here = location.pathname.endsWith(`/m/${f.address}/`);
