@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
     from ..host import Module
     from ..server.bus import ModuleBus
+    from .app import ModuleIndex
 
 WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's default is 16 MiB
 
@@ -44,6 +45,7 @@ class DashboardHandle:
         self._thread = thread
         self._pollers = list(pollers)
         self._on_stop = on_stop
+        self.index: ModuleIndex | None = None  # the app's modules, with those opened from a scan
         self.host, self.port = self._bound()
 
     @property
@@ -79,9 +81,8 @@ class DashboardHandle:
         return f"{self.url}m/{address}/"
 
     def stop(self) -> None:
-        index = getattr(self._server.config.app.state, "index", None)
-        if index is not None:
-            index.close()  # the scan and the modules opened from it
+        if self.index is not None:
+            self.index.close()  # the scan and the modules opened from it
         for d in self.dashboards:
             d.closed.set()
             d.cancel_run()
@@ -250,7 +251,9 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     if poll:
         for poller in pollers:
             poller.start()
-    return DashboardHandle(dashboards, server, thread, pollers, on_stop, token, hosts)
+    handle = DashboardHandle(dashboards, server, thread, pollers, on_stop, token, hosts)
+    handle.index = app.state.index
+    return handle
 
 
 def bus_dashboards(bus: ModuleBus, *, address: int | None = None,
