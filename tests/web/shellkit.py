@@ -4,12 +4,13 @@ a page that records every console error or warning."""
 from __future__ import annotations
 
 import contextlib
+import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 import pytest
 
-TIMEOUT_MS = 60000  # only a guard against hanging: the tests wait for a state, they do not time anything
+TIMEOUT_MS = int(os.environ.get("OPENTMCL_TEST_TIMEOUT_MS", "60000"))  # a guard against hanging: the tests wait for a state, they do not time anything
 GAP, SAP, MST = 6, 5, 3
 ACTUAL_SPEED, TARGET_SPEED, ACTUAL_POSITION = 3, 2, 1
 
@@ -76,7 +77,7 @@ def open_view(page, name: str) -> None:
     page.wait_for_selector(f"#view-{name}", state="visible", timeout=TIMEOUT_MS)
 
 
-def wait_until(predicate, what: str, limit: float = 30.0, every: float = 0.05) -> None:
+def wait_until(predicate, what: str, limit: float = TIMEOUT_MS / 2000, every: float = 0.05) -> None:
     """Poll `predicate` until true; fail naming `what` after `limit` seconds (a guard, not a timing)."""
     import time
 

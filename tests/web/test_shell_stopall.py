@@ -66,15 +66,22 @@ def test_stop_all_stops_three_rotating_axes_and_the_program(browser, how):
 
 def test_stop_all_route_refuses_a_foreign_origin():
     """docs/dashboard.md "Threat model": a POST with another site's Origin is refused with 403 before
-    the route runs; the motor (manual 3.6.1 ROR) keeps turning."""
+    the route runs, and the motor (manual 3.6.1 ROR) keeps its target speed; the same POST with the
+    dashboard's own Origin stops it (3.6.3 MST sets the target speed to zero)."""
     import http.client
+
+    def post(origin: str) -> int:
+        conn = http.client.HTTPConnection(b.handle.host, b.handle.port, timeout=10)
+        conn.request("POST", "/api/stop-all", body=b"{}", headers={
+            "Content-Type": "application/json", "X-OpenTMCL": "1", "Origin": origin})
+        status = conn.getresponse().status
+        conn.close()
+        return status
 
     with bench(("TMCM-6212", 1)) as b:
         six = b.client(1)
         six.request(1, 0, 0, 30000)
-        conn = http.client.HTTPConnection(b.handle.host, b.handle.port, timeout=10)
-        conn.request("POST", "/api/stop-all", body=b"{}", headers={
-            "Content-Type": "application/json", "X-OpenTMCL": "1", "Origin": "http://evil.example"})
-        assert conn.getresponse().status == 403
-        conn.close()
+        assert post("http://evil.example") == 403
         assert six.client.reply(6, 2, 0).value == 30000  # target speed untouched
+        assert post(f"http://127.0.0.1:{b.handle.port}") == 200
+        assert six.client.reply(6, 2, 0).value == 0
