@@ -53,7 +53,11 @@ function show(st) {
       el("td", {}, f.module || "(no profile)"), el("td", {}, f.version), el("td", {}, f.baud ?? "-"), el("td", {}, action)));
   }
   $("scan-results").replaceChildren(...rows);
-  if (!st.running && S.timer) { clearInterval(S.timer); S.timer = null; }
+  if (!st.running && S.timer) {
+    clearInterval(S.timer); S.timer = null;
+    log(`  ${st.cancelled ? "cancelled, " : ""}found ${st.found.length}: ` +
+        (st.found.map(f => `${f.address} ${f.version}`).join(", ") || "none"), st.error ? "err" : "ok");
+  }
 }
 
 async function poll() {
