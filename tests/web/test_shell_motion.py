@@ -24,7 +24,7 @@ def motion(browser):
         messages: list[str] = []
         page = watched_page(browser, b.handle.module_url(1), messages)
         open_view(page, "motion")
-        page.wait_for_function("document.getElementById('motion-0-rfs').textContent !== '-'", timeout=TIMEOUT_MS)
+        page.wait_for_function("document.getElementById('motion-5-rfs').textContent !== '-'", timeout=TIMEOUT_MS)  # all read
         try:
             yield page, b.client(1), messages
         finally:
