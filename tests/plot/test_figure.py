@@ -46,14 +46,6 @@ def test_current_is_drawn_in_percent_of_the_module_maximum(n, percent):
     assert label == "AP 180 n" and percent * scale + offset == pytest.approx(n)
 
 
-def test_velocity_label_follows_the_unit_plotted():
-    """Manual 6.5: rpm = 60 * pps / (fullsteps * microsteps); 51200 pps at 256 x 200 is 60 rpm."""
-    tr = _trace(velocity=[51200] * 10)
-    assert _panel(plan(tr, ["velocity"]), "velocity").ylabel == "velocity [pps]"
-    rpm = _panel(plan(tr, ["velocity"], rpm=True), "velocity")
-    assert rpm.ylabel == "velocity [rpm]" and set(rpm.lines[0].y) == {60.0}
-
-
 # --- minimum span ------------------------------------------------------------------------------
 
 def test_a_two_count_change_of_the_load_value_does_not_fill_the_panel():
@@ -106,7 +98,8 @@ def test_an_origin_write_is_a_break_with_the_values_either_side():
 
 def test_without_events_an_unexplained_jump_is_guessed_and_a_move_is_not():
     """A trace that does not know its events (a real module, an old CSV): a position change larger
-    than 2 x speed x interval + 1 µstep is a break; the largest that speed explains is not."""
+    than 2 x speed x interval + 1 µstep is a break; the largest that speed explains is not. A trace
+    with recorded events draws only those."""
     dt, v = 0.1, 1000
     limit = 2 * v * dt + 1   # 201 µsteps in one interval at 1000 pps
     moves = [0, 100, 200, 200 + limit, 200 + 2 * limit + 1, 2000, 2000, 2000]
@@ -115,12 +108,7 @@ def test_without_events_an_unexplained_jump_is_guessed_and_a_move_is_not():
     line = _panel(plan(tr, ["position"]), "position").lines[0]
     gaps = _gaps(line)
     assert [line.x[i] for i in gaps] == [pytest.approx(0.4), pytest.approx(0.5)]
-
-
-def test_known_events_replace_the_guess():
-    """With events recorded (even none), a jump is drawn as the module reported it: no guess."""
-    tr = _trace(position=[0] * 5 + [5000] * 5, velocity=[0] * 10)
-    tr.events = []
+    tr.events = []   # known to be none (a virtual run): the module's word wins over the guess
     assert _gaps(_panel(plan(tr, ["position"]), "position").lines[0]) == []
 
 
@@ -149,7 +137,7 @@ def test_breaks_outside_the_samples_are_ignored_and_unknown_values_leave_a_gap()
 
 def test_target_position_is_overlaid_as_steps():
     """Manual 4.1 AP 0 "Target position": drawn dashed, as steps, with the position."""
-    tr = _trace(position=[0, 100, 200, 300, 300] * 2, target=[300] * 10)
+    tr = _trace(position=[0, 100, 200] + [300] * 7, velocity=[1000] * 3 + [0] * 7, target=[300] * 10)
     panel = _panel(plan(tr, ["position"]), "position")
     target = panel.lines[1]
     assert target.label == "axis 0 target (AP 0)" and target.steps and target.dashed
@@ -206,3 +194,26 @@ def test_marks_go_to_every_panel_and_close_ones_share_a_label():
     fig = plan(tr, ["position", "velocity"])
     assert fig.marks == marks and fig.labels == [1, 2]
     assert plan(tr, ["position"], marks=False).marks == []
+
+
+def test_a_polling_loop_is_marked_once_per_address():
+    """A loop the program spins in (GAP / COMP / JC, manual 3.6.15) changes the program counter at
+    almost every sample: each address gets one mark, not one per sample; an address seen again
+    after LABEL_GAP of the duration is marked again."""
+    from opentmcl.plot.figure import LABEL_GAP, thin_marks
+
+    spin = [Mark(0.01 * i, 5 + i % 3, "") for i in range(100)]           # 5, 6, 7, 5, 6, 7 ... for 1 s
+    later = Mark(1.0 + LABEL_GAP * 10.0, 5, "GAP 1, 0")
+    assert [m.pc for m in thin_marks(spin + [later], 10.0)] == [5, 6, 7, 5]
+    tr = _trace(n=3, dt=5.0)
+    tr.marks = spin
+    assert len(plan(tr, ["position"]).marks) == 3
+
+
+def test_an_origin_write_breaks_the_target_overlay_too():
+    """The target follows the new origin (it is not a new move command): no vertical step there."""
+    tr = _trace(position=[0, 500, 1000, 1000, 0, 0, 0, 0, 0, 0], target=[1000] * 4 + [0] * 6)
+    tr.events = [Event(0.35, 0, "origin", 1000, 0)]
+    target = _panel(plan(tr, ["position"]), "position").lines[1]
+    (gap,) = _gaps(target)
+    assert target.x[gap] == 0.35 and target.y[gap - 1] == 1000 and target.y[gap + 1] == 0

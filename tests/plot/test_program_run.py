@@ -109,11 +109,20 @@ def test_without_seconds_a_loop_is_recorded_twice_then_the_recording_ends():
     back = sum(1 for a, b in zip(pos, pos[1:], strict=False) if a >= 2560 > b)
     assert out == 2 and back == 2
     assert [m.pc for m in trace.marks].count(3) == 3 and trace.time[-1] < 2.5
+    longer = _run(LOOP, seconds=3.0, interval=0.05)   # explicit seconds: that long, loops or not
+    assert longer.time[-1] == pytest.approx(3.0)
 
 
-def test_explicit_seconds_record_the_loop_for_that_long():
-    trace = _run(LOOP, seconds=3.0, interval=0.05)
-    assert trace.time[-1] == pytest.approx(3.0)
+def test_a_polling_loop_is_waited_out_like_a_wait():
+    """A loop that ends by itself (COMP / JC, manual 3.6.14-3.6.15) is no JA loop: the recording
+    goes on until the program stops (position 20000 passed, MST, STOP), while a JA loop polling the
+    same way ends after two passes."""
+    poll = "    ROR 0, 20000\nMoving:\n    GAP 1, 0\n    COMP 20000\n    JC LT, Moving\n    MST 0\n    STOP\n"
+    trace = _run(poll)
+    assert trace.column(0, "position")[-1] >= 20000 and trace.column(0, "velocity")[-1] == 0
+    assert trace.marks[-1].text == "STOP"
+    forever = "    ROR 0, 20000\nMoving:\n    GAP 1, 0\n    JA Moving\n"
+    assert len(_run(forever)) <= 4
 
 
 def test_a_loop_shorter_than_the_interval_is_counted_from_the_executed_instructions():
@@ -125,17 +134,14 @@ def test_a_loop_shorter_than_the_interval_is_counted_from_the_executed_instructi
 
 def test_a_program_that_neither_stops_nor_loops_ends_at_the_cap():
     """The hard cap: AUTO_SECONDS of module time (fewer when the interval would make more than
-    MAX_SAMPLES samples)."""
+    MAX_SAMPLES samples). Without a program the recording is DEFAULT_SECONDS long."""
     trace = _run("    ROR 0, 1000\n    WAIT TICKS, 0, 100000000\n    STOP\n", interval=1.0)
     assert trace.time[-1] == pytest.approx(AUTO_SECONDS) and len(trace) == AUTO_SECONDS + 1
     assert auto_seconds(1.0) == AUTO_SECONDS
     assert auto_seconds(1e-4) == pytest.approx(MAX_SAMPLES * 1e-4)
     assert auto_seconds(1e-4) < AUTO_SECONDS
-
-
-def test_without_a_program_the_default_is_ten_seconds():
-    trace = run_virtual(None, stop_when_idle=False, interval=0.5)
-    assert trace.time[-1] == pytest.approx(DEFAULT_SECONDS) == 10.0
+    nothing = run_virtual(None, stop_when_idle=False, interval=0.5)   # no program to derive it from
+    assert nothing.time[-1] == pytest.approx(DEFAULT_SECONDS) == 10.0
 
 
 def test_events_and_marks_survive_the_csv(origin_trace):

@@ -86,6 +86,7 @@ class Figure:
     panels: list[Panel]
     marks: list[Mark] = field(default_factory=list)   # instruction marks, on every panel
     labels: list[int] = field(default_factory=list)  # the marks (indices) drawn with their text
+    xlim: tuple[float, float] = (0.0, 1.0)            # first and last sample time
     xlabel: str = "time [s]"
 
 
@@ -115,9 +116,25 @@ def plan(trace: Trace, channels: Iterable[str] = DEFAULT_CHANNELS, *, rpm: bool 
                            for s in ramp_phases(trace, ax, breaks[ax], _band(n, len(trace.axes)))]
         panels.append(panel)
     which = f"axis {trace.axes[0]}" if len(trace.axes) == 1 else f"axes {', '.join(map(str, trace.axes))}"
-    shown = trace.marks[:MAX_DRAWN] if marks else []
+    duration = trace.time[-1] - trace.time[0]
+    shown = thin_marks(trace.marks, duration)[:MAX_DRAWN] if marks else []
     return Figure(title or f"{trace.module or 'module'}: {which}", panels, shown,
-                  labels=mark_labels(shown, trace.time[-1] - trace.time[0]))
+                  labels=mark_labels(shown, duration), xlim=(trace.time[0], trace.time[-1]))
+
+
+def thin_marks(marks: list[Mark], duration: float) -> list[Mark]:
+    """The marks worth a line: a mark whose address already had a mark less than LABEL_GAP of the
+    duration before is left out, so a loop the program spins in (polling) is marked once per
+    address, not at every sample."""
+    gap = duration * LABEL_GAP
+    last: dict[int, float] = {}
+    out = []
+    for m in marks:
+        seen = last.get(m.pc)
+        last[m.pc] = m.time
+        if seen is None or m.time - seen >= gap:
+            out.append(m)
+    return out
 
 
 def mark_labels(marks: list[Mark], duration: float) -> list[int]:
@@ -176,8 +193,8 @@ def _panel(trace: Trace, ch: str, rpm: bool, breaks: dict[int, list[Event]], tar
                       [(e.time, _opt(f, e.before), _opt(f, e.after)) for e in cuts])
         panel.lines.append(Line(f"axis {ax}", x, y, ax, steps=ch in ("load", "current")))
         panel.markers += [Marker(e.time, e.kind, _marker_text(e), ax) for e in cuts]
-        if ch == "position" and target and trace.has(ax, "target"):
-            tx, ty = broken(t, trace.column(ax, "target"), [])
+        if ch == "position" and target and trace.has(ax, "target"):   # an origin write may move it too
+            tx, ty = broken(t, trace.column(ax, "target"), [(e.time, None, None) for e in cuts])
             panel.lines.append(Line(f"axis {ax} target (AP 0)", tx, ty, ax, steps=True, dashed=True))
     panel.ylim = span([v for line in panel.lines for v in line.y], MIN_SPAN[key], LIMITS.get(ch))
     if ch == "current":

@@ -2,15 +2,17 @@
 
 Each sample also reads the application status (command 135 type 1: mode and program counter,
 TMCM-6212 manual 3.6.36), so the trace knows which instruction ran when (at sample resolution:
-the instruction the program was at, usually a WAIT). A *loop pass* is counted when the program
-counter comes back to the address it first came back to (its loop's anchor); on an in-process
-virtual module also when it is at the same address as one sample before but has executed
-instructions in between (a loop shorter than the sampling interval). A return from an interrupt
-or a subroutine called from several places counts the same way (docs/plots.md).
+the instruction the program was at, usually a WAIT). A *loop* is the body of an unconditional
+jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17); a *loop pass* is
+counted when the program counter comes back to the first address inside such a body that it came
+back to (the anchor); on an in-process virtual module also when it is at the same address as one
+sample before but has executed instructions in between (a loop shorter than the sampling
+interval). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out like a WAIT.
+A return from an interrupt into a loop counts as a pass (docs/plots.md).
 """
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from .events import EngineWatch, Mark
 from .trace import MAX_SAMPLES, Sampler, Trace, record
@@ -27,6 +29,14 @@ def auto_seconds(interval: float) -> float:
     """The cap of a derived recording: AUTO_SECONDS, or less when the interval would give more
     than MAX_SAMPLES samples."""
     return min(AUTO_SECONDS, MAX_SAMPLES * interval)
+
+
+JA = 22                 # TMCL opcode of JA (manual 3.4.1 Table 5)
+
+
+def loop_bodies(program) -> list[tuple[int, int]]:
+    """(first, last) address of every loop: a JA whose target is at or before its own address."""
+    return [(ins[3], address) for address, ins in enumerate(program) if ins[0] == JA and 0 <= ins[3] <= address]
 
 
 def instruction_texts(program) -> dict[int, str]:
@@ -53,9 +63,10 @@ class ProgramWatch:
     SETTLE_SAMPLES samples."""
 
     def __init__(self, loader, texts: dict[int, str], *, stop_when_idle: bool = True,
-                 loops: int | None = None, vm=None) -> None:
+                 loops: int | None = None, vm=None, bodies: Iterable[tuple[int, int]] = ()) -> None:
         self.loader = loader
         self.texts = texts
+        self.bodies = list(bodies)
         self.stop_when_idle = stop_when_idle
         self.loops_wanted = loops
         self.vm = vm
@@ -86,7 +97,7 @@ class ProgramWatch:
         self._seen.add(pc)
         if not back:
             return
-        if self.anchor is None:
+        if self.anchor is None and any(first <= pc <= last for first, last in self.bodies):
             self.anchor = pc
         if pc == self.anchor:
             self.loops += 1
@@ -125,7 +136,7 @@ def record_program(module, program=None, axes=(0,), seconds: float | None = None
         code = loader.download(program, progress=download_progress)
         loader.run(0)
         until = ProgramWatch(loader, instruction_texts(code), stop_when_idle=stop_when_idle,
-                             loops=loops, vm=vm)
+                             loops=loops, vm=vm, bodies=loop_bodies(code))
     elif stop_when_idle:
         until = idle
     inner = until

@@ -48,7 +48,7 @@ def draw(figure: Figure, fmt: str = "png", *, width: float = 9.0) -> bytes:
     fig = MplFigure(figsize=(width, 1.9 * len(panels) + 0.6), layout="constrained")
     axs = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
     for n, (ax, panel) in enumerate(zip(axs, panels, strict=True)):
-        _panel(ax, panel)
+        _panel(ax, panel, figure)
         _marks(ax, figure, label=n == 0)
     axs[-1].set_xlabel(figure.xlabel)
     fig.suptitle(figure.title)
@@ -57,18 +57,21 @@ def draw(figure: Figure, fmt: str = "png", *, width: float = 9.0) -> bytes:
     return image.getvalue()
 
 
-def _panel(ax: Axes, panel: Panel) -> None:
+def _panel(ax: Axes, panel: Panel, figure: Figure) -> None:
     for s in panel.spans:
         ax.axvspan(s.start, s.end, ymin=s.band[0], ymax=s.band[1], color=PHASE_COLOURS[s.phase],
                    alpha=0.15, linewidth=0)
     for line in panel.lines:
         ax.plot(line.x, line.y, label=line.label, drawstyle="steps-post" if line.steps else "default",
                 linestyle="--" if line.dashed else "-", linewidth=0.9 if line.dashed else 1.2)
+    t0, t1 = figure.xlim
     for m in panel.markers:
         colour, style = BREAK_STYLE.get(m.kind, ("black", ":"))
         ax.axvline(m.time, color=colour, linestyle=style, linewidth=0.9)
-        ax.annotate(m.text, (m.time, 1.0), xycoords=("data", "axes fraction"), xytext=(2, -2),
-                    textcoords="offset points", va="top", fontsize="x-small", color=colour)
+        right = m.time > (t0 + t1) / 2   # text on the side with room, inside the panel
+        ax.annotate(m.text, (m.time, 1.0), xycoords=("data", "axes fraction"), xytext=(-2 if right else 2, -2),
+                    textcoords="offset points", va="top", ha="right" if right else "left",
+                    fontsize="x-small", color=colour)
     if panel.ylim is not None:
         ax.set_ylim(*panel.ylim)
     if panel.yticks is not None:
@@ -86,7 +89,11 @@ def _panel(ax: Axes, panel: Panel) -> None:
         def from_raw(r):
             return (r - offset) / scale
 
-        ax.secondary_yaxis("right", functions=(to_raw, from_raw)).set_ylabel(label)
+        from matplotlib.ticker import MaxNLocator
+
+        raw = ax.secondary_yaxis("right", functions=(to_raw, from_raw))
+        raw.set_ylabel(label)
+        raw.yaxis.set_major_locator(MaxNLocator(integer=True))   # the raw reading is a whole number
     _legend(ax, panel)
 
 
