@@ -186,3 +186,18 @@ def test_cli_bad_trace_metadata_is_a_one_line_error(tmp_path):
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 2 and done.stderr.count("\n") == 1 and "Traceback" not in done.stderr
     assert not (tmp_path / "x.png").exists()
+
+
+def test_a_pd86_1180_hard_stop_is_reported_in_pps():
+    """PD86-1180 manual 5: the actual speed is in TMC429 units, pps = f_CLK * v / (2^pulse_div * 2048
+    * 32); the speed before a limit-switch hard stop is converted the same way as the samples."""
+    from opentmcl import connect
+    from opentmcl.host.units import tmc429_velocity_to_pps
+
+    program = assemble("    ROR 0, 500\n    WAIT TICKS, 0, 300\n    STOP\n", module="PD86-1180").instructions
+    trace = run_virtual(program, module="PD86-1180", scenario={"axis": {"0": {"right": {"position": 3000}}}})
+    with connect("sim://PD86-1180") as m:
+        pulse_div = m.axes[0].get(154)
+    (e,) = trace.events
+    assert e.kind == "hard_stop" and e.before == pytest.approx(tmc429_velocity_to_pps(500, pulse_div))
+    assert e.before == max(trace.column(0, "velocity"))

@@ -11,7 +11,7 @@ TMCM-6212 manual 4.1 / PD86-1180 manual 5. Velocities are stored in pps: on TMC4
 modules (PD86-1180) the internal velocity is converted with the pulse divisor
 (axis parameter 154, PD86-1180 manual 5). Acceleration is derived from velocity.
 Samples are kept in compact columns (opentmcl.columns): one hour at 10 ms of six axes takes
-about 35 MB (`python bench/run.py`, "memory plot trace").
+about 41 MB (`python bench/bench_trace.py`, "plot trace MB per hour").
 """
 from __future__ import annotations
 
