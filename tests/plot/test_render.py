@@ -29,14 +29,16 @@ def _trace() -> Trace:
 
 def test_svg_has_labelled_axes_with_units(tmp_path):
     """Manual 6.5: velocities in pps or rpm; positions in µsteps; time in s. Manual 4.1: the load
-    value (AP 206) is 0...1023, the actual current (AP 180) a scaling factor 0...31: 1/32 ... 32/32."""
+    value (AP 206) is 0...1023, the actual current (AP 180) a scaling factor 0...31: 1/32 ... 32/32,
+    drawn as % of the module's maximum current (AP 6: "255 which means 100%") with n beside it."""
     out = tmp_path / "t.svg"
     assert render(_trace(), out) == "svg"
     text = out.read_text(encoding="utf-8")
     assert text.lstrip().startswith("<?xml") and "<svg" in text
     for label in ("position [µsteps]", "velocity [pps]", "acceleration [pps²]", "time [s]",
-                  "load [0…1023]", "current [(n+1)/32 CS]"):
+                  "load value [0…1023]", "current [% of module max.]", "AP 180 n"):
         assert label in text
+    assert "(n+1)/32 CS" not in text
 
 
 def test_rpm_label(tmp_path):

@@ -33,7 +33,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--axes", default=None, help="comma-separated axis numbers (default 0; for a .csv trace all of its axes)")
     p.add_argument("--channels", help="comma-separated panels: position, velocity, acceleration, load, "
                    "current, switches (default all the module has)")
-    p.add_argument("-t", "--seconds", type=float, default=10.0, help="record at most this long (default 10)")
+    p.add_argument("-t", "--seconds", type=float, default=None,
+                   help="record at most this long (default: a program runs until it stops or has looped twice, "
+                   "at most 300 s; otherwise 10 s)")
     p.add_argument("--interval", type=float, default=0.01, help="seconds between samples (default 0.01)")
     p.add_argument("-m", "--module", default=None, help="virtual module type (default TMCM-6212)")
     p.add_argument("--scenario", help="scenario file for the virtual module (with a program)")
@@ -42,6 +44,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rpm", action="store_true", help="velocity in rpm instead of pps")
     p.add_argument("--csv", help="also save the recorded trace to this CSV file")
     p.add_argument("--title", help="figure title")
+    p.add_argument("--phases", action="store_true", help="shade the ramp phases (accelerating, constant, "
+                   "decelerating) in the velocity panel")
+    p.add_argument("--no-marks", dest="marks", action="store_false",
+                   help="leave out the program's instruction marks")
+    p.add_argument("--no-target", dest="target", action="store_false",
+                   help="leave out the target position (AP 0) over the position")
     p.add_argument("--keep-going", action="store_true",
                    help="record the full --seconds even after the program stopped and the axes are idle")
     p.set_defaults(func=run)
@@ -88,9 +96,7 @@ def _record(args: argparse.Namespace, axes: list[int]) -> Trace:
 
 def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) -> Trace:
     from ..host import TmclError, connect
-    from ..host.loader import Loader
-    from ..plot import record
-    from ..plot.virtual import _stopped
+    from ..plot import record_program
     from .load import module_name, read_program
 
     try:
@@ -99,13 +105,10 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
         raise CliError(str(exc)) from None
     try:
         if not is_program:  # FILE "-": record what the module does for --seconds
-            return record(m, axes, args.seconds, args.interval)
+            return record_program(m, None, axes, args.seconds, args.interval, stop_when_idle=False)
         program = read_program(args.file, module_name(m, args.module))
-        loader = Loader(m)
-        loader.download(program.instructions)
-        loader.run(0)
-        until = None if args.keep_going else _stopped(m, loader, axes)
-        return record(m, axes, args.seconds, args.interval, until=until)
+        return record_program(m, program.instructions, axes, args.seconds, args.interval,
+                              stop_when_idle=not args.keep_going)
     except TmclError as exc:
         raise CliError(str(exc)) from None
     finally:
@@ -117,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     from ..plot.trace import check_duration
 
     try:
-        check_duration(args.seconds, args.interval)
+        check_duration(10.0 if args.seconds is None else args.seconds, args.interval)
     except ValueError as exc:
         raise CliError(f"--seconds/--interval: {exc}") from None
     if Path(args.output).suffix.lower() not in (".png", ".svg"):
@@ -139,7 +142,8 @@ def run(args: argparse.Namespace) -> int:
             trace = _record(args, axes)
         if args.csv:
             trace.to_csv(args.csv)
-        render(trace, args.output, channels=channels, rpm=args.rpm, title=args.title)
+        render(trace, args.output, channels=channels, rpm=args.rpm, title=args.title, phases=args.phases,
+               marks=args.marks, target=args.target)
     except TraceError as exc:
         raise CliError(str(exc)) from None
     except ImportError as exc:

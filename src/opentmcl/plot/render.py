@@ -1,9 +1,6 @@
-"""Render a trace with matplotlib (Agg backend, no display): one panel per channel, one line per axis.
-
-Units on the axes: position in µsteps, velocity in pps (or rpm), acceleration in pps²,
-time in s (TMCM-6212 manual 6.5 for pps and rpm); the stallGuard2 load value 0..1023 and the
-current scaling factor n = 0..31, i.e. (n+1)/32 of the run current CS (manual 4.1, AP 206/180).
-Switch states and the position reached flag share one panel, drawn as stacked 0/1 steps.
+"""Draw a `Figure` (plot/figure.py) with matplotlib (Agg backend, no display): one panel per
+channel, one line per axis; breaks and instruction marks as vertical lines, ramp phases as shaded
+bands, the legend right of the data. Everything drawn comes from the figure's data.
 """
 from __future__ import annotations
 
@@ -13,90 +10,111 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from ..atomicfile import write_atomic
-from .trace import CHANNELS, SWITCHES, Trace, TraceError
+from .figure import DEFAULT_CHANNELS, PHASES, Figure, Panel, channel_names, plan
+from .trace import Trace, TraceError
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-DEFAULT_CHANNELS = ("position", "velocity", "acceleration", "load", "current", "switches")
+__all__ = ["DEFAULT_CHANNELS", "FORMATS", "channel_names", "draw", "render"]
+
 FORMATS = {".png": "png", ".svg": "svg"}
-LABELS = {
-    "position": "position [µsteps]",
-    "velocity": "velocity [pps]",
-    "acceleration": "acceleration [pps²]",
-    "load": "load [0…1023]",
-    "current": "current [(n+1)/32 CS]",
-}
-
-
-def channel_names() -> list[str]:
-    return [c for c in CHANNELS if c not in SWITCHES] + ["switches"]
+PHASE_COLOURS = dict(zip(PHASES, ("tab:green", "tab:gray", "tab:red"), strict=True))
+BREAK_STYLE = {"origin": ("tab:purple", ":"), "hard_stop": ("black", "--")}
 
 
 def render(trace: Trace, path: str | os.PathLike, *, channels: Iterable[str] = DEFAULT_CHANNELS,
-           rpm: bool = False, title: str | None = None, width: float = 9.0) -> str:
-    """Write the plot to `path` (.png or .svg); return the format used."""
+           rpm: bool = False, title: str | None = None, width: float = 9.0, phases: bool = False,
+           marks: bool = True, target: bool = True) -> str:
+    """Write the plot of `trace` to `path` (.png or .svg); return the format used. `phases`: shade
+    the ramp phases in the velocity panel; `marks`: the instruction marks of a program run;
+    `target`: the target position (AP 0) over the position."""
     fmt = FORMATS.get(os.path.splitext(str(path))[1].lower())
     if fmt is None:
         raise TraceError(f"cannot write {path}: use a .png or .svg file name")
-    if not len(trace):
-        raise TraceError("the trace has no samples")
-    panels = _panels(trace, list(channels))
-
-    import matplotlib
-
-    matplotlib.use("Agg", force=True)
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(width, 1.9 * len(panels) + 0.6), layout="constrained")
-    axs = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
-    for panel, ch in zip(axs, panels, strict=True):
-        if ch == "switches":
-            _switches(panel, trace)
-        else:
-            _channel(panel, trace, ch, rpm)
-    axs[-1].set_xlabel("time [s]")
-    which = f"axis {trace.axes[0]}" if len(trace.axes) == 1 else f"axes {', '.join(map(str, trace.axes))}"
-    fig.suptitle(title or f"{trace.module or 'module'}: {which}")
-    image = io.BytesIO()
-    fig.savefig(image, format=fmt, dpi=110)
-    write_atomic(path, image.getvalue())   # a failed or killed render keeps the old image
+    figure = plan(trace, channels, rpm=rpm, phases=phases, marks=marks, target=target, title=title)
+    write_atomic(path, draw(figure, fmt, width=width))   # a failed or killed render keeps the old image
     return fmt
 
 
-def _panels(trace: Trace, wanted: list[str]) -> list[str]:
-    """The panels to draw: the channels asked for, less those no axis of the trace has (e.g. no
-    load value), unless that leaves none."""
-    for ch in wanted:
-        if ch not in channel_names():
-            raise TraceError(f"unknown channel {ch!r}; channels: {', '.join(channel_names())}")
-    return [ch for ch in wanted
-            if ch == "switches" or any(trace.has(ax, ch) for ax in trace.axes)] or wanted
+def draw(figure: Figure, fmt: str = "png", *, width: float = 9.0) -> bytes:
+    """The image bytes of `figure` in `fmt` ("png" or "svg")."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=True)
+    from matplotlib.figure import Figure as MplFigure
+
+    panels = figure.panels
+    fig = MplFigure(figsize=(width, 1.9 * len(panels) + 0.6), layout="constrained")
+    axs = fig.subplots(len(panels), 1, sharex=True, squeeze=False)[:, 0]
+    for n, (ax, panel) in enumerate(zip(axs, panels, strict=True)):
+        _panel(ax, panel, figure)
+        _marks(ax, figure, label=n == 0)
+    axs[-1].set_xlabel(figure.xlabel)
+    fig.suptitle(figure.title)
+    image = io.BytesIO()
+    fig.savefig(image, format=fmt, dpi=110)
+    return image.getvalue()
 
 
-def _channel(panel: Axes, trace: Trace, ch: str, rpm: bool) -> None:
-    """One line per axis of channel `ch` (velocity in rpm when `rpm`)."""
-    for ax in trace.axes:
-        ys = trace.rpm(ax) if ch == "velocity" and rpm else trace.column(ax, ch)
-        panel.plot(trace.time, [float("nan") if y is None else y for y in ys], label=f"axis {ax}",
-                   drawstyle="steps-post" if ch in ("load", "current") else "default", linewidth=1.2)
-    panel.set_ylabel("velocity [rpm]" if ch == "velocity" and rpm else LABELS[ch])
-    panel.grid(True, alpha=0.3)
-    if len(trace.axes) > 1:
-        panel.legend(loc="upper right", fontsize="small")
+def _panel(ax: Axes, panel: Panel, figure: Figure) -> None:
+    for s in panel.spans:
+        ax.axvspan(s.start, s.end, ymin=s.band[0], ymax=s.band[1], color=PHASE_COLOURS[s.phase],
+                   alpha=0.15, linewidth=0)
+    for line in panel.lines:
+        ax.plot(line.x, line.y, label=line.label, drawstyle="steps-post" if line.steps else "default",
+                linestyle="--" if line.dashed else "-", linewidth=0.9 if line.dashed else 1.2)
+    t0, t1 = figure.xlim
+    for m in panel.markers:
+        colour, style = BREAK_STYLE.get(m.kind, ("black", ":"))
+        ax.axvline(m.time, color=colour, linestyle=style, linewidth=0.9)
+        right = m.time > (t0 + t1) / 2   # text on the side with room, inside the panel
+        ax.annotate(m.text, (m.time, 1.0), xycoords=("data", "axes fraction"), xytext=(-2 if right else 2, -2),
+                    textcoords="offset points", va="top", ha="right" if right else "left",
+                    fontsize="x-small", color=colour)
+    if panel.ylim is not None:
+        ax.set_ylim(*panel.ylim)
+    if panel.yticks is not None:
+        ax.set_yticks([y for y, _ in panel.yticks], [name for _, name in panel.yticks], fontsize="small")
+        ax.grid(True, axis="x", alpha=0.3)
+    else:
+        ax.grid(True, alpha=0.3)
+    ax.set_ylabel(panel.ylabel)
+    if panel.raw is not None:
+        label, scale, offset = panel.raw
+
+        def to_raw(y):
+            return y * scale + offset
+
+        def from_raw(r):
+            return (r - offset) / scale
+
+        from matplotlib.ticker import MaxNLocator
+
+        raw = ax.secondary_yaxis("right", functions=(to_raw, from_raw))
+        raw.set_ylabel(label)
+        raw.yaxis.set_major_locator(MaxNLocator(integer=True))   # the raw reading is a whole number
+    _legend(ax, panel)
 
 
-def _switches(panel: Axes, trace: Trace) -> None:
-    """Stacked 0/1 traces: one row per (axis, switch), labelled on the y axis."""
-    labels, row = [], 0
-    for ax in trace.axes:
-        for ch in SWITCHES:
-            if not trace.has(ax, ch):
-                continue
-            ys = [float("nan") if v is None else row * 1.5 + (0.9 if v else 0.0) for v in trace.column(ax, ch)]
-            panel.plot(trace.time, ys, drawstyle="steps-post", linewidth=1.2)
-            labels.append((row * 1.5 + 0.45, f"{ch.replace('_', ' ')} {ax}"))
-            row += 1
-    panel.set_yticks([y for y, _ in labels], [name for _, name in labels], fontsize="small")
-    panel.set_ylabel("switches")
-    panel.grid(True, axis="x", alpha=0.3)
+def _legend(ax: Axes, panel: Panel) -> None:
+    from matplotlib.patches import Patch
+
+    handles, labels = ax.get_legend_handles_labels()
+    for phase in PHASES:
+        if any(s.phase == phase for s in panel.spans):
+            handles.append(Patch(color=PHASE_COLOURS[phase], alpha=0.3))
+            labels.append(phase)
+    if panel.legend or panel.spans:
+        ax.legend(handles, labels, loc="upper left", bbox_to_anchor=panel.legend_anchor,
+                  borderaxespad=0.0, fontsize="small")
+
+
+def _marks(ax: Axes, figure: Figure, *, label: bool) -> None:
+    named = set(figure.labels) if label else set()
+    for i, m in enumerate(figure.marks):
+        ax.axvline(m.time, color="tab:olive", linestyle=":", linewidth=0.6, alpha=0.8)
+        if i in named:
+            ax.annotate(f"{m.pc}: {m.text}".rstrip(": "), (m.time, 1.0), xycoords=("data", "axes fraction"),
+                        xytext=(1, 3), textcoords="offset points", rotation=90, va="bottom",
+                        fontsize="xx-small", color="tab:olive")

@@ -4,14 +4,14 @@
     trace.to_csv("run.csv"); Trace.from_csv("run.csv").column(0, "velocity")
 
 Every sample reads, per axis, through the host library (so the same code works on a
-real module): actual position (axis parameter 1, µsteps), actual speed (3), position
+real module): actual position (axis parameter 1, µsteps), target position (0), actual speed (3), position
 reached (8), home / right / left switch (9, 10, 11), actual load value (206) and the
 actual motor current (180, "smartEnergy actual current"); the names are those of the
 TMCM-6212 manual 4.1 / PD86-1180 manual 5. Velocities are stored in pps: on TMC429
 modules (PD86-1180) the internal velocity is converted with the pulse divisor
 (axis parameter 154, PD86-1180 manual 5). Acceleration is derived from velocity.
 Samples are kept in compact columns (opentmcl.columns): one hour at 10 ms of six axes takes
-about 35 MB (`python bench/run.py`, "memory plot trace").
+about 41 MB (`python bench/bench_trace.py`, "plot trace MB per hour").
 """
 from __future__ import annotations
 
@@ -25,10 +25,12 @@ from ..atomicfile import open_atomic
 from ..columns import Column
 from ..limits import CSV_MAX, LINE_MAX, size_text
 from ..trace import check_interval
+from .events import Event, Mark, meta_lines, parse_event, parse_mark
 
 # channel -> (axis parameter number, unit). position/velocity are always recorded.
 CHANNELS: dict[str, tuple[int | None, str]] = {
     "position": (1, "µsteps"),
+    "target": (0, "µsteps"),
     "velocity": (3, "pps"),
     "acceleration": (None, "pps²"),
     "target_reached": (8, ""),
@@ -57,6 +59,10 @@ class Trace:
     data: dict[tuple[int, str], Column] = field(default_factory=dict)
     module: str = ""
     microsteps: dict[int, tuple[int, int]] = field(default_factory=dict)  # axis -> (usteps/fullstep, fullsteps/rev)
+    # Discontinuities seen by the module (origin writes, hard stops); None: not known, the renderer
+    # guesses origin writes from the samples (plot/events.py).
+    events: list[Event] | None = None
+    marks: list[Mark] = field(default_factory=list)  # program counter changes of a program run
 
     def __len__(self) -> int:
         return len(self.time)
@@ -100,6 +106,7 @@ class Trace:
         rows = ([f"{t:.6f}"] + ["" if v is None else _fmt(v) for v in values]
                 for t, *values in zip(self.time, *cols, strict=True))   # streamed, not a list
         meta = [f"# module={self.module}"] + [f"# microsteps_{ax}={u},{f}" for ax, (u, f) in self.microsteps.items()]
+        meta += meta_lines(self)
         if isinstance(target, io.TextIOBase):
             _write(target, meta, header, rows)
             return
@@ -147,12 +154,14 @@ def _write(fh, meta, header, rows) -> None:
 
 def _parse_csv(lines) -> Trace:
     meta: dict[str, str] = {}
+    repeated: list[tuple[str, str]] = []   # event / mark lines, in order
 
     def data_lines():
         for line in lines:
             if line.startswith("#"):
                 key, _, value = line[1:].strip().partition("=")
                 meta[key] = value
+                repeated.append((key, value))
             elif line.strip():
                 yield line
 
@@ -182,6 +191,7 @@ def _parse_csv(lines) -> Trace:
             raise TraceError(f"trace row {n}: not a number") from None
         trace.add(t, values)
     trace.module = meta.get("module", "")
+    _read_events(trace, repeated)
     for key, value in meta.items():
         if key.startswith("microsteps_"):
             try:
@@ -190,6 +200,24 @@ def _parse_csv(lines) -> Trace:
             except ValueError:
                 raise TraceError(f"bad trace metadata line {'# ' + key + '=' + value!r}") from None
     return trace
+
+
+def _read_events(trace: Trace, lines: list[tuple[str, str]]) -> None:
+    """The ``# events=``, ``# event=`` and ``# mark=`` lines (plot/events.py) into `trace`."""
+    for key, value in lines:
+        try:
+            if key == "events" and trace.events is None:
+                trace.events = []
+            elif key == "mark":
+                trace.marks.append(parse_mark(value))
+            elif key == "event":
+                if trace.events is None:
+                    raise TraceError("a trace's '# event=' lines need '# events=recorded' before them")
+                trace.events.append(parse_event(value))
+        except TraceError:
+            raise
+        except ValueError:
+            raise TraceError(f"bad trace metadata line {'# ' + key + '=' + value!r}") from None
 
 
 def derivative(t: list[float], v: list[float | None]) -> list[float | None]:
@@ -225,6 +253,14 @@ class Sampler:
             usteps = 1 << axis.microstep_resolution() if 140 in prof.axis_parameters else 256
             self.microsteps[ax] = (usteps, axis.fullstep_resolution())
 
+    def to_pps(self, axis: int, velocity: float) -> float:
+        """A velocity in the units of actual speed (AP 3) in pps (TMC429 modules: pulse divisor)."""
+        from ..host.units import tmc429_velocity_to_pps
+
+        if axis in self.pulse_div:
+            return tmc429_velocity_to_pps(velocity, self.pulse_div[axis])
+        return float(velocity)
+
     def sample(self) -> dict[tuple[int, str], float | None]:
         from ..host import TmclStatusError
         from ..host.units import tmc429_velocity_to_pps
@@ -251,11 +287,13 @@ def check_duration(seconds: float, interval: float) -> None:
                          "record less or sample less often")
 
 
-def record(module, axes=(0,), seconds: float = 10.0, interval: float = 0.01, *, until=None) -> Trace:
+def record(module, axes=(0,), seconds: float = 10.0, interval: float = 0.01, *, until=None,
+           sampler: Sampler | None = None) -> Trace:
     """Sample `axes` of a host `Module` every `interval` seconds for `seconds` (module time: virtual
-    for sim:// modules, the wall clock for real ones). `until(trace) -> bool` may end it early."""
+    for sim:// modules, the wall clock for real ones). `until(trace) -> bool` may end it early.
+    `sampler`: a `Sampler` of `module` made before (it reads the microstep settings when made)."""
     check_duration(seconds, interval)
-    sampler = Sampler(module, list(axes))
+    sampler = sampler or Sampler(module, list(axes))
     trace = Trace(sampler.axes, module=module.profile.name, microsteps=dict(sampler.microsteps))
     clock = module.client.transport.monotonic
     start = clock()

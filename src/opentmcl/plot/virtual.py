@@ -3,13 +3,14 @@
 The run uses virtual time (docs/architecture.md "Time"): the module advances only while the recorder
 waits, so a ten-second program is recorded in a fraction of that and always gives the same
 trace. The program is downloaded (132, instructions, 133) and started with 129 (TMCM-6212
-manual 3.6.36), as `opentmcl run` does.
+manual 3.6.36), as `opentmcl run` does; plot/program.py records it.
 """
 from __future__ import annotations
 
-from .trace import Trace, record
+from .program import SETTLE_SAMPLES, idle, record_program
+from .trace import Trace
 
-SETTLE_SAMPLES = 5  # samples of standstill after the program stopped before the recording ends
+__all__ = ["SETTLE_SAMPLES", "run_virtual"]
 
 
 def _stopped(module, loader, axes):
@@ -17,28 +18,23 @@ def _stopped(module, loader, axes):
     def done(trace: Trace) -> bool:
         if loader is not None and loader.status().mode == 1:
             return False
-        if len(trace) < SETTLE_SAMPLES:
-            return False
-        for ax in axes:
-            tail = trace.column(ax, "velocity")[-SETTLE_SAMPLES:]
-            if any(v not in (0, None) for v in tail):
-                return False
-        return True
+        return idle(trace)
     return done
 
 
-def run_virtual(program=None, *, module: str = "TMCM-6212", axes=(0,), seconds: float = 10.0,
+def run_virtual(program=None, *, module: str = "TMCM-6212", axes=(0,), seconds: float | None = None,
                 interval: float = 0.01, scenario=None, address: int = 1, vm=None,
-                stop_when_idle: bool = True) -> Trace:
-    """Run `program` (a lang `Program`, a list of 4-tuples, or None) on a new virtual `module`
-    (or the given `vm`) with an optional loaded `scenario`, and return the trace of `axes`.
+                stop_when_idle: bool = True, loops: int | None = None) -> Trace:
+    """Run `program` (a lang `Program`'s instructions, a list of 4-tuples, or None) on a new virtual
+    `module` (or the given `vm`) with an optional loaded `scenario`, and return the trace of `axes`
+    with the module's origin writes and hard stops (`Trace.events`) and the program's marks.
 
-    The recording ends after `seconds`, or - with `stop_when_idle` - once the program has
-    stopped and the recorded axes stand still.
+    The recording ends after `seconds`, or - with `stop_when_idle` - once the program has stopped
+    and the recorded axes stand still, or after `loops` loop passes. `seconds=None`: as long as the
+    program needs (until it stops or has looped twice, at most plot.program.AUTO_SECONDS).
     """
     from ..firmware.vm import VirtualModule
     from ..host import Client
-    from ..host.loader import Loader
     from ..host.transports.inprocess import InProcessTransport
 
     if vm is None:
@@ -46,12 +42,6 @@ def run_virtual(program=None, *, module: str = "TMCM-6212", axes=(0,), seconds: 
     client = Client(InProcessTransport(vm, clock="virtual"), address=vm.address)
     try:
         m = client.module(vm.address, vm.profile)
-        loader = None
-        if program is not None:
-            loader = Loader(m)
-            loader.download(program)
-            loader.run(0)
-        until = _stopped(m, loader, list(axes)) if stop_when_idle else None
-        return record(m, axes, seconds, interval, until=until)
+        return record_program(m, program, axes, seconds, interval, stop_when_idle=stop_when_idle, loops=loops)
     finally:
         client.close()

@@ -1,0 +1,156 @@
+"""Recording a program run: instruction marks, loop passes and when to stop.
+
+Each sample also reads the application status (command 135 type 1: mode and program counter,
+TMCM-6212 manual 3.6.36), so the trace knows which instruction ran when (at sample resolution:
+the instruction the program was at, usually a WAIT). A *loop* is the body of an unconditional
+jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17); a *loop pass* is
+counted when the program counter comes back to the first address inside such a body that it came
+back to (the anchor); on an in-process virtual module also when it is at the same address as one
+sample before but has executed instructions in between (a loop shorter than the sampling
+interval). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out like a WAIT.
+A return from an interrupt into a loop counts as a pass (docs/plots.md).
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+from .events import EngineWatch, Mark
+from .trace import MAX_SAMPLES, Sampler, Trace, record
+
+SETTLE_SAMPLES = 5      # samples of standstill after the program stopped before the recording ends
+AUTO_SECONDS = 300.0    # hard cap of a recording whose length comes from the program
+AUTO_LOOPS = 2          # ... which ends once the program has looped this often
+DEFAULT_SECONDS = 10.0  # a recording without a program to derive its length from
+MAX_MARKS = 10_000      # program marks kept (a tight loop changes the PC at every sample)
+RUNNING = 1             # 135 mode: 0 stop, 1 run, 2 step, 3 reset
+
+
+def auto_seconds(interval: float) -> float:
+    """The cap of a derived recording: AUTO_SECONDS, or less when the interval would give more
+    than MAX_SAMPLES samples."""
+    return min(AUTO_SECONDS, MAX_SAMPLES * interval)
+
+
+JA = 22                 # TMCL opcode of JA (manual 3.4.1 Table 5)
+
+
+def loop_bodies(program) -> list[tuple[int, int]]:
+    """(first, last) address of every loop: a JA whose target is at or before its own address."""
+    return [(ins[3], address) for address, ins in enumerate(program) if ins[0] == JA and 0 <= ins[3] <= address]
+
+
+def instruction_texts(program) -> dict[int, str]:
+    """Address -> TMCL source text of each instruction (lang disassembler, plain numbers)."""
+    from ..lang.disassembler import disassemble
+
+    texts = {}
+    try:
+        source = disassemble(list(program), comments=True)
+    except (TypeError, ValueError):
+        return {}
+    for line in source.splitlines():
+        text, sep, addr = line.rpartition("//")
+        if sep and addr.strip().isdigit():
+            texts[int(addr)] = " ".join(text.split())
+    return texts
+
+
+class ProgramWatch:
+    """`until(trace)` of a program run: records marks, counts loop passes, says when to stop.
+
+    Stops when `loops` passes were seen (None: never for that reason), or - with `stop_when_idle` -
+    once the program no longer runs and every axis of the trace had actual speed 0 for
+    SETTLE_SAMPLES samples."""
+
+    def __init__(self, loader, texts: dict[int, str], *, stop_when_idle: bool = True,
+                 loops: int | None = None, vm=None, bodies: Iterable[tuple[int, int]] = ()) -> None:
+        self.loader = loader
+        self.texts = texts
+        self.bodies = list(bodies)
+        self.stop_when_idle = stop_when_idle
+        self.loops_wanted = loops
+        self.vm = vm
+        self.loops = 0
+        self.anchor: int | None = None
+        self._seen: set[int] = set()
+        self._pc: int | None = None
+        self._executed: int | None = None
+
+    def __call__(self, trace: Trace) -> bool:
+        word = self.loader.request(135, 1).value & 0xFFFFFFFF
+        mode, pc = word >> 24, word & 0xFFFF
+        executed = getattr(getattr(self.vm, "interpreter", None), "executed", None)
+        self._count(pc, executed)
+        if pc != self._pc and len(trace.marks) < MAX_MARKS:
+            trace.marks.append(Mark(trace.time[-1], pc, self.texts.get(pc, "")))
+        self._pc, self._executed = pc, executed
+        if self.loops_wanted is not None and self.loops >= self.loops_wanted:
+            return True
+        return mode != RUNNING and self.stop_when_idle and idle(trace)
+
+    def _count(self, pc: int, executed: int | None) -> None:
+        if self._pc is None:
+            self._seen.add(pc)
+            return
+        ran = executed is not None and self._executed is not None and executed > self._executed
+        back = (pc != self._pc and pc in self._seen) or (pc == self._pc and ran)
+        self._seen.add(pc)
+        if not back:
+            return
+        if self.anchor is None and any(first <= pc <= last for first, last in self.bodies):
+            self.anchor = pc
+        if pc == self.anchor:
+            self.loops += 1
+
+
+def idle(trace: Trace) -> bool:
+    """Every axis of the trace had actual speed 0 (or none) for the last SETTLE_SAMPLES samples."""
+    if len(trace) < SETTLE_SAMPLES:
+        return False
+    return all(v in (0, None) for ax in trace.axes for v in trace.column(ax, "velocity")[-SETTLE_SAMPLES:])
+
+
+def record_program(module, program=None, axes=(0,), seconds: float | None = None, interval: float = 0.01,
+                   *, stop_when_idle: bool = True, loops: int | None = None, download_progress=None) -> Trace:
+    """Download `program` (instructions; None: record what runs) to a host `Module`, start it
+    (129 from address 0) and record `axes`.
+
+    `seconds=None` derives the length from the program: until it stops (and the axes stand still)
+    or has looped AUTO_LOOPS times, at most `auto_seconds(interval)`; without a program
+    DEFAULT_SECONDS. On an in-process virtual module the trace also gets the module's origin
+    writes and hard stops (`Trace.events`). `download_progress(done, total)` follows the download."""
+    from ..host.loader import Loader
+
+    if seconds is None:
+        seconds = auto_seconds(interval) if program is not None else DEFAULT_SECONDS
+        if program is not None and loops is None:
+            loops = AUTO_LOOPS
+    axes = list(axes)
+    sampler = Sampler(module, axes)
+    vm = module.client.transport.local_module(module.address)
+    watch = EngineWatch(vm, sampler.to_pps) if vm is not None and hasattr(vm, "axes") else None
+    start: list[float] = []
+    until: Callable[[Trace], bool] | None = None
+    if program is not None:
+        loader = Loader(module)
+        code = loader.download(program, progress=download_progress)
+        loader.run(0)
+        until = ProgramWatch(loader, instruction_texts(code), stop_when_idle=stop_when_idle,
+                             loops=loops, vm=vm, bodies=loop_bodies(code))
+    elif stop_when_idle:
+        until = idle
+    inner = until
+
+    def first_sample(trace: Trace) -> bool:   # the module's clock at the trace's time 0
+        if not start and vm is not None:
+            start.append(vm.time - trace.time[-1])
+        return inner(trace) if inner is not None else False
+
+    try:
+        trace = record(module, axes, seconds, interval, until=first_sample, sampler=sampler)
+    finally:
+        if watch is not None:
+            watch.close()
+    if watch is not None and start:
+        trace.events = watch.events(start[0], axes)
+    return trace
