@@ -242,6 +242,64 @@ class _Phase:
         return lo * self.pulse_period
 
 
+def _lag_walk(c: int, w: int, left: int, a: int, low: int, pm: int, sh: int, rp: int,
+              last: int) -> tuple[int, int, int]:
+    """Lagging ramp ticks from tick c on at PULSE_DIV == RAMP_DIV: |v| falls by A_MAX with
+    the computed target at or below it (6.1.9). With V_MIN <= V_MAX three integer tests on
+    the new level n decide such a tick without a square root: |v| - A_MAX > V_MIN * 256,
+    n < `left` (no arrival), PMUL * left >> (3 + PDIV) < (n + 1)^2 (the target is at most n).
+    Returns (c, |v|, left) before the first other tick or past `last`."""
+    nw = w - a
+    n = nw >> 8
+    while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
+        left -= n
+        w = nw
+        c += rp
+        nw -= a
+        n = nw >> 8
+    return c, w, left
+
+
+def _on_target(c: int, n: int, left: int, rp: int, last: int, a: int, pm: int, sh: int,
+               floor: int) -> tuple[int, int, int]:
+    """Ramp ticks from tick c on at PULSE_DIV == RAMP_DIV with |v| = n * 256 on its computed
+    target (6.1.9), `left` > n units before the arrival step: the target stays n while left
+    >= level start L(n) = ceil(n^2 * 2^(3+PDIV) / PMUL) and each pulse adds n. After that,
+    as long as the target falls one level at a time (to m = n - 1 > V_MIN), |v| falls by
+    A_MAX: 255 // A_MAX ticks strictly between the levels, then the one that lands on m * 256,
+    each adding m, and the walk goes on at level m. Stops before an arrival, V_MIN and past
+    `last`: (c, n, left) with |v| = n * 256 before tick c."""
+    r = 255 // a if a else 0
+    ln = -(-(n * n << sh) // pm)
+    while True:
+        k = min((left - ln) // n + 1, (left - 1) // n, (last - c) // rp + 1)
+        if k > 0:
+            left -= k * n
+            c += k * rp
+        m = n - 1
+        if left >= ln or m <= floor or a == 0:  # stopped before an arrival or `last`
+            return c, n, left
+        lm = -(-(m * m << sh) // pm)
+        snap = left - r * m                     # left before the tick that lands on m * 256
+        if snap < lm or snap <= m or c + r * rp > last:
+            return c, n, left
+        left = snap - m
+        c += (r + 1) * rp
+        n, ln = m, lm
+
+
+def _lag_run(c: int, nw: int, left: int, a: int, rp: int, last: int) -> tuple[int, int, int]:
+    """Ramp ticks from tick c on at PULSE_DIV == RAMP_DIV (A_MAX > 0) over which |v| falls by
+    A_MAX above its target inside level n = nw >> 8 (nw: |v| after tick c); the target only
+    falls, so it stays below. All but the last such tick, stopped before an arrival and past
+    `last`: (c, |v|, left) after them."""
+    n = nw >> 8
+    ticks = min((nw & 255) // a, (last - c) // rp + 1)
+    if n:
+        ticks = min(ticks, (left - 1) // n)
+    return c + ticks * rp, nw - a * (ticks - 1), left - ticks * n
+
+
 _Plan = tuple[int | None, int | None, _Phase | _Follow]
 """(event, clamp, phase) of `Tmc429Ramp._plan`."""
 
@@ -743,11 +801,24 @@ class Tmc429Ramp:
                 self._pulse_div, self._a_max, self._v_min, self._v_max, self._pmul, self._pdiv)
 
     def _follow(self, limit: int | None, steps: _Steps | None) -> int:
-        """Go through ramp_mode from now while the velocity heads for the target, tick by
-        tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at
+        """Go through ramp_mode from now while the velocity heads for the target (6.1.9), tick
+        by tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at
         `limit`, just before the arrival step, or after the tick that reaches V_MIN (or 0);
         returns the cycle to apply exactly next. `steps` collects (cycle, direction) of
         each step made."""
+        s = _sign(self.dx)
+        if self._ramp_div == self._pulse_div and steps is None:
+            t, w, total, moved, event = self._follow_fast(limit)
+        else:
+            t, w, total, moved, event = self._follow_walk(limit, steps)
+        self._units_made, self._moved = total, moved
+        self._settle(t, self._made(s) + total, s * w, s, moved)
+        return event
+
+    def _follow_walk(self, limit: int | None,
+                     steps: _Steps | None) -> tuple[int, int, int, bool, int]:
+        """`_follow` for any dividers, the steps recorded: (t, |v|, units added, moved,
+        event)."""
         dx = self.dx
         s, d = _sign(dx), abs(dx)
         units = self._remaining(s, d)
@@ -757,17 +828,9 @@ class Tmc429Ramp:
         t = self.now
         moved = False
         event: int | None = None
-        fast = self._ramp_div == self._pulse_div and steps is None
         while event is None:
-            if fast:        # tick by tick inlined, back here for a run worth jumping
-                t, w, walk.total, moved, event = self._follow_fast(t, w, units, walk.total,
-                                                                   moved, limit, floor)
-                if event is not None:
-                    break
             t, w, moved, event = self._follow_step(walk, t, w, moved, limit, floor)
-        self._units_made, self._moved = walk.total, moved
-        self._settle(t, walk.made0 + walk.total, s * w, s, moved)
-        return event
+        return t, w, walk.total, moved, event
 
     def _follow_step(self, walk: _Walk, t: int, w: int, moved: bool, limit: int | None,
                      floor: int) -> tuple[int, int, bool, int | None]:
@@ -825,67 +888,50 @@ class Tmc429Ramp:
             return c, w, moved, c + 1
         return c, w, moved, None
 
-    def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
-                     limit: int | None, floor: int) -> tuple[int, int, int, bool, int | None]:
-        """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
-        same rules inlined; hands back (event None) before a run worth jumping (one
-        velocity on the target, or many ticks falling inside one level), at `limit`, or
-        when done."""
+    def _follow_fast(self, limit: int | None) -> tuple[int, int, int, bool, int]:
+        """`_follow` for PULSE_DIV == RAMP_DIV, where a pulse follows each ramp tick: |v| moves
+        towards the computed target by at most A_MAX (6.1.9.2), then the pulse adds |v| >> 8
+        units (6.1.12.1). The per-tick rules run on locals; lagging ticks are walked by
+        `_lag_walk` (A_MAX >= 32), runs on the target by `_on_target`, lagging runs inside one
+        level by `_lag_run` (8 ticks or more: 0 < A_MAX < 32). Returns (t, |v|, units added, moved, event)."""
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
-        low = floor << 8
-        lag_walk = a >= 32 and vmin <= vmax     # then the four tests below decide a lagging tick
-        left = units - total
-        c = (t // rp + 1) * rp
+        floor = min(vmin, vmax)
+        low = floor << 8                        # |v| reaching it ends the stretch (so does 0,
+        lag_walk = a >= 32 and vmin <= vmax     # which only a zero floor lets |v| reach)
+        dx = self.dx
+        units = left = self._remaining(_sign(dx), abs(dx))   # left >= 1 throughout
+        w = abs(self._v)
+        c = c0 = (self.now // rp + 1) * rp     # the next ramp tick
         last = c + _FOREVER if limit is None else limit
         while c <= last:
             if lag_walk:
-                # lagging: |v| falls by A_MAX with the computed target at or below it
-                # (6.1.9); stops before an arrival, V_MIN or `last`
-                nw = w - a
-                n = nw >> 8
-                while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
-                    left -= n
-                    w, t, moved = nw, c, True
-                    c += rp
-                    nw -= a
-                    n = nw >> 8
+                c, w, left = _lag_walk(c, w, left, a, low, pm, sh, rp, last)
                 if c > last:
                     break
             sp = isqrt(pm * left >> sh)
             sp = vmax if sp > vmax else (vmin if sp < vmin else sp)
-            after = self._fast_velocity(w, sp << 8, left)
-            if after is None:
-                return t, w, units - left, moved, None     # `_follow` jumps the run
-            n = after >> 8
-            if n and n >= left:                                # the arrival step at c
-                return c - 1, w, units - left, moved, c
-            w, t = after, c
+            tgt = sp << 8
+            if w == tgt and sp > floor and left > sp:
+                c, sp, left = _on_target(c, sp, left, rp, last, a, pm, sh, floor)
+                w = sp << 8
+                continue
+            if w <= tgt:
+                nw = w + a if w + a < tgt else tgt
+            elif w - a > tgt and (w - a) & 255 >= a << 3 > 0 and left > (w - a) >> 5:
+                c, w, left = _lag_run(c, w - a, left, a, rp, last)
+                continue
+            else:
+                nw = w - a if w - a > tgt else tgt
+            n = nw >> 8
+            if n >= left:                       # the arrival step at c
+                return c - 1, w, units - left, c > c0, c
+            w = nw
             left -= n
-            moved = moved or w > 0
-            if w == low or w == 0:
-                return t, w, units - left, moved, t + 1
+            if w == low:
+                return c, w, units - left, c > c0 or w > 0, c + 1
             c += rp
-        return t, w, units - left, moved, None
-
-    def _fast_velocity(self, w: int, tgt: int, left: int) -> int | None:
-        """|v| after a `_follow_fast` ramp tick from w towards the computed target tgt
-        (by at most A_MAX, 6.1.9.2), `left` units before the arrival step; None before
-        a run `_follow` jumps: one velocity on the target for 4 pulses or more, or
-        |v| falling by A_MAX inside one level for 8 ticks or more."""
-        a = self._a_max
-        if w == tgt:
-            n = w >> 8
-            low = min(self._v_min, self._v_max) << 8
-            sh = 3 + self._pdiv
-            if n and w > low and left + (-(n * n << sh) // self._pmul) >= n << 2:
-                return None
-            return w
-        if w < tgt:
-            return w + a if w + a < tgt else tgt
-        if w - a > tgt and (w - a) & 255 > a << 3:
-            return None
-        return w - a if w - a > tgt else tgt
+        return last, w, units - left, c > c0, last + 1
 
     def _brake_run(self, c: int, w: int, left: int, limit: int | None) -> tuple[int, int, int]:
         """Ramp ticks from tick c on (pulses before c done, `left` units to go) over which |v|
