@@ -99,7 +99,7 @@ def _linear_floor_sum(count: int, start: int, slope: int) -> int:
     return floor_sum(count, 256, -slope, last)
 
 
-@dataclass
+@dataclass(slots=True)
 class _Follow:
     """A ramp_mode stretch following the computed target (`Tmc429Ramp._follow`), from t0."""
 
@@ -111,8 +111,14 @@ class _Follow:
     moved: bool         # a pulse tick saw a non-zero velocity
 
 
+    def shifted(self, shift: int) -> _Follow:
+        """The same stretch from t0 + shift."""
+        return _Follow(self.t0 + shift, self.event_offset, self.end_offset, self.total,
+                       self.w_end, self.moved)
+
+
 _FollowKey = tuple[int, int, int, int, int, int, int, int, int, int]
-_FOLLOW_MEMO: dict[_FollowKey, tuple[int, int, int, int, bool]] = {}
+_PlanKey = tuple[int, ...]
 _FOLLOW_MEMO_SIZE = 4096
 _FOREVER = 1 << 80
 """Cycles past any `limit` (a walk without one)."""
@@ -167,7 +173,7 @@ class _Walk:
             m += 1
 
 
-@dataclass
+@dataclass(slots=True)
 class _Phase:
     """Closed form of the motion from `t0` while the ramp target stays `vt`."""
 
@@ -207,6 +213,13 @@ class _Phase:
         total += (i_hi - jb * m + 1) * (self.w(jb - self.j0) >> 8)
         total += m * self.ramp_sum(ja + 1 - self.j0, 1, jb - ja - 1)
         return total
+
+    def shifted(self, shift: int) -> _Phase:
+        """The same phase from t0 + shift (shift: a multiple of both tick periods)."""
+        pp = self.pulse_period
+        return _Phase(self.t0 + shift, self.ramp_period, pp, self.j0 + shift // self.ramp_period,
+                      self.i0 + shift // pp, self.w0, self.delta, self.direction, self.acc0,
+                      self.i_dir + shift // pp)
 
     def nth_step_cycle(self, n: int, t_hi: int | None) -> int | None:
         """Cycle of the n-th step after t0 (n >= 1), if it happens by t_hi."""
@@ -267,41 +280,82 @@ def _on_target(c: int, n: int, left: int, rp: int, last: int, a: int, pm: int, s
     >= level start L(n) = ceil(n^2 * 2^(3+PDIV) / PMUL) and each pulse adds n. After that,
     as long as the target falls one level at a time (to m = n - 1 > V_MIN), |v| falls by
     A_MAX: 255 // A_MAX ticks strictly between the levels, then the one that lands on m * 256,
-    each adding m, and the walk goes on at level m. Stops before an arrival, V_MIN and past
+    each adding m, and the ticks on level m follow. Stops before an arrival, V_MIN and past
     `last`: (c, n, left) with |v| = n * 256 before tick c."""
-    r = 255 // a if a else 0
     ln = -(-(n * n << sh) // pm)
-    while True:
-        k = min((left - ln) // n + 1, (left - 1) // n, (last - c) // rp + 1)
-        if k > 0:
-            left -= k * n
-            c += k * rp
+    k = min((left - ln) // n + 1, (left - 1) // n, (last - c) // rp + 1)   # >= 1
+    left -= k * n
+    c += k * rp
+    if left >= ln or a == 0:                    # stopped before an arrival or past `last`
+        return c, n, left
+    r = 255 // a
+    fall = r * rp
+    while n - 1 > floor:
         m = n - 1
-        if left >= ln or m <= floor or a == 0:  # stopped before an arrival or `last`
-            return c, n, left
         lm = -(-(m * m << sh) // pm)
         snap = left - r * m                     # left before the tick that lands on m * 256
-        if snap < lm or snap <= m or c + r * rp > last:
-            return c, n, left
+        if snap < lm or lm <= m or c + fall > last:
+            break                               # (lm > m: no arrival on level m)
         left = snap - m
-        c += (r + 1) * rp
-        n, ln = m, lm
+        c += fall + rp
+        n = m
+        if left >= lm:                          # ticks on the target at level m
+            k = (left - lm) // m + 1
+            if c + (k - 1) * rp > last:
+                k = (last - c) // rp + 1
+            left -= k * m
+            c += k * rp
+    return c, n, left
 
 
-def _lag_run(c: int, nw: int, left: int, a: int, rp: int, last: int) -> tuple[int, int, int]:
-    """Ramp ticks from tick c on at PULSE_DIV == RAMP_DIV (A_MAX > 0) over which |v| falls by
-    A_MAX above its target inside level n = nw >> 8 (nw: |v| after tick c); the target only
-    falls, so it stays below. All but the last such tick, stopped before an arrival and past
-    `last`: (c, |v|, left) after them."""
-    n = nw >> 8
-    ticks = min((nw & 255) // a, (last - c) // rp + 1)
-    if n:
-        ticks = min(ticks, (left - 1) // n)
-    return c + ticks * rp, nw - a * (ticks - 1), left - ticks * n
+def _lag_run(c: int, w: int, left: int, a: int, rp: int, last: int, pm: int, sh: int,
+             vmin: int, vmax: int) -> tuple[int, int, int]:
+    """Ramp ticks from tick c on at PULSE_DIV == RAMP_DIV and 0 < A_MAX < 32 over which |v|
+    (w before tick c) falls by A_MAX above its computed target (tick c does, `left` > the
+    units of its pulse), level by level: inside level n (n * 256 <= |v| < n * 256 + 256) each
+    pulse adds n and, as `left` only falls, the level's first tick decides that the target
+    stays at most n: V_MIN <= n and (V_MAX <= n or left < L(n + 1)). Stops before an arrival,
+    before |v| lands on V_MIN * 256 and past `last`: (c, |v|, left) after the ticks done."""
+    low = min(vmin, vmax) << 8
+    while True:
+        nw = w - a
+        n = nw >> 8
+        base = n << 8 if n << 8 > low else low + 1   # lowest |v| of the run in this level
+        ticks = (nw - base) // a + 1
+        cap = (left - 1) // n if n else ticks         # pulses before the arrival one
+        room = (last - c) // rp + 1
+        if ticks >= cap or ticks >= room or base > n << 8:
+            ticks = min(ticks, cap, room)
+            return c + ticks * rp, nw - a * (ticks - 1), left - ticks * n
+        left -= ticks * n
+        c += ticks * rp
+        w = nw - a * (ticks - 1)
+        m = n - 1
+        if m < vmin or (vmax > m and left >= -(-(n * n << sh) // pm)):
+            return c, w, left                       # the target catches up in level m
 
 
 _Plan = tuple[int | None, int | None, _Phase | _Follow]
 """(event, clamp, phase) of `Tmc429Ramp._plan`."""
+
+
+class _Memo:
+    """Results by the state they start from, relative to `now`, so that a repeated move costs
+    O(1): follow stretches (`Tmc429Ramp._follow_plan`) and whole plans of `next_event`
+    (`Tmc429Ramp._memo_plan`), at most `_FOLLOW_MEMO_SIZE` of each (emptied when full)."""
+
+    __slots__ = ("follow", "plans")
+
+    def __init__(self) -> None:
+        self.follow: dict[_FollowKey, tuple[int, int, int, int, bool]] = {}
+        self.plans: dict[_PlanKey, tuple[int, _Plan]] = {}
+
+    def clear(self) -> None:
+        self.follow.clear()
+        self.plans.clear()
+
+
+_FOLLOW_MEMO = _Memo()
 
 
 class Tmc429Ramp:
@@ -778,7 +832,8 @@ class Tmc429Ramp:
         """Plan of a stretch where the ramp_mode velocity follows its computed target:
         walked on a copy up to `until` (None: to its end, memoised by the start state)."""
         key = self._follow_key()
-        hit = _FOLLOW_MEMO.get(key)
+        memo = _FOLLOW_MEMO.follow
+        hit = memo.get(key)
         if hit is not None:
             seg = _Follow(self.now, *hit)
             return self.now + seg.event_offset, None, seg
@@ -787,9 +842,9 @@ class Tmc429Ramp:
         hit = (event - self.now, probe.now - self.now, probe._units_made, abs(probe._v),
                probe._moved)
         if until is None or event <= until:           # the whole stretch: remember it
-            if len(_FOLLOW_MEMO) >= _FOLLOW_MEMO_SIZE:
-                _FOLLOW_MEMO.clear()
-            _FOLLOW_MEMO[key] = hit
+            if len(memo) >= _FOLLOW_MEMO_SIZE:
+                memo.clear()
+            memo[key] = hit
         seg = _Follow(self.now, *hit)
         return event, None, seg
 
@@ -892,13 +947,14 @@ class Tmc429Ramp:
         """`_follow` for PULSE_DIV == RAMP_DIV, where a pulse follows each ramp tick: |v| moves
         towards the computed target by at most A_MAX (6.1.9.2), then the pulse adds |v| >> 8
         units (6.1.12.1). The per-tick rules run on locals; lagging ticks are walked by
-        `_lag_walk` (A_MAX >= 32), runs on the target by `_on_target`, lagging runs inside one
-        level by `_lag_run` (8 ticks or more: 0 < A_MAX < 32). Returns (t, |v|, units added, moved, event)."""
+        `_lag_walk` (A_MAX >= 32) or `_lag_run` (level by level, 0 < A_MAX < 32), runs on the
+        target by `_on_target`. Returns (t, |v|, units added, moved, event)."""
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
         floor = min(vmin, vmax)
         low = floor << 8                        # |v| reaching it ends the stretch (so does 0,
         lag_walk = a >= 32 and vmin <= vmax     # which only a zero floor lets |v| reach)
+        lag_run = 0 < a < 32
         dx = self.dx
         units = left = self._remaining(_sign(dx), abs(dx))   # left >= 1 throughout
         w = abs(self._v)
@@ -918,8 +974,8 @@ class Tmc429Ramp:
                 continue
             if w <= tgt:
                 nw = w + a if w + a < tgt else tgt
-            elif w - a > tgt and (w - a) & 255 >= a << 3 > 0 and left > (w - a) >> 5:
-                c, w, left = _lag_run(c, w - a, left, a, rp, last)
+            elif w - a > tgt and lag_run and left > (w - a) >> 8:
+                c, w, left = _lag_run(c, w, left, a, rp, last, pm, sh, vmin, vmax)
                 continue
             else:
                 nw = w - a if w - a > tgt else tgt
@@ -1019,9 +1075,29 @@ class Tmc429Ramp:
         """Next cycle where the ramp phase changes or the target is reached
         (None: nothing changes without a new register write)."""
         if self._cached_plan is None:
-            self._cached_plan = self._plan(None)
+            self._cached_plan = self._memo_plan()
         event, clamp, _phase = self._cached_plan
         return _min_opt(event, clamp)
+
+    def _memo_plan(self) -> _Plan:
+        """`_plan(None)`, memoised by the whole state relative to now (`_Memo`): the
+        registers, dx, the velocity, the accumulator and the phase of the tick clocks."""
+        key = (self.dx, self._v, self._acc, self._acc_dir, self._stopping, self._mode,
+               self.now % (32 << max(self._ramp_div, self._pulse_div)), self._v_min,
+               self._v_max, self._v_target, self._a_max, self._pmul, self._pdiv,
+               self._pulse_div, self._ramp_div, self._modulus)
+        memo = _FOLLOW_MEMO.plans
+        hit = memo.get(key)
+        if hit is None:
+            plan = self._plan(None)
+            if len(memo) >= _FOLLOW_MEMO_SIZE:
+                memo.clear()
+            memo[key] = (self.now, plan)
+            return plan
+        now0, (event, clamp, phase) = hit
+        shift = self.now - now0
+        return (None if event is None else event + shift,
+                None if clamp is None else clamp + shift, phase.shifted(shift))
 
     def step_events(self, until: int) -> list[tuple[int, int]]:
         """(cycle, +1 or -1) of each step on cycles now+1 .. until; advances to until."""
