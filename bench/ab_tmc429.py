@@ -2,6 +2,7 @@
 wall-clock figures of bench/run.py useless for small differences; CPU time of this process is not).
 
     python bench/ab_tmc429.py /tmp/old /path/to/repo      # alternates the trees, five rounds
+    python bench/ab_tmc429.py --rounds 15 /tmp/old .      # more rounds on a busy machine
 
 Each round runs, in a fresh interpreter per tree and with that tree's `src` first on the path,
 the cold-braking move at A_MAX=4 (bench_tmc429's last row), the six-move arrival run and the
@@ -11,6 +12,7 @@ bench row still run the same code.
 """
 from __future__ import annotations
 
+import argparse
 import statistics
 import subprocess
 import sys
@@ -79,9 +81,13 @@ def _line(figures: list[float]) -> str:
 
 
 def main() -> None:
-    trees = sys.argv[1:] or ["."]
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rounds", type=int, default=5)
+    ap.add_argument("trees", nargs="*", default=["."])
+    args = ap.parse_args()
+    trees = args.trees
     seen: dict[str, list[list[float]]] = {tree: [] for tree in trees}
-    for _ in range(5):
+    for _ in range(args.rounds):
         for tree in trees:
             figures = _run(tree)
             seen[tree].append(figures)

@@ -266,11 +266,10 @@ def _lag_walk(c: int, w: int, left: int, a: int, low: int, pm: int, sh: int, rp:
     n = nw >> 8
     while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
         left -= n
-        w = nw
         c += rp
         nw -= a
         n = nw >> 8
-    return c, w, left
+    return c, nw + a, left
 
 
 def _on_target(c: int, n: int, left: int, rp: int, last: int, a: int, pm: int, sh: int,
