@@ -29,9 +29,11 @@ something changes (end of a ramp, the computed ramp_mode target binding,
 arrival, a soft-mode target change) is found by binary search on those closed
 forms. That one cycle is then applied exactly. Where the ramp_mode velocity
 follows its computed target down the square-root curve (`_Follow`), runs on the
-target and runs falling by A_MAX inside one velocity level are jumped by
-arithmetic, the ticks between them walked (a few per velocity level), and the
-result is memoised by the state it starts from (repeated moves cost O(1)). The per-tick oracle in
+target (and the levels followed down one by one after them) and runs falling by
+A_MAX inside one velocity level are jumped by arithmetic, the other ticks walked
+(at most a few per velocity level). Follow stretches and the plans of
+`next_event` are memoised by the state they start from, relative to `now`, so a
+repeated move costs O(1) per phase (docs/motion-tmc429.md). The per-tick oracle in
 tests/motion/tmc429_reference.py defines the behaviour this must reproduce.
 """
 from __future__ import annotations
