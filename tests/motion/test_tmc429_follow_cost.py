@@ -157,3 +157,73 @@ def test_braking_at_equal_dividers_evaluates_the_target_on_few_ticks(a_max, v_ma
     assert not (ref.x_actual == target and ref.v == 0)
     ref.advance(fast.now)
     assert state(ref) == state(fast)
+
+
+@pytest.mark.parametrize("a_max", [1, 2, 4, 8, 16])
+def test_first_braking_follows_the_levels_down_without_square_roots(a_max):
+    """TMC4210 6.1.9: V_TARGET is calculated "for each ramp step" and "Whenever V_TARGET falls
+    below the actual velocity, the TMC4210 decelerates"; with A_MAX (6.1.7) dividing 256 and p
+    from 6.1.9.2 the velocity lands on each velocity level and stays there while the target
+    does. The fast core walks those levels with the level starts ceil(n^2 * 2^(3+PDIV) / PMUL)
+    (docs/motion-tmc429.md), so a cold 3 000 000-step move at V_MAX = 2047 evaluates the target
+    at most 64 times in all (2047 levels; at least one evaluation per level before); the
+    braking lands where the per-tick oracle lands, on the same cycle."""
+    pmul, pdiv = registers_for(a_max, 0, 0)
+    regs = {"v_max": 2047, "v_min": 1, "a_max": a_max, "pmul": pmul, "pdiv": pdiv}
+    fast, probe = Tmc429Ramp(position_bits=32), Tmc429Ramp(position_bits=32)
+    apply((fast, probe), regs)
+    apply((fast, probe), {"x_target": 3_000_000})
+    tmc429._FOLLOW_MEMO.clear()
+    with counted_isqrt() as calls:
+        while (e := fast.next_event()) is not None:
+            fast.advance(e)
+    assert fast.position_reached and fast.x_actual == 3_000_000
+    assert calls[0] <= 64
+    if a_max != 4:          # the oracle is slow: one braking (131 008 ticks) checked
+        return
+    while probe.a_actual >= 0:
+        probe.advance(probe.next_event())
+    ref = RecordingReference(position_bits=32)
+    apply((ref,), regs)
+    ref.now, ref.x_actual, ref.x_target = probe.now, probe.x_actual, probe.x_target
+    ref.v, ref.acc, ref.acc_dir = probe.v_internal, probe._acc, probe._acc_dir
+    ref.advance(fast.now - 1)
+    assert not (ref.x_actual == 3_000_000 and ref.v == 0)
+    ref.advance(fast.now)
+    assert state(ref) == state(fast)
+
+
+def test_a_repeated_move_is_planned_once():
+    """TMC4210 6.1.9 / PD86-1180 MVP (4.6.4): back-and-forth moves of 20 000 steps at V_MAX =
+    2047, A_MAX = 1000 repeat the same motion relative to their start once the pulse
+    accumulator's fraction repeats. From the fourth move on the fast core takes every phase from
+    its memo (docs/motion-tmc429.md): at most one target evaluation per event (the ramp tick
+    it applies), where planning alone evaluates it several times. Every event, and cycles
+    sampled inside the phases (a second core, planned from the same memo), match the per-tick
+    oracle."""
+    pmul, pdiv = registers_for(1000, 0, 0)
+    regs = {"v_max": 2047, "v_min": 1, "a_max": 1000, "pmul": pmul, "pdiv": pdiv}
+    fast, sampled = Tmc429Ramp(position_bits=32), Tmc429Ramp(position_bits=32)
+    ref = RecordingReference(position_bits=32)
+    apply((fast, sampled, ref), regs)
+    tmc429._FOLLOW_MEMO.clear()
+    for move in range(8):
+        target = 0 if move % 2 else 20_000
+        apply((fast, sampled, ref), {"x_target": target})
+        events = 0
+        with counted_isqrt() as calls:
+            while (e := fast.next_event()) is not None:
+                fast.advance(e)
+                events += 1
+        assert fast.position_reached and fast.x_actual == target
+        if move >= 3:
+            assert calls[0] <= events
+        while (e := sampled.next_event()) is not None:
+            middle = (sampled.now + e) // 2
+            for r in (sampled, ref):
+                r.advance(middle)
+            assert state(sampled) == state(ref)
+            for r in (sampled, ref):
+                r.advance(e)
+            assert state(sampled) == state(ref)
+        assert state(sampled)[1:] == state(fast)[1:]

@@ -29,9 +29,11 @@ something changes (end of a ramp, the computed ramp_mode target binding,
 arrival, a soft-mode target change) is found by binary search on those closed
 forms. That one cycle is then applied exactly. Where the ramp_mode velocity
 follows its computed target down the square-root curve (`_Follow`), runs on the
-target and runs falling by A_MAX inside one velocity level are jumped by
-arithmetic, the ticks between them walked (a few per velocity level), and the
-result is memoised by the state it starts from (repeated moves cost O(1)). The per-tick oracle in
+target (and the levels followed down one by one after them) and runs falling by
+A_MAX inside one velocity level are jumped by arithmetic, the other ticks walked
+(at most a few per velocity level). Follow stretches and the plans of
+`next_event` are memoised by the state they start from, relative to `now`, so a
+repeated move costs O(1) per phase (docs/motion-tmc429.md). The per-tick oracle in
 tests/motion/tmc429_reference.py defines the behaviour this must reproduce.
 """
 from __future__ import annotations
@@ -99,7 +101,7 @@ def _linear_floor_sum(count: int, start: int, slope: int) -> int:
     return floor_sum(count, 256, -slope, last)
 
 
-@dataclass
+@dataclass(slots=True)
 class _Follow:
     """A ramp_mode stretch following the computed target (`Tmc429Ramp._follow`), from t0."""
 
@@ -111,8 +113,14 @@ class _Follow:
     moved: bool         # a pulse tick saw a non-zero velocity
 
 
+    def shifted(self, shift: int) -> _Follow:
+        """The same stretch from t0 + shift."""
+        return _Follow(self.t0 + shift, self.event_offset, self.end_offset, self.total,
+                       self.w_end, self.moved)
+
+
 _FollowKey = tuple[int, int, int, int, int, int, int, int, int, int]
-_FOLLOW_MEMO: dict[_FollowKey, tuple[int, int, int, int, bool]] = {}
+_PlanKey = tuple[int, ...]
 _FOLLOW_MEMO_SIZE = 4096
 _FOREVER = 1 << 80
 """Cycles past any `limit` (a walk without one)."""
@@ -167,7 +175,7 @@ class _Walk:
             m += 1
 
 
-@dataclass
+@dataclass(slots=True)
 class _Phase:
     """Closed form of the motion from `t0` while the ramp target stays `vt`."""
 
@@ -208,6 +216,13 @@ class _Phase:
         total += m * self.ramp_sum(ja + 1 - self.j0, 1, jb - ja - 1)
         return total
 
+    def shifted(self, shift: int) -> _Phase:
+        """The same phase from t0 + shift (shift: a multiple of both tick periods)."""
+        pp = self.pulse_period
+        return _Phase(self.t0 + shift, self.ramp_period, pp, self.j0 + shift // self.ramp_period,
+                      self.i0 + shift // pp, self.w0, self.delta, self.direction, self.acc0,
+                      self.i_dir + shift // pp)
+
     def nth_step_cycle(self, n: int, t_hi: int | None) -> int | None:
         """Cycle of the n-th step after t0 (n >= 1), if it happens by t_hi."""
         if self.direction == 0:
@@ -242,8 +257,106 @@ class _Phase:
         return lo * self.pulse_period
 
 
+def _lag_walk(c: int, w: int, left: int, a: int, low: int, pm: int, sh: int, rp: int,
+              last: int) -> tuple[int, int, int]:
+    """Lagging ramp ticks from tick c on at PULSE_DIV == RAMP_DIV: |v| falls by A_MAX with
+    the computed target at or below it (6.1.9). With V_MIN <= V_MAX three integer tests on
+    the new level n decide such a tick without a square root: |v| - A_MAX > V_MIN * 256,
+    n < `left` (no arrival), PMUL * left >> (3 + PDIV) < (n + 1)^2 (the target is at most n).
+    Returns (c, |v|, left) before the first other tick or past `last`."""
+    nw = w - a
+    n = nw >> 8
+    while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
+        left -= n
+        c += rp
+        nw -= a
+        n = nw >> 8
+    return c, nw + a, left
+
+
+def _on_target(c: int, n: int, left: int, rp: int, last: int, a: int, pm: int, sh: int,
+               floor: int) -> tuple[int, int, int]:
+    """Ramp ticks from tick c on at PULSE_DIV == RAMP_DIV with |v| = n * 256 on its computed
+    target (6.1.9), `left` > n units before the arrival step: the target stays n while left
+    >= level start L(n) = ceil(n^2 * 2^(3+PDIV) / PMUL) and each pulse adds n. After that,
+    as long as the target falls one level at a time (to m = n - 1 > V_MIN), |v| falls by
+    A_MAX: 255 // A_MAX ticks strictly between the levels, then the one that lands on m * 256,
+    each adding m, and the ticks on level m follow. Stops before an arrival, V_MIN and past
+    `last`: (c, n, left) with |v| = n * 256 before tick c."""
+    ln = -(-(n * n << sh) // pm)
+    k = min((left - ln) // n + 1, (left - 1) // n, (last - c) // rp + 1)   # >= 1
+    left -= k * n
+    c += k * rp
+    if left >= ln or a == 0:                    # stopped before an arrival or past `last`
+        return c, n, left
+    r = 255 // a
+    fall = r * rp
+    while n - 1 > floor:
+        m = n - 1
+        lm = -(-(m * m << sh) // pm)
+        snap = left - r * m                     # left before the tick that lands on m * 256
+        if snap < lm or lm <= m or c + fall > last:
+            break                               # (lm > m: no arrival on level m)
+        left = snap - m
+        c += fall + rp
+        n = m
+        if left >= lm:                          # ticks on the target at level m
+            k = (left - lm) // m + 1
+            if c + (k - 1) * rp > last:
+                k = (last - c) // rp + 1
+            left -= k * m
+            c += k * rp
+    return c, n, left
+
+
+def _lag_run(c: int, w: int, left: int, a: int, rp: int, last: int, pm: int, sh: int,
+             vmin: int, vmax: int) -> tuple[int, int, int]:
+    """Ramp ticks from tick c on at PULSE_DIV == RAMP_DIV and 0 < A_MAX < 32 over which |v|
+    (w before tick c) falls by A_MAX above its computed target (tick c does, `left` > the
+    units of its pulse), level by level: inside level n (n * 256 <= |v| < n * 256 + 256) each
+    pulse adds n and, as `left` only falls, the level's first tick decides that the target
+    stays at most n: V_MIN <= n and (V_MAX <= n or left < L(n + 1)). Stops before an arrival,
+    before |v| lands on V_MIN * 256 and past `last`: (c, |v|, left) after the ticks done."""
+    low = min(vmin, vmax) << 8
+    while True:
+        nw = w - a
+        n = nw >> 8
+        base = n << 8 if n << 8 > low else low + 1   # lowest |v| of the run in this level
+        ticks = (nw - base) // a + 1
+        cap = (left - 1) // n if n else ticks         # pulses before the arrival one
+        room = (last - c) // rp + 1
+        if ticks >= cap or ticks >= room or base > n << 8:
+            ticks = min(ticks, cap, room)
+            return c + ticks * rp, nw - a * (ticks - 1), left - ticks * n
+        left -= ticks * n
+        c += ticks * rp
+        w = nw - a * (ticks - 1)
+        m = n - 1
+        if m < vmin or (vmax > m and left >= -(-(n * n << sh) // pm)):
+            return c, w, left                       # the target catches up in level m
+
+
 _Plan = tuple[int | None, int | None, _Phase | _Follow]
 """(event, clamp, phase) of `Tmc429Ramp._plan`."""
+
+
+class _Memo:
+    """Results by the state they start from, relative to `now`, so that a repeated move costs
+    O(1): follow stretches (`Tmc429Ramp._follow_plan`) and whole plans of `next_event`
+    (`Tmc429Ramp._memo_plan`), at most `_FOLLOW_MEMO_SIZE` of each (emptied when full)."""
+
+    __slots__ = ("follow", "plans")
+
+    def __init__(self) -> None:
+        self.follow: dict[_FollowKey, tuple[int, int, int, int, bool]] = {}
+        self.plans: dict[_PlanKey, tuple[int, _Plan]] = {}
+
+    def clear(self) -> None:
+        self.follow.clear()
+        self.plans.clear()
+
+
+_FOLLOW_MEMO = _Memo()
 
 
 class Tmc429Ramp:
@@ -720,7 +833,8 @@ class Tmc429Ramp:
         """Plan of a stretch where the ramp_mode velocity follows its computed target:
         walked on a copy up to `until` (None: to its end, memoised by the start state)."""
         key = self._follow_key()
-        hit = _FOLLOW_MEMO.get(key)
+        memo = _FOLLOW_MEMO.follow
+        hit = memo.get(key)
         if hit is not None:
             seg = _Follow(self.now, *hit)
             return self.now + seg.event_offset, None, seg
@@ -729,9 +843,9 @@ class Tmc429Ramp:
         hit = (event - self.now, probe.now - self.now, probe._units_made, abs(probe._v),
                probe._moved)
         if until is None or event <= until:           # the whole stretch: remember it
-            if len(_FOLLOW_MEMO) >= _FOLLOW_MEMO_SIZE:
-                _FOLLOW_MEMO.clear()
-            _FOLLOW_MEMO[key] = hit
+            if len(memo) >= _FOLLOW_MEMO_SIZE:
+                memo.clear()
+            memo[key] = hit
         seg = _Follow(self.now, *hit)
         return event, None, seg
 
@@ -743,11 +857,24 @@ class Tmc429Ramp:
                 self._pulse_div, self._a_max, self._v_min, self._v_max, self._pmul, self._pdiv)
 
     def _follow(self, limit: int | None, steps: _Steps | None) -> int:
-        """Go through ramp_mode from now while the velocity heads for the target, tick by
-        tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at
+        """Go through ramp_mode from now while the velocity heads for the target (6.1.9), tick
+        by tick but runs of one velocity or of one level falling by A_MAX in one go. Stops at
         `limit`, just before the arrival step, or after the tick that reaches V_MIN (or 0);
         returns the cycle to apply exactly next. `steps` collects (cycle, direction) of
         each step made."""
+        s = _sign(self.dx)
+        if self._ramp_div == self._pulse_div and steps is None:
+            t, w, total, moved, event = self._follow_fast(limit)
+        else:
+            t, w, total, moved, event = self._follow_walk(limit, steps)
+        self._units_made, self._moved = total, moved
+        self._settle(t, self._made(s) + total, s * w, s, moved)
+        return event
+
+    def _follow_walk(self, limit: int | None,
+                     steps: _Steps | None) -> tuple[int, int, int, bool, int]:
+        """`_follow` for any dividers, the steps recorded: (t, |v|, units added, moved,
+        event)."""
         dx = self.dx
         s, d = _sign(dx), abs(dx)
         units = self._remaining(s, d)
@@ -757,17 +884,9 @@ class Tmc429Ramp:
         t = self.now
         moved = False
         event: int | None = None
-        fast = self._ramp_div == self._pulse_div and steps is None
         while event is None:
-            if fast:        # tick by tick inlined, back here for a run worth jumping
-                t, w, walk.total, moved, event = self._follow_fast(t, w, units, walk.total,
-                                                                   moved, limit, floor)
-                if event is not None:
-                    break
             t, w, moved, event = self._follow_step(walk, t, w, moved, limit, floor)
-        self._units_made, self._moved = walk.total, moved
-        self._settle(t, walk.made0 + walk.total, s * w, s, moved)
-        return event
+        return t, w, walk.total, moved, event
 
     def _follow_step(self, walk: _Walk, t: int, w: int, moved: bool, limit: int | None,
                      floor: int) -> tuple[int, int, bool, int | None]:
@@ -825,67 +944,51 @@ class Tmc429Ramp:
             return c, w, moved, c + 1
         return c, w, moved, None
 
-    def _follow_fast(self, t: int, w: int, units: int, total: int, moved: bool,
-                     limit: int | None, floor: int) -> tuple[int, int, int, bool, int | None]:
-        """`_follow` for PULSE_DIV == RAMP_DIV (one pulse right after each ramp tick), the
-        same rules inlined; hands back (event None) before a run worth jumping (one
-        velocity on the target, or many ticks falling inside one level), at `limit`, or
-        when done."""
+    def _follow_fast(self, limit: int | None) -> tuple[int, int, int, bool, int]:
+        """`_follow` for PULSE_DIV == RAMP_DIV, where a pulse follows each ramp tick: |v| moves
+        towards the computed target by at most A_MAX (6.1.9.2), then the pulse adds |v| >> 8
+        units (6.1.12.1). The per-tick rules run on locals; lagging ticks are walked by
+        `_lag_walk` (A_MAX >= 32) or `_lag_run` (level by level, 0 < A_MAX < 32), runs on the
+        target by `_on_target`. Returns (t, |v|, units added, moved, event)."""
         rp, a = 32 << self._ramp_div, self._a_max
         pm, sh, vmax, vmin = self._pmul, 3 + self._pdiv, self._v_max, self._v_min
-        low = floor << 8
-        lag_walk = a >= 32 and vmin <= vmax     # then the four tests below decide a lagging tick
-        left = units - total
-        c = (t // rp + 1) * rp
+        floor = min(vmin, vmax)
+        low = floor << 8                        # |v| reaching it ends the stretch (so does 0,
+        lag_walk = a >= 32 and vmin <= vmax     # which only a zero floor lets |v| reach)
+        lag_run = 0 < a < 32
+        dx = self.dx
+        units = left = self._remaining(_sign(dx), abs(dx))   # left >= 1 throughout
+        w = abs(self._v)
+        c = c0 = (self.now // rp + 1) * rp     # the next ramp tick
         last = c + _FOREVER if limit is None else limit
         while c <= last:
             if lag_walk:
-                # lagging: |v| falls by A_MAX with the computed target at or below it
-                # (6.1.9); stops before an arrival, V_MIN or `last`
-                nw = w - a
-                n = nw >> 8
-                while nw > low and n < left and pm * left >> sh < (n + 1) * (n + 1) and c <= last:
-                    left -= n
-                    w, t, moved = nw, c, True
-                    c += rp
-                    nw -= a
-                    n = nw >> 8
+                c, w, left = _lag_walk(c, w, left, a, low, pm, sh, rp, last)
                 if c > last:
                     break
             sp = isqrt(pm * left >> sh)
             sp = vmax if sp > vmax else (vmin if sp < vmin else sp)
-            after = self._fast_velocity(w, sp << 8, left)
-            if after is None:
-                return t, w, units - left, moved, None     # `_follow` jumps the run
-            n = after >> 8
-            if n and n >= left:                                # the arrival step at c
-                return c - 1, w, units - left, moved, c
-            w, t = after, c
+            tgt = sp << 8
+            if w == tgt and sp > floor and left > sp:
+                c, sp, left = _on_target(c, sp, left, rp, last, a, pm, sh, floor)
+                w = sp << 8
+                continue
+            if w <= tgt:
+                nw = w + a if w + a < tgt else tgt
+            elif w - a > tgt and lag_run and left > (w - a) >> 8:
+                c, w, left = _lag_run(c, w, left, a, rp, last, pm, sh, vmin, vmax)
+                continue
+            else:
+                nw = w - a if w - a > tgt else tgt
+            n = nw >> 8
+            if n >= left:                       # the arrival step at c
+                return c - 1, w, units - left, c > c0, c
+            w = nw
             left -= n
-            moved = moved or w > 0
-            if w == low or w == 0:
-                return t, w, units - left, moved, t + 1
+            if w == low:
+                return c, w, units - left, c > c0 or w > 0, c + 1
             c += rp
-        return t, w, units - left, moved, None
-
-    def _fast_velocity(self, w: int, tgt: int, left: int) -> int | None:
-        """|v| after a `_follow_fast` ramp tick from w towards the computed target tgt
-        (by at most A_MAX, 6.1.9.2), `left` units before the arrival step; None before
-        a run `_follow` jumps: one velocity on the target for 4 pulses or more, or
-        |v| falling by A_MAX inside one level for 8 ticks or more."""
-        a = self._a_max
-        if w == tgt:
-            n = w >> 8
-            low = min(self._v_min, self._v_max) << 8
-            sh = 3 + self._pdiv
-            if n and w > low and left + (-(n * n << sh) // self._pmul) >= n << 2:
-                return None
-            return w
-        if w < tgt:
-            return w + a if w + a < tgt else tgt
-        if w - a > tgt and (w - a) & 255 > a << 3:
-            return None
-        return w - a if w - a > tgt else tgt
+        return last, w, units - left, c > c0, last + 1
 
     def _brake_run(self, c: int, w: int, left: int, limit: int | None) -> tuple[int, int, int]:
         """Ramp ticks from tick c on (pulses before c done, `left` units to go) over which |v|
@@ -973,9 +1076,29 @@ class Tmc429Ramp:
         """Next cycle where the ramp phase changes or the target is reached
         (None: nothing changes without a new register write)."""
         if self._cached_plan is None:
-            self._cached_plan = self._plan(None)
+            self._cached_plan = self._memo_plan()
         event, clamp, _phase = self._cached_plan
         return _min_opt(event, clamp)
+
+    def _memo_plan(self) -> _Plan:
+        """`_plan(None)`, memoised by the whole state relative to now (`_Memo`): the
+        registers, dx, the velocity, the accumulator and the phase of the tick clocks."""
+        key = (self.dx, self._v, self._acc, self._acc_dir, self._stopping, self._mode,
+               self.now % (32 << max(self._ramp_div, self._pulse_div)), self._v_min,
+               self._v_max, self._v_target, self._a_max, self._pmul, self._pdiv,
+               self._pulse_div, self._ramp_div, self._modulus)
+        memo = _FOLLOW_MEMO.plans
+        hit = memo.get(key)
+        if hit is None:
+            plan = self._plan(None)
+            if len(memo) >= _FOLLOW_MEMO_SIZE:
+                memo.clear()
+            memo[key] = (self.now, plan)
+            return plan
+        now0, (event, clamp, phase) = hit
+        shift = self.now - now0
+        return (None if event is None else event + shift,
+                None if clamp is None else clamp + shift, phase.shifted(shift))
 
     def step_events(self, until: int) -> list[tuple[int, int]]:
         """(cycle, +1 or -1) of each step on cycles now+1 .. until; advances to until."""
