@@ -135,9 +135,12 @@ def _coordinate(ins: Instruction, name: str, profile: ModuleProfile, out: list[F
 def _interrupt(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
     if ins.command not in (25, 26, 37):
         return
-    if ins.type in profile.interrupts or (ins.type == ALL and ins.command != 37):
+    if ins.type == ALL:  # EI/DI 255: all interrupts; VECT 255 names no vector (TMCM-6212 3.6.30-3.6.32)
+        if ins.command == 37:
+            out.append(Finding("type", f"{name}: 255 is not an interrupt vector (it switches all interrupts)"))
         return
-    out.append(Finding("type", f"{name}: {profile.name} has no interrupt {ins.type}"))
+    if ins.type not in profile.interrupts:
+        out.append(Finding("type", f"{name}: {profile.name} has no interrupt {ins.type}"))
 
 
 _Rule = Callable[[Instruction, str, "ModuleProfile", list[Finding]], None]
