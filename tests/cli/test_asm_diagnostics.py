@@ -28,13 +28,6 @@ def test_three_errors_in_one_run_in_source_order(tmp_path):
     assert not (tmp_path / "bad.bin").exists()
 
 
-def test_one_error_stays_one_line(tmp_path):
-    (tmp_path / "one.tmc").write_text("ROL 0, 1\nWAIT POSS, 0, 0\n")
-    r = cli("asm", "one.tmc", cwd=tmp_path)
-    assert r.returncode == 2 and r.stderr == "opentmcl asm: error: one.tmc:2:6: unknown WAIT type 'POSS'; " \
-                                             "expected TICKS|POS|REFSW|LIMSW|RFS\n"
-
-
 def test_many_errors_are_cut_at_fifty(tmp_path):
     (tmp_path / "many.tmc").write_text("".join(f"BAD{i}\n" for i in range(57)))
     r = cli("asm", "many.tmc", cwd=tmp_path)

@@ -53,13 +53,6 @@ def test_more_than_fifty_errors_are_counted(client):
     assert len(out["errors"]) == 50 and out["more"] == 3
 
 
-def test_a_foreign_origin_cannot_assemble(client):
-    """The endpoint keeps the dashboard's guard (docs/dashboard.md): a foreign Origin gets 403."""
-    r = client.post("/m/1/api/program/assemble", json={"source": "STOP\n"},
-                    headers={"Origin": "http://evil.example"})
-    assert r.status_code == 403
-
-
 def test_the_vendored_editor_is_served_with_its_licence(client):
     """CodeMirror 5 is a static asset of the package (no CDN): script, stylesheet, licence and
     README with name and version beside them."""
