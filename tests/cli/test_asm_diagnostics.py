@@ -133,3 +133,11 @@ def test_load_warns_and_strict_refuses_the_download(tmp_path):
     r = cli("load", "l.tmc", "--to", "sim://TMCM-6212", "--strict", cwd=tmp_path)
     assert r.returncode == 2 and r.stdout == ""
     assert r.stderr == "opentmcl load: error: l.tmc:1:5: ROR: motor 7 does not exist on TMCM-6212 (motors 0..5)\n"
+
+
+def test_debug_strict_refuses_too(tmp_path):
+    """`debug` shares the connection options of `run` and `load`: --strict refuses the program."""
+    (tmp_path / "d.tmc").write_text("ROR 7, 1000\nSTOP\n")
+    r = cli("debug", "d.tmc", "--strict", cwd=tmp_path)
+    assert r.returncode == 2
+    assert r.stderr == "opentmcl debug: error: d.tmc:1:5: ROR: motor 7 does not exist on TMCM-6212 (motors 0..5)\n"

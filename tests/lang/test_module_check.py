@@ -6,9 +6,11 @@ The firmware answers such instructions with status 2 "Invalid command", 3 "Wrong
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
-from opentmcl.lang import AsmError, assemble
+from opentmcl.lang import AsmError, assemble, assemble_file
 
 
 def warned(source: str, module: str = "TMCM-6212") -> list[tuple[int, int, str]]:
@@ -102,3 +104,19 @@ def test_a_bad_profile_file_is_one_error(tmp_path):
     with pytest.raises(AsmError) as info:
         assemble("STOP", module=str(path))
     assert str(info.value).startswith(f"{path}: cannot use the module profile") and "\n" not in str(info.value)
+
+
+def test_the_manuals_own_slips_are_found():
+    """TMCM-6212 manual 7.4 prints "AAP MyVariable, 2 //Store contents of accumulator register to
+    variable" with MyVariable = 42: a user variable is stored with AGP (3.6.28), and axis
+    parameter 42 does not exist (Table 14), so the example as printed gets a warning. The
+    PD86-1180's 4.4.2.6.5 example switches OUT3 ("SIO 3, 2, 1"), a port only the TMCM-6212 has
+    (PD86-1180 4.6.14: OUT_0 and OUT_1)."""
+    examples = Path(__file__).parent / "examples"
+    prog = assemble_file(examples / "tmcm6212_7_4_variables.tmc", module="TMCM-6212")
+    assert [(d.line, d.column, d.message) for d in prog.warnings] == [
+        (9, 5, "AAP: TMCM-6212 has no axis parameter 42")]
+    timer = Path(__file__).parents[2] / "examples" / "pd86_1180_4.4.2.6.5_timer_interrupt.tmc"
+    prog = assemble_file(timer, module="PD86-1180")
+    assert [(d.line, d.message) for d in prog.warnings] == [
+        (11, "SIO: PD86-1180 has no port 3 in I/O bank 2"), (13, "SIO: PD86-1180 has no port 3 in I/O bank 2")]
