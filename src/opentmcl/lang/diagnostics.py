@@ -43,19 +43,33 @@ class Collector:
     def __init__(self, limit: int = MAX_REPORTED) -> None:
         self.limit = limit
         self._kept: list[Diagnostic] = []
+        self._seen: set[Diagnostic] = set()
+        self._cutoff: tuple[tuple[int, int], int] | None = None  # key of the last kept, once full
         self.more = 0
 
+    @staticmethod
+    def _key(d: Diagnostic) -> tuple[tuple[int, int], int]:
+        return d.order, d.column
+
     def add(self, diag: Diagnostic) -> None:
-        if diag in self._kept:
+        if diag in self._seen:
+            return
+        if self._cutoff is not None and self._key(diag) > self._cutoff:
+            self.more += 1  # after the first `limit`: counted, not kept
             return
         self._kept.append(diag)
+        self._seen.add(diag)
         if len(self._kept) > 2 * self.limit:
             self._trim()
 
     def _trim(self) -> None:
-        self._kept.sort(key=lambda d: (d.order, d.column))
-        self.more += max(0, len(self._kept) - self.limit)
+        self._kept.sort(key=self._key)
+        dropped = self._kept[self.limit:]
+        self.more += len(dropped)
         del self._kept[self.limit:]
+        self._seen.difference_update(dropped)
+        if len(self._kept) == self.limit:
+            self._cutoff = self._key(self._kept[-1])
 
     @property
     def items(self) -> list[Diagnostic]:
