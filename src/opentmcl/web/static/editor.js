@@ -204,8 +204,13 @@ async function assembleOnly(download) {
 }
 
 async function programAction(name) {
-  try { showProgramState(await api(`api/program/${name}`, {})); message(name); }
-  catch (e) { message(e.message, true); }
+  try {
+    const st = await api(`api/program/${name}`, {});
+    // A run to a breakpoint answers mid-run; the live state (WebSocket) brings where it stops,
+    // and may already have: a late mid-run answer must not overwrite it.
+    if (!st.stepping_to_breakpoint) showProgramState(st);
+    message(name);
+  } catch (e) { message(e.message, true); }
 }
 
 // ------------------------------------------------------------------ program state
