@@ -124,11 +124,14 @@ def test_duplicate_identical_constant_is_allowed():
 
 
 def test_module_checks_commands_and_memory():
-    """With a module: commands it lacks are errors (STAP is in the PD86-1180 set, the extended set
-    only in the PD28-1021's), and a program larger than its memory is an error."""
+    """With a module: commands it lacks are warnings, errors with strict (issue 15 item 6; STAP is
+    in the PD86-1180 set, the extended set only in the PD28-1021's), and a program larger than its
+    memory is an error."""
     assert ins("STAP 4, 0", module="PD86-1180")[0] == (7, 4, 0, 0)
-    e = err("ROL 0, 1\nCALCVV ADD, 1, 2", module="PD86-1180")
+    e = err("ROL 0, 1\nCALCVV ADD, 1, 2", module="PD86-1180", strict=True)
     assert (e.line, e.column) == (2, 1) and "not available on PD86-1180" in e.message
+    w = assemble("ROL 0, 1\nCALCVV ADD, 1, 2", module="PD86-1180").warnings
+    assert [(d.line, d.column, d.severity) for d in w] == [(2, 1, "warning")]
     assert ins("CALCVV ADD, 1, 2")[0] == (40, 0, 1, 2)  # no module: no check
     from opentmcl.modules.profile import load_profile
     size = load_profile("PD86-1180").program_memory

@@ -74,36 +74,6 @@ def test_edit_axis_parameter(page, served):
     assert title  # the manual's description on hover
 
 
-def test_assemble_error_is_shown_inline(page):
-    """An unknown mnemonic is an assembler error on its line (docs/tmcl-assembler.md)."""
-    open_view(page, "program")
-    page.fill("#editor", "    MVP ABS, 0, 100\n    FOO 1\n")
-    page.click("#btn-assemble")
-    page.wait_for_selector("#line-2.error", timeout=TIMEOUT_MS)
-    assert "line 2" in page.inner_text("#asm-errors")
-
-
-def test_download_and_step_program(page, served):
-    """Manual 3.6.36: 132/133 download, 130 executes one instruction, 135 reports the program counter.
-    Stepping highlights the next line and shows A (manual 3.6.26 CALC LOAD puts the value into A)."""
-    source = "    CALC LOAD, 5\n    CALC ADD, 2\n    AGP 3, 2\n    STOP\n"
-    open_view(page, "program")
-    page.fill("#editor", source)
-    page.click("#btn-download")
-    page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",
-                           timeout=TIMEOUT_MS)
-    page.click("#btn-step")
-    page.wait_for_function("document.getElementById('prog-pc').textContent === '1'", timeout=TIMEOUT_MS)
-    page.wait_for_selector("#line-2.current", timeout=TIMEOUT_MS)
-    assert page.inner_text("#prog-a") == "5"
-    page.click("#btn-step")
-    page.click("#btn-step")
-    page.wait_for_function("document.getElementById('prog-pc').textContent === '3'", timeout=TIMEOUT_MS)
-    page.wait_for_function("document.getElementById('prog-var-3') && "
-                           "document.getElementById('prog-var-3').textContent === '7'", timeout=TIMEOUT_MS)
-    page.screenshot(path=str(ARTIFACTS / "dashboard-program.png"), full_page=True)
-
-
 def test_switch_output_and_force_input(page, served):
     """TMCM-6212 manual 3.6.12 SIO / 3.6.13 GIO: OUT2 (bank 2) is switched from the page; the
     virtual module's IN1 (bank 0) is forced to 1 and read back by GIO."""
@@ -116,30 +86,6 @@ def test_switch_output_and_force_input(page, served):
     page.wait_for_function("document.getElementById('io-val-0-1').textContent === '1 (forced)'",
                            timeout=TIMEOUT_MS)
     assert served.dashboard.module.digital_input(1) == 1
-
-
-def test_run_stops_at_breakpoint(page, served):
-    """Host-side breakpoints (docs/assumptions.md): Run single-steps (manual 3.6.36 command 130) until
-    the program counter reaches the line; the accumulator counts the passes of the loop (manual
-    3.6.26 CALC ADD)."""
-    open_view(page, "program")
-    page.fill("#editor", "    CALC LOAD, 0\nLoop:\n    CALC ADD, 1\n    JA Loop\n")
-    page.click("#btn-download")
-    page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",
-                           timeout=TIMEOUT_MS)
-    page.click("#gutter-3")
-    page.wait_for_selector("#gutter-3.bp")
-    page.wait_for_function("window.fetch('api/program').then(r => r.json())"
-                           ".then(j => j.state.breakpoints.length === 1)", timeout=TIMEOUT_MS)
-    page.click("#btn-run")  # from address 0: CALC LOAD runs, then the PC is at the breakpoint
-    page.wait_for_function("document.getElementById('prog-line').textContent === '3' && "
-                           "document.getElementById('prog-a').textContent === '0'", timeout=TIMEOUT_MS)
-    page.wait_for_selector("#line-3.current", timeout=TIMEOUT_MS)
-    page.click("#btn-run")  # once round the loop: CALC ADD, JA, back at the breakpoint
-    page.wait_for_function("document.getElementById('prog-line').textContent === '3' && "
-                           "document.getElementById('prog-a').textContent === '1'", timeout=TIMEOUT_MS)
-    st = served.dashboard.program_state()
-    assert st["pc"] == 1 and st["a"] == 1 and st["mode"] != 1
 
 
 def test_bus_with_two_modules_has_a_selector(browser, served_bus):

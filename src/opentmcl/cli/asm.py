@@ -1,9 +1,17 @@
-"""`opentmcl asm SOURCE.tmc -o OUT.bin`: assemble TMCL-IDE source to a binary program file."""
+"""`opentmcl asm SOURCE.tmc -o OUT.bin`: assemble TMCL-IDE source to a binary program file.
+
+Every error and warning is printed on stderr as `file:line:column: [warning: ]message`, in source
+order (docs/tmcl-assembler.md "Errors and warnings").
+"""
 from __future__ import annotations
 
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ..lang.assembler import AsmError, Program
 
 from ..atomicfile import write_atomic
 from . import CliError, same_file
@@ -16,14 +24,72 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", help="binary output file (default: SOURCE with .bin; '-' for stdout)")
     p.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
                    help="add a directory to the #include search path (repeatable)")
-    p.add_argument("-m", "--module", help="target module (TMCM-6212, PD86-1180, PD28-1021): selects the "
-                   "bundled include files and checks commands and program size")
+    p.add_argument("-m", "--module", metavar="NAME|FILE", help="target module (TMCM-6212, PD86-1180, PD28-1021 "
+                   "or a profile file NAME.toml): selects the bundled include files, checks the program size "
+                   "and warns about instructions the module cannot execute")
+    add_strict_option(p)
     p.add_argument("-D", "--define", action="append", default=[], metavar="NAME=VALUE",
                    help="define a constant (repeatable)")
     p.add_argument("-l", "--listing", metavar="FILE", help="write a listing ('-' for stdout)")
     p.add_argument("-s", "--symbols", metavar="FILE", help="write the label table ('-' for stdout)")
     p.add_argument("--no-stop", action="store_true", help="do not append the trailing STOP")
     p.set_defaults(func=run)
+
+
+MAX_LISTED = 50  # findings printed for a binary program (diagnostics.MAX_REPORTED)
+
+
+def add_strict_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--strict", action="store_true", help="refuse instructions the module cannot execute "
+                   "(motor, bank, parameter or port number, opcode) instead of warning")
+
+
+def print_warnings(program: Program) -> None:
+    """The warnings of a successful assembly, one line each on stderr."""
+    from ..lang.diagnostics import more_line
+
+    for diag in program.warnings:
+        print(diag, file=sys.stderr)
+    if program.warnings_more:
+        print(more_line(program.warnings_more, "warning"), file=sys.stderr)
+
+
+def error_lines(exc: AsmError) -> CliError:
+    """Print every error and warning of a failed assembly (source order) and return the CliError
+    that ends the command: the error itself when it is the only diagnostic, else the counts."""
+    from ..lang.diagnostics import more_line, summary
+
+    found = exc.diagnostics()
+    if len(found) == 1 and not exc.more:
+        return CliError(str(found[0]))
+    for diag in found:
+        print(diag, file=sys.stderr)
+    for count, what in ((exc.more, "error"), (exc.warnings_more, "warning")):
+        if count:
+            print(more_line(count, what), file=sys.stderr)
+    return CliError(summary(len(exc.errors) + exc.more, len(exc.warnings) + exc.warnings_more))
+
+
+def check_binary(path: str, code: list, module: str | None, strict: bool) -> None:
+    """Warn about (or, strict, refuse) the records of a binary program `module` cannot execute."""
+    from ..lang.capabilities_check import check
+    from ..lang.diagnostics import ERROR, WARNING, Diagnostic, more_line, summary
+    from ..modules.profile import load_profile
+
+    if module is None:
+        return
+    try:
+        profile = load_profile(module)
+    except (KeyError, OSError, ValueError) as exc:
+        raise CliError(f"cannot use the module profile {module}: {exc.args[0] if exc.args else exc}") from None
+    found = [Diagnostic(path, 0, 0, f"record {addr}: {f.message}", ERROR if strict else WARNING)
+             for addr, ins in enumerate(code) for f in check(ins, profile)]
+    for diag in found[:MAX_LISTED]:
+        print(diag, file=sys.stderr)
+    if len(found) > MAX_LISTED:
+        print(more_line(len(found) - MAX_LISTED, "error" if strict else "warning"), file=sys.stderr)
+    if strict and found:
+        raise CliError(summary(len(found), 0))
 
 
 def _defines(items: list[str]) -> dict[str, int]:
@@ -75,11 +141,15 @@ def run(args: argparse.Namespace) -> int:
     from ..lang import binfile
     from ..lang.assembler import AsmError, assemble_file
 
+    if args.strict and not args.module:
+        raise CliError("--strict needs --module (the module whose capabilities are checked)")
     try:
         program = assemble_file(args.source, include_path=args.include, module=args.module,
-                                append_stop=not args.no_stop, defines=_defines(args.define))
+                                append_stop=not args.no_stop, defines=_defines(args.define),
+                                strict=args.strict)
     except AsmError as exc:
-        raise CliError(str(exc)) from None
+        raise error_lines(exc) from None
+    print_warnings(program)
     out = args.output or str(Path(args.source).with_suffix(".bin"))
     if "-" in (args.listing, args.symbols) and out == "-":
         raise CliError("only one of -o, -l and -s can write to stdout ('-')")

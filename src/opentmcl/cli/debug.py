@@ -301,7 +301,7 @@ def run(args: argparse.Namespace) -> int:
         module = client.module(args.address, name)
         if name is None and args.program.lower().endswith(".tmc"):
             name = module_name(module, args.module)
-        program = read_program(args.program, name or args.module or DEFAULT_MODULE, args.include)
+        program = read_program(args.program, name or args.module or DEFAULT_MODULE, args.include, strict=args.strict)
         loader = Loader(module)
         try:
             loader.download(program.instructions)

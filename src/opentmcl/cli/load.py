@@ -32,11 +32,13 @@ class LoadedProgram:
 
 
 def read_program(path: str, module: str | None, include: list[str] | None = None,
-                 origin: int = 0) -> LoadedProgram:
+                 origin: int = 0, strict: bool = False) -> LoadedProgram:
     """Assemble a .tmc file (for `module`, to be loaded at address `origin`) or read a .bin file
-    (loaded as it is: its jump addresses are those it was assembled with); CliError on any problem."""
+    (loaded as it is: its jump addresses are those it was assembled with); CliError on any problem.
+    What `module` cannot execute is printed as warnings on stderr, refused with `strict`."""
     from ..lang.assembler import AsmError, assemble_file
     from ..lang.binfile import BinFileError, read
+    from .asm import check_binary, error_lines, print_warnings
 
     p = Path(path)
     if p.suffix.lower() == ".bin":
@@ -48,11 +50,13 @@ def read_program(path: str, module: str | None, include: list[str] | None = None
             raise CliError(f"{path}: {exc}") from None
         if not code:
             raise CliError(f"{path}: empty program file (no 8-byte records)")
+        check_binary(str(p), code, module, strict)
         return LoadedProgram(code, {}, [None] * len(code), str(p))
     try:
-        prog = assemble_file(p, module=module, include_path=include or [], origin=origin)
+        prog = assemble_file(p, module=module, include_path=include or [], origin=origin, strict=strict)
     except AsmError as exc:
-        raise CliError(str(exc)) from None
+        raise error_lines(exc) from None
+    print_warnings(prog)
     return LoadedProgram(prog.instructions, dict(prog.labels), list(prog.source), str(p))
 
 
@@ -67,6 +71,8 @@ def add_connection_options(p: argparse.ArgumentParser, *, required: bool) -> Non
                    "module with command 136, or TMCM-6212 for a new virtual module)")
     p.add_argument("-I", "--include", action="append", default=[], metavar="DIR",
                    help="#include search directory (repeatable)")
+    from .asm import add_strict_option
+    add_strict_option(p)
 
 
 def check_connection_options(args: argparse.Namespace) -> None:
@@ -115,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         module = client.module(args.address)
         name = module_name(module, args.module) if args.program.lower().endswith(".tmc") else args.module
-        program = read_program(args.program, name, args.include, origin=args.start)
+        program = read_program(args.program, name, args.include, origin=args.start, strict=args.strict)
         loader = Loader(module)
         try:
             loader.download(program.instructions, start=args.start, verify=not args.no_verify)

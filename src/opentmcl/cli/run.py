@@ -118,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
         module = client.module(args.address, name)
         if name is None and args.program.lower().endswith(".tmc"):
             name = module_name(module, args.module)
-        program = read_program(args.program, name or args.module, args.include)
+        program = read_program(args.program, name or args.module, args.include, strict=args.strict)
         try:
             specs = [s for item in args.watch for s in item.split(",") if s.strip()]
             watches = parse_watches(specs or default_watches(module.profile))

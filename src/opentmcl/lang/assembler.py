@@ -15,8 +15,10 @@ Source syntax, one statement per line:
 - ``RAW command, type, motor, value`` emits any instruction verbatim (used by the disassembler for
   records that have no mnemonic form).
 
-Output: the program (a list of instructions), its 8-byte-record image, the label table and a
-listing. Errors raise AsmError naming file, line and column.
+Output: the program (a list of instructions), its 8-byte-record image, the label table, a
+listing and the warnings (`Program.warnings`). Every error is found in one run: AsmError carries
+them all, in source order (lang/diagnostics.py), each naming file, line and column. With a module,
+instructions it cannot execute (lang/capabilities_check.py) are warnings, or errors with `strict`.
 """
 from __future__ import annotations
 
@@ -32,6 +34,8 @@ from ..protocol import opcodes
 from ..protocol.frame import to_int32
 from ..protocol.opcodes import MOTOR, TYPE, VALUE, Command
 from .binfile import Instruction, encode
+from .capabilities_check import check as check_instruction
+from .diagnostics import ERROR, WARNING, Collector, Diagnostic, merged, more_line
 
 if TYPE_CHECKING:
     from ..modules.profile import ModuleProfile
@@ -58,11 +62,39 @@ _TOKEN_RE = re.compile(
 
 
 class AsmError(Exception):
-    """An error in TMCL source, with its position (1-based line and column)."""
+    """Errors in TMCL source. `file`, `line`, `column` (1-based; line 0: no position) and `message`
+    are those of the first error; `errors` lists every error in source order (at most
+    diagnostics.MAX_REPORTED, `more` counts the rest), `warnings` and `warnings_more` likewise.
+    str() is one line per error."""
 
-    def __init__(self, file: str, line: int, column: int, message: str):
-        super().__init__(f"{file}:{line}:{column}: {message}")
+    def __init__(self, file: str, line: int, column: int, message: str, *,
+                 order: tuple[int, int] = (0, 0)):
         self.file, self.line, self.column, self.message = file, line, column, message
+        self.errors = [Diagnostic(file, line, column, message, ERROR, order)]
+        self.warnings: list[Diagnostic] = []
+        self.more = self.warnings_more = 0
+        super().__init__(str(self.errors[0]))
+
+    @classmethod
+    def from_collected(cls, errors: Collector, warnings: Collector) -> AsmError:
+        first, *_ = kept = errors.items
+        exc = cls(first.file, first.line, first.column, first.message, order=first.order)
+        exc.errors, exc.more = kept, errors.more
+        exc.warnings, exc.warnings_more = warnings.items, warnings.more
+        exc.args = ("\n".join(str(d) for d in kept) + (f"\n{more_line(exc.more, 'error')}" if exc.more else ""),)
+        return exc
+
+    @property
+    def diagnostic(self) -> Diagnostic:
+        return self.errors[0]
+
+    def diagnostics(self) -> list[Diagnostic]:
+        """Errors and warnings together, in source order."""
+        return merged(self.errors, self.warnings)
+
+
+class _Cascade(AsmError):
+    """A consequence of an error already reported (a constant whose definition failed)."""
 
 
 @dataclass(frozen=True)
@@ -83,6 +115,10 @@ class Program:
     module: str | None = None
     filename: str = "<source>"
     origin: int = 0  # program memory address of the first instruction (labels are absolute)
+    warnings: list[Diagnostic] = field(default_factory=list)
+    """What the module cannot execute (only with a module), in source order."""
+    warnings_more: int = 0
+    """Warnings beyond diagnostics.MAX_REPORTED, counted but not listed."""
 
     def image(self) -> bytes:
         """The binary file contents (TMCL-IDE format: 8-byte records, no header)."""
@@ -239,6 +275,7 @@ class _Where:
     file: str
     line: int
     text: str
+    seq: int = 0  # position in reading order (an include's lines come where it is included)
 
 
 @dataclass
@@ -277,10 +314,19 @@ class _State:
     included: set[str] = field(default_factory=set)
     values: dict[str, int] = field(default_factory=dict)
     resolving: list[str] = field(default_factory=list)
+    poisoned: set[str] = field(default_factory=set)  # constants whose definition failed
+    errors: Collector = field(default_factory=Collector)
+    warnings: Collector = field(default_factory=Collector)
+    lines_read: int = 0
+    strict: bool = False
+
+    def report(self, exc: AsmError) -> None:
+        if not isinstance(exc, _Cascade):
+            self.errors.add(exc.diagnostic)
 
 
 def _fail(where: _Where, column: int, message: str) -> NoReturn:
-    raise AsmError(where.file, where.line, column, message)
+    raise AsmError(where.file, where.line, column, message, order=(where.seq, column))
 
 
 def bundled_include(name: str, module: str | None = None) -> Path | None:
@@ -355,8 +401,12 @@ def _read_file(path: Path, display: str, st: _State, where: _Where | None, depth
 def _read_text(text: str, display: str, path: Path | None, st: _State, depth: int) -> None:
     text = text.removeprefix("\ufeff")
     for lineno, raw in enumerate(text.splitlines(), 1):
-        where = _Where(display, lineno, raw)
-        _read_line(raw, where, path, st, depth)
+        st.lines_read += 1
+        where = _Where(display, lineno, raw, st.lines_read)
+        try:
+            _read_line(raw, where, path, st, depth)
+        except AsmError as exc:
+            st.report(exc)
 
 
 def _read_line(raw: str, where: _Where, path: Path | None, st: _State, depth: int) -> None:
@@ -377,7 +427,11 @@ def _read_line(raw: str, where: _Where, path: Path | None, st: _State, depth: in
         name = m.group(1)
         col = pos + m.start(1) + 1
         expr_col = pos + m.start(2) + 1
-        expr = _ExprParser(m.group(2), expr_col, lambda c, msg: _fail(where, c, msg)).parse()
+        try:
+            expr = _ExprParser(m.group(2), expr_col, lambda c, msg: _fail(where, c, msg)).parse()
+        except AsmError:
+            st.poisoned.add(name)  # its uses are not errors of their own
+            raise
         _define_constant(name, col, expr, where, st)
         return
     m = _WORD_RE.match(rest)
@@ -470,14 +524,33 @@ def _lookup(name: str, col: int, where: _Where, st: _State) -> int:
         return st.labels[name][0]
     if name in st.values:
         return st.values[name]
+    if name in st.poisoned:
+        raise _Cascade(where.file, where.line, col, f"{name!r} has an error in its definition")
     if name in st.constants:
-        if name in st.resolving:
-            chain = " -> ".join(st.resolving[st.resolving.index(name):] + [name])
-            _fail(where, col, f"constant defined in terms of itself: {chain}")
-        if len(st.resolving) > MAX_CONSTANT_DEPTH:
-            _fail(where, col, f"constant {st.resolving[0]!r} is defined through more than "
-                              f"{MAX_CONSTANT_DEPTH} levels of other constants (down to {name!r})")
-        st.resolving.append(name)
+        return _resolve(name, col, where, st)
+    hint = _names_like(name, st)
+    extra = f" (names are case-sensitive; did you mean {hint[0]!r}?)" if hint else ""
+    _fail(where, col, f"undefined symbol {name!r}{extra}")
+
+
+def _resolve(name: str, col: int, where: _Where, st: _State) -> int:
+    """The value of constant `name` (every definition must agree); an error poisons it."""
+    try:
+        return _resolve_checked(name, col, where, st)
+    except AsmError:
+        st.poisoned.add(name)
+        raise
+
+
+def _resolve_checked(name: str, col: int, where: _Where, st: _State) -> int:
+    if name in st.resolving:
+        chain = " -> ".join(st.resolving[st.resolving.index(name):] + [name])
+        _fail(where, col, f"constant defined in terms of itself: {chain}")
+    if len(st.resolving) > MAX_CONSTANT_DEPTH:
+        _fail(where, col, f"constant {st.resolving[0]!r} is defined through more than "
+                          f"{MAX_CONSTANT_DEPTH} levels of other constants (down to {name!r})")
+    st.resolving.append(name)
+    try:
         defs = st.constants[name]
         first = _eval(defs[0].expr, defs[0].where, st)
         for other in defs[1:]:
@@ -486,12 +559,10 @@ def _lookup(name: str, col: int, where: _Where, st: _State) -> int:
                 _fail(other.where, other.column,
                       f"constant {name!r} redefined as {v} (was {first} at "
                       f"{defs[0].where.file}:{defs[0].where.line})")
+    finally:
         st.resolving.pop()
-        st.values[name] = first
-        return first
-    hint = _names_like(name, st)
-    extra = f" (names are case-sensitive; did you mean {hint[0]!r}?)" if hint else ""
-    _fail(where, col, f"undefined symbol {name!r}{extra}")
+    st.values[name] = first
+    return first
 
 
 def _eval(e: _Expr, where: _Where, st: _State) -> int:
@@ -533,7 +604,7 @@ def _operand_value(stmt: _Stmt, op: _Operand, fld: str, st: _State) -> int:
         sym = opcodes.lookup_symbol(cmd, op.expr.name)
         if sym is not None:
             return sym
-        if op.expr.name not in st.labels and op.expr.name not in st.constants:
+        if op.expr.name not in (*st.labels, *st.constants, *st.poisoned):
             table = "|".join(cmd.symbol_table())
             _fail(stmt.where, op.column, f"unknown {cmd.mnemonic} type {op.expr.name!r}; expected {table}")
     v = _eval(op.expr, stmt.where, st)
@@ -561,34 +632,75 @@ def _encode_stmt(stmt: _Stmt, st: _State, profile: ModuleProfile | None) -> Inst
         n = len(stmt.operands)
         _fail(stmt.where, col, f"{cmd.mnemonic} does not take {n} operand{'s' if n != 1 else ''}; "
               f"expected {cmd.usage()}")
-    if profile is not None and cmd.number not in profile.opcodes:
-        _fail(stmt.where, stmt.column, f"{cmd.mnemonic} (command {cmd.number}) is not available on {profile.name}")
     fields = {TYPE: 0, MOTOR: 0, VALUE: 0}
     for op, fld in zip(stmt.operands, form, strict=True):
         fields[fld] = _operand_value(stmt, op, fld, st)
     return Instruction(cmd.number, fields[TYPE], fields[MOTOR], fields[VALUE])
 
 
-def _finish(st: _State, profile: ModuleProfile | None) -> Program:
+def _field_column(stmt: _Stmt, fld: str) -> int:
+    """Column of the operand that gave field `fld` (the mnemonic's when none did)."""
+    names = ("command", TYPE, MOTOR, VALUE) if stmt.command is None else \
+        stmt.command.form_for(len(stmt.operands)) or ()
+    for op, name in zip(stmt.operands, names, strict=False):
+        if name == fld:
+            return op.column
+    return stmt.column
+
+
+def _check_module(stmt: _Stmt, ins: Instruction, st: _State, profile: ModuleProfile) -> None:
+    for finding in check_instruction(ins, profile):
+        col = _field_column(stmt, finding.field)
+        severity = ERROR if st.strict else WARNING
+        diag = Diagnostic(stmt.where.file, stmt.where.line, col, finding.message, severity, (stmt.where.seq, col))
+        (st.errors if st.strict else st.warnings).add(diag)
+
+
+def _encode_all(st: _State, profile: ModuleProfile | None) -> tuple[list[Instruction], list[SourceLine | None]]:
     instructions: list[Instruction] = []
     sources: list[SourceLine | None] = []
     for stmt in st.statements:
-        instructions.append(_encode_stmt(stmt, st, profile))
+        try:
+            ins = _encode_stmt(stmt, st, profile)
+        except AsmError as exc:
+            st.report(exc)
+            continue
+        if profile is not None:
+            _check_module(stmt, ins, st, profile)
+        instructions.append(ins)
         sources.append(SourceLine(stmt.where.file, stmt.where.line, stmt.where.text))
     if st.append_stop:
         instructions.append(STOP)
         sources.append(None)
-    if profile is not None and st.origin + len(instructions) > profile.program_memory:
+    return instructions, sources
+
+
+def _check_size(st: _State, profile: ModuleProfile | None) -> None:
+    size = len(st.statements) + int(st.append_stop)
+    if profile is not None and st.origin + size > profile.program_memory:
         over = st.statements[max(0, min(profile.program_memory - st.origin, len(st.statements) - 1))]
         at = f" from address {st.origin}" if st.origin else ""
-        _fail(over.where, over.column, f"program has {len(instructions)} instructions{at}; "
+        _fail(over.where, over.column, f"program has {size} instructions{at}; "
               f"{profile.name} program memory holds {profile.program_memory}")
+
+
+def _finish(st: _State, profile: ModuleProfile | None) -> Program:
+    instructions, sources = _encode_all(st, profile)
+    try:
+        _check_size(st, profile)
+    except AsmError as exc:
+        st.report(exc)
     constants = {}
     for name in st.constants:
-        constants[name] = _lookup(name, 1, st.constants[name][0].where, st)
+        try:
+            constants[name] = _lookup(name, 1, st.constants[name][0].where, st)
+        except AsmError as exc:
+            st.report(exc)
+    if len(st.errors):
+        raise AsmError.from_collected(st.errors, st.warnings)
     labels = {name: addr for name, (addr, _) in st.labels.items()}
     return Program(instructions, labels, constants, sources, profile.name if profile else None,
-                   st.filename, st.origin)
+                   st.filename, st.origin, st.warnings.items, st.warnings.more)
 
 
 def _profile(module: str | None) -> ModuleProfile | None:
@@ -599,17 +711,21 @@ def _profile(module: str | None) -> ModuleProfile | None:
         return load_profile(module)
     except KeyError as exc:
         raise AsmError("<options>", 0, 0, str(exc.args[0])) from None
+    except (OSError, ValueError) as exc:  # a profile file that cannot be read or used
+        raise AsmError(str(module), 0, 0, f"cannot use the module profile: {exc}") from None
 
 
 def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[str | os.PathLike[str]] = (),
              module: str | None = None, append_stop: bool = True,
-             defines: Mapping[str, int] | None = None, origin: int = 0) -> Program:
-    """Assemble TMCL source text.
+             defines: Mapping[str, int] | None = None, origin: int = 0, strict: bool = False) -> Program:
+    """Assemble TMCL source text; AsmError lists every error (and the warnings so far).
 
-    `module` ("TMCM-6212", "PD86-1180", "PD28-1021" or an alias) selects the bundled include files
-    and checks that every command exists on that module and the program fits its memory; without
-    it the TMCM-6212 includes are used and nothing is checked. `defines` are extra constants.
-    `origin` is the program memory address the program is loaded at (labels are absolute).
+    `module` ("TMCM-6212", "PD86-1180", "PD28-1021", an alias or a profile file NAME.toml) selects
+    the bundled include files, checks that the program fits its memory (an error) and that the
+    module can execute every instruction - its opcodes, motors, parameter banks and numbers, ports,
+    coordinates and interrupts (`Program.warnings`; errors with `strict`). Without it the TMCM-6212
+    includes are used and nothing is checked. `defines` are extra constants. `origin` is the
+    program memory address the program is loaded at (labels are absolute).
     """
     if isinstance(origin, bool) or not isinstance(origin, int) or origin < 0:
         raise ValueError(f"origin must be a program memory address >= 0, not {origin!r}")
@@ -619,7 +735,7 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
         raise TypeError(f"assemble() takes the source text (str or bytes), not {type(source).__name__}; "
                         "assemble_file() reads a file")
     profile = _profile(module)
-    st = _State(module, [Path(p) for p in include_path], append_stop, filename, origin)
+    st = _State(module, [Path(p) for p in include_path], append_stop, filename, origin, strict=bool(strict))
     where = _Where("<defines>", 0, "")
     for name, value in (defines or {}).items():
         st.constants[name] = [_Const(where, 0, _Expr("num", 0, value=int(value)))]
@@ -632,8 +748,8 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
 
 def assemble_file(path: str | os.PathLike[str], *, include_path: Iterable[str | os.PathLike[str]] = (),
                   module: str | None = None, append_stop: bool = True,
-                  defines: Mapping[str, int] | None = None, origin: int = 0) -> Program:
-    """Assemble a source file; AsmError (line 0) if it cannot be read."""
+                  defines: Mapping[str, int] | None = None, origin: int = 0, strict: bool = False) -> Program:
+    """Assemble a source file; AsmError (line 0: no position) if it cannot be read."""
     p = Path(path)
     try:
         text = read_text(p, TEXT_MAX, "program source", errors="replace")
@@ -642,4 +758,4 @@ def assemble_file(path: str | os.PathLike[str], *, include_path: Iterable[str | 
     except OSError as exc:
         raise AsmError(str(p), 0, 0, f"cannot read file: {exc.strerror or exc}") from None
     return assemble(text, filename=str(p), include_path=include_path, module=module,
-                    append_stop=append_stop, defines=defines, origin=origin)
+                    append_stop=append_stop, defines=defines, origin=origin, strict=strict)

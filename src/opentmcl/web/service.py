@@ -329,20 +329,26 @@ class Dashboard:
 
     # --- TMCL program -----------------------------------------------------------------------
     def assemble(self, source: str) -> dict:
-        """Assemble for this module; errors come back with line and column for inline display."""
+        """Assemble for this module: every error and warning (what this module cannot execute) with
+        file, line, column and severity, in source order (docs/dashboard-program.md)."""
         from ..lang import AsmError, assemble
 
         where = _file_include(source)
         if where is not None:
-            return {"ok": False, "errors": [{"line": where, "column": 1, "message":
-                    "the dashboard includes only the bundled files (#include <tmcm6212.inc>), not paths"}]}
+            bad = {"file": "<editor>", "line": where, "column": 1, "severity": "error", "message":
+                   "the dashboard includes only the bundled files (#include <tmcm6212.inc>), not paths"}
+            return {"ok": False, "errors": [bad], "warnings": [], "diagnostics": [bad], "more": 0}
         try:
             prog = assemble(source, filename="<editor>", module=self.profile.name)
         except AsmError as exc:
-            return {"ok": False, "errors": [{"line": exc.line, "column": exc.column, "message": exc.message}]}
+            return {"ok": False, "errors": [d.as_dict() for d in exc.errors],
+                    "warnings": [d.as_dict() for d in exc.warnings],
+                    "diagnostics": [d.as_dict() for d in exc.diagnostics()], "more": exc.more + exc.warnings_more}
         lines = [src.line if src is not None and src.file == "<editor>" else None for src in prog.source]
-        return {"ok": True, "errors": [], "count": len(prog.instructions), "lines": lines,
-                "labels": prog.labels, "listing": prog.listing(), "_program": prog}
+        warnings = [d.as_dict() for d in prog.warnings]
+        return {"ok": True, "errors": [], "warnings": warnings, "diagnostics": warnings, "more": prog.warnings_more,
+                "count": len(prog.instructions), "lines": lines, "labels": prog.labels, "listing": prog.listing(),
+                "_program": prog}
 
     def download(self, source: str) -> dict:
         """Assemble, stop the program, download with verify (132, ..., 133, 134)."""

@@ -1,10 +1,64 @@
-// The "program" view: the TMCL program editor with breakpoints and stepping (moved from app.js as-is).
+// The "program" view: a CodeMirror 5 editor (static/vendor/codemirror) for TMCL-IDE source with
+// highlighting, every assembler error and warning marked at once, breakpoints and stepping
+// (docs/dashboard-program.md).
 "use strict";
 (() => {
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
-const D = {breakpoints: new Set(), errorLines: new Set(), currentLine: null, downloaded: false};
+const D = {cm: null, breakpoints: new Set(), currentLine: null, downloaded: false, marks: [], lineCount: 0,
+           diagnostics: []};
 
+// ------------------------------------------------------------------ the TMCL mode
+// Words as the manuals print them (TMCM-6212 3.4.1, 3.6; PD86-1180 4.6; PD28-1021 3.5); a browser
+// test compares them with the assembler's tables (protocol/opcodes.py).
+const WORDS = {
+  mnemonics: ("ROR ROL MST MVP SAP GAP STAP RSAP SGP GGP STGP RSGP RFS SIO GIO CALC COMP JC JA CSUB RSUB " +
+              "EI DI WAIT STOP SCO GCO CCO CALCX AAP AGP CLE VECT RETI ACO CALCVV CALCVA CALCAV CALCVX " +
+              "CALCXV CALCV MVPA RST DJNZ ROLA RORA SIV GIV AIV CALL UF0 UF1 UF2 UF3 UF4 UF5 UF6 UF7 RAW").split(" "),
+  // type operands: MVP, RFS, CALC/CALCX, WAIT, CLE
+  types: ("ABS REL COORD START STOP STATUS ADD SUB MUL DIV MOD AND OR XOR NOT LOAD SWAP " +
+          "TICKS POS REFSW LIMSW RFS ALL ETO EAL EDV EPO ESD").split(" "),
+  // JC / CALL conditions
+  conditions: "ZE NZ EQ NE GT GE LT LE ETO EAL EDV EPO ESD".split(" "),
+};
+const MNEMONIC = new Set(WORDS.mnemonics), CONDITION = new Set(WORDS.conditions), TYPE = new Set(WORDS.types);
+const CONDITIONAL = new Set(["JC", "CALL"]);
+const NUMBER = /^(?:0[xX][0-9A-Fa-f]+|\$[0-9A-Fa-f]+|0[bB][01]+|[0-9]+)/;
+const NAME = /^[A-Za-z_][A-Za-z0-9_]*/;
+
+function tmclMode() {
+  return {
+    startState: () => ({where: "start", mnemonic: null}),
+    token(stream, state) {
+      if (stream.sol()) { state.where = "start"; state.mnemonic = null; }
+      if (stream.eatSpace()) return null;
+      if (stream.match("//")) { stream.skipToEnd(); return "comment"; }
+      if (state.where === "start" && stream.match(/^#\s*[A-Za-z_]+/)) { state.where = "directive"; return "meta"; }
+      if (state.where === "directive") { stream.match(/^(?:[^/]|\/(?!\/))+/); return "string"; }
+      if (stream.match(NUMBER)) return "number";
+      const word = stream.match(NAME);
+      if (word) return wordStyle(word[0], stream, state);
+      return stream.next() === "," ? null : "operator";
+    },
+    lineComment: "//",
+  };
+}
+
+function wordStyle(word, stream, state) {
+  const upper = word.toUpperCase();
+  if (state.where === "start") {
+    if (stream.match(/^\s*:/, false)) return "def";                                 // Label:
+    if (stream.match(/^\s*=/, false)) { state.where = "operands"; return "def"; }  // Name = ...
+    state.where = "operands";
+    state.mnemonic = upper;
+    return MNEMONIC.has(upper) ? "keyword" : "variable";
+  }
+  if (CONDITIONAL.has(state.mnemonic) && CONDITION.has(upper)) return "builtin";
+  if (TYPE.has(upper)) return "atom";
+  return "variable";
+}
+
+// ------------------------------------------------------------------ markup
 const MARKUP = `
     <h2>TMCL program</h2>
     <div class="toolbar">
@@ -17,13 +71,7 @@ const MARKUP = `
       <span id="prog-message"></span>
     </div>
     <div class="columns">
-      <div id="editor-wrap">
-        <div id="editor-gutter"></div>
-        <div id="editor-area">
-          <div id="editor-backdrop"></div>
-          <textarea id="editor" spellcheck="false" wrap="off"></textarea>
-        </div>
-      </div>
+      <div id="program-editor"></div>
       <div id="prog-state">
         <table>
           <tr><th>State</th><td id="prog-mode">-</td></tr>
@@ -35,7 +83,8 @@ const MARKUP = `
         </table>
         <h3>User variables</h3>
         <table id="prog-vars"></table>
-        <p class="hint">Click a line number to set a breakpoint. Run with breakpoints single-steps to the next one.</p>
+        <p class="hint">Click a line number to set a breakpoint. Run with breakpoints single-steps to the next one.
+        Errors and warnings are marked in the left gutter and underlined; hover for the message.</p>
       </div>
     </div>
     <div id="asm-errors"></div>`;
@@ -56,32 +105,25 @@ Loop:
 `;
 
 const SOURCE_KEY = `opentmcl-source ${location.pathname}`;  // each module keeps its own program
+const BP_GUTTER = "cm-breakpoints", DIAG_GUTTER = "cm-asm-diagnostics";
 
-function editorLines() { return $("editor").value.split("\n").length; }
-
-function renderGutter() {
-  const n = editorLines(), gutter = $("editor-gutter"), back = $("editor-backdrop");
-  const g = [], b = [];
-  for (let i = 1; i <= n; i++) {
-    const d = el("div", {id: `gutter-${i}`, class: D.breakpoints.has(i) ? "bp" : "", title: "toggle breakpoint"}, i);
-    d.addEventListener("click", () => toggleBreakpoint(i));
-    g.push(d);
-    b.push(el("div", {id: `line-${i}`, class: i === D.currentLine ? "current" : D.errorLines.has(i) ? "error" : ""}, " "));
-  }
-  gutter.replaceChildren(...g);
-  back.replaceChildren(...b);
-  syncScroll();
-}
-
-function syncScroll() {
-  const t = $("editor");
-  $("editor-gutter").scrollTop = t.scrollTop;
-  $("editor-backdrop").scrollTop = t.scrollTop;
+// ------------------------------------------------------------------ breakpoints
+function renderBreakpoints() {
+  const cm = D.cm;
+  cm.operation(() => {
+    cm.clearGutter(BP_GUTTER);
+    for (let i = 1; i <= cm.lineCount(); i++) {
+      const bp = D.breakpoints.has(i);
+      cm.setGutterMarker(i - 1, BP_GUTTER, el("div", {id: `gutter-${i}`, class: bp ? "bp" : "",
+        title: bp ? "breakpoint (click to clear)" : "click to set a breakpoint"}, bp ? "●" : ""));
+    }
+  });
+  D.lineCount = cm.lineCount();
 }
 
 async function toggleBreakpoint(line) {
   if (D.breakpoints.has(line)) D.breakpoints.delete(line); else D.breakpoints.add(line);
-  renderGutter();
+  renderBreakpoints();
   if (D.downloaded) await pushBreakpoints();
 }
 
@@ -95,32 +137,92 @@ function message(text, error) {
   m.textContent = text; m.className = error ? "err" : "";
 }
 
-function showErrors(errors) {
-  D.errorLines = new Set(errors.map(e => e.line));
-  $("asm-errors").replaceChildren(...errors.map(e => el("div", {class: "asm-error"}, `line ${e.line}, column ${e.column}: ${e.message}`)));
-  renderGutter();
+// ------------------------------------------------------------------ errors and warnings
+function clearDiagnostics() {
+  for (const m of D.marks) m.clear();
+  D.marks = [];
+  D.cm.clearGutter(DIAG_GUTTER);
+}
+
+function tokenRange(cm, line, column) {
+  const text = cm.getLine(line) || "";
+  const ch = Math.min(Math.max(column - 1, 0), text.length);
+  const word = /^[A-Za-z0-9_$]+/.exec(text.slice(ch));
+  const end = word ? ch + word[0].length : Math.min(ch + 1, text.length);
+  return end > ch ? [ch, end] : [Math.max(0, text.length - 1), text.length];
+}
+
+function showDiagnostics(diags, more) {
+  const cm = D.cm;
+  D.diagnostics = diags;
+  clearDiagnostics();
+  const byLine = new Map();
+  diags.forEach((d, i) => {
+    if (d.file !== "<editor>" || d.line < 1 || d.line > cm.lineCount()) return;
+    const [from, to] = tokenRange(cm, d.line - 1, d.column);
+    D.marks.push(cm.markText({line: d.line - 1, ch: from}, {line: d.line - 1, ch: to},
+      {className: `cm-asm-${d.severity}`, attributes: {title: d.message, "data-diagnostic": String(i)}}));
+    if (!byLine.has(d.line)) byLine.set(d.line, []);
+    byLine.get(d.line).push(d);
+  });
+  for (const [line, list] of byLine) {
+    const severity = list.some(d => d.severity === "error") ? "error" : "warning";
+    cm.setGutterMarker(line - 1, DIAG_GUTTER, el("div", {class: `asm-mark ${severity}`, id: `diag-${line}`,
+      title: list.map(d => `${d.severity}: ${d.message}`).join("\n")}, severity === "error" ? "✖" : "▲"));
+  }
+  const items = diags.map(d => {
+    const at = d.file === "<editor>" ? `line ${d.line}, column ${d.column}` : `${d.file}:${d.line}:${d.column}`;
+    const row = el("div", {class: `asm-${d.severity}`}, `${at}: ${d.severity}: ${d.message}`);
+    if (d.file === "<editor>") row.addEventListener("click", () => { cm.focus(); cm.setCursor(d.line - 1, d.column - 1); });
+    return row;
+  });
+  if (more) items.push(el("div", {class: "asm-more"}, `... and ${more} more`));
+  $("asm-errors").replaceChildren(...items);
+}
+
+function counts(r) {
+  const e = r.errors.length, w = (r.warnings || []).length, more = r.more ? ` (+${r.more} more)` : "";
+  return `${e} error${e === 1 ? "" : "s"}, ${w} warning${w === 1 ? "" : "s"}${more}`;
 }
 
 async function assembleOnly(download) {
-  const source = $("editor").value;
+  const source = D.cm.getValue();
   try {
     const r = await api(download ? "api/program/download" : "api/program/assemble", {source});
-    showErrors(r.errors || []);
-    if (!r.ok) { message(`${r.errors.length} error(s)`, true); return false; }
+    showDiagnostics(r.diagnostics || r.errors || [], r.more || 0);
+    if (!r.ok) { message(counts(r), true); return false; }
+    const warned = (r.warnings || []).length ? ` (${counts(r)})` : "";
     if (download) {
       D.downloaded = true;
       await pushBreakpoints();
-      message(`downloaded ${r.count} instructions`);
+      message(`downloaded ${r.count} instructions${warned}`);
     } else {
-      message(`assembled: ${r.count} instructions`);
+      message(`assembled: ${r.count} instructions${warned}`);
     }
     return true;
   } catch (e) { message(e.message, true); return false; }
 }
 
 async function programAction(name) {
-  try { showProgramState(await api(`api/program/${name}`, {})); message(name); }
-  catch (e) { message(e.message, true); }
+  try {
+    const st = await api(`api/program/${name}`, {});
+    // A run to a breakpoint answers mid-run; the live state (WebSocket) brings where it stops,
+    // and may already have: a late mid-run answer must not overwrite it.
+    if (!st.stepping_to_breakpoint) showProgramState(st);
+    message(name);
+  } catch (e) { message(e.message, true); }
+}
+
+// ------------------------------------------------------------------ program state
+function setCurrentLine(line) {
+  const cm = D.cm;
+  if (line === D.currentLine) return;
+  if (D.currentLine && D.currentLine <= cm.lineCount()) cm.removeLineClass(D.currentLine - 1, "background", "current-line");
+  D.currentLine = line;
+  if (line && line <= cm.lineCount()) {
+    cm.addLineClass(line - 1, "background", "current-line");
+    cm.scrollIntoView({line: line - 1, ch: 0}, 40);
+  }
 }
 
 function showProgramState(p) {
@@ -133,60 +235,63 @@ function showProgramState(p) {
   $("prog-flags").textContent = p.flags;
   $("prog-vars").replaceChildren(...Object.entries(p.variables || {}).map(([n, v]) =>
     el("tr", {}, el("th", {}, `var ${n}`), el("td", {id: `prog-var-${n}`}, v ?? "-"))));
-  const line = D.downloaded ? p.line : null;
-  if (line !== D.currentLine) {
-    const old = D.currentLine && $(`line-${D.currentLine}`);
-    if (old) old.className = D.errorLines.has(D.currentLine) ? "error" : "";
-    D.currentLine = line;
-    const cur = line && $(`line-${line}`);
-    if (cur) cur.className = "current";
-  }
+  setCurrentLine(D.downloaded ? p.line : null);
 }
 
-function setupEditor() {
-  const t = $("editor");
-  t.value = localStorage.getItem(SOURCE_KEY) || EXAMPLE;
-  t.addEventListener("input", () => {
-    localStorage.setItem(SOURCE_KEY, t.value);
+// ------------------------------------------------------------------ setup
+function setupEditor(root) {
+  CodeMirror.defineMode("tmcl", tmclMode);
+  const cm = CodeMirror($("program-editor"), {
+    value: localStorage.getItem(SOURCE_KEY) || EXAMPLE, mode: "tmcl", lineNumbers: true, indentUnit: 4,
+    tabSize: 4, indentWithTabs: false, gutters: [DIAG_GUTTER, BP_GUTTER, "CodeMirror-linenumbers"],
+    extraKeys: {Tab: c => c.replaceSelection("    ")}, viewportMargin: 200,
+  });
+  D.cm = cm;
+  cm.on("change", () => {
+    localStorage.setItem(SOURCE_KEY, cm.getValue());
     D.downloaded = false;
-    if (editorLines() !== $("editor-gutter").childElementCount) renderGutter();
+    setCurrentLine(null);
+    if (cm.lineCount() !== D.lineCount) renderBreakpoints();
   });
-  t.addEventListener("scroll", syncScroll);
-  t.addEventListener("keydown", ev => {  // Tab indents instead of leaving the editor
-    if (ev.key !== "Tab" || ev.shiftKey) return;
-    ev.preventDefault();
-    const a = t.selectionStart;
-    t.setRangeText("    ", a, t.selectionEnd, "end");
-    t.dispatchEvent(new Event("input"));
-  });
+  cm.on("gutterClick", (_cm, line, gutter) => { if (gutter !== DIAG_GUTTER) toggleBreakpoint(line + 1); });
   $("btn-assemble").addEventListener("click", () => assembleOnly(false));
   $("btn-download").addEventListener("click", () => assembleOnly(true));
   $("btn-run").addEventListener("click", () => programAction("run"));
   $("btn-stop").addEventListener("click", () => programAction("stop"));
   $("btn-step").addEventListener("click", () => programAction("step"));
   $("btn-reset").addEventListener("click", () => programAction("reset"));
-  renderGutter();
+  renderBreakpoints();
 }
 
 async function loadProgram() {
   try {  // the program the dashboard downloaded before (e.g. from another tab) is what runs
     const prog = await api("api/program");
     if (prog.source) {
-      $("editor").value = prog.source;
+      D.cm.setValue(prog.source);
       D.downloaded = true;
       D.breakpoints = new Set((prog.state.breakpoints || []).map(a => prog.lines[a]).filter(l => l));
-      renderGutter();
+      renderBreakpoints();
       showProgramState(prog.state);
     }
   } catch (e) { log(e.message, "err"); }
 }
 
+// For the browser tests and the curious: the editor, its words and its marks.
+window.OpenTMCL.programEditor = {
+  words: WORDS,
+  get cm() { return D.cm; },
+  setSource(text) { D.cm.setValue(text); },
+  currentLine: () => D.currentLine,
+  diagnostics: () => D.diagnostics,
+};
+
 OpenTMCL.registerView("program", {
   mount(root, ctx) {
     root.innerHTML = MARKUP;
-    setupEditor();
+    setupEditor(root);
     ctx.onState(st => showProgramState(st.program));
     loadProgram();
   },
+  show() { if (D.cm) D.cm.refresh(); },
 });
 })();

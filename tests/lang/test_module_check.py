@@ -1,0 +1,122 @@
+"""Instructions the target module cannot execute are warnings (errors with strict), read from
+the module's profile (docs/tmcl-assembler.md "Checking against a module"; issue 15 item 6).
+
+The firmware answers such instructions with status 2 "Invalid command", 3 "Wrong type" or
+4 "Invalid value" (TMCM-6212 manual 3.2); the assembler says so before the program runs.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from opentmcl.lang import AsmError, assemble, assemble_file
+
+
+def warned(source: str, module: str = "TMCM-6212") -> list[tuple[int, int, str]]:
+    prog = assemble(source, filename="m.tmc", module=module)
+    return [(d.line, d.column, d.message) for d in prog.warnings]
+
+
+def test_motor_beyond_the_axes():
+    """TMCM-6212 manual 3.6.22 SCO: "<motor number> 0...5" - six axes; ROR 5 is the last motor,
+    ROR 6 the first that does not exist, ROR 7 the issue's example. The PD86-1180 has one
+    motor (manual 4.6.4: "only one motor is involved")."""
+    assert warned("ROR 5, 1000") == []
+    assert warned("ROR 6, 1000\nROR 7, 1000") == [
+        (1, 5, "ROR: motor 6 does not exist on TMCM-6212 (motors 0..5)"),
+        (2, 5, "ROR: motor 7 does not exist on TMCM-6212 (motors 0..5)")]
+    assert warned("ROL 0, 10", "PD86-1180") == []
+    assert warned("MVP ABS, 1, 10", "PD86-1180") == [
+        (1, 10, "MVP: motor 1 does not exist on PD86-1180 (motor 0 only)")]
+
+
+def test_wait_checks_the_motor_only_where_it_is_one():
+    """TMCM-6212 3.6.20 WAIT: TICKS ignores the motor field, POS waits for a motor."""
+    assert warned("WAIT TICKS, 9, 10") == []
+    assert warned("WAIT POS, 9, 0") == [(1, 11, "WAIT: motor 9 does not exist on TMCM-6212 (motors 0..5)")]
+
+
+def test_axis_parameter_numbers_come_from_the_profile():
+    """TMCM-6212 Table 14 lists the axis parameters; 250 is not one of them (the issue's
+    `SAP 250, 0, 1`), 255 is. Actual speed (3) is read-only ("R")."""
+    assert warned("SAP 255, 0, 1") == []
+    assert warned("SAP 250, 0, 1") == [(1, 5, "SAP: TMCM-6212 has no axis parameter 250")]
+    assert warned("GAP 3, 0") == []
+    assert warned("SAP 3, 0, 100") == [(1, 5, "SAP: axis parameter 3 (actual_speed) of TMCM-6212 "
+                                              "cannot be written")]
+
+
+def test_global_parameter_banks_and_user_variables():
+    """TMCM-6212 3.6.7: "bank 0 is used for global parameters, and bank 2 is used for user
+    variables. Bank 3 is used for interrupt configuration." 256 user variables (0..255); STGP
+    stores the first 56 (0..55)."""
+    assert warned("SGP 255, 2, 1\nSTGP 55, 2") == []
+    assert warned("STGP 56, 2") == [(1, 6, "STGP: TMCM-6212 has 56 storable user variables (0..55), not 56")]
+    assert warned("SGP 0, 1, 1") == [(1, 8, "SGP: TMCM-6212 has no global parameter bank 1 (banks 0, 2, 3)")]
+    assert warned("GGP 1, 0") == [(1, 5, "GGP: TMCM-6212 has no global parameter 1 in bank 0")]
+
+
+def test_ports_and_outputs():
+    """TMCM-6212 3.6.12 SIO: outputs are in bank 2; bank 0 holds the inputs."""
+    assert warned("SIO 3, 2, 1\nSIO 255, 2, 15\nGIO 0, 0") == []
+    assert warned("SIO 0, 0, 1") == [(1, 5, "SIO: port 0 in bank 0 (IN0) of TMCM-6212 is an input")]
+    assert warned("GIO 4, 2") == [(1, 5, "GIO: TMCM-6212 has no port 4 in I/O bank 2")]
+    assert warned("GIO 0, 5") == [(1, 8, "GIO: TMCM-6212 has no I/O bank 5")]
+
+
+def test_coordinates_and_interrupts():
+    """TMCM-6212 3.6.4 MVP COORD: "<coordinate number (0..20)>"; 3.6.30 EI: "Interrupt number 255
+    globally enables interrupt processing"."""
+    assert warned("MVP COORD, 0, 20\nSCO 20, 0, 5\nEI 255\nEI 0") == []
+    assert warned("MVP COORD, 0, 21") == [(1, 15, "MVP: TMCM-6212 has coordinates 0..20, not 21")]
+    assert warned("GCO 21, 0") == [(1, 5, "GCO: TMCM-6212 has coordinates 0..20, not 21")]
+    assert warned("EI 99") == [(1, 4, "EI: TMCM-6212 has no interrupt 99")]
+    assert warned("L: VECT 255, L") == [(1, 9, "VECT: 255 is not an interrupt vector (it switches all interrupts)")]
+
+
+def test_opcodes_the_module_lacks():
+    """The PD28-1021 extended command set (manual 3.5) is not in the TMCM-6212's (3.4.1)."""
+    assert warned("CALCVV ADD, 1, 2", "PD28-1021") == []
+    assert warned("  CALCVV ADD, 1, 2") == [(1, 3, "CALCVV (command 40) is not available on TMCM-6212")]
+    assert warned("RAW 40, 0, 1, 2") == [(1, 5, "CALCVV (command 40) is not available on TMCM-6212")]
+
+
+def test_strict_turns_every_warning_into_an_error():
+    with pytest.raises(AsmError) as info:
+        assemble("ROR 7, 1000\nSAP 250, 0, 1\nROL 0, 1\n", filename="s.tmc", module="TMCM-6212", strict=True)
+    assert [(d.line, d.severity) for d in info.value.errors] == [(1, "error"), (2, "error")]
+    assert info.value.warnings == []
+
+
+def test_a_profile_file_is_the_target(tmp_path):
+    """--module FILE: the checks read the profile, so a two-axis variant of the TMCM-6212 makes
+    motor 2 the first missing one - no table in the assembler knows it (docs/profiles.md)."""
+    path = tmp_path / "two.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "TMCM-2212"\naxes = 2\n')
+    assert warned("ROR 1, 10", str(path)) == []
+    assert warned("ROR 2, 10", str(path)) == [(1, 5, "ROR: motor 2 does not exist on TMCM-2212 (motors 0..1)")]
+
+
+def test_a_bad_profile_file_is_one_error(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text("[module\n")
+    with pytest.raises(AsmError) as info:
+        assemble("STOP", module=str(path))
+    assert str(info.value).startswith(f"{path}: cannot use the module profile") and "\n" not in str(info.value)
+
+
+def test_the_manuals_own_slips_are_found():
+    """TMCM-6212 manual 7.4 prints "AAP MyVariable, 2 //Store contents of accumulator register to
+    variable" with MyVariable = 42: a user variable is stored with AGP (3.6.28), and axis
+    parameter 42 does not exist (Table 14), so the example as printed gets a warning. The
+    PD86-1180's 4.4.2.6.5 example switches OUT3 ("SIO 3, 2, 1"), a port only the TMCM-6212 has
+    (PD86-1180 4.6.14: OUT_0 and OUT_1)."""
+    examples = Path(__file__).parent / "examples"
+    prog = assemble_file(examples / "tmcm6212_7_4_variables.tmc", module="TMCM-6212")
+    assert [(d.line, d.column, d.message) for d in prog.warnings] == [
+        (9, 5, "AAP: TMCM-6212 has no axis parameter 42")]
+    timer = Path(__file__).parents[2] / "examples" / "pd86_1180_4.4.2.6.5_timer_interrupt.tmc"
+    prog = assemble_file(timer, module="PD86-1180")
+    assert [(d.line, d.message) for d in prog.warnings] == [
+        (11, "SIO: PD86-1180 has no port 3 in I/O bank 2"), (13, "SIO: PD86-1180 has no port 3 in I/O bank 2")]
