@@ -10,7 +10,6 @@ A name is looked up in this order, the first match winning:
 """
 from __future__ import annotations
 
-import difflib
 import re
 from collections.abc import Iterable
 from typing import TYPE_CHECKING
@@ -60,6 +59,8 @@ class NameIndex:
     def suggest(self, name: str) -> list[str]:
         """Close names from both vocabularies, best first: ours as they are, an alias with the name
         it stands for (``MaxVelocity (max_positioning_speed)``)."""
+        import difflib  # only for an unknown name
+
         scored: list[tuple[float, str]] = []
         loose = compact(name)
         for ours in self._ours:

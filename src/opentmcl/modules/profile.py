@@ -65,15 +65,9 @@ import os
 import sys
 from dataclasses import dataclass, field, fields
 from functools import cache, cached_property
-from importlib import resources
 from typing import Any
 
 from .names import NameIndex
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 
 @dataclass(frozen=True, slots=True)
@@ -274,6 +268,14 @@ def _normalise(name: str) -> str:
 
 @cache
 def _builtin_raw(fname: str) -> RawProfile:
+    # imported here, on the first profile read: `import opentmcl` stays cheap (docs/host.md)
+    from importlib import resources
+
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
     text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
     return tomllib.loads(text)  # a TOML document is a table
 
