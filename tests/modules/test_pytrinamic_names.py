@@ -7,6 +7,11 @@ so a PyTrinamic release that adds or renumbers a name fails this file until the 
 """
 from __future__ import annotations
 
+import re
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
 from pytrinamic.modules import TMCM1021, TMCM1160, TMCM1161, TMCM6212
 
@@ -180,3 +185,16 @@ def test_a_bad_alias_is_one_line_naming_its_key(tmp_path, entry, message):
     with pytest.raises(ProfileError) as info:
         load_profile(str(path))
     assert any(message in line for line in info.value.errors), info.value.errors
+
+
+def test_the_readme_from_pytrinamic_example_runs_and_prints_what_it_says(tmp_path):
+    """README "From PyTrinamic": its Python block runs against sim:// and each print() line's output
+    is the value its trailing comment states (so the section cannot rot)."""
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text(encoding="utf-8")
+    section = readme.split("## From PyTrinamic", 1)[1].split("\n## ", 1)[0]
+    (code,) = re.findall(r"```python\n(.*?)```", section, re.S)
+    stated = [line.rsplit("#", 1)[1].strip() for line in code.splitlines() if line.strip().startswith("print(")]
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines() == stated
+    assert len(stated) == 3 and '"MaxVelocity"' in code and "motor.AP.MaxVelocity" in section
