@@ -19,6 +19,11 @@ The fixture is a host `Module` (the same API as ``opentmcl.connect("sim://...")`
 
 Which module: the ``tmcl_module`` marker of the test (or its class/module), else the
 ``--tmcl-module NAME`` option, else the ``tmcl_module`` ini value, else TMCM-6212.
+
+Through the entry point this module is loaded into every pytest run of the environment, so it is
+kept inert: importing it loads the host library only (no firmware, endpoints or third-party
+packages), registers one option, one ini value and the marker, and builds a virtual module only
+for a test that asks for ``tmcl_module`` (docs/pytest-plugin.md "Enabling it").
 """
 from __future__ import annotations
 
@@ -31,7 +36,6 @@ import pytest
 from .host.client import Client
 from .host.errors import TmclError, TmclValueError, check_int, check_seconds, check_timeout
 from .host.module import Module
-from .host.transports.inprocess import InProcessTransport
 
 DEFAULT_MODULE = "TMCM-6212"
 MARKER = "tmcl_module"
@@ -40,6 +44,7 @@ _OPTIONS = ("address", "eeprom", "clock", "timeout", "host_address")
 if TYPE_CHECKING:
     from .capture import ReplayReport
     from .firmware.vm import VirtualModule
+    from .host.transports.inprocess import InProcessTransport
 
 
 class TmclModule(Module):
@@ -47,8 +52,10 @@ class TmclModule(Module):
 
     def __init__(self, vm: VirtualModule, *, address: int, clock: str = "virtual", timeout: float = 5.0,
                  host_address: int = 2) -> None:
+        from .host.transports.inprocess import InProcessTransport
+
         self.vm = vm
-        self.transport = InProcessTransport([vm], clock=clock)
+        self.transport: InProcessTransport = InProcessTransport([vm], clock=clock)
         super().__init__(Client(self.transport, address=address, host_address=host_address,
                                 timeout=timeout), address, vm.profile)
 

@@ -13,9 +13,13 @@ from __future__ import annotations
 
 import importlib
 import re
+import sys
 from collections.abc import Mapping
-from importlib import metadata
 from types import MappingProxyType
+from typing import TYPE_CHECKING, TypeGuard
+
+if TYPE_CHECKING:  # importlib.metadata is imported when entry points are first asked for
+    from importlib import metadata
 
 NAME = re.compile(r"[a-z][a-z0-9+.-]*")
 """A registrable name: a URL scheme (RFC 3986 3.1), compared in lower case."""
@@ -60,13 +64,21 @@ class Registry:
                 return None
             self._targets[key] = found
         target = self._targets[key]
-        if isinstance(target, (str, metadata.EntryPoint)):
+        if isinstance(target, str) or _is_entry_point(target):
             target = load(target)
             self._targets[key] = target
         return target
 
     def _entry_points(self) -> list[metadata.EntryPoint]:
+        from importlib import metadata
+
         return list(metadata.entry_points(group=self.group))
+
+
+def _is_entry_point(target: object) -> TypeGuard[metadata.EntryPoint]:
+    """An entry point not loaded yet (none exists before importlib.metadata is imported)."""
+    md = sys.modules.get("importlib.metadata")
+    return md is not None and isinstance(target, md.EntryPoint)
 
 
 def check_name(name: object) -> str:
@@ -79,7 +91,7 @@ def check_name(name: object) -> str:
 
 def load(target: str | metadata.EntryPoint) -> object:
     """Import the object a lazy reference or entry point names."""
-    if isinstance(target, metadata.EntryPoint):
+    if not isinstance(target, str):
         return target.load()
     module_name, _, attribute = target.partition(":")
     obj: object = importlib.import_module(module_name)

@@ -45,6 +45,16 @@ def add_allow_host(p: argparse.ArgumentParser) -> None:
                         "for a LAN: a token printed at start-up is then required, see docs/dashboard.md)")
 
 
+def require_web(feature: str) -> None:
+    """The packages of the 'web' extra, or a one-line CliError naming it (opentmcl/extras.py)."""
+    from ..extras import MissingExtra, require
+
+    try:
+        require("web", feature)
+    except MissingExtra as exc:
+        raise CliError(str(exc)) from None
+
+
 def allowed_hosts(names: list[str]) -> tuple[str, ...]:
     from ..web.server import check_allowed_hosts
 
@@ -97,6 +107,7 @@ def run(args: argparse.Namespace) -> int:
     from ..host import TmclError, connect
     from ..host.transports.inprocess import InProcessTransport
 
+    require_web("opentmcl dashboard")
     if not args.url:
         raise CliError("give the module URL with --to (or set $OPENTMCL_URL)")
     if not args.timeout > 0:
@@ -106,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         from ..web.server import DashboardStartError, start_dashboard
     except ImportError as exc:
-        raise CliError(f"the dashboard needs starlette, uvicorn and websockets (dependencies of opentmcl; reinstall it): {exc}") from None
+        raise CliError(f"the dashboard needs the 'web' extra (pip install 'opentmcl[web]'): {exc}") from None
     url = sim_url_real_time(args.url)
     try:
         module = connect(url, address=args.address, timeout=args.timeout)

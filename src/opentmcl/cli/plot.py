@@ -116,9 +116,14 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..extras import MissingExtra, require
     from ..plot import DEFAULT_CHANNELS, Trace, TraceError, channel_names, render
     from ..plot.trace import check_duration
 
+    try:
+        require("plot", "opentmcl plot")   # before a recording that could not be drawn
+    except MissingExtra as exc:
+        raise CliError(str(exc)) from None
     try:
         check_duration(10.0 if args.seconds is None else args.seconds, args.interval)
     except ValueError as exc:
@@ -147,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
     except TraceError as exc:
         raise CliError(str(exc)) from None
     except ImportError as exc:
-        raise CliError(f"plotting needs matplotlib (a dependency of opentmcl; reinstall it): {exc}") from None
+        raise CliError(f"plotting needs the 'plot' extra (pip install 'opentmcl[plot]'): {exc}") from None
     except OSError as exc:
         raise CliError(f"cannot write {exc.filename or args.output}: {exc.strerror or exc}") from None
     print(f"wrote {args.output} ({len(trace)} samples, {trace.time[-1] if len(trace) else 0:.2f} s, "

@@ -302,6 +302,10 @@ def _log_to_stderr(tool: str = "serve") -> tuple[logging.Logger, logging.Handler
 def run(args: argparse.Namespace) -> int:
     if getattr(args, "allow_host", None) and not getattr(args, "web", None):
         raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
+    if getattr(args, "web", None):
+        from .dashboard import require_web
+
+        require_web("opentmcl serve --web")
     logger, handler = _log_to_stderr()
     try:
         return _run(args)
@@ -367,7 +371,7 @@ def _start_web(server: Server, spec: str, allow_host: list[str]) -> DashboardHan
     try:
         from ..web.server import DashboardStartError, start_dashboard_for_bus
     except ImportError as exc:
-        raise CliError(f"--web needs starlette, uvicorn and websockets (dependencies of opentmcl; reinstall it): {exc}") from None
+        raise CliError(f"--web needs the 'web' extra (pip install 'opentmcl[web]'): {exc}") from None
     try:
         return start_dashboard_for_bus(server.bus, host or "127.0.0.1", port, allow_hosts=hosts)
     except DashboardStartError as exc:

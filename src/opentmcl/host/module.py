@@ -12,10 +12,11 @@ and answers bad ones with a status code, which raises `TmclStatusError`.
 """
 from __future__ import annotations
 
-import difflib
 from collections.abc import Callable, Iterable, Iterator
 from typing import SupportsIndex, overload
 
+from ..modules.names import NameIndex
+from ..modules.names import norm as _norm
 from ..modules.profile import IOPort, ModuleProfile, Param, load_profile, module_names
 from ..protocol.frame import Reply
 from . import units
@@ -55,10 +56,6 @@ MOTION_TIMEOUT = 60.0  # default seconds to wait for a move or a reference searc
 POLL_INTERVAL = 0.01  # seconds between status polls (one TMCL tick is 10 ms)
 
 
-def _norm(name: str) -> str:
-    return "_".join(name.strip().lower().replace("-", " ").replace("/", " ").split())
-
-
 def _byte_number(kind: str, number: int) -> int:
     """A parameter or bank number: 0..255, the type or motor/bank byte of the frame (manual 3.1)."""
     if not 0 <= number <= 255:
@@ -73,7 +70,9 @@ def _raw_number(kind: str, key: object) -> int | None:
     return None
 
 
-def _find(kind: str, key: str | int, params: list[Param], lookup: Callable[[str | int], Param]) -> Param:
+def _find(kind: str, key: str | int, lookup: Callable[[str | int], Param], names: NameIndex) -> Param:
+    """The profile entry `key` names: a number, or our name, the manual's title or an alias such as
+    PyTrinamic's ``MaxVelocity`` (modules/names.py); an unknown name lists close ones of both."""
     if isinstance(key, bool) or not isinstance(key, (int, str)):
         raise TmclTypeError(f"{kind} must be a name or a number, got {key!r}")
     try:
@@ -81,11 +80,7 @@ def _find(kind: str, key: str | int, params: list[Param], lookup: Callable[[str 
     except KeyError:
         pass
     if isinstance(key, str):
-        want = _norm(key)
-        for p in params:
-            if p.name == want or _norm(p.title) == want:
-                return p
-        hint = difflib.get_close_matches(want, [p.name for p in params], n=3)
+        hint = names.suggest(key)
         more = f"; did you mean {', '.join(hint)}?" if hint else ""
         raise UnknownParameterError(f"unknown {kind} {key!r}{more}")
     raise UnknownParameterError(f"{kind} {key} is not defined in the module profile")
@@ -193,7 +188,8 @@ class Axis:
     # --- parameters -------------------------------------------------------------
     def param(self, name: str | int) -> Param:
         """The profile entry of an axis parameter (number, name, range, access, unit)."""
-        return _find("axis parameter", name, self._all(), self.module.profile.axis_parameter)
+        prof = self.module.profile
+        return _find("axis parameter", name, prof.axis_parameter, prof.axis_names)
 
     def _number(self, name: str | int) -> int:
         number = _raw_number("axis parameter", name)
@@ -438,8 +434,7 @@ class Module:
     # --- global parameters and user variables (manual 3.6.7-3.6.10, 5) ------------
     def global_param(self, name: str | int, bank: int = 0) -> Param:
         prof = self.profile
-        params = list(prof.global_parameters.values())
-        return _find("global parameter", name, params, lambda k: prof.global_parameter(k, bank))
+        return _find("global parameter", name, lambda k: prof.global_parameter(k, bank), prof.global_names)
 
     def _gp(self, name: str | int, bank: int | None) -> tuple[int, int]:
         """(number, bank): a name implies its bank; a number goes to `bank` (default 0) unchanged."""

@@ -28,6 +28,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     [[axis_parameter]]            # one per axis parameter of the manual
     number = 4
     name = "max_positioning_speed"   # snake_case of the manual's name
+    aliases = ["MaxVelocity"]     # optional: other accepted names (case and separators ignored)
     title = "Maximum positioning speed"
     description = "The maximum speed used for positioning ramps."
     min = 0
@@ -63,14 +64,10 @@ from __future__ import annotations
 import os
 import sys
 from dataclasses import dataclass, field, fields
-from functools import cache
-from importlib import resources
+from functools import cache, cached_property
 from typing import Any
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from .names import NameIndex
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,6 +86,8 @@ class Param:
     excluded: tuple[int, ...] = ()
     engine: str = ""
     """Keyword of the ramp engine setting this axis parameter drives ("" for none)."""
+    aliases: tuple[str, ...] = ()
+    """Other names accepted for this parameter (built-in profiles: PyTrinamic's; modules/names.py)."""
 
     @property
     def readable(self) -> bool:
@@ -195,21 +194,33 @@ class ModuleProfile:
         """Axis parameter number -> the ramp engine keyword it drives (the `engine` field)."""
         return {n: p.engine for n, p in self.axis_parameters.items() if p.engine}
 
+    @cached_property
+    def axis_names(self) -> NameIndex:
+        """Names, titles and aliases of the axis parameters (modules/names.py)."""
+        return NameIndex(self.axis_parameters.values())
+
+    @cached_property
+    def global_names(self) -> NameIndex:
+        """Names, titles and aliases of the global parameters of every bank."""
+        return NameIndex(self.global_parameters.values())
+
     def axis_parameter(self, name_or_number: str | int) -> Param:
+        """By number, or by name, title or alias (modules/names.py); KeyError if there is none."""
         if isinstance(name_or_number, int):
             return self.axis_parameters[name_or_number]
-        for p in self.axis_parameters.values():
-            if p.name == name_or_number:
-                return p
-        raise KeyError(name_or_number)
+        found = self.axis_names.find(name_or_number)
+        if found is None:
+            raise KeyError(name_or_number)
+        return found
 
     def global_parameter(self, name_or_number: str | int, bank: int = 0) -> Param:
+        """By number in `bank`, or by name, title or alias (which imply the bank); KeyError if none."""
         if isinstance(name_or_number, int):
             return self.global_parameters[(bank, name_or_number)]
-        for p in self.global_parameters.values():
-            if p.name == name_or_number:
-                return p
-        raise KeyError(name_or_number)
+        found = self.global_names.find(name_or_number)
+        if found is None:
+            raise KeyError(name_or_number)
+        return found
 
 
 def _param(d: RawProfile) -> Param:
@@ -217,7 +228,7 @@ def _param(d: RawProfile) -> Param:
         number=d["number"], name=d["name"], title=d["title"] if "title" in d else d["name"], min=d["min"], max=d["max"],
         access=d["access"], default=d.get("default", 0), unit=d.get("unit", ""),
         description=d.get("description", ""), values=tuple(d.get("values", ())), bank=d.get("bank"),
-        excluded=tuple(d.get("excluded", ())), engine=d.get("engine", ""),
+        excluded=tuple(d.get("excluded", ())), engine=d.get("engine", ""), aliases=tuple(d.get("aliases", ())),
     )
 
 
@@ -257,6 +268,14 @@ def _normalise(name: str) -> str:
 
 @cache
 def _builtin_raw(fname: str) -> RawProfile:
+    # imported here, on the first profile read: `import opentmcl` stays cheap (docs/host.md)
+    from importlib import resources
+
+    if sys.version_info >= (3, 11):
+        import tomllib
+    else:  # pragma: no cover
+        import tomli as tomllib
+
     text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
     return tomllib.loads(text)  # a TOML document is a table
 

@@ -20,6 +20,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from .names import compact
 from .profile import CAPABILITY_VALUES, RawProfile
 
 if sys.version_info >= (3, 11):
@@ -138,6 +139,21 @@ def validate(data: RawProfile) -> list[str]:
         seen: dict[tuple[int, ...], int] = {}
         for i, entry in enumerate(entries):
             errors += _check_entry(table, i, entry, seen)
+        if table in ("axis_parameter", "global_parameter") and not errors:
+            errors += _name_clashes(table, entries)
+    return errors
+
+
+def _name_clashes(table: str, entries: list[RawProfile]) -> list[str]:
+    """A name or alias (compared as modules/names.py does) that two entries of a table share."""
+    errors: list[str] = []
+    owner: dict[str, str] = {}
+    for i, entry in enumerate(entries):
+        path = _entry_path(table, i, entry, _key(table, entry))
+        for name in (entry["name"], *entry.get("aliases", [])):
+            first = owner.setdefault(compact(name), path)
+            if first != path:
+                errors.append(f"{path}: name {name!r} is also a name or alias of {first}")
     return errors
 
 
@@ -210,6 +226,9 @@ def _field_types(table: str, path: str, entry: RawProfile) -> list[str]:
     errors += [f"{path}.{f}: expected an integer, got {entry[f]!r}" for f in _INT_FIELDS
                if f in entry and not _is_int(entry[f])]
     errors += [f"{path}.{f}: expected a string" for f in _STR_FIELDS if f in entry and not isinstance(entry[f], str)]
+    aliases = entry.get("aliases", [])
+    if not isinstance(aliases, list) or not all(isinstance(a, str) and compact(a) for a in aliases):
+        errors.append(f"{path}.aliases: expected a list of names")
     return errors
 
 
