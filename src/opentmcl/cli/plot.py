@@ -13,13 +13,14 @@ scenario file for the virtual module (any other name). The output format follows
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from . import CliError
 
 if TYPE_CHECKING:
+    from ..host import Module
     from ..plot import Trace
 
 PROGRAM_SUFFIXES = (".tmc", ".bin")
@@ -89,9 +90,8 @@ def _record(args: argparse.Namespace, axes: list[int]) -> Trace:
 def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) -> Trace:
     from ..host import TmclError, connect
     from ..host.loader import Loader
-    from ..plot import record
     from ..plot.virtual import _stopped
-    from .load import module_name, read_program
+    from .load import download, module_name, read_program
 
     try:
         m = connect(args.url, address=args.address)
@@ -99,17 +99,30 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
         raise CliError(str(exc)) from None
     try:
         if not is_program:  # FILE "-": record what the module does for --seconds
-            return record(m, axes, args.seconds, args.interval)
+            return _recording(m, axes, args, None)
         program = read_program(args.file, module_name(m, args.module))
         loader = Loader(m)
-        loader.download(program.instructions)
+        download(loader, program.instructions)
         loader.run(0)
-        until = None if args.keep_going else _stopped(m, loader, axes)
-        return record(m, axes, args.seconds, args.interval, until=until)
+        return _recording(m, axes, args, None if args.keep_going else _stopped(m, loader, axes))
     except TmclError as exc:
         raise CliError(str(exc)) from None
     finally:
         m.close()
+
+
+def _recording(m: Module, axes: list[int], args: argparse.Namespace,
+               until: Callable[[Trace], bool] | None) -> Trace:
+    """`plot.record` for --seconds with a progress bar in module seconds (on a terminal only)."""
+    from ..plot import record
+    from .verbosity import Bar
+
+    with Bar(args.seconds, "recording", unit="s") as bar:
+        def tick(trace: Trace) -> bool:
+            bar.to(round(trace.time[-1], 2) if len(trace) else 0)
+            return until is not None and until(trace)
+
+        return record(m, axes, args.seconds, args.interval, until=tick)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,6 +17,7 @@ import threading
 from typing import TYPE_CHECKING
 
 from . import CliError
+from .exits import NO_REPLY
 
 if TYPE_CHECKING:
     from ..capture.proxy import Proxy
@@ -77,16 +78,6 @@ def build_proxy(args: argparse.Namespace) -> Proxy:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .serve import _log_to_stderr
-
-    logger, handler = _log_to_stderr("proxy")
-    try:
-        return _run(args)
-    finally:
-        logger.removeHandler(handler)
-
-
-def _run(args: argparse.Namespace) -> int:
     from ..server import PtyServer, TcpServer
 
     proxy = build_proxy(args)
@@ -118,7 +109,7 @@ def _run(args: argparse.Namespace) -> int:
                 if args.to.startswith("tcp://") and "closed" in error:  # e.g. serve's idle timeout
                     error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
                 print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
-                return 1
+                return NO_REPLY   # the module's link broke (docs/cli.md)
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)

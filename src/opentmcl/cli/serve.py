@@ -22,8 +22,6 @@ from typing import TYPE_CHECKING, TextIO
 from . import CliError
 
 if TYPE_CHECKING:
-    import logging
-
     from ..firmware.vm import VirtualModule
     from ..motion.scenario import Scenario
     from ..server import Server
@@ -288,25 +286,10 @@ def describe(server: Server) -> list[str]:
     return lines
 
 
-def _log_to_stderr(tool: str = "serve") -> tuple[logging.Logger, logging.Handler]:
-    """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl TOOL: ...`` lines."""
-    import logging
-
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter(f"opentmcl {tool}: %(message)s"))
-    logger = logging.getLogger("opentmcl.server")
-    logger.addHandler(handler)
-    return logger, handler
-
-
 def run(args: argparse.Namespace) -> int:
     if getattr(args, "allow_host", None) and not getattr(args, "web", None):
         raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
-    logger, handler = _log_to_stderr()
-    try:
-        return _run(args)
-    finally:
-        logger.removeHandler(handler)
+    return _run(args)   # endpoint events reach stderr through main()'s log handler (cli/verbosity.py)
 
 
 def _run(args: argparse.Namespace) -> int:
