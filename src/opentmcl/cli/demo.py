@@ -123,7 +123,9 @@ def _world_demo(args: argparse.Namespace) -> int:
         header = list(rows[0]) if rows else ["time"]
         cells = [["" if r[c] is None else (f"{r[c]:.3f}" if c == "time" else str(r[c])) for c in header]
                  for r in rows]
-        print("\n".join(fit(header, cells, width())))
+        from ..trace import FIELDS
+
+        print("\n".join(fit(header, cells, width(), group=len(FIELDS) + 1)))   # an axis's columns together
     return 0
 
 
@@ -161,7 +163,7 @@ def _print_table(vm: VirtualModule, duration: float, interval: float, axes: list
         if i:
             vm.advance(interval)
         rows.append([f"{vm.time:.3f}"] + [str(_axis_parameter(vm, n, a)) for a in axes for n in (1, 3)])
-    print("\n".join(fit(header, rows, width(), keep=1)))
+    print("\n".join(fit(header, rows, width(), keep=1, group=2)))
     reached = [a for a in range(vm.profile.axes) if _axis_parameter(vm, 8, a)]
     print(f"position reached (AP8) on axes: {reached or 'none'}")
 

@@ -14,18 +14,24 @@ def width() -> int:
     return max(40, shutil.get_terminal_size(fallback=(80, 24)).columns - 1)
 
 
-def fit(header: Sequence[str], rows: Sequence[Sequence[str]], columns: int, keep: int = 1) -> list[str]:
+def fit(header: Sequence[str], rows: Sequence[Sequence[str]], columns: int, keep: int = 1,
+        group: int = 1) -> list[str]:
     """Lines of an aligned table no wider than `columns`: the first `keep` columns in every block,
-    the others packed left to right; blocks are separated by an empty line."""
+    the others packed left to right in groups of `group` that stay together (an axis's position and
+    velocity); blocks are separated by an empty line. A group wider than `columns` alone gets a
+    block of its own."""
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(header)]
+    base = sum(widths[:keep]) + GAP * max(0, keep - 1)
     blocks: list[list[int]] = []
-    used = sum(widths[:keep]) + GAP * max(0, keep - 1)
-    for i in range(keep, len(header)):
-        if not blocks or used + GAP + widths[i] > columns:
+    used = base
+    for start in range(keep, len(header), group):
+        members = list(range(start, min(start + group, len(header))))
+        need = sum(GAP + widths[i] for i in members)
+        if not blocks or used + need > columns:
             blocks.append([])
-            used = sum(widths[:keep]) + GAP * max(0, keep - 1)
-        blocks[-1].append(i)
-        used += GAP + widths[i]
+            used = base
+        blocks[-1] += members
+        used += need
     lines: list[str] = []
     for n, block in enumerate(blocks or [[]]):
         cols = list(range(keep)) + block

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import os
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -97,6 +98,17 @@ def bars_wanted() -> bool:
         return False
 
 
+def _size() -> tuple[int, int]:
+    """(columns, lines) of the terminal on stderr; 80 x 24 where it reports none (a pty nobody
+    sized says 0 x 0, and tqdm then draws nothing)."""
+    try:
+        size = os.get_terminal_size(sys.stderr.fileno())
+        columns, lines = size.columns, size.lines
+    except (OSError, ValueError, AttributeError):
+        columns = lines = 0
+    return (columns if columns > 0 else 80), (lines if lines > 0 else 24)
+
+
 class Bar:
     """A tqdm bar on stderr, or nothing (`update` and `close` do nothing) off a terminal."""
 
@@ -105,8 +117,10 @@ class Bar:
         if bars_wanted():
             from tqdm import tqdm  # type: ignore[import-untyped]  # no stubs shipped
 
+            columns, lines = _size()
+
             self._bar = tqdm(total=total, desc=description, unit=unit, file=sys.stderr, leave=False,
-                             dynamic_ncols=True, mininterval=0.2)
+                             ncols=columns, nrows=lines, mininterval=0.2)
 
     def to(self, done: float, total: float | None = None) -> None:
         """Show `done` of `total` (the callback shape of `Loader.download`'s `progress`)."""

@@ -49,14 +49,26 @@ class Output(NamedTuple):
     kind: str  # BINARY or ASCII
 
 
+def _name(vm) -> str:
+    return getattr(getattr(vm, "profile", None), "name", type(vm).__name__)
+
+
 def _log_exchange(vm, frame: bytes, reply: bytes) -> None:
     """A request one module read and its reply (if it gave one), as TMCL text plus hex."""
     from ..host.transport import frame_text
 
-    name = getattr(getattr(vm, "profile", None), "name", type(vm).__name__)
-    log.debug("%s <- %s", name, frame_text(frame, request=True))
+    log.debug("%s <- %s", _name(vm), frame_text(frame, request=True))
     if reply:
-        log.debug("%s -> %s", name, frame_text(reply, request=False))
+        log.debug("%s -> %s", _name(vm), frame_text(reply, request=False))
+
+
+def _log_frames(frame: bytes, outputs: list) -> None:
+    """A request every module of the bus read at once (the fast path) and the replies to it."""
+    from ..host.transport import frame_text
+
+    log.debug("bus <- %s", frame_text(frame, request=True))
+    for vm, data, _kind in outputs:
+        log.debug("%s -> %s", _name(vm), frame_text(data, request=False))
 
 
 class SerialStream:
@@ -100,7 +112,10 @@ class SerialStream:
                 else:
                     bus.sync()
                     self.frames += 1
-                    return bus.serial_frames(data, channel)
+                    outputs = bus.serial_frames(data, channel)
+            if log.isEnabledFor(DEBUG):
+                _log_frames(data, outputs)
+            return outputs
         return self._feed_each(data, now, channel)
 
     def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
