@@ -93,3 +93,13 @@ def test_probe_shows_a_bar_on_a_terminal_and_lines_in_a_pipe():
     assert "probe:" in shown and BAR in shown and "probe: axis 0:" in shown
     piped = in_a_pipe("profile", "probe", "sim://PD28-1021")
     assert piped.returncode == 0 and BAR not in piped.stderr and "probe: axis 0:" in piped.stderr
+
+
+def test_plot_to_shows_its_recording_on_a_terminal_only(tmp_path):
+    """`plot - --to URL` records what the module does for --seconds: the bar counts them."""
+    out = tmp_path / "rec.png"
+    code, text, shown = on_terminal("plot", "-", "--to", SIM, "--seconds", "1", "-o", str(out))
+    assert code == 0 and text.startswith(f"wrote {out}")
+    assert "recording:" in shown and BAR in shown
+    piped = in_a_pipe("plot", "-", "--to", SIM, "--seconds", "1", "-o", str(out))
+    assert piped.returncode == 0 and piped.stderr == ""

@@ -11,6 +11,7 @@ program opens the pty (or connects to the TCP port) exactly as it would a served
 from __future__ import annotations
 
 import argparse
+import logging
 import signal
 import sys
 import threading
@@ -102,8 +103,8 @@ def run(args: argparse.Namespace) -> int:
         while not stop.wait(0.2):
             if not warned and proxy.writer is not None and proxy.writer.truncated:
                 warned = True
-                print(f"opentmcl proxy: warning: {args.log} reached its size limit; relaying goes on, "
-                      "capturing stopped", file=sys.stderr, flush=True)
+                logging.getLogger("opentmcl.cli").warning(   # -q hides it (cli/verbosity.py)
+                    "warning: %s reached its size limit; relaying goes on, capturing stopped", args.log)
             error = getattr(proxy.upstream, "error", None)
             if error:
                 if args.to.startswith("tcp://") and "closed" in error:  # e.g. serve's idle timeout

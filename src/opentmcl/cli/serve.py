@@ -201,7 +201,7 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
         _give_can_ids(modules)
     server = Server(modules)
     if tcp_spec is not None or args.host:
-        _add_tcp(server, args, tcp_spec or DEFAULT_TCP, err)
+        _add_tcp(server, args, tcp_spec or DEFAULT_TCP)
     if args.pty:
         _add_pty(server, args, len(modules))
     if args.can:
@@ -219,7 +219,7 @@ def _give_can_ids(modules: list[VirtualModule]) -> None:
             vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
 
 
-def _add_tcp(server: Server, args: argparse.Namespace, spec: str, err: TextIO) -> None:
+def _add_tcp(server: Server, args: argparse.Namespace, spec: str) -> None:
     """--tcp [HOST:]PORT and --host: loopback unless --host names another address (with a warning)."""
     from ..server import TcpServer
     from ..server.tcp import is_loopback
@@ -231,8 +231,10 @@ def _add_tcp(server: Server, args: argparse.Namespace, spec: str, err: TextIO) -
     if not is_loopback(host):
         if not args.host:
             raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
-        print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
-              "anyone who can connect can move the motors", file=err)
+        import logging  # a warning record: -q hides it (cli/verbosity.py)
+
+        logging.getLogger("opentmcl.cli").warning("warning: TCP bound to %s is reachable from the network; "
+                                                  "anyone who can connect can move the motors", host)
     server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
                          pace_bytes=args.pace, idle_timeout=args.idle_timeout))
 

@@ -86,7 +86,7 @@ _state = {"bars": True}
 
 
 def enable_bars(on: bool) -> None:
-    """Progress bars allowed (not with -q)."""
+    """Progress bars and progress lines allowed (not with -q)."""
     _state["bars"] = on
 
 
@@ -139,7 +139,9 @@ class Bar:
             sys.stdout.flush()
 
     def write(self, line: str) -> None:
-        """A line on stderr, above the bar when one is drawn."""
+        """A progress line on stderr (not with -q), above the bar when one is drawn."""
+        if not _state["bars"]:
+            return
         if self._bar is None:
             print(line, file=sys.stderr, flush=True)
         else:
