@@ -113,9 +113,9 @@ class SerialStream:
                     bus.sync()
                     self.frames += 1
                     outputs = bus.serial_frames(data, channel)
-            if log.isEnabledFor(DEBUG):
-                _log_frames(data, outputs)
-            return outputs
+                    if log.isEnabledFor(DEBUG):
+                        _log_frames(data, outputs)
+                    return outputs
         return self._feed_each(data, now, channel)
 
     def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
