@@ -14,12 +14,11 @@ read; at most MAX_ROWS rows (TraceFull beyond).
 """
 from __future__ import annotations
 
-import argparse
 import csv
 import io
 import math
 import os
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, overload
 
 from .atomicfile import open_atomic
@@ -30,8 +29,6 @@ if TYPE_CHECKING:
 
 Row = dict[str, float | int | None]
 """One sample: column name -> value (None: the module has no such value)."""
-ErrorType = Callable[[str], Exception]
-"""The exception the CLI raises for bad input (its CliError), built from a one-line message."""
 
 FIELDS = (("pos", 1), ("vel", 3), ("left", 11), ("right", 10), ("home", 9), ("load", 206),
           ("current", 180), ("encoder", 209))
@@ -167,71 +164,3 @@ class Trace:
         lines = [" ".join(c.rjust(w) for c, w in zip(cols, widths, strict=True))]
         lines += [" ".join(v.rjust(w) for v, w in zip(row, widths, strict=True)) for row in cells]
         return "\n".join(lines)
-
-
-def world_demo(args: argparse.Namespace, plan: Callable[[VirtualModule], Iterable[tuple[int, int, int, int]]],
-               error: ErrorType) -> int:
-    """`opentmcl demo --scenario FILE [--csv OUT]`: the demo moves (`plan(vm)`) in a world;
-    prints the trace table or writes it as CSV. Bad input raises `error` (the CLI's CliError)."""
-    from .firmware.vm import VirtualModule
-    from .motion.scenario import load_scenario
-
-    if not args.scenario:
-        raise error("--csv needs --scenario")
-    try:
-        scenario = load_scenario(args.scenario)
-        vm = VirtualModule(args.module or scenario.module or "TMCM-6212", scenario=scenario)
-    except KeyError as exc:
-        raise error(str(exc.args[0] if exc.args else exc)) from None
-    except ValueError as exc:
-        raise error(f"cannot use scenario {args.scenario}: {exc}") from None
-    for cmd, type_, motor, value in plan(vm):
-        reply = vm.request(cmd, type_, motor, value)
-        if reply is None or reply.status != 100:
-            raise error(f"module refused command {cmd} {type_} {motor} {value}")
-    trace = Trace()
-    trace.record(vm, args.duration, args.interval)
-    if args.csv == "-":
-        print(trace.to_csv(), end="")
-    elif args.csv:
-        try:
-            trace.to_csv(args.csv)
-        except OSError as exc:
-            raise error(f"cannot write {args.csv}: {exc.strerror or exc}") from None
-        print(f"{len(trace.rows)} rows written to {args.csv}")
-    else:
-        print(f"Virtual {vm.profile.name} in scenario {args.scenario}, virtual time")
-        print(trace.table())
-    return 0
-
-
-class _CliRecorder:
-    """`opentmcl run --csv FILE`: samples the in-process module at each look of the run."""
-
-    def __init__(self, vm: VirtualModule, path: str, error: ErrorType) -> None:
-        self.vm, self.path, self.error = vm, path, error
-        self.trace = Trace()
-
-    def sample(self) -> None:
-        self.trace.sample(self.vm)
-
-    def save(self) -> None:
-        if self.path == "-":
-            print(self.trace.to_csv(), end="")
-            return
-        try:
-            self.trace.to_csv(self.path)
-        except OSError as exc:
-            raise self.error(f"cannot write {self.path}: {exc.strerror or exc}") from None
-        print(f"world trace: {len(self.trace.rows)} rows written to {self.path}")
-
-
-def cli_recorder(client: object, args: argparse.Namespace, error: ErrorType) -> _CliRecorder | None:
-    """The recorder for `run --csv`, or None without --csv (needs the in-process module)."""
-    path = getattr(args, "csv", None)
-    if not path:
-        return None
-    modules = getattr(getattr(client, "transport", None), "modules", None)
-    if not modules:
-        raise error("--csv records the in-process virtual module only (no --to)")
-    return _CliRecorder(modules[0], path, error)

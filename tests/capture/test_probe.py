@@ -68,9 +68,9 @@ def test_probe_is_bounded_in_time_and_fails_in_one_line(tmp_path):
         nobody = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--address", "9", "--timeout", "0.2")
     with Tool("serve", "--module", "PD86-1180", "--pty", "--interface", "usb") as served:
         usb = cli("profile", "probe", f"serial://{served.endpoint('pty')}", "--address", "9", "--timeout", "0.2")
-    assert slow.returncode == 1 and "longer than its time limit" in slow.stderr.splitlines()[-1]
-    assert nobody.returncode == 1 and "does not answer command 136" in nobody.stderr.splitlines()[-1]
-    assert usb.returncode == 1 and len(usb.stderr.splitlines()) == 1
+    assert slow.returncode == 3 and "longer than its time limit" in slow.stderr.splitlines()[-1]
+    assert nobody.returncode == 3 and "does not answer command 136" in nobody.stderr.splitlines()[-1]
+    assert usb.returncode == 3 and len(usb.stderr.splitlines()) == 1   # 3: no reply (docs/cli.md)
     assert "not type 1 at this address" in usb.stderr and "give that --address" in usb.stderr
     bad = cli("profile", "probe", "nope://x")
     assert bad.returncode == 2 and len(bad.stderr.splitlines()) == 1

@@ -81,18 +81,18 @@ def test_late_event_reply_reaches_the_host_and_the_capture(tmp_path):
     assert kinds == ["request", "reply", "request", "reply", "event"]
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--to", "sim://TMCM-6212"], "give --pty"),
-    (["--to", "nope://x", "--pty"], "unknown URL scheme"),
-    (["--to", "can://nosuchinterface/x?id=1", "--pty"], "cannot open CAN bus"),
-    (["--to", "sim://TMCM-6212", "--tcp", "10.1.2.3:5000"], "refusing to bind"),
-    (["--to", "sim://TMCM-6212", "--pty", "--log", "/nonexistent/dir/c.jsonl"], "cannot write"),
-    (["--to", "sim://TMCM-9999", "--pty"], "unknown module"),
-    (["--to", "tcp://127.0.0.1:1", "--pty"], "tcp://127.0.0.1:1"),
+@pytest.mark.parametrize("args, message, code", [
+    (["--to", "sim://TMCM-6212"], "give --pty", 2),
+    (["--to", "nope://x", "--pty"], "unknown URL scheme", 2),
+    (["--to", "can://nosuchinterface/x?id=1", "--pty"], "cannot open CAN bus", 3),   # 3: link not opened
+    (["--to", "sim://TMCM-6212", "--tcp", "10.1.2.3:5000"], "refusing to bind", 2),
+    (["--to", "sim://TMCM-6212", "--pty", "--log", "/nonexistent/dir/c.jsonl"], "cannot write", 2),
+    (["--to", "sim://TMCM-9999", "--pty"], "unknown module", 2),
+    (["--to", "tcp://127.0.0.1:1", "--pty"], "tcp://127.0.0.1:1", 3),                # (docs/cli.md)
 ])
-def test_cli_errors_are_one_line_exit_2(args, message):
+def test_cli_errors_are_one_line_exit_2(args, message, code):
     done = cli("proxy", *args, timeout=30)
-    assert done.returncode == 2 and len(done.stderr.splitlines()) == 1 and message in done.stderr
+    assert done.returncode == code and len(done.stderr.splitlines()) == 1 and message in done.stderr
 
 
 def test_proxy_ends_with_one_line_when_the_module_goes_away(tmp_path):
@@ -102,7 +102,7 @@ def test_proxy_ends_with_one_line_when_the_module_goes_away(tmp_path):
     while proxy.proc.poll() is None and time.monotonic() < deadline:
         time.sleep(0.1)
     code, out, err = proxy.stop()
-    assert code == 1 and "connection closed" in err and len(err.splitlines()) == 1
+    assert code == 3 and "connection closed" in err and len(err.splitlines()) == 1   # 3: link broke (docs/cli.md)
     assert read_capture(tmp_path / "c.jsonl").header["target"] == srv.endpoint("tcp")
 
 
@@ -178,5 +178,5 @@ def test_proxy_behind_serve_idle_timeout_names_the_cure():
         while proxy.proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.1)
         code, _, err = proxy.stop()
-    assert code == 1 and len(err.splitlines()) == 1
+    assert code == 3 and len(err.splitlines()) == 1
     assert "connection closed" in err and "--idle-timeout 0" in err, err

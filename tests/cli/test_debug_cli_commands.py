@@ -53,7 +53,7 @@ def test_errors_are_one_line_messages(tmp_path, capsys):
     assert main(["load", str(EXAMPLES / TIMER)]) == 2
     assert "no module URL" in capsys.readouterr().err
     assert main(["run", str(tmp_path / "missing.tmc")]) == 2
-    assert "cannot read file" in capsys.readouterr().err
+    assert f"cannot read {tmp_path / 'missing.tmc'}: No such file" in capsys.readouterr().err
     assert main(["run", str(EXAMPLES / TIMER), "-w", "bogus"]) == 2
     assert "cannot watch 'bogus'" in capsys.readouterr().err
     bad = tmp_path / "bad.bin"

@@ -203,10 +203,10 @@ def test_a_probed_module_without_a_built_in_match_declares_capabilities(tmp_path
 @pytest.mark.parametrize("parent", ["TMCM-6212", "PD28-1021", "PD86-1180"])
 def test_an_engine_keyword_the_engine_lacks_is_a_profile_error(tmp_path, parent):
     """docs/profiles.md: the engine refuses a keyword it does not have when the module is built; the
-    CLI prints one line (exit 1), no internal error."""
+    CLI prints one line (exit 2: bad input, docs/cli.md), no internal error."""
     path = derived(tmp_path, parent, rest='[[axis_parameter]]\nnumber = 4\nengine = "warp"\n')
     with pytest.raises(ProfileError, match="ramp engine refuses the profile's settings.*warp"):
         VirtualModule(path)
     done = cli("demo", "--module", path, "--duration", "0.1")
-    assert done.returncode == 1 and "warp" in done.stderr and "internal error" not in done.stderr
+    assert done.returncode == 2 and "warp" in done.stderr and "internal error" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1

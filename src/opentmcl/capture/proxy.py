@@ -19,7 +19,7 @@ import time
 import urllib.parse
 
 from .. import __version__
-from ..host.errors import TmclConnectionError
+from ..host.errors import TmclConnectionError, TmclUrlError
 from ..server.app import start_all
 from .decode import HOST, MODULE, Decoder
 from .format import CaptureWriter
@@ -177,7 +177,7 @@ def open_upstream(url: str, on_bytes):
         try:
             return SimUpstream(url, on_bytes)
         except (KeyError, ValueError) as exc:
-            raise TmclConnectionError(f"cannot open {url}: {exc.args[0] if exc.args else exc}") from None
+            raise TmclUrlError(f"cannot open {url}: {exc.args[0] if exc.args else exc}") from None
     if scheme == "can":
         return CanUpstream(open_transport(url), on_bytes)
     return StreamUpstream(open_transport(url), on_bytes)

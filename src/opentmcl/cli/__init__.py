@@ -2,24 +2,34 @@
 
 Each subcommand lives in its own module `opentmcl.cli.<name>` with
 `register(subparsers)` that adds a parser whose default `func(args) -> int`
-runs it. Errors the user can cause raise `CliError`; main() turns them into a
-one-line message and exit status 2, never a traceback.
+runs it. Errors the user can cause raise `CliError`; main() turns every exception into a
+one-line message and the exit status of the table in `cli/exits.py` (docs/cli.md): 2 for bad
+input, 3 when the module does not answer, 4 when it answers with an error status, 1 for a bug
+(with its traceback only under -v). `-v`/`-q` set the log level (`cli/verbosity.py`).
 """
 from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import os
 import pathlib
 import sys
 from typing import NoReturn
+
+from . import exits, verbosity
 
 COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard",
             "proxy", "log", "replay", "profile"]
 
 
 class CliError(Exception):
-    """A user-facing error: printed as one line, exit status 2."""
+    """A user-facing error: printed as one line. Exit status `code` if given, else the status 3 or 4
+    of the library error it was raised from, else 2 (`exits.code_of`)."""
+
+    def __init__(self, message: str, code: int | None = None) -> None:
+        super().__init__(message)
+        self.code = code
 
 
 def same_file(a: str, b: str) -> bool:
@@ -68,12 +78,15 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="opentmcl", description="Open TMCL tools: virtual modules, client, assembler.")
+    parser = _Parser(prog="opentmcl", description="Open TMCL tools: virtual modules, client, assembler.",
+                     epilog=exits.epilog(), formatter_class=argparse.RawDescriptionHelpFormatter)
     from .. import __version__
     parser.add_argument("--version", action="version", version=f"opentmcl {__version__}")
+    verbosity.add_options(parser, top=True)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"{__name__}.{name}").register(sub)
+    verbosity.add_everywhere(parser)
     return parser
 
 
@@ -86,24 +99,34 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return 0
+    level = verbosity.level_of(args)
+    verbosity.enable_bars(level <= logging.WARNING)
+    with verbosity.logging_to_stderr(args.command, level):
+        return _run(args, level)
+
+
+def _run(args: argparse.Namespace, level: int) -> int:
+    """Run the command; any exception becomes one line and its exit status (cli/exits.py)."""
     try:
         return int(args.func(args) or 0)
-    except CliError as exc:
-        print(f"opentmcl {args.command}: error: {exc}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
         return 0
-    except (OSError, ValueError, KeyError) as exc:
-        print(f"opentmcl {args.command}: error: {exc}", file=sys.stderr)
-        return 1
-    except Exception as exc:  # a bug of ours: still one line, unless asked for the traceback
+    except Exception as exc:
+        code = exits.code_of(exc)
+        if code != exits.INTERNAL:
+            print(f"opentmcl {args.command}: error: {exc}{exits.hint_for(exc, args)}", file=sys.stderr)
+            return code
         if os.environ.get("OPENTMCL_DEBUG"):
             raise
+        if level <= logging.INFO:
+            import traceback
+
+            traceback.print_exc(file=sys.stderr)
         print(f"opentmcl {args.command}: internal error: {type(exc).__name__}: {exc} "
-              "(set OPENTMCL_DEBUG=1 for a traceback)", file=sys.stderr)
-        return 3
+              "(a bug: please report it, with the output of -v)", file=sys.stderr)
+        return exits.INTERNAL
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -34,7 +34,7 @@ from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
 from . import CliError
-from .load import add_connection_options, module_name, read_program
+from .load import add_connection_options, download, module_name, read_program
 from .run import DEFAULT_MODULE, open_target
 
 if TYPE_CHECKING:
@@ -304,7 +304,7 @@ def run(args: argparse.Namespace) -> int:
         program = read_program(args.program, name or args.module or DEFAULT_MODULE, args.include, strict=args.strict)
         loader = Loader(module)
         try:
-            loader.download(program.instructions)
+            download(loader, program.instructions)
             loader.reset()
             specs = [s for item in args.watch for s in item.split(",") if s.strip()]
             dbg = Debugger(loader, program.instructions, program.labels, program.source,

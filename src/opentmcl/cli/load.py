@@ -17,6 +17,7 @@ from . import CliError
 
 if TYPE_CHECKING:
     from ..host import Module
+    from ..host.loader import Loader
 
 ENV_URL = "OPENTMCL_URL"
 
@@ -52,12 +53,22 @@ def read_program(path: str, module: str | None, include: list[str] | None = None
             raise CliError(f"{path}: empty program file (no 8-byte records)")
         check_binary(str(p), code, module, strict)
         return LoadedProgram(code, {}, [None] * len(code), str(p))
+    _check_readable(path)
     try:
         prog = assemble_file(p, module=module, include_path=include or [], origin=origin, strict=strict)
     except AsmError as exc:
         raise error_lines(exc) from None
     print_warnings(prog)
     return LoadedProgram(prog.instructions, dict(prog.labels), list(prog.source), str(p))
+
+
+def _check_readable(path: str) -> None:
+    """A source file that cannot be read is a plain file error (not an assembler position)."""
+    try:
+        with open(path, "rb"):
+            pass
+    except OSError as exc:
+        raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None
 
 
 def add_connection_options(p: argparse.ArgumentParser, *, required: bool) -> None:
@@ -105,6 +116,18 @@ def module_name(module: Module, given: str | None) -> str:
         raise CliError(f"cannot tell the module type ({exc}); give --module") from None
 
 
+def download(loader: Loader, instructions: list, *, start: int = 0, verify: bool = True) -> None:
+    """`Loader.download` with a progress bar (on a terminal only): the instructions written, then
+    the ones read back (134)."""
+    from .verbosity import Bar
+
+    n = len(instructions)
+    total = 2 * n if verify else n
+    with Bar(total, "load", unit="instr") as bar:
+        loader.download(instructions, start=start, verify=verify, progress=lambda i, _: bar.to(i),
+                        verify_progress=lambda i, _: bar.to(n + i))
+
+
 def run(args: argparse.Namespace) -> int:
     from ..host import TmclError, open_bus
     from ..host.loader import Loader, LoaderError
@@ -124,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         program = read_program(args.program, name, args.include, origin=args.start, strict=args.strict)
         loader = Loader(module)
         try:
-            loader.download(program.instructions, start=args.start, verify=not args.no_verify)
+            download(loader, program.instructions, start=args.start, verify=not args.no_verify)
             end = args.start + len(program.instructions) - 1
             check = "" if args.no_verify else ", verified"
             print(f"loaded {len(program.instructions)} instructions at {args.start}..{end}{check}")

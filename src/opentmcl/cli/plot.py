@@ -98,6 +98,7 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
     from ..host import TmclError, connect
     from ..plot import record_program
     from .load import module_name, read_program
+    from .verbosity import Bar
 
     try:
         m = connect(args.url, address=args.address)
@@ -105,10 +106,15 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
         raise CliError(str(exc)) from None
     try:
         if not is_program:  # FILE "-": record what the module does for --seconds
-            return record_program(m, None, axes, args.seconds, args.interval, stop_when_idle=False)
+            with Bar(0, "recording", unit="s") as bar:
+                return record_program(m, None, axes, args.seconds, args.interval, stop_when_idle=False,
+                                      sample_progress=bar.to)
         program = read_program(args.file, module_name(m, args.module))
-        return record_program(m, program.instructions, axes, args.seconds, args.interval,
-                              stop_when_idle=not args.keep_going)
+        n = len(program.instructions)
+        with Bar(n, "load", unit="instr") as load_bar, Bar(0, "recording", unit="s") as bar:
+            return record_program(m, program.instructions, axes, args.seconds, args.interval,
+                                  stop_when_idle=not args.keep_going, sample_progress=bar.to,
+                                  download_progress=load_bar.to)
     except TmclError as exc:
         raise CliError(str(exc)) from None
     finally:

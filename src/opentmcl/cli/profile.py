@@ -12,6 +12,7 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING
 
 from . import CliError
+from .verbosity import Bar
 
 if TYPE_CHECKING:
     from ..modules.profile import Param
@@ -87,27 +88,27 @@ def run_show(args: argparse.Namespace) -> int:
     return 0
 
 
+def _probe_line(bar: Bar, text: str) -> None:
+    """A probe progress line on stderr (above the bar when there is one)."""
+    bar.write(f"probe: {text}")
+
+
 def run_probe(args: argparse.Namespace) -> int:
     from ..atomicfile import write_atomic
     from ..host.connect import open_bus
-    from ..host.errors import TmclError
-    from ..host.probe import ProbeError, probe, skeleton
+    from ..host.probe import probe, skeleton
 
     if not 0 < args.timeout <= 60 or not 0 < args.max_seconds < float("inf"):
         raise CliError("--timeout must be 0..60 s and --max-seconds a positive number")
     if not 0 <= args.address <= 255:
         raise CliError(f"--address must be 0..255, got {args.address}")
+    client = open_bus(args.url, address=args.address, timeout=args.timeout)   # errors: exit 2/3 (cli/exits.py)
+    bar = Bar(0, "probe", unit="req")
     try:
-        client = open_bus(args.url, address=args.address, timeout=args.timeout)
-    except TmclError as exc:
-        raise CliError(str(exc)) from None
-    try:
-        result = probe(client, max_seconds=args.max_seconds,
-                       progress=lambda text: print(f"probe: {text}", file=sys.stderr, flush=True))
-    except (ProbeError, TmclError) as exc:
-        print(f"opentmcl profile: error: {exc}", file=sys.stderr)
-        return 1
+        result = probe(client, max_seconds=args.max_seconds, counted=bar.to,
+                       progress=lambda text: _probe_line(bar, text))
     finally:
+        bar.close()
         client.close()
     text = skeleton(result, args.url)
     if args.output:

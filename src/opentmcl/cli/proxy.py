@@ -11,12 +11,14 @@ program opens the pty (or connects to the TCP port) exactly as it would a served
 from __future__ import annotations
 
 import argparse
+import logging
 import signal
 import sys
 import threading
 from typing import TYPE_CHECKING
 
 from . import CliError
+from .exits import NO_REPLY
 
 if TYPE_CHECKING:
     from ..capture.proxy import Proxy
@@ -77,16 +79,6 @@ def build_proxy(args: argparse.Namespace) -> Proxy:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .serve import _log_to_stderr
-
-    logger, handler = _log_to_stderr("proxy")
-    try:
-        return _run(args)
-    finally:
-        logger.removeHandler(handler)
-
-
-def _run(args: argparse.Namespace) -> int:
     from ..server import PtyServer, TcpServer
 
     proxy = build_proxy(args)
@@ -111,14 +103,14 @@ def _run(args: argparse.Namespace) -> int:
         while not stop.wait(0.2):
             if not warned and proxy.writer is not None and proxy.writer.truncated:
                 warned = True
-                print(f"opentmcl proxy: warning: {args.log} reached its size limit; relaying goes on, "
-                      "capturing stopped", file=sys.stderr, flush=True)
+                logging.getLogger("opentmcl.cli").warning(   # -q hides it (cli/verbosity.py)
+                    "warning: %s reached its size limit; relaying goes on, capturing stopped", args.log)
             error = getattr(proxy.upstream, "error", None)
             if error:
                 if args.to.startswith("tcp://") and "closed" in error:  # e.g. serve's idle timeout
                     error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
                 print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
-                return 1
+                return NO_REPLY   # the module's link broke (docs/cli.md)
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)

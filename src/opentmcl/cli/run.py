@@ -23,14 +23,16 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from . import CliError
-from .load import add_connection_options, check_connection_options, module_name, read_program
+from .load import add_connection_options, check_connection_options, download, module_name, read_program
 
 if TYPE_CHECKING:
+    from ..firmware.vm import VirtualModule
     from ..host import Client
     from ..host.debugger import Watch
     from ..host.loader import Loader
     from ..modules.profile import ModuleProfile
     from ..motion.scenario import Scenario
+    from .verbosity import Bar
 
 DEFAULT_MODULE = "TMCM-6212"
 MAX_SAMPLES = 1_000_000  # more looks than this is a typo in --seconds / --sample
@@ -125,10 +127,9 @@ def run(args: argparse.Namespace) -> int:
         except DebugError as exc:
             raise CliError(str(exc)) from None
         loader = Loader(module)
-        from ..trace import cli_recorder
-        args.recorder = cli_recorder(client, args, CliError)   # --csv: the world trace (trace.py)
+        args.recorder = _recorder(client, args)   # --csv: the world trace (trace.py)
         try:
-            loader.download(program.instructions)
+            download(loader, program.instructions)
             loader.run(args.start)
             try:
                 _trace(loader, watches, read_watch, args)
@@ -153,7 +154,16 @@ def _check_csv(args: argparse.Namespace) -> None:
 
 def _trace(loader: Loader, watches: list[Watch], read_watch: Callable[[Loader, Watch], int | str],
            args: argparse.Namespace) -> None:
-    print(f"{'time [s]':>9}  changes", flush=True)
+    from .verbosity import Bar
+
+    with Bar(args.seconds, "run", unit="s") as bar:
+        _looks(loader, watches, read_watch, args, bar)
+
+
+def _looks(loader: Loader, watches: list[Watch], read_watch: Callable[[Loader, Watch], int | str],
+           args: argparse.Namespace, bar: Bar) -> None:
+    """Look every --sample seconds until the program stops or --seconds pass; a line per change."""
+    bar.print(f"{'time [s]':>9}  changes")
     last: dict[str, object] = {}
     elapsed, steps = 0.0, 0
     total = round(args.seconds / args.sample)
@@ -164,15 +174,49 @@ def _trace(loader: Loader, watches: list[Watch], read_watch: Callable[[Loader, W
         if getattr(args, "recorder", None) is not None:
             args.recorder.sample()
         if changed:
-            print(f"{elapsed:9.3f}  {' '.join(changed)}", flush=True)
+            bar.print(f"{elapsed:9.3f}  {' '.join(changed)}")
         st = loader.status()
         if st.mode != 1:
-            print(f"program stopped at address {st.pc} after {elapsed:.3f} s (A={st.accumulator}, "
-                  f"X={st.x_register})")
+            bar.print(f"program stopped at address {st.pc} after {elapsed:.3f} s (A={st.accumulator}, "
+                      f"X={st.x_register})")
             return
         if steps >= total:
-            print(f"{elapsed:.3f} s elapsed, program still running at address {st.pc}")
+            bar.print(f"{elapsed:.3f} s elapsed, program still running at address {st.pc}")
             return
         loader.client.sleep(args.sample)
         steps += 1
         elapsed = steps * args.sample
+        bar.to(min(elapsed, args.seconds))
+
+
+class _Recorder:
+    """`run --csv FILE`: samples the in-process module at each look of the run (trace.py)."""
+
+    def __init__(self, vm: VirtualModule, path: str) -> None:
+        from ..trace import Trace
+
+        self.vm, self.path = vm, path
+        self.trace = Trace()
+
+    def sample(self) -> None:
+        self.trace.sample(self.vm)
+
+    def save(self) -> None:
+        if self.path == "-":
+            print(self.trace.to_csv(), end="")
+            return
+        try:
+            self.trace.to_csv(self.path)
+        except OSError as exc:
+            raise CliError(f"cannot write {self.path}: {exc.strerror or exc}") from None
+        print(f"world trace: {len(self.trace.rows)} rows written to {self.path}")
+
+
+def _recorder(client: Client, args: argparse.Namespace) -> _Recorder | None:
+    """The recorder for `run --csv`, or None without --csv (needs the in-process module)."""
+    if not args.csv:
+        return None
+    modules = getattr(client.transport, "modules", None)
+    if not modules:
+        raise CliError("--csv records the in-process virtual module only (no --to)")
+    return _Recorder(modules[0], args.csv)

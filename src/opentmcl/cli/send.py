@@ -34,7 +34,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "on CAN the URL's ?id=N chooses the module")
     p.add_argument("--host-address", type=int, default=2, help="reply (host) address (default 2)")
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each reply (default 5)")
-    p.add_argument("-v", "--verbose", action="store_true", help="print the whole reply, not just the value")
+    p.add_argument("-v", "--verbose", action="count", default=0,
+                   help="print the whole reply, not just the value; also log at INFO (-vv: DEBUG, every frame)")
     p.set_defaults(func=run)
 
 

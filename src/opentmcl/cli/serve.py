@@ -22,8 +22,6 @@ from typing import TYPE_CHECKING, TextIO
 from . import CliError
 
 if TYPE_CHECKING:
-    import logging
-
     from ..firmware.vm import VirtualModule
     from ..motion.scenario import Scenario
     from ..server import Server
@@ -203,7 +201,7 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
         _give_can_ids(modules)
     server = Server(modules)
     if tcp_spec is not None or args.host:
-        _add_tcp(server, args, tcp_spec or DEFAULT_TCP, err)
+        _add_tcp(server, args, tcp_spec or DEFAULT_TCP)
     if args.pty:
         _add_pty(server, args, len(modules))
     if args.can:
@@ -221,7 +219,7 @@ def _give_can_ids(modules: list[VirtualModule]) -> None:
             vmapi.set_global_ram(vm, vmapi.GP_CAN_ID, vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS))
 
 
-def _add_tcp(server: Server, args: argparse.Namespace, spec: str, err: TextIO) -> None:
+def _add_tcp(server: Server, args: argparse.Namespace, spec: str) -> None:
     """--tcp [HOST:]PORT and --host: loopback unless --host names another address (with a warning)."""
     from ..server import TcpServer
     from ..server.tcp import is_loopback
@@ -233,8 +231,10 @@ def _add_tcp(server: Server, args: argparse.Namespace, spec: str, err: TextIO) -
     if not is_loopback(host):
         if not args.host:
             raise CliError(f"refusing to bind TCP to {host}: give --host {host} to serve beyond loopback")
-        print(f"opentmcl serve: warning: TCP bound to {host} is reachable from the network; "
-              "anyone who can connect can move the motors", file=err)
+        import logging  # a warning record: -q hides it (cli/verbosity.py)
+
+        logging.getLogger("opentmcl.cli").warning("warning: TCP bound to %s is reachable from the network; "
+                                                  "anyone who can connect can move the motors", host)
     server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
                          pace_bytes=args.pace, idle_timeout=args.idle_timeout))
 
@@ -288,17 +288,6 @@ def describe(server: Server) -> list[str]:
     return lines
 
 
-def _log_to_stderr(tool: str = "serve") -> tuple[logging.Logger, logging.Handler]:
-    """Endpoint events (a client refused or dropped, a module bug) as ``opentmcl TOOL: ...`` lines."""
-    import logging
-
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter(f"opentmcl {tool}: %(message)s"))
-    logger = logging.getLogger("opentmcl.server")
-    logger.addHandler(handler)
-    return logger, handler
-
-
 def run(args: argparse.Namespace) -> int:
     if getattr(args, "allow_host", None) and not getattr(args, "web", None):
         raise CliError("--allow-host belongs to the dashboard: give --web HOST:PORT too")
@@ -306,11 +295,7 @@ def run(args: argparse.Namespace) -> int:
         from .dashboard import require_web
 
         require_web("opentmcl serve --web")
-    logger, handler = _log_to_stderr()
-    try:
-        return _run(args)
-    finally:
-        logger.removeHandler(handler)
+    return _run(args)   # endpoint events reach stderr through main()'s log handler (cli/verbosity.py)
 
 
 def _run(args: argparse.Namespace) -> int:

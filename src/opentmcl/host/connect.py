@@ -21,7 +21,7 @@ from collections.abc import Callable, Mapping
 from .. import registry
 from ..modules.profile import ModuleProfile
 from .client import Client, check_address
-from .errors import TmclConnectionError, TmclError, check_timeout
+from .errors import TmclConnectionError, TmclError, TmclUrlError, check_timeout
 from .module import Module
 from .transport import Transport, register_checked
 
@@ -57,12 +57,12 @@ SCHEMES: Mapping[str, object] = _TRANSPORTS.targets()
 
 def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
     if not isinstance(url, str) or "://" not in url:
-        raise TmclConnectionError(f"not a module URL: {url!r} (expected e.g. sim://TMCM-6212, "
+        raise TmclUrlError(f"not a module URL: {url!r} (expected e.g. sim://TMCM-6212, "
                                   f"tcp://HOST:PORT, serial:///dev/ttyUSB0, can://socketcan/can0?id=1)")
     try:
         parts = urllib.parse.urlsplit(url.strip())
     except ValueError as exc:  # e.g. an unclosed [IPv6 bracket
-        raise TmclConnectionError(f"bad module URL {url!r}: {exc}") from None
+        raise TmclUrlError(f"bad module URL {url!r}: {exc}") from None
     scheme = parts.scheme.lower()
     parts = parts._replace(scheme=scheme)
     if scheme == "sim" and address is not None:
@@ -97,7 +97,7 @@ def _factory(scheme: str, url: str) -> Callable[[urllib.parse.SplitResult], obje
     except (ImportError, AttributeError) as exc:
         raise TmclConnectionError(f"{scheme}:// transport is not available: {exc}") from None
     if factory is None:
-        raise TmclConnectionError(f"unknown URL scheme {scheme!r} in {url!r}; "
+        raise TmclUrlError(f"unknown URL scheme {scheme!r} in {url!r}; "
                                   f"use one of {', '.join(s + '://' for s in transport_schemes())}")
     if not callable(factory):
         raise TmclConnectionError(f"{scheme}:// transport is not callable: {factory!r}")

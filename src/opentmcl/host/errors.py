@@ -61,6 +61,12 @@ class TmclConnectionError(TmclError, ConnectionError):
     """The transport could not be opened, or it was closed or broke."""
 
 
+class TmclUrlError(TmclConnectionError, ValueError):
+    """A module URL that names no link that could be opened: unknown scheme or key, missing host,
+    port or device, a bad number, an unknown sim:// module. Bad input, not a link failure (the CLI
+    exits 2, not 3); still a TmclConnectionError, as before it had its own class."""
+
+
 class TmclAddressError(TmclError, ValueError):
     """A request for a module address this connection cannot reach (on CAN the connection's
     CAN ID, not an address byte, selects the module)."""

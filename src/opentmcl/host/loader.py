@@ -32,6 +32,8 @@ if TYPE_CHECKING:
 STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
 ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
 MODES = {0: "stop", 1: "run", 2: "step", 3: "reset"}  # GP128 / 135 (TMCM-6212 manual 5.1)
+Progress = Callable[[int, int], None]
+"""A progress callback: (instructions done, instructions in all)."""
 
 @runtime_checkable
 class HasInstructions(Protocol):
@@ -124,9 +126,11 @@ class Loader:
 
     # --- download / read back ---------------------------------------------------------------
     def download(self, program: ProgramSource, *, start: int = 0, verify: bool = True,
-                 progress: Callable[[int, int], None] | None = None) -> list[Instruction]:
+                 progress: Progress | None = None, verify_progress: Progress | None = None) -> list[Instruction]:
         """132 <start>, every instruction (answered 101), 133; then, if `verify`, read each back
-        with 134 and compare. Returns the instructions written."""
+        with 134 and compare. Returns the instructions written. `progress(done, total)` is called
+        after each instruction written, `verify_progress(done, total)` after each one read back
+        (for a progress bar; the library draws nothing)."""
         code = instructions_of(program)
         self.request(ENTER_DOWNLOAD_MODE, 0, 0, start)
         try:
@@ -141,23 +145,29 @@ class Loader:
         finally:
             self.request(EXIT_DOWNLOAD_MODE)
         if verify:
-            self.verify(code, start=start)
+            self.verify(code, start=start, progress=verify_progress)
         return code
 
-    def verify(self, program: ProgramSource, *, start: int = 0) -> None:
+    def verify(self, program: ProgramSource, *, start: int = 0, progress: Progress | None = None) -> None:
         """Compare program memory from `start` with `program` (134); VerifyError on a difference."""
         code = instructions_of(program)
-        got = self.read(start, len(code))
+        got = self.read(start, len(code), progress=progress)
         bad = [(start + i, want, have) for i, (want, have) in enumerate(zip(code, got, strict=True))
                if tuple(want) != tuple(have)]
         if bad:
             raise VerifyError(bad)
 
-    def read(self, start: int, count: int) -> list[Instruction]:
-        """`count` instructions of program memory from `start` (command 134)."""
+    def read(self, start: int, count: int, *, progress: Progress | None = None) -> list[Instruction]:
+        """`count` instructions of program memory from `start` (command 134); `progress(done, count)`
+        after each."""
         check_int(start, "start")
         check_int(count, "count")
-        return [self.read_one(start + i) for i in range(count)]
+        out = []
+        for i in range(count):
+            out.append(self.read_one(start + i))
+            if progress is not None:
+                progress(i + 1, count)
+        return out
 
     def read_one(self, address: int) -> Instruction:
         """One program memory location (command 134, special reply)."""

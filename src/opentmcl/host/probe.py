@@ -43,18 +43,23 @@ class ProbeResult:
 
 
 Progress = Callable[[str], None]
+Counted = Callable[[int, int], None]
+"""(requests sent, requests the probe will send; 0 while the axes are being counted)."""
 TomlValue = str | int | bool | Sequence["TomlValue"]
 
 
 class _Asker:
-    def __init__(self, client: Client, deadline: float, progress: Progress) -> None:
-        self.client, self.deadline, self.progress = client, deadline, progress
+    def __init__(self, client: Client, deadline: float, progress: Progress, counted: Counted | None) -> None:
+        self.client, self.deadline, self.progress, self.counted = client, deadline, progress, counted
         self.requests = 0
+        self.total = 0
 
     def read(self, command: int, type_: int, motor: int) -> int | None:
         if time.monotonic() > self.deadline:
             raise ProbeError(f"probe took longer than its time limit ({self.requests} requests sent)")
         self.requests += 1
+        if self.counted is not None:
+            self.counted(self.requests, self.total)
         for attempt in range(3):
             try:
                 return self.client.reply(command, type_, motor, 0).value
@@ -94,9 +99,11 @@ def _version_binary(client: Client) -> int | None:
                          "give that --address") from None
 
 
-def probe(client: Client, *, max_seconds: float = 300.0, progress: Progress = _no_progress) -> ProbeResult:
-    """Probe the module `client` talks to (its default address)."""
-    ask = _Asker(client, time.monotonic() + max_seconds, progress)
+def probe(client: Client, *, max_seconds: float = 300.0, progress: Progress = _no_progress,
+          counted: Counted | None = None) -> ProbeResult:
+    """Probe the module `client` talks to (its default address). `progress` gets a line per axis
+    and bank, `counted` (requests sent, requests in all) each read request, e.g. for a progress bar."""
+    ask = _Asker(client, time.monotonic() + max_seconds, progress, counted)
     version = _version_string(client)
     binary = _version_binary(client)
     progress(f"firmware {version!r}")
@@ -104,6 +111,7 @@ def probe(client: Client, *, max_seconds: float = 300.0, progress: Progress = _n
     while axes < MAX_AXES and ask.read(GAP, 1, axes) is not None:
         axes += 1
     result = ProbeResult(version, binary, axes)
+    ask.total = ask.requests + len(NUMBERS) * (axes + len(GLOBAL_BANKS)) + len(PORTS) * len(IO_BANKS)
     for motor in range(axes):
         axis = {n: v for n in NUMBERS if (v := ask.read(GAP, n, motor)) is not None}
         result.axis[motor] = axis

@@ -16,19 +16,76 @@ of bytes asked for, or raises `TmclTimeout`. Concrete transports live in
   address) and the last byte (checksum) are left out" (PD86-1180 manual 4.2);
   the string reply of command 136 is eight bytes, the version string (PD86-1180
   manual 4.6.39).
+
+Every transport logs each frame it sends (``->``) and receives (``<-``) at DEBUG on the logger
+``opentmcl.host.transport`` as TMCL text plus the bytes (`frame_text`), e.g.
+``-> MVP ABS, 0, 51200  [01 04 00 00 00 00 c8 00 cd]``; the text is built only when that level is
+enabled (docs/host.md "Logging").
 """
 from __future__ import annotations
 
+import logging
 import threading
 import time
 import urllib.parse
 from abc import ABC, abstractmethod
 from typing import TYPE_CHECKING, Self
 
-from .errors import TmclConnectionError, TmclTimeout, TmclValueError
+from .errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError
 
 if TYPE_CHECKING:
     from ..registry import Registry
+
+log = logging.getLogger("opentmcl.host.transport")
+DEBUG = logging.DEBUG
+
+
+def _request_text(command: int, type_: int, motor: int, value: int) -> str:
+    from ..protocol.opcodes import format_instruction
+
+    text = format_instruction(command, type_, motor, value)
+    return text if text is not None else f"command {command}, type {type_}, motor/bank {motor}, value {value}"
+
+
+def _reply_text(host: int, module: int, status: int, command: int, value: int) -> str:
+    """``reply 2<-1 status 100 (...) MVP value 0``; `host` -1 on CAN (no reply address byte)."""
+    from ..protocol.opcodes import COMMANDS
+    from ..protocol.status import message
+
+    cmd = COMMANDS.get(command)
+    name = cmd.mnemonic if cmd is not None and cmd.mnemonic else f"command {command}"
+    to = "" if host < 0 else f" to {host}"
+    return f"{name} reply from {module}{to}: status {status} ({message(status)}), value {value}"
+
+
+def frame_text(data: bytes, frame_format: str = "serial", *, request: bool = True) -> str:
+    """One frame as TMCL text plus its bytes in hex: a request as the manual writes the
+    instruction (``MVP ABS, 0, 51200``), a reply as its addresses, status, command and value.
+    Anything else (part of a frame, a wrong checksum, ASCII text, the 136 version string) is
+    shown as its bytes only."""
+    raw = bytes(data)
+    hexed = f"[{raw.hex(' ')}]"
+    if frame_format == "can":  # no address byte, no checksum on the request's CAN ID side
+        fields = raw[:3] if request and len(raw) == 8 else raw[:4] if not request and len(raw) == 7 else None
+        value = raw[3:7]
+    else:
+        whole = len(raw) == 9 and sum(raw[:8]) & 0xFF == raw[8]
+        fields = (raw[1:4] if request else raw[:4]) if whole else None
+        value = raw[4:8]
+    if fields is None:
+        return hexed
+    number = int.from_bytes(value, "big", signed=True)
+    if request:
+        return f"{_request_text(fields[0], fields[1], fields[2], number)}  {hexed}"
+    if frame_format == "can":  # module address, status, command, value
+        return f"{_reply_text(-1, fields[0], fields[1], fields[2], number)}  {hexed}"
+    return f"{_reply_text(fields[0], fields[1], fields[2], fields[3], number)}  {hexed}"
+
+
+def log_frame(arrow: str, data: bytes, frame_format: str) -> None:
+    """Log one frame at DEBUG (callers check ``log.isEnabledFor(DEBUG)`` first: the hot path pays
+    one call when logging is off)."""
+    log.debug("%s %s", arrow, frame_text(data, frame_format, request=arrow == "->"))
 
 
 class Transport(ABC):
@@ -114,6 +171,8 @@ class StreamTransport(Transport):
 
     def send(self, data: bytes) -> None:
         self._check_open()
+        if log.isEnabledFor(DEBUG):
+            log_frame("->", data, self.frame_format)
         self._write(data)
 
     def recv(self, n: int, timeout: float) -> bytes:
@@ -127,6 +186,8 @@ class StreamTransport(Transport):
             self._rx += self._read_some(left)
         out = bytes(self._rx[:n])
         del self._rx[:n]
+        if log.isEnabledFor(DEBUG):
+            log_frame("<-", out, self.frame_format)
         return out
 
     def close(self) -> None:
@@ -139,13 +200,25 @@ class StreamTransport(Transport):
             pass
 
 
+def link_error(name: str, action: str, exc: OSError) -> str:
+    """One sentence for a link that broke while `action` ("sending", "receiving"): the cause once
+    (no bare errno) and what to check."""
+    if isinstance(exc, (BrokenPipeError, ConnectionResetError, ConnectionAbortedError)):
+        return (f"{name}: the other end closed the connection while {action}; check that the server "
+                "or module is still running, then connect again")
+    if isinstance(exc, TimeoutError):
+        return f"{name}: {action} timed out; check that the server or module still reads its link"
+    cause = exc.strerror or str(exc)
+    return f"{name}: {action} failed: {cause}"
+
+
 def url_query(url: urllib.parse.SplitResult, known: tuple[str, ...]) -> dict[str, str]:
     """The query of a transport URL as a dict; a key the transport does not know (a typo such as
     ``?baudrate=``) is a TmclConnectionError instead of being ignored."""
     query = dict(urllib.parse.parse_qsl(url.query, keep_blank_values=True))
     unknown = sorted(set(query) - set(known))
     if unknown:
-        raise TmclConnectionError(f"unknown {', '.join(repr(k) for k in unknown)} in {url.scheme}:// URL "
+        raise TmclUrlError(f"unknown {', '.join(repr(k) for k in unknown)} in {url.scheme}:// URL "
                                   f"(it takes {', '.join(known)})")
     return query
 

@@ -111,14 +111,16 @@ def idle(trace: Trace) -> bool:
 
 
 def record_program(module, program=None, axes=(0,), seconds: float | None = None, interval: float = 0.01,
-                   *, stop_when_idle: bool = True, loops: int | None = None, download_progress=None) -> Trace:
+                   *, stop_when_idle: bool = True, loops: int | None = None, download_progress=None,
+                   sample_progress=None) -> Trace:
     """Download `program` (instructions; None: record what runs) to a host `Module`, start it
     (129 from address 0) and record `axes`.
 
     `seconds=None` derives the length from the program: until it stops (and the axes stand still)
     or has looped AUTO_LOOPS times, at most `auto_seconds(interval)`; without a program
     DEFAULT_SECONDS. On an in-process virtual module the trace also gets the module's origin
-    writes and hard stops (`Trace.events`). `download_progress(done, total)` follows the download."""
+    writes and hard stops (`Trace.events`). `download_progress(done, total)` follows the download,
+    `sample_progress(seconds, total)` the recording (total: the longest it may take)."""
     from ..host.loader import Loader
 
     if seconds is None:
@@ -144,6 +146,8 @@ def record_program(module, program=None, axes=(0,), seconds: float | None = None
     def first_sample(trace: Trace) -> bool:   # the module's clock at the trace's time 0
         if not start and vm is not None:
             start.append(vm.time - trace.time[-1])
+        if sample_progress is not None:
+            sample_progress(round(trace.time[-1], 2), seconds)
         return inner(trace) if inner is not None else False
 
     try:

@@ -21,7 +21,7 @@ from . import canmap, vmapi
 if TYPE_CHECKING:
     from can import BusABC
 
-log = logging.getLogger("opentmcl.server")
+log = logging.getLogger("opentmcl.server.can")  # every frame at DEBUG (docs/host.md "Logging")
 
 POLL = 0.2
 
@@ -78,6 +78,8 @@ class CanServer:
             except Exception:  # a module bug must not stop the endpoint
                 log.exception("module failed on CAN frame %03x %s", msg.arbitration_id, bytes(msg.data).hex(" "))
                 continue
+            if log.isEnabledFor(logging.DEBUG):
+                _log_exchange(msg.arbitration_id, bytes(msg.data), replies)
             for _vm, reply_id, payload in replies:
                 self._send(reply_id, payload)
 
@@ -112,3 +114,12 @@ class CanServer:
             canbus, self.canbus = self.canbus, None
         if canbus is not None:
             canbus.shutdown()
+
+
+def _log_exchange(can_id: int, data: bytes, replies: list) -> None:
+    """A CAN request and the replies to it, as TMCL text plus hex."""
+    from ..host.transport import frame_text
+
+    log.debug("ID %03x <- %s", can_id, frame_text(data, "can", request=True))
+    for _vm, reply_id, payload in replies:
+        log.debug("ID %03x -> %s", reply_id, frame_text(payload, "can", request=False))

@@ -23,12 +23,13 @@ The class is pure apart from the bus: the caller passes the arrival time.
 from __future__ import annotations
 
 import logging
+from logging import DEBUG
 from typing import NamedTuple
 
 from ..protocol.frame import FRAME_LEN
 from .framer import DEFAULT_GAP, SerialFramer
 
-log = logging.getLogger("opentmcl.server")
+log = logging.getLogger("opentmcl.server.stream")  # every frame at DEBUG (docs/host.md "Logging")
 
 BINARY = "binary"
 ASCII = "ascii"
@@ -46,6 +47,28 @@ class Output(NamedTuple):
     vm: object
     data: bytes
     kind: str  # BINARY or ASCII
+
+
+def _name(vm) -> str:
+    return getattr(getattr(vm, "profile", None), "name", type(vm).__name__)
+
+
+def _log_exchange(vm, frame: bytes, reply: bytes) -> None:
+    """A request one module read and its reply (if it gave one), as TMCL text plus hex."""
+    from ..host.transport import frame_text
+
+    log.debug("%s <- %s", _name(vm), frame_text(frame, request=True))
+    if reply:
+        log.debug("%s -> %s", _name(vm), frame_text(reply, request=False))
+
+
+def _log_frames(frame: bytes, outputs: list) -> None:
+    """A request every module of the bus read at once (the fast path) and the replies to it."""
+    from ..host.transport import frame_text
+
+    log.debug("bus <- %s", frame_text(frame, request=True))
+    for vm, data, _kind in outputs:
+        log.debug("%s -> %s", _name(vm), frame_text(data, request=False))
 
 
 class SerialStream:
@@ -89,7 +112,10 @@ class SerialStream:
                 else:
                     bus.sync()
                     self.frames += 1
-                    return bus.serial_frames(data, channel)
+                    outputs = bus.serial_frames(data, channel)
+                    if log.isEnabledFor(DEBUG):
+                        _log_frames(data, outputs)
+                    return outputs
         return self._feed_each(data, now, channel)
 
     def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
@@ -109,10 +135,13 @@ class SerialStream:
 
     def _frame(self, vm, frame: bytes, channel) -> bytes:
         try:
-            return self.bus.serial_frame(vm, frame, channel)
+            reply = self.bus.serial_frame(vm, frame, channel)
         except Exception:
             log.exception("module failed on frame %s", frame.hex(" "))
             return b""
+        if log.isEnabledFor(DEBUG):
+            _log_exchange(vm, frame, reply)
+        return reply
 
     def _feed_module(self, index: int, vm, data: bytes, now: float, channel, found: list) -> int:
         framer = self._framers[index]

@@ -13,7 +13,7 @@ import urllib.parse
 
 from ..firmware.vm import VirtualModule
 from ..host.connect import register_transport
-from ..host.errors import TmclConnectionError
+from ..host.errors import TmclUrlError
 from ..host.transport import url_query
 from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, _parse_modules, make_clock
 
@@ -26,7 +26,7 @@ def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
     try:
         default_address = int(query.get("address", "1"), 0)
     except ValueError:
-        raise TmclConnectionError(f"bad address {query['address']!r} in sim:// URL") from None
+        raise TmclUrlError(f"bad address {query['address']!r} in sim:// URL") from None
     # A profile file is a path: sim:///abs/module.toml or sim://relative/module.toml (docs/profiles.md).
     spec = url.netloc + url.path if ".toml" in url.path.lower() else (url.netloc or url.path.lstrip("/"))
     modules = []
@@ -34,7 +34,7 @@ def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
         try:
             modules.append(VirtualModule(name, address=address))
         except (KeyError, ValueError) as exc:  # ValueError: a bad profile file
-            raise TmclConnectionError(f"sim://: {exc.args[0] if exc.args else exc}") from None
+            raise TmclUrlError(f"sim://: {exc.args[0] if exc.args else exc}") from None
     return InProcessTransport(modules, clock=_clock(query))
 
 
@@ -46,7 +46,7 @@ def _clock(query: dict[str, str]) -> Clock:
             return VirtualClock(float(query["step"]))
         return make_clock(clock_name)
     except ValueError as exc:
-        raise TmclConnectionError(f"sim://: {exc}") from None
+        raise TmclUrlError(f"sim://: {exc}") from None
 
 
 register_transport("sim", open_sim)

@@ -13,7 +13,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Iterable
-from typing import TYPE_CHECKING, TextIO
+from typing import TYPE_CHECKING
 
 from .connlimits import HEAD_MAX, HEAD_TIMEOUT, KEEP_ALIVE, MAX_CONNECTIONS, protocol_class
 from .guard import BODY_TIMEOUT
@@ -126,15 +126,14 @@ class DashboardStartError(OSError):
     """The web server could not start (port in use, bad address)."""
 
 
-def warn_if_exposed(host: str, err: TextIO | None = None) -> None:
-    """Anyone who has the token can move the motors: say so when it is not loopback-only."""
-    import sys
-
+def warn_if_exposed(host: str) -> None:
+    """Anyone who has the token can move the motors: say so (a log warning) when it is not loopback-only."""
     from ..server.tcp import is_loopback
 
     if not is_loopback(host):
-        print(f"opentmcl: warning: the dashboard on {host} is reachable from the network; "
-              "anyone who has its token can move the motors", file=err or sys.stderr)
+        logging.getLogger("opentmcl.web").warning(
+            "warning: the dashboard on %s is reachable from the network; anyone who has its token can move "
+            "the motors", host)
 
 
 def check_allowed_hosts(names: Iterable[object]) -> tuple[str, ...]:

@@ -15,8 +15,8 @@ import time
 import urllib.parse
 from typing import Any
 
-from ..errors import TmclConnectionError, TmclProtocolError, TmclTimeout, check_int
-from ..transport import Transport, url_query
+from ..errors import TmclConnectionError, TmclProtocolError, TmclTimeout, TmclUrlError, check_int
+from ..transport import DEBUG, Transport, log, log_frame, url_query
 
 DEFAULT_ID = 1
 DEFAULT_REPLY_ID = 2
@@ -34,7 +34,7 @@ class CanTransport(Transport):
 
         for name, value in (("id", can_id), ("reply_id", reply_id)):
             if not 0 <= check_int(value, f"CAN {name}") <= 0x7FF:
-                raise TmclConnectionError(f"CAN {name} must be 0..2047 (manual 5.1), got {value}")
+                raise TmclUrlError(f"CAN {name} must be 0..2047 (manual 5.1), got {value}")
         self.interface, self.channel = interface, channel
         self.can_id, self.reply_id = can_id, reply_id
         try:
@@ -42,6 +42,7 @@ class CanTransport(Transport):
         except (can.CanError, OSError, ValueError, ImportError, NotImplementedError) as exc:
             raise TmclConnectionError(f"cannot open CAN bus {interface}/{channel}: {exc}") from None
         self._closed = False
+        log.info("opened %s (CAN ID %d, reply ID %d)", self.name, can_id, reply_id)
 
     @property
     def name(self) -> str:
@@ -58,6 +59,8 @@ class CanTransport(Transport):
         if not 1 <= len(data) <= 8:
             raise TmclProtocolError(f"a CAN frame carries 1..8 data bytes, got {len(data)}")
         message = can.Message(arbitration_id=self.can_id, data=bytes(data), is_extended_id=False)
+        if log.isEnabledFor(DEBUG):
+            log_frame("->", data, self.frame_format)
         try:
             self._bus.send(message, timeout=1.0)
         except (can.CanError, OSError) as exc:
@@ -83,6 +86,8 @@ class CanTransport(Transport):
             data = bytes(msg.data)
             if len(data) < n:
                 raise TmclProtocolError(f"{self.name}: reply of {len(data)} bytes, expected {n}: {data.hex(' ')}")
+            if log.isEnabledFor(DEBUG):
+                log_frame("<-", data[:n], self.frame_format)
             return data[:n]
 
     def reset_input(self) -> None:
@@ -110,7 +115,7 @@ def open_can(url: urllib.parse.SplitResult) -> CanTransport:
     interface = url.netloc
     channel = urllib.parse.unquote(url.path.lstrip("/"))
     if not interface or not channel:
-        raise TmclConnectionError(f"CAN URL needs an interface and a channel, e.g. can://socketcan/can0?id=1, "
+        raise TmclUrlError(f"CAN URL needs an interface and a channel, e.g. can://socketcan/can0?id=1, "
                                   f"got {url.geturl()!r}")
     kwargs: dict[str, int] = {}
     try:
@@ -119,5 +124,5 @@ def open_can(url: urllib.parse.SplitResult) -> CanTransport:
         if "bitrate" in query:
             kwargs["bitrate"] = int(query["bitrate"])
     except ValueError:
-        raise TmclConnectionError(f"bad number in {url.geturl()!r}") from None
+        raise TmclUrlError(f"bad number in {url.geturl()!r}") from None
     return CanTransport(interface, channel, can_id, reply_id, **kwargs)

@@ -28,8 +28,8 @@ from collections.abc import Callable, Iterable
 from typing import Generic, Protocol, TypeVar
 
 from ...modules.addresses import address_error
-from ..errors import TmclConnectionError, TmclTimeout, TmclValueError, check_timeout
-from ..transport import Transport
+from ..errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError, check_timeout
+from ..transport import DEBUG, Transport, log, log_frame
 
 
 class SimulatedModule(Protocol):
@@ -195,6 +195,8 @@ class InProcessTransport(Transport, Generic[M]):
     def send(self, data: bytes) -> None:
         with self.lock:
             self._check_open()
+            if log.isEnabledFor(DEBUG):
+                log_frame("->", data, self.frame_format)
             self.clock.sync(self)
             self._collect_events()
             for m in self.modules:
@@ -213,6 +215,8 @@ class InProcessTransport(Transport, Generic[M]):
                 raise TmclTimeout(f"no reply within {timeout:g} s ({len(self._rx)} of {n} bytes received)")
             out = bytes(self._rx[:n])
             del self._rx[:n]
+            if log.isEnabledFor(DEBUG):
+                log_frame("<-", out, self.frame_format)
             return out
 
     def reset_input(self) -> None:
@@ -239,18 +243,18 @@ def _parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
     out = []
     names = [p for p in urllib.parse.unquote(netloc).split(",") if p.strip()]
     if not names:
-        raise TmclConnectionError("sim:// URL names no module, e.g. sim://TMCM-6212")
+        raise TmclUrlError("sim:// URL names no module, e.g. sim://TMCM-6212")
     for i, part in enumerate(names):
         name, sep, addr = part.strip().partition("@")
         if sep:
             try:
                 address = int(addr, 0)
             except ValueError:
-                raise TmclConnectionError(f"bad module address {addr!r} in sim:// URL") from None
+                raise TmclUrlError(f"bad module address {addr!r} in sim:// URL") from None
         else:
             address = default_address + i
         out.append((name.strip(), address))
     problem = address_error([address for _, address in out])  # the rule of `opentmcl serve`
     if problem:
-        raise TmclConnectionError(f"sim://: {problem}")
+        raise TmclUrlError(f"sim://: {problem}")
     return out

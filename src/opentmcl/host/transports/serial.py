@@ -11,13 +11,15 @@ handlers that live in other layers: the root package registers ``opentmcl://``.
 """
 from __future__ import annotations
 
+import errno
+import os
 import urllib.parse
 from collections.abc import Callable
 from typing import Protocol
 
 from ... import registry
-from ..errors import TmclConnectionError, TmclTypeError
-from ..transport import StreamTransport, register_checked, url_query
+from ..errors import TmclConnectionError, TmclTypeError, TmclUrlError
+from ..transport import StreamTransport, link_error, log, register_checked, url_query
 
 DEFAULT_BAUD = 9600
 
@@ -62,6 +64,35 @@ def prepare_port(port: str) -> None:
         hook()
 
 
+def existing_ports() -> list[str]:
+    """The serial ports pyserial finds on this computer (`serial.tools.list_ports`); [] if it cannot tell."""
+    try:
+        from serial.tools import list_ports
+
+        return sorted(p.device for p in list_ports.comports())
+    except Exception:  # listing is a hint only: never let it hide the real error
+        return []
+
+
+def open_error(port: str, exc: BaseException) -> str:
+    """One line for a port that cannot be opened: the cause once (pyserial repeats the errno in
+    its message) and the likely fix: the ports that exist, or the permission to ask for."""
+    code = getattr(exc, "errno", None)
+    cause = os.strerror(code) if isinstance(code, int) and code > 0 else str(exc)
+    text = f"cannot open serial port {port}: {cause}"
+    if code in (errno.EACCES, errno.EPERM):
+        return text + " (on Linux: add your user to the 'dialout' group, then log in again)"
+    if code == errno.EBUSY:
+        return text + " (another program has it open)"
+    is_url = "://" in port
+    if code in (errno.ENOENT, errno.ENODEV, errno.ENXIO) or (not is_url and code is None and port not in existing_ports()):
+        ports = existing_ports()
+        found = (f"serial ports here: {', '.join(ports)}" if ports else
+                 "no serial port found here: is the adapter plugged in?")
+        return f"{text}; {found}"
+    return text
+
+
 class SerialTransport(StreamTransport):
     """A pyserial port; `recv` returns exactly n bytes or raises `TmclTimeout`."""
 
@@ -77,7 +108,8 @@ class SerialTransport(StreamTransport):
         try:
             self._ser: PyserialPort = serial.serial_for_url(port, baudrate=baud, timeout=0.1, write_timeout=5.0)
         except (serial.SerialException, ValueError, OSError) as exc:
-            raise TmclConnectionError(f"cannot open serial port {port}: {exc}") from None
+            raise TmclConnectionError(open_error(port, exc)) from None
+        log.info("opened %s at %d baud", self.name, baud)
 
     @property
     def baud(self) -> int:
@@ -95,7 +127,7 @@ class SerialTransport(StreamTransport):
             self._ser.write(data)
             self._ser.flush()
         except (serial.SerialException, OSError) as exc:
-            raise TmclConnectionError(f"{self.name}: write failed: {exc}") from None
+            raise TmclConnectionError(link_error(self.name, "writing", exc)) from None
 
     def _read_some(self, timeout: float) -> bytes:
         import serial
@@ -123,11 +155,11 @@ def open_serial(url: urllib.parse.SplitResult) -> SerialTransport:
     query = url_query(url, ("port", "baud"))
     port = query.get("port") or (url.netloc + url.path if url.netloc else url.path)
     if not port:
-        raise TmclConnectionError(f"serial URL names no port, e.g. serial:///dev/ttyUSB0, got {url.geturl()!r}")
+        raise TmclUrlError(f"serial URL names no port, e.g. serial:///dev/ttyUSB0, got {url.geturl()!r}")
     try:
         baud = int(query.get("baud", DEFAULT_BAUD))
     except ValueError:
-        raise TmclConnectionError(f"bad baud rate in {url.geturl()!r}") from None
+        raise TmclUrlError(f"bad baud rate in {url.geturl()!r}") from None
     if baud <= 0:
-        raise TmclConnectionError(f"bad baud rate {baud}")
+        raise TmclUrlError(f"bad baud rate {baud}")
     return SerialTransport(port, baud)

@@ -10,8 +10,8 @@ from __future__ import annotations
 import socket
 import urllib.parse
 
-from ..errors import TmclConnectionError, check_timeout
-from ..transport import StreamTransport, url_query
+from ..errors import TmclConnectionError, TmclUrlError, check_timeout
+from ..transport import StreamTransport, link_error, log, url_query
 
 DEFAULT_CONNECT_TIMEOUT = 5.0
 
@@ -31,13 +31,14 @@ class TcpTransport(StreamTransport):
         except OSError as exc:
             raise TmclConnectionError(f"tcp://{host}:{port}: {exc.strerror or exc}") from None
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        log.info("connected to %s", self.name)
 
     def _write(self, data: bytes) -> None:
         try:
             self._sock.settimeout(DEFAULT_CONNECT_TIMEOUT)
             self._sock.sendall(data)
         except OSError as exc:
-            raise TmclConnectionError(f"{self.name}: send failed: {exc}") from None
+            raise TmclConnectionError(link_error(self.name, "sending", exc)) from None
 
     def _read_some(self, timeout: float) -> bytes:
         try:
@@ -46,7 +47,7 @@ class TcpTransport(StreamTransport):
         except TimeoutError:
             return b""
         except OSError as exc:
-            raise TmclConnectionError(f"{self.name}: receive failed: {exc}") from None
+            raise TmclConnectionError(link_error(self.name, "receiving", exc)) from None
         if not chunk:
             raise TmclConnectionError(f"{self.name}: connection closed by the server")
         return chunk
@@ -77,14 +78,14 @@ def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
     try:
         port = url.port
     except ValueError:
-        raise TmclConnectionError(f"bad port in {url.geturl()!r}") from None
+        raise TmclUrlError(f"bad port in {url.geturl()!r}") from None
     if not url.hostname or port is None:
-        raise TmclConnectionError(f"TCP URL needs a host and a port, e.g. tcp://127.0.0.1:2323, got {url.geturl()!r}")
+        raise TmclUrlError(f"TCP URL needs a host and a port, e.g. tcp://127.0.0.1:2323, got {url.geturl()!r}")
     try:
         connect_timeout = float(query.get("connect_timeout", DEFAULT_CONNECT_TIMEOUT))
     except ValueError:
-        raise TmclConnectionError(f"bad connect_timeout in {url.geturl()!r}") from None
+        raise TmclUrlError(f"bad connect_timeout in {url.geturl()!r}") from None
     if not 0 < connect_timeout < float("inf"):  # also NaN
-        raise TmclConnectionError(f"connect_timeout must be a positive, finite number of seconds, "
+        raise TmclUrlError(f"connect_timeout must be a positive, finite number of seconds, "
                                   f"got {connect_timeout}")
     return TcpTransport(url.hostname, port, connect_timeout)

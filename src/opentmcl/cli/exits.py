@@ -1,0 +1,124 @@
+"""Exit statuses of `opentmcl` and the one table that maps an exception to its status (docs/cli.md).
+
+    0  done
+    1  internal error: an exception we did not expect (a bug; one line, "please report")
+    2  usage or bad input: an option, a file, a program, a profile, an argument the library refused
+    3  no reply or connection failure: the module did not answer, the link could not be opened or broke
+    4  the module answered with an error status (TMCM-6212 manual 3.2.1: 1..6)
+
+Check commands keep the statuses they document: `replay` exits 1 when replies diverge and
+`profile check` 1 when the file has errors (docs/capture.md, docs/profiles.md).
+"""
+from __future__ import annotations
+
+import urllib.parse
+
+OK, INTERNAL, USAGE, NO_REPLY, STATUS = 0, 1, 2, 3, 4
+
+DESCRIPTIONS = {
+    OK: "done",
+    INTERNAL: "internal error (a bug: please report it; -v shows the traceback)",
+    USAGE: "usage error or bad input (option, file, program, profile, argument)",
+    NO_REPLY: "no reply or connection failure (module silent, link not opened or broken)",
+    STATUS: "the module answered with an error status (wrong checksum, invalid command, type or value, ...)",
+}
+
+
+def _table() -> list[tuple[type[BaseException], int]]:
+    """(exception type, status), the first match wins: the specific types come first."""
+    from ..host.errors import (
+        TmclArgumentError,
+        TmclConnectionError,
+        TmclError,
+        TmclProtocolError,
+        TmclStatusError,
+        TmclTimeout,
+        TmclUrlError,
+    )
+    from ..host.loader import LoaderError
+    from ..host.probe import ProbeError
+    from . import CliError
+
+    return [
+        (CliError, USAGE),               # its own `code` wins (see code_of)
+        (TmclStatusError, STATUS),
+        (LoaderError, STATUS),           # the module refused an instruction or stored another one
+        (TmclArgumentError, USAGE),      # refused before anything was sent
+        (TmclUrlError, USAGE),           # a module URL that names no link
+        (ProbeError, NO_REPLY),
+        (TmclTimeout, NO_REPLY),
+        (TmclConnectionError, NO_REPLY),
+        (TmclProtocolError, NO_REPLY),   # bytes that are not a reply: a link problem
+        (TmclError, NO_REPLY),
+        (ConnectionError, NO_REPLY),
+        (TimeoutError, NO_REPLY),
+        (ValueError, USAGE),             # the library's bad-input errors are ValueErrors
+        (KeyError, USAGE),               # unknown names (modules, parameters)
+        (OSError, USAGE),                # a file that cannot be read or written
+    ]
+
+
+def code_of(exc: BaseException) -> int:
+    """The exit status for `exc`. A CliError keeps its explicit `code`; without one it keeps the
+    status 3 or 4 of the library error it was raised from (``raise CliError(...)`` inside
+    ``except TmclTimeout``), else 2."""
+    from . import CliError
+
+    if isinstance(exc, CliError):
+        if exc.code is not None:
+            return exc.code
+        cause = exc.__cause__ or exc.__context__
+        inner = code_of(cause) if cause is not None else USAGE
+        return inner if inner in (NO_REPLY, STATUS) else USAGE
+    for kind, code in _table():
+        if isinstance(exc, kind):
+            return code
+    return INTERNAL
+
+
+def _root(exc: BaseException) -> BaseException:
+    """The library error behind a CliError (its cause or context), else `exc`."""
+    return exc.__cause__ or exc.__context__ or exc
+
+
+def _query_value(url: str, key: str, default: str) -> str:
+    try:
+        query = dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(url).query))
+    except ValueError:
+        return default
+    return query.get(key, default)
+
+
+def no_reply_hint(url: str | None, address: int | None, host_address: int | None) -> str:
+    """What to check when a module does not answer: its address (GP66), the baud rate on serial
+    links (GP65, default 9600) and the host address of its replies (GP76), TMCM-6212 manual 5.1;
+    on CAN the CAN IDs (GP71, GP70)."""
+    scheme = (url or "").partition(":")[0].lower()
+    if scheme == "can":
+        return ("check the module's CAN ID (?id=, GP71), its reply ID (?reply_id=, GP70) and the "
+                "bit rate (?bitrate=)")
+    parts = [f"the module address ({address if address is not None else 1}: --address; GP66)"]
+    if scheme == "serial":
+        parts.append(f"the baud rate ({_query_value(url or '', 'baud', '9600')}: ?baud= in the URL; GP65)")
+    parts.append(f"the host address ({host_address if host_address is not None else 2}: GP76)")
+    if scheme == "tcp":
+        parts.append("that a module is behind the TCP port")
+    return "check " + ", ".join(parts[:-1]) + " and " + parts[-1]
+
+
+def hint_for(exc: BaseException, args: object) -> str:
+    """A likely fix appended to the message of a no-reply error, else ""."""
+    from ..host.errors import TmclTimeout
+
+    if not isinstance(_root(exc), TmclTimeout) or "check " in str(exc):
+        return ""
+    return "; " + no_reply_hint(getattr(args, "url", None), getattr(args, "address", None),
+                                getattr(args, "host_address", None))
+
+
+def epilog() -> str:
+    """The status table for `opentmcl --help`."""
+    rows = "\n".join(f"  {code}  {text}" for code, text in DESCRIPTIONS.items())
+    return ("exit status:\n" + rows + "\n  (replay: 1 when replies diverge; profile check: 1 when the file "
+            "has errors)\n\nlogging: -v INFO, -vv DEBUG (every frame as TMCL text and hex), -q errors only; "
+            "before or after the command")

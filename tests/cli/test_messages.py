@@ -1,0 +1,86 @@
+"""Issue 15 item 5: errors that help - one line, the cause once, the likely fix (docs/cli.md).
+
+Real parts: a device path that does not exist, files that do not exist, a TCP peer that closes.
+"""
+from __future__ import annotations
+
+import socket
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+
+from opentmcl.host.errors import TmclConnectionError
+from opentmcl.host.transports.tcp import TcpTransport
+
+SIM = "sim://TMCM-6212"
+
+
+def cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "opentmcl", *args], capture_output=True, text=True, timeout=120)
+
+
+def one_line(done: subprocess.CompletedProcess[str]) -> str:
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in done.stderr, done.stderr
+    return lines[0]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="a POSIX device path")
+def test_a_missing_serial_port_lists_the_ports_that_exist_and_says_the_cause_once(tmp_path):
+    """pyserial words it "[Errno 2] could not open port X: [Errno 2] No such file or directory: 'X'";
+    we say the cause once and list the ports pyserial's list_ports finds (or that there are none)."""
+    from serial.tools import list_ports
+
+    missing = tmp_path / "ttyUSB-none"
+    done = cli("send", "GAP 1, 0", "--to", f"serial://{missing}")
+    line = one_line(done)
+    assert done.returncode == 3
+    assert line == f"opentmcl send: error: cannot open serial port {missing}: No such file or directory; " + (
+        "serial ports here: " + ", ".join(sorted(p.device for p in list_ports.comports()))
+        if list_ports.comports() else "no serial port found here: is the adapter plugged in?")
+    assert "Errno" not in line
+
+
+@pytest.mark.parametrize("command", [["load", "--to", SIM], ["run"], ["plot", "-o", "out.png"]])
+def test_a_missing_program_file_is_a_file_error_without_a_fake_position(tmp_path, command):
+    """Old code: `missing.tmc:0:0: cannot read file: ...` (an assembler position for a file that was
+    never read)."""
+    missing = tmp_path / "missing.tmc"
+    done = cli(command[0], str(missing), *command[1:])
+    line = one_line(done)
+    assert done.returncode == 2
+    assert line == f"opentmcl {command[0]}: error: cannot read {missing}: No such file or directory"
+
+
+def test_a_directory_given_as_program_is_named_so(tmp_path):
+    done = cli("load", str(tmp_path), "--to", SIM)
+    assert done.returncode == 2 and ":0:0" not in one_line(done) and f"cannot read {tmp_path}" in one_line(done)
+
+
+def test_a_connection_the_peer_closed_is_a_sentence_not_an_errno():
+    """The dashboard console showed `send failed: [Errno 32] Broken pipe`: the text of the
+    transport's TmclConnectionError, which the console passes on (web/service.py)."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def accept_and_close():
+        conn, _ = server.accept()
+        conn.close()
+
+    closer = threading.Thread(target=accept_and_close, daemon=True)
+    closer.start()
+    t = TcpTransport("127.0.0.1", server.getsockname()[1])
+    closer.join(5)
+    try:
+        with pytest.raises(TmclConnectionError) as err:
+            for _ in range(200):   # the first write may still reach the kernel; a later one fails
+                t.send(b"\x01\x06\x01\x00\x00\x00\x00\x00\x08")
+                time.sleep(0.01)
+    finally:
+        t.close()
+        server.close()
+    text = str(err.value)
+    assert "Errno" not in text and "failed" not in text
+    assert text.startswith(f"{t.name}: the other end closed the connection while sending; check that")
