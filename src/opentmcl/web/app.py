@@ -38,6 +38,7 @@ from starlette.routing import BaseRoute, Mount, Route, WebSocketRoute
 from starlette.staticfiles import StaticFiles
 from starlette.websockets import WebSocket, WebSocketDisconnect
 
+from . import params as data_views
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
 from .service import FAST_HZ, Dashboard, DashboardError
 
@@ -214,6 +215,7 @@ class ModuleApi:
             Route("/api/program/step", json_api(self.step), methods=post),
             Route("/api/program/reset", json_api(self.reset), methods=post),
             WebSocketRoute("/ws", self.live),
+            *data_views.routes(self.d),  # parameter sets and chart samples (web/params.py)
         ]
 
     async def index(self, _request: Request) -> Response:
