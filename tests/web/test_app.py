@@ -28,7 +28,7 @@ def test_page_and_static_files_are_served_without_cdn(client):
     page = client.get("/")
     assert page.status_code == 200 and "OpenTMCL" in page.text and str(page.url).endswith("/m/1/")
     assert "http://" not in page.text and "https://" not in page.text  # works offline
-    for name in ("app.js", "chart.js", "style.css"):
+    for name in ("app.js", "params.js", "charts.js", "editor.js", "style.css"):
         r = client.get(f"/static/{name}")
         assert r.status_code == 200
         assert "https://" not in r.text

@@ -17,6 +17,12 @@ def test_single_module_has_no_selector(page, served):
     assert not page.is_visible("#module-select")
 
 
+def open_view(page, name: str) -> None:
+    """Click the view's entry in the navigation (docs/dashboard.md "Views") and wait until it shows."""
+    page.click(f"#views-nav a[data-view='{name}']")
+    page.wait_for_selector(f"#view-{name}", state="visible", timeout=TIMEOUT_MS)
+
+
 def move_from_console(page, position: int) -> None:
     """Type "MVP ABS, 0, <position>" into the console; wait for status 100 and the axis card."""
     page.fill("#console-input", f"MVP ABS, 0, {position}")
@@ -58,6 +64,7 @@ def test_console_shows_status_text_of_an_error(page):
 
 def test_edit_axis_parameter(page, served):
     """Manual 3.6.5 SAP: editing "Maximum positioning speed" (axis parameter 4) writes it to the module."""
+    open_view(page, "parameters")
     page.wait_for_selector("#param-axis-4")
     page.fill("#param-axis-4", "20000")
     page.press("#param-axis-4", "Enter")
@@ -69,6 +76,7 @@ def test_edit_axis_parameter(page, served):
 
 def test_assemble_error_is_shown_inline(page):
     """An unknown mnemonic is an assembler error on its line (docs/tmcl-assembler.md)."""
+    open_view(page, "program")
     page.fill("#editor", "    MVP ABS, 0, 100\n    FOO 1\n")
     page.click("#btn-assemble")
     page.wait_for_selector("#line-2.error", timeout=TIMEOUT_MS)
@@ -79,6 +87,7 @@ def test_download_and_step_program(page, served):
     """Manual 3.6.36: 132/133 download, 130 executes one instruction, 135 reports the program counter.
     Stepping highlights the next line and shows A (manual 3.6.26 CALC LOAD puts the value into A)."""
     source = "    CALC LOAD, 5\n    CALC ADD, 2\n    AGP 3, 2\n    STOP\n"
+    open_view(page, "program")
     page.fill("#editor", source)
     page.click("#btn-download")
     page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",
@@ -98,6 +107,7 @@ def test_download_and_step_program(page, served):
 def test_switch_output_and_force_input(page, served):
     """TMCM-6212 manual 3.6.12 SIO / 3.6.13 GIO: OUT2 (bank 2) is switched from the page; the
     virtual module's IN1 (bank 0) is forced to 1 and read back by GIO."""
+    open_view(page, "io")
     page.check("#io-out-2-2")
     page.wait_for_function("document.getElementById('io-val-2-2').textContent === '1'", timeout=TIMEOUT_MS)
     assert served.dashboard.module.output(2) == 1
@@ -112,6 +122,7 @@ def test_run_stops_at_breakpoint(page, served):
     """Host-side breakpoints (docs/assumptions.md): Run single-steps (manual 3.6.36 command 130) until
     the program counter reaches the line; the accumulator counts the passes of the loop (manual
     3.6.26 CALC ADD)."""
+    open_view(page, "program")
     page.fill("#editor", "    CALC LOAD, 0\nLoop:\n    CALC ADD, 1\n    JA Loop\n")
     page.click("#btn-download")
     page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",

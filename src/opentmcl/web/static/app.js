@@ -1,5 +1,6 @@
-// OpenTMCL dashboard: plain JavaScript, no build step, no CDN.
+// OpenTMCL dashboard shell: plain JavaScript, no build step, no CDN, loaded before the views.
 // The page of one module at /m/ADDRESS/: every request path is relative to it.
+// Views (params.js, charts.js, editor.js, ...) call OpenTMCL.registerView(name, {mount, show, hide}).
 "use strict";
 const $ = id => document.getElementById(id);
 const el = (tag, attrs = {}, ...kids) => {
@@ -24,9 +25,57 @@ async function api(path, body) {
   return data;
 }
 
-const D = {overview: null, charts: {}, wsOpen: false, connected: true, breakpoints: new Set(),
-           errorLines: new Set(), currentLine: null, history: [], historyPos: 0, ioBuilt: false};
+const VIEWS = ["overview", "motion", "parameters", "charts", "program", "io"];
+const D = {overview: null, charts: {}, wsOpen: false, connected: true, history: [], historyPos: 0,
+           views: {}, current: null, stateSubs: [], sampleSubs: []};
 window.dashboard = D;  // for the browser tests and the curious
+
+window.OpenTMCL = {
+  registerView(name, view) { D.views[name] = view; },
+  api, el, log,
+};
+
+// ---------------------------------------------------------------- navigation between views
+function viewFromHash() {
+  const name = location.hash.replace(/^#/, "");
+  return VIEWS.includes(name) ? name : "overview";
+}
+
+function showView(name) {
+  if (name === D.current) return;
+  const old = D.current && D.views[D.current];
+  if (old && old.hide) { try { old.hide(); } catch (e) { log(e.message, "err"); } }
+  for (const sec of document.querySelectorAll("section.view")) sec.hidden = sec.dataset.view !== name;
+  for (const a of document.querySelectorAll("#views-nav a")) {
+    a.classList.toggle("active", a.dataset.view === name);
+    if (a.dataset.view === name) a.setAttribute("aria-current", "page"); else a.removeAttribute("aria-current");
+  }
+  D.current = name;
+  const view = D.views[name];
+  if (view && view.show) { try { view.show(); } catch (e) { log(e.message, "err"); } }
+}
+
+function contextFor(name) {
+  return {
+    api, log, el,
+    get overview() { return D.overview; },
+    onState(cb) { D.stateSubs.push(cb); },
+    onSamples(cb) { D.sampleSubs.push(cb); },
+    isVisible() { return D.current === name; },
+  };
+}
+
+function mountViews() {
+  for (const [name, view] of Object.entries(D.views)) {
+    const root = $(`view-${name}`);
+    if (!root) { log(`no place for the view "${name}"`, "err"); continue; }
+    try { view.mount(root, contextFor(name)); } catch (e) { log(`${name}: ${e.message}`, "err"); }
+  }
+}
+
+function notify(subs, data) {
+  for (const cb of subs) { try { cb(data); } catch (e) { console.error(e); } }
+}
 
 // ---------------------------------------------------------------- overview and axis cards
 function showOverview(ov) {
@@ -38,11 +87,6 @@ function showOverview(ov) {
   document.title = `OpenTMCL ${ov.module}`;
   const cards = $("axis-cards");
   cards.replaceChildren();
-  const chartAxes = $("chart-axes");
-  chartAxes.replaceChildren();
-  const sel = $("param-axis");
-  const keep = sel.value;
-  sel.replaceChildren();
   for (let i = 0; i < ov.axes; i++) {
     const row = (label, key) => el("div", {class: "row"}, el("span", {}, label), el("span", {id: `axis-${i}-${key}`}, "-"));
     cards.append(el("div", {class: "axis-card", id: `axis-${i}`},
@@ -54,17 +98,6 @@ function showOverview(ov) {
         el("span", {class: "lamp", id: `axis-${i}-home`, title: "home switch (AP 9)"}, "H"),
         el("span", {class: "lamp", id: `axis-${i}-left`, title: "left limit switch (AP 11)"}, "L"),
         el("span", {class: "lamp", id: `axis-${i}-right`, title: "right limit switch (AP 10)"}, "R")))));
-    const cb = el("input", {type: "checkbox", checked: "", onchange: e => {
-      for (const c of Object.values(D.charts)) { c.visible[i] = e.target.checked; c.dirty = true; }
-    }});
-    chartAxes.append(el("label", {style: `color:${CHART_COLORS[i % CHART_COLORS.length]}`}, cb, ` axis ${i}`));
-    sel.append(el("option", {value: i}, `${i}`));
-  }
-  if (keep && Number(keep) < ov.axes) sel.value = keep;
-  $("vel-unit").textContent = ov.velocity_unit;
-  for (const name of ["position", "velocity"]) {
-    D.charts[name] = new LiveChart($(`chart-${name}`), ov.history_seconds || 60);
-    D.charts[name].setAxes(ov.axes);
   }
   buildIo(ov);
 }
@@ -77,10 +110,7 @@ function setConnection() {
 }
 
 function onSamples(samples) {
-  for (const s of samples) {
-    s.p.forEach((v, i) => D.charts.position.push(i, s.t, v));
-    s.v.forEach((v, i) => D.charts.velocity.push(i, s.t, v));
-  }
+  notify(D.sampleSubs, samples);
   const last = samples[samples.length - 1];
   if (!last) return;
   last.p.forEach((v, i) => { const e = $(`axis-${i}-position`); if (e) e.textContent = v ?? "-"; });
@@ -99,7 +129,7 @@ function onState(st) {
     lamp(`axis-${i}-left`, a.left); lamp(`axis-${i}-right`, a.right);
   });
   updateIo(st.io);
-  showProgramState(st.program);
+  notify(D.stateSubs, st);
 }
 
 function connect() {
@@ -114,11 +144,6 @@ function connect() {
     else if (msg.type === "samples") onSamples(msg.samples);
     else if (msg.type === "state") onState(msg.state);
   };
-}
-
-function animate() {
-  for (const c of Object.values(D.charts)) c.draw();
-  requestAnimationFrame(animate);
 }
 
 // ---------------------------------------------------------------- module selector
@@ -213,218 +238,14 @@ function updateIo(io) {
   }
 }
 
-// ---------------------------------------------------------------- parameters
-function paramRows(table, params, kind, index) {
-  const filter = $("param-filter").value.trim().toLowerCase();
-  const writableOnly = $("param-filter-writable").checked;
-  const rows = [el("tr", {}, ...["#", "name", "value", "unit", "range", "access", ""].map(h => el("th", {}, h)))];
-  for (const p of params) {
-    if (writableOnly && !p.writable) continue;
-    if (filter && !p.name.includes(filter) && !p.title.toLowerCase().includes(filter)) continue;
-    const id = kind === "axis" ? `param-axis-${p.number}` : `param-global-${p.bank}-${p.number}`;
-    let valueCell;
-    if (p.writable) {
-      const input = el("input", {id, value: p.value ?? "", "data-number": p.number});
-      input.addEventListener("keydown", async ev => {
-        if (ev.key !== "Enter") return;
-        input.classList.remove("saved", "failed");
-        const body = kind === "axis" ? {axis: index, number: p.number, value: input.value}
-                                     : {bank: p.bank, number: p.number, value: input.value};
-        try {
-          const r = await api(`api/params/${kind}`, body);
-          input.value = r.value; input.classList.add("saved");
-        } catch (e) { input.classList.add("failed"); input.title = e.message; log(e.message, "err"); }
-      });
-      valueCell = el("td", {class: "num"}, input);
-    } else {
-      valueCell = el("td", {class: "num", id}, p.value ?? "-");
-    }
-    const range = p.values.length ? p.values.join(", ") : `${p.min} … ${p.max}`;
-    const buttons = el("td", {});
-    if (p.can_store) buttons.append(el("button", {onclick: () => storeParam(kind, p, index, false)}, "store"));
-    if (p.can_restore) buttons.append(el("button", {onclick: () => storeParam(kind, p, index, true)}, "restore"));
-    const label = kind === "global" ? `${p.number} (bank ${p.bank})` : `${p.number}`;
-    rows.push(el("tr", {class: p.writable ? "" : "ro"}, el("td", {class: "num"}, label),
-      el("td", {title: p.description || p.title}, p.title), valueCell, el("td", {}, p.unit),
-      el("td", {}, range), el("td", {}, p.access), buttons));
-  }
-  table.replaceChildren(...rows);
-}
-
-async function storeParam(kind, p, index, restore) {
-  try {
-    await api("api/params/store", {kind, number: p.number, index: kind === "axis" ? index : p.bank, restore});
-    log(`${restore ? "restored" : "stored"} ${kind} parameter ${p.number}`, "ok");
-    if (restore) loadParams();
-  } catch (e) { log(e.message, "err"); }
-}
-
-async function loadParams() {
-  const axis = Number($("param-axis").value || 0);
-  try {
-    const [a, g] = await Promise.all([api(`api/params/axis/${axis}`), api("api/params/global")]);
-    D.axisParams = a.params; D.globalParams = g.params;
-    renderParams();
-  } catch (e) { log(e.message, "err"); }
-}
-
-function renderParams() {
-  if (!D.axisParams) return;
-  paramRows($("param-axis-table"), D.axisParams, "axis", Number($("param-axis").value || 0));
-  paramRows($("param-global-table"), D.globalParams, "global", 0);
-}
-
-// ---------------------------------------------------------------- program editor
-const EXAMPLE = `// Move motor 0 back and forth (TMCM-6212 manual 2.4)
-    SAP 4, 0, 51200        // maximum positioning speed
-    SAP 5, 0, 51200        // maximum acceleration
-    SGP 0, 2, 0            // user variable 0 counts the moves
-Loop:
-    MVP ABS, 0, 51200
-    WAIT POS, 0, 0
-    MVP ABS, 0, 0
-    WAIT POS, 0, 0
-    GGP 0, 2
-    CALC ADD, 1
-    AGP 0, 2
-    JA Loop
-`;
-
-const SOURCE_KEY = `opentmcl-source ${location.pathname}`;  // each module keeps its own program
-
-function editorLines() { return $("editor").value.split("\n").length; }
-
-function renderGutter() {
-  const n = editorLines(), gutter = $("editor-gutter"), back = $("editor-backdrop");
-  const g = [], b = [];
-  for (let i = 1; i <= n; i++) {
-    const d = el("div", {id: `gutter-${i}`, class: D.breakpoints.has(i) ? "bp" : "", title: "toggle breakpoint"}, i);
-    d.addEventListener("click", () => toggleBreakpoint(i));
-    g.push(d);
-    b.push(el("div", {id: `line-${i}`, class: i === D.currentLine ? "current" : D.errorLines.has(i) ? "error" : ""}, " "));
-  }
-  gutter.replaceChildren(...g);
-  back.replaceChildren(...b);
-  syncScroll();
-}
-
-function syncScroll() {
-  const t = $("editor");
-  $("editor-gutter").scrollTop = t.scrollTop;
-  $("editor-backdrop").scrollTop = t.scrollTop;
-}
-
-async function toggleBreakpoint(line) {
-  if (D.breakpoints.has(line)) D.breakpoints.delete(line); else D.breakpoints.add(line);
-  renderGutter();
-  if (D.downloaded) await pushBreakpoints();
-}
-
-async function pushBreakpoints() {
-  try { await api("api/program/breakpoints", {lines: [...D.breakpoints]}); }
-  catch (e) { message(e.message, true); }
-}
-
-function message(text, error) {
-  const m = $("prog-message");
-  m.textContent = text; m.className = error ? "err" : "";
-}
-
-function showErrors(errors) {
-  D.errorLines = new Set(errors.map(e => e.line));
-  $("asm-errors").replaceChildren(...errors.map(e => el("div", {class: "asm-error"}, `line ${e.line}, column ${e.column}: ${e.message}`)));
-  renderGutter();
-}
-
-async function assembleOnly(download) {
-  const source = $("editor").value;
-  try {
-    const r = await api(download ? "api/program/download" : "api/program/assemble", {source});
-    showErrors(r.errors || []);
-    if (!r.ok) { message(`${r.errors.length} error(s)`, true); return false; }
-    if (download) {
-      D.downloaded = true;
-      await pushBreakpoints();
-      message(`downloaded ${r.count} instructions`);
-    } else {
-      message(`assembled: ${r.count} instructions`);
-    }
-    return true;
-  } catch (e) { message(e.message, true); return false; }
-}
-
-async function programAction(name) {
-  try { showProgramState(await api(`api/program/${name}`, {})); message(name); }
-  catch (e) { message(e.message, true); }
-}
-
-function showProgramState(p) {
-  if (!p || p.mode === null || p.mode === undefined) return;
-  $("prog-mode").textContent = p.mode_name + (p.waiting ? " (waiting)" : "") + (p.stepping_to_breakpoint ? " (to breakpoint)" : "");
-  $("prog-pc").textContent = p.pc;
-  $("prog-line").textContent = p.line ?? "-";
-  $("prog-a").textContent = p.a;
-  $("prog-x").textContent = p.x;
-  $("prog-flags").textContent = p.flags;
-  $("prog-vars").replaceChildren(...Object.entries(p.variables || {}).map(([n, v]) =>
-    el("tr", {}, el("th", {}, `var ${n}`), el("td", {id: `prog-var-${n}`}, v ?? "-"))));
-  const line = D.downloaded ? p.line : null;
-  if (line !== D.currentLine) {
-    const old = D.currentLine && $(`line-${D.currentLine}`);
-    if (old) old.className = D.errorLines.has(D.currentLine) ? "error" : "";
-    D.currentLine = line;
-    const cur = line && $(`line-${line}`);
-    if (cur) cur.className = "current";
-  }
-}
-
-function setupEditor() {
-  const t = $("editor");
-  t.value = localStorage.getItem(SOURCE_KEY) || EXAMPLE;
-  t.addEventListener("input", () => {
-    localStorage.setItem(SOURCE_KEY, t.value);
-    D.downloaded = false;
-    if (editorLines() !== $("editor-gutter").childElementCount) renderGutter();
-  });
-  t.addEventListener("scroll", syncScroll);
-  t.addEventListener("keydown", ev => {  // Tab indents instead of leaving the editor
-    if (ev.key !== "Tab" || ev.shiftKey) return;
-    ev.preventDefault();
-    const a = t.selectionStart;
-    t.setRangeText("    ", a, t.selectionEnd, "end");
-    t.dispatchEvent(new Event("input"));
-  });
-  $("btn-assemble").addEventListener("click", () => assembleOnly(false));
-  $("btn-download").addEventListener("click", () => assembleOnly(true));
-  $("btn-run").addEventListener("click", () => programAction("run"));
-  $("btn-stop").addEventListener("click", () => programAction("stop"));
-  $("btn-step").addEventListener("click", () => programAction("step"));
-  $("btn-reset").addEventListener("click", () => programAction("reset"));
-  renderGutter();
-}
-
 // ---------------------------------------------------------------- start
 async function main() {
   setupConsole();
-  setupEditor();
-  $("param-axis").addEventListener("change", loadParams);
-  $("btn-params-reload").addEventListener("click", loadParams);
-  $("param-filter").addEventListener("input", renderParams);
-  $("param-filter-writable").addEventListener("change", renderParams);
   try { showOverview(await api("api/overview")); } catch (e) { log(e.message, "err"); }
+  mountViews();
+  showView(viewFromHash());
+  window.addEventListener("hashchange", () => showView(viewFromHash()));
   try { await setupModules(); } catch (e) { log(e.message, "err"); }
-  try {  // the program the dashboard downloaded before (e.g. from another tab) is what runs
-    const prog = await api("api/program");
-    if (prog.source) {
-      $("editor").value = prog.source;
-      D.downloaded = true;
-      D.breakpoints = new Set((prog.state.breakpoints || []).map(a => prog.lines[a]).filter(l => l));
-      renderGutter();
-      showProgramState(prog.state);
-    }
-  } catch (e) { log(e.message, "err"); }
   connect();
-  loadParams();
-  requestAnimationFrame(animate);
 }
-main();
+document.addEventListener("DOMContentLoaded", main);

@@ -1,5 +1,10 @@
-// Live line charts on a <canvas>: no libraries, works offline.
+// The "charts" view: live position and velocity charts (moved from app.js and chart.js as-is).
 "use strict";
+(() => {
+const {el} = window.OpenTMCL;
+const $ = id => document.getElementById(id);
+const D = window.dashboard;  // D.charts: read by the browser tests
+
 const CHART_COLORS = ["#1565c0", "#c62828", "#2e7d32", "#ef6c00", "#6a1b9a", "#00838f"];
 
 class LiveChart {
@@ -86,3 +91,46 @@ function formatNumber(v) {
   if (a >= 1e4) return (v / 1e3).toFixed(0) + "k";
   return Number.isInteger(v) ? String(v) : v.toFixed(a < 1 ? 2 : 1);
 }
+
+const MARKUP = `
+    <h2>Live charts <small>(last 60 s)</small></h2>
+    <div id="chart-axes"></div>
+    <div class="chart"><div class="chart-title">position [µsteps]</div><canvas id="chart-position" width="900" height="200"></canvas></div>
+    <div class="chart"><div class="chart-title">velocity [<span id="vel-unit">pps</span>]</div><canvas id="chart-velocity" width="900" height="200"></canvas></div>`;
+
+function onSamples(samples) {
+  if (!D.charts.position) return;
+  for (const s of samples) {
+    s.p.forEach((v, i) => D.charts.position.push(i, s.t, v));
+    s.v.forEach((v, i) => D.charts.velocity.push(i, s.t, v));
+  }
+}
+
+function animate() {
+  for (const c of Object.values(D.charts)) c.draw();
+  requestAnimationFrame(animate);
+}
+
+OpenTMCL.registerView("charts", {
+  mount(root, ctx) {
+    root.innerHTML = MARKUP;
+    const ov = ctx.overview;
+    if (!ov) return;
+    const chartAxes = $("chart-axes");
+    for (let i = 0; i < ov.axes; i++) {
+      const cb = el("input", {type: "checkbox", checked: "", onchange: e => {
+        for (const c of Object.values(D.charts)) { c.visible[i] = e.target.checked; c.dirty = true; }
+      }});
+      chartAxes.append(el("label", {style: `color:${CHART_COLORS[i % CHART_COLORS.length]}`}, cb, ` axis ${i}`));
+    }
+    $("vel-unit").textContent = ov.velocity_unit;
+    for (const name of ["position", "velocity"]) {
+      D.charts[name] = new LiveChart($(`chart-${name}`), ov.history_seconds || 60);
+      D.charts[name].setAxes(ov.axes);
+    }
+    ctx.onSamples(onSamples);
+    requestAnimationFrame(animate);
+  },
+  show() { for (const c of Object.values(D.charts)) c.dirty = true; },  // redraw at the visible size
+});
+})();
