@@ -127,3 +127,18 @@ def test_endpoints_stream_samples_of_the_load_value(dash):
         assert c.get("/m/1/api/charts/samples?client=nope").status_code == 400
         assert c.get("/m/1/api/charts/samples?client=x&since=y").status_code == 400
         assert c.get("/m/1/api/charts/series").json()["axes"] == 6
+
+
+def test_vendored_uplot_is_served_with_its_licence(dash):
+    """The vendored library ships in the package and is served (static/vendor/uplot/README.md names
+    version and origin); the page loads it before app.js and links its style sheet."""
+    with TestClient(create_app(dash), base_url="http://127.0.0.1") as c:
+        for name in ("uPlot.iife.min.js", "uPlot.min.css", "LICENSE", "README.md"):
+            assert c.get(f"/static/vendor/uplot/{name}").status_code == 200, name
+        assert "MIT" in c.get("/static/vendor/uplot/LICENSE").text
+        assert "1.6.32" in c.get("/static/vendor/uplot/README.md").text
+        page = c.get("/m/1/").text
+        assert page.index("vendor/uplot/uPlot.iife.min.js") < page.index("static/app.js")
+        assert "vendor/uplot/uPlot.min.css" in page
+        for name in ("params.css", "charts.css"):
+            assert c.get(f"/static/{name}").status_code == 200
