@@ -139,3 +139,37 @@ def test_an_out_of_range_file_is_refused(page, served):
     page.wait_for_selector("#param-import-error", timeout=TIMEOUT_MS)
     assert "7999775" in page.inner_text("#param-import-error")
     assert gap(served, 7) == before7 and gap(served, 4) != 7999775
+
+
+def test_store_and_restore_on_a_module_with_stap(browser, served_bus):
+    """PD86-1180 manual 4.6.7 STAP "Store the maximum speed of motor: STAP 4, 0" and 4.6.8 RSAP
+    (the parameter is copied from the EEPROM to its RAM location): set 4 to 1500, store, set it to
+    900 over the wire, restore: GAP answers 1500 again and the table shows it. The TMCM-6212 has
+    no STAP/RSAP (its command list), so its axis table has no store button."""
+    page = browser.new_page()
+    errors: list[str] = []
+    page.on("pageerror", lambda exc: errors.append(str(exc)))
+    try:
+        page.goto(served_bus.module_url(1))
+        open_parameters(page)
+        assert page.locator("#param-axis-4-store").count() == 0
+        assert page.locator("#param-global-0-77-store").count() == 1   # STGP: TMCM-6212 manual 3.6.9
+        page.goto(served_bus.module_url(2))
+        open_parameters(page)
+        pd86 = served_bus.dashboards[1].module
+        page.fill("#param-axis-4", "1500")
+        page.press("#param-axis-4", "Enter")
+        page.wait_for_selector("#param-axis-4.saved", timeout=TIMEOUT_MS)
+        page.click("#param-axis-4-store")
+        page.wait_for_function("document.getElementById('console-log').textContent.includes('stored max_positioning_speed')",
+                               timeout=TIMEOUT_MS)
+        assert "STAP 4, 0" in page.inner_text("#console-log")
+        pd86.request(5, 4, 0, 900)                                      # SAP 4, 0, 900 from another client
+        page.wait_for_function("document.getElementById('param-axis-4').value === '900'", timeout=TIMEOUT_MS)
+        page.click("#param-axis-4-restore")
+        page.wait_for_function("document.getElementById('param-axis-4').value === '1500'", timeout=TIMEOUT_MS)
+        assert pd86.reply(6, 4, 0).value == 1500
+        assert "RSAP 4, 0" in page.inner_text("#console-log")
+    finally:
+        page.close()
+    assert not errors, f"JavaScript errors on the page: {errors}"
