@@ -273,15 +273,10 @@ function plotWidth() { const list = $("chart-list"); return Math.max(300, (list 
 function draw() {
   if (C.ctx && C.ctx.isVisible()) {
     for (const chart of Object.values(D.charts)) {
-      if (!chart.dirty || !chart.plot || chart.paused && !chart.zoomed && chart.drawnPaused) continue;
+      if (!chart.dirty || !chart.plot) continue;
       chart.dirty = false;
-      chart.drawnPaused = chart.paused;
-      const data = [chart.t, ...chart.series.map(s => s.y)];
-      if (chart.zoomed || chart.paused) {
-        const x = chart.plot.scales.x;
-        chart.plot.setData(data, false);
-        if (x.min !== null && x.max !== null && chart.zoomed) chart.plot.setScale("x", {min: x.min, max: x.max});
-      } else chart.plot.setData(data, true);
+      // following: rescale to the newest window; zoomed: keep the user's time axis
+      chart.plot.setData([chart.t, ...chart.series.map(s => s.y)], !chart.zoomed);
     }
   }
   requestAnimationFrame(draw);
