@@ -142,3 +142,18 @@ def test_vendored_uplot_is_served_with_its_licence(dash):
         assert "vendor/uplot/uPlot.min.css" in page
         for name in ("params.css", "charts.css"):
             assert c.get(f"/static/{name}").status_code == 200
+
+
+def test_row_numbers_are_shared_and_a_new_subscription_keeps_them(sampler):
+    """seq counts the sampler's ticks for every client: a client that changes its series gets only
+    rows after the change, numbered after every row it saw, so a page's `since` stays valid."""
+    a = sampler.subscribe(None, [("axis", 0, 4)])
+    sampler.tick()
+    b = sampler.subscribe(None, [("axis", 1, 4)])
+    sampler.tick()
+    seen = sampler.samples(a, 0)["rows"][-1][0]
+    assert sampler.samples(b, 0)["rows"][-1][0] == seen
+    sampler.subscribe(a, [("axis", 2, 4)])
+    assert sampler.samples(a, seen)["rows"] == []
+    sampler.tick()
+    assert [r[0] for r in sampler.samples(a, seen)["rows"]] == [seen + 1]

@@ -95,6 +95,11 @@ def test_several_charts_axes_and_removal(page, served):
     page.wait_for_function(f"window.dashboard.charts['{a}'].series.length === 2 && "
                            f"window.dashboard.charts['{a}'].series[1].y.length > 2", timeout=TIMEOUT_MS)
     assert page.evaluate(f"window.dashboard.charts['{a}'].series[1].y.slice(-1)[0]") == 4321
+    for axis in ("2", "3", "2"):  # each change subscribes again: time still only moves forward
+        page.click(f"#chart-{a} .chart-axis[data-axis='{axis}']")
+    wait_count(page, a, 5)
+    times = page.evaluate(f"window.dashboard.charts['{a}'].t")
+    assert all(t1 < t2 for t1, t2 in zip(times, times[1:], strict=False))
     wait_count(page, b, 3)
     page.click(f"#chart-{b} .btn-remove")
     assert page.locator(f"#chart-{b}").count() == 0

@@ -11,7 +11,8 @@ A series is ("axis", axis, number), ("global", bank, number) or ("io", bank, por
 "axis:0:206" etc. A client holds at most `MAX_SERIES` series and at most `MAX_CLIENTS` clients are
 kept; one that has not polled for `IDLE_SECONDS` is dropped, and with no client left the sampling
 thread ends. Each client keeps the last `HISTORY_SECONDS` of rows; t is the dashboard's clock, the
-same as the WebSocket samples'.
+same as the WebSocket samples'. Row numbers (seq) count the ticks of this sampler, shared by all
+clients, so a page may keep its `since` across a new subscription.
 """
 from __future__ import annotations
 

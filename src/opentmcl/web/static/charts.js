@@ -104,8 +104,9 @@ function wheel(chart, ev) {  // wheel: zoom the time axis around the cursor; shi
 }
 
 function push(chart, t, values) {
-  if (chart.paused) return;
-  if (chart.gap && chart.t.length) {  // resumed after a pause: a break, not a straight line
+  const last = chart.t.length ? chart.t[chart.t.length - 1] : -Infinity;
+  if (chart.paused || !(t > last)) return;  // time only moves forward (a row polled twice is dropped)
+  if (chart.gap && t - 1e-3 > last) {  // resumed after a pause: a break, not a straight line
     chart.t.push(t - 1e-3); chart.series.forEach(s => s.y.push(null));
   }
   chart.gap = false;
@@ -241,7 +242,7 @@ async function resubscribe() {
   try {
     const r = await api("api/charts/subscribe", {client: C.client, series});
     if (C.subscribing !== mine) return;  // a newer subscription is under way
-    C.client = r.client; C.keys = r.series; C.lastSeq = 0;
+    C.client = r.client; C.keys = r.series;  // row numbers are global: C.lastSeq stays valid
     startPolling();
   } catch (e) { log(`charts: ${e.message}`, "err"); }
 }
@@ -255,12 +256,12 @@ async function poll() {
     for (const row of r.rows) {
       C.lastSeq = Math.max(C.lastSeq, row[0]);
       for (const chart of Object.values(D.charts)) {
-        if (chart.cfg.source.startsWith("ws:")) continue;
+        if (chart.cfg.source.startsWith("ws:") || !chart.series.every(s => column.has(s.key))) continue;  // rows of an older subscription
         push(chart, row[1], chart.series.map(s => column.has(s.key) ? row[column.get(s.key)] : null));
       }
     }
   } catch (e) {
-    if (/subscribe again/.test(e.message)) { C.client = null; resubscribe(); } else log(`charts: ${e.message}`, "err");
+    if (/subscribe again/.test(e.message)) { C.client = null; C.lastSeq = 0; resubscribe(); }  // expired, or a new server else log(`charts: ${e.message}`, "err");
   } finally { C.inFlight = false; }
 }
 
