@@ -45,6 +45,7 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 
 from ..host import TmclError
 from . import motion
+from . import params as data_views
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
 from .scan import TIMEOUT_DEFAULT, Scanner
 from .service import FAST_HZ, Dashboard, DashboardError, Poller
@@ -318,6 +319,7 @@ class ModuleApi:
             Route("/api/program/step", json_api(self.step), methods=post),
             Route("/api/program/reset", json_api(self.reset), methods=post),
             WebSocketRoute("/ws", self.live),
+            *data_views.routes(self.d),  # parameter sets and chart samples (web/params.py)
         ]
 
     async def index(self, _request: Request) -> Response:

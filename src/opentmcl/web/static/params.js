@@ -1,93 +1,274 @@
-// The "parameters" view: axis and global parameter tables (moved from app.js as-is).
+// The "parameters" view (docs/dashboard-parameters.md): axis and global tables that refresh while
+// visible, highlight changed values, edit in place within the manual's range, store/restore to
+// EEPROM, and export/import parameter sets with a diff that applies only on confirmation.
 "use strict";
 (() => {
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
-const P = {axisParams: null, globalParams: null};
+const REFRESH_MS = 500;      // 2 Hz, one batched request (api/params/values/AXIS)
+const FLASH_MS = 1500;       // how long a changed value stays highlighted
+const BANK_TITLES = {0: "bank 0: global parameters", 2: "bank 2: user variables", 3: "bank 3: interrupt configuration"};
+const P = {axisParams: null, globalParams: null, values: null, timer: null, ctx: null, busy: false,
+           pendingFile: null};
+window.dashboard.params = P;  // for the browser tests and the curious
 
 const MARKUP = `
     <h2>Parameters</h2>
     <div class="toolbar">
       <label>Axis <select id="param-axis"></select></label>
       <button id="btn-params-reload">Reload</button>
+      <label title="read every value twice a second while this view is shown"><input type="checkbox" id="param-live" checked> live</label>
       <label><input type="checkbox" id="param-filter-writable"> writable only</label>
       <input id="param-filter" placeholder="filter by name">
+      <span class="sep"></span>
+      <button id="btn-params-export-json" title="download the parameter set as JSON">Export JSON</button>
+      <button id="btn-params-export-toml" title="download the parameter set as TOML">Export TOML</button>
+      <label class="file-button">Import… <input type="file" id="param-import" accept=".json,.toml,application/json,application/toml,text/plain"></label>
     </div>
+    <div id="param-import-panel" hidden></div>
     <h3>Axis parameters</h3>
     <table id="param-axis-table" class="params"></table>
-    <h3>Global parameters</h3>
-    <table id="param-global-table" class="params"></table>`;
+    <div id="param-global-tables"></div>`;
+
+const axisNow = () => Number($("param-axis").value || 0);
+const mnemonic = (kind, store, restore) => kind === "axis" ? (restore ? "RSAP" : store ? "STAP" : "SAP")
+                                                            : (restore ? "RSGP" : store ? "STGP" : "SGP");
+const rangeText = p => p.values.length ? p.values.join(", ") : `${p.min} … ${p.max}`;
+
+// A value the manual allows for parameter p (profile data: min/max or the list of values).
+function checkValue(p, text) {
+  const t = String(text).trim();
+  if (!/^[-+]?(0x[0-9a-f]+|\d+)$/i.test(t)) return {error: `"${t}" is not an integer`};
+  const neg = t.startsWith("-"), body = t.replace(/^[-+]/, "");
+  const v = (neg ? -1 : 1) * Number(body.toLowerCase().startsWith("0x") ? parseInt(body, 16) : body);
+  if (!Number.isSafeInteger(v)) return {error: `${t} is too large`};
+  const ok = p.values.length ? p.values.includes(v) : v >= p.min && v <= p.max;
+  if (!ok) return {error: `${p.title} takes ${rangeText(p)}${p.unit ? " [" + p.unit + "]" : ""}, not ${v}`};
+  return {value: v};
+}
+
+function cellId(kind, p) { return kind === "axis" ? `param-axis-${p.number}` : `param-global-${p.bank}-${p.number}`; }
+
+function valueCell(kind, p, index) {
+  const id = cellId(kind, p);
+  if (!p.writable) return el("td", {class: "num"}, el("span", {id, class: "value"}, p.value ?? "-"));
+  const input = el("input", {id, value: p.value ?? "", "data-number": p.number, title: `${rangeText(p)} ${p.unit}`.trim(),
+                             spellcheck: "false", autocomplete: "off"});
+  input.addEventListener("input", () => { input.dataset.dirty = "1"; input.classList.remove("saved", "failed"); });
+  input.addEventListener("blur", () => {  // leaving without Enter drops the edit; live values come back
+    if (input.dataset.dirty && !input.classList.contains("failed")) { delete input.dataset.dirty; refresh(); }
+  });
+  input.addEventListener("keydown", ev => { if (ev.key === "Enter") writeValue(kind, p, index, input); });
+  return el("td", {class: "num"}, input);
+}
+
+async function writeValue(kind, p, index, input) {
+  input.classList.remove("saved", "failed");
+  const checked = checkValue(p, input.value);
+  if (checked.error) {
+    input.classList.add("failed"); input.title = checked.error; log(checked.error, "err");
+    return;
+  }
+  const where = kind === "axis" ? index : p.bank;
+  log(`> ${mnemonic(kind)} ${p.number}, ${where}, ${checked.value}`, "req");
+  const body = kind === "axis" ? {axis: index, number: p.number, value: checked.value}
+                               : {bank: p.bank, number: p.number, value: checked.value};
+  try {
+    const r = await api(`api/params/${kind}`, body);
+    delete input.dataset.dirty;
+    input.value = r.value; input.classList.add("saved"); input.title = `${rangeText(p)} ${p.unit}`.trim();
+    remember(kind, p, r.value);
+    log(`  ${p.name} = ${r.value}`, "ok");
+  } catch (e) { input.classList.add("failed"); input.title = e.message; log(`  ${e.message}`, "err"); }
+}
+
+function remember(kind, p, value) {
+  if (!P.values) return;
+  if (kind === "axis") P.values.axis[String(p.number)] = value; else P.values.global[`${p.bank}:${p.number}`] = value;
+}
 
 function paramRows(table, params, kind, index) {
   const filter = $("param-filter").value.trim().toLowerCase();
   const writableOnly = $("param-filter-writable").checked;
-  const rows = [el("tr", {}, ...["#", "name", "value", "unit", "range", "access", ""].map(h => el("th", {}, h)))];
+  const rows = [el("tr", {}, ...["#", "name", "value", "unit", "range", "access", "EEPROM"].map(h => el("th", {}, h)))];
   for (const p of params) {
     if (writableOnly && !p.writable) continue;
-    if (filter && !p.name.includes(filter) && !p.title.toLowerCase().includes(filter)) continue;
-    const id = kind === "axis" ? `param-axis-${p.number}` : `param-global-${p.bank}-${p.number}`;
-    let valueCell;
-    if (p.writable) {
-      const input = el("input", {id, value: p.value ?? "", "data-number": p.number});
-      input.addEventListener("keydown", async ev => {
-        if (ev.key !== "Enter") return;
-        input.classList.remove("saved", "failed");
-        const body = kind === "axis" ? {axis: index, number: p.number, value: input.value}
-                                     : {bank: p.bank, number: p.number, value: input.value};
-        try {
-          const r = await api(`api/params/${kind}`, body);
-          input.value = r.value; input.classList.add("saved");
-        } catch (e) { input.classList.add("failed"); input.title = e.message; log(e.message, "err"); }
-      });
-      valueCell = el("td", {class: "num"}, input);
-    } else {
-      valueCell = el("td", {class: "num", id}, p.value ?? "-");
-    }
-    const range = p.values.length ? p.values.join(", ") : `${p.min} … ${p.max}`;
+    if (filter && !p.name.includes(filter) && !p.title.toLowerCase().includes(filter) && String(p.number) !== filter) continue;
     const buttons = el("td", {});
-    if (p.can_store) buttons.append(el("button", {onclick: () => storeParam(kind, p, index, false)}, "store"));
-    if (p.can_restore) buttons.append(el("button", {onclick: () => storeParam(kind, p, index, true)}, "restore"));
-    const label = kind === "global" ? `${p.number} (bank ${p.bank})` : `${p.number}`;
-    rows.push(el("tr", {class: p.writable ? "" : "ro"}, el("td", {class: "num"}, label),
-      el("td", {title: p.description || p.title}, p.title), valueCell, el("td", {}, p.unit),
-      el("td", {}, range), el("td", {}, p.access), buttons));
+    const where = kind === "axis" ? index : p.bank;
+    if (p.can_store) buttons.append(el("button", {id: `${cellId(kind, p)}-store`, title: `${mnemonic(kind, true)} ${p.number}, ${where}`,
+                                                  onclick: () => storeParam(kind, p, index, false)}, "store"));
+    if (p.can_restore) buttons.append(el("button", {id: `${cellId(kind, p)}-restore`, title: `${mnemonic(kind, false, true)} ${p.number}, ${where}`,
+                                                    onclick: () => storeParam(kind, p, index, true)}, "restore"));
+    rows.push(el("tr", {class: p.writable ? "" : "ro"}, el("td", {class: "num"}, `${p.number}`),
+      el("td", {title: p.description || p.title}, p.title), valueCell(kind, p, index), el("td", {}, p.unit),
+      el("td", {}, rangeText(p)), el("td", {}, p.access), buttons));
   }
   table.replaceChildren(...rows);
 }
 
 async function storeParam(kind, p, index, restore) {
+  const where = kind === "axis" ? index : p.bank;
+  log(`> ${mnemonic(kind, !restore, restore)} ${p.number}, ${where}`, "req");
   try {
-    await api("api/params/store", {kind, number: p.number, index: kind === "axis" ? index : p.bank, restore});
-    log(`${restore ? "restored" : "stored"} ${kind} parameter ${p.number}`, "ok");
-    if (restore) loadParams();
-  } catch (e) { log(e.message, "err"); }
+    await api("api/params/store", {kind, number: p.number, index: where, restore});
+    log(`  ${restore ? "restored" : "stored"} ${p.name}`, "ok");
+    if (restore) refresh();
+  } catch (e) { log(`  ${e.message}`, "err"); }
 }
 
 async function loadParams() {
-  const axis = Number($("param-axis").value || 0);
+  const axis = axisNow();
   try {
     const [a, g] = await Promise.all([api(`api/params/axis/${axis}`), api("api/params/global")]);
     P.axisParams = a.params; P.globalParams = g.params;
+    P.values = {axis: {}, global: {}};
+    for (const p of a.params) P.values.axis[String(p.number)] = p.value;
+    for (const p of g.params) P.values.global[`${p.bank}:${p.number}`] = p.value;
     renderParams();
   } catch (e) { log(e.message, "err"); }
 }
 
 function renderParams() {
   if (!P.axisParams) return;
-  paramRows($("param-axis-table"), P.axisParams, "axis", Number($("param-axis").value || 0));
-  paramRows($("param-global-table"), P.globalParams, "global", 0);
+  paramRows($("param-axis-table"), P.axisParams, "axis", axisNow());
+  const banks = [...new Set(P.globalParams.map(p => p.bank))].sort((a, b) => a - b);
+  $("param-global-tables").replaceChildren(...banks.flatMap(b => {
+    const table = el("table", {id: `param-global-table-${b}`, class: "params"});
+    paramRows(table, P.globalParams.filter(p => p.bank === b), "global", b);
+    return [el("h3", {}, `Global parameters, ${BANK_TITLES[b] || "bank " + b}`), table];
+  }));
+}
+
+// ---------------------------------------------------------------- live refresh
+function flash(node) {
+  node.classList.remove("changed");
+  void node.offsetWidth;  // restart the highlight
+  node.classList.add("changed");
+  clearTimeout(node._flash);
+  node._flash = setTimeout(() => node.classList.remove("changed"), FLASH_MS);
+}
+
+function showValue(id, value) {
+  const node = $(id);
+  if (!node) return;
+  const text = value === null || value === undefined ? "-" : String(value);
+  if (node.tagName === "INPUT") {
+    if (node.dataset.dirty || document.activeElement === node) return;  // never overwrite an edit
+    if (node.value !== text) { node.value = text; flash(node); }
+  } else if (node.textContent !== text) { node.textContent = text; flash(node); }
+}
+
+async function refresh() {
+  if (P.busy || !P.axisParams) return;
+  P.busy = true;
+  const axis = axisNow();
+  try {
+    const r = await api(`api/params/values/${axis}`);
+    if (r.axis !== axisNow()) return;  // the axis changed meanwhile
+    for (const [n, v] of Object.entries(r.values.axis)) showValue(`param-axis-${n}`, v);
+    for (const [k, v] of Object.entries(r.values.global)) showValue(`param-global-${k.replace(":", "-")}`, v);
+    P.values = r.values;
+  } catch (e) { log(e.message, "err"); }
+  finally { P.busy = false; }
+}
+
+function startLive() {
+  stopLive();
+  if (!$("param-live").checked || !P.ctx || !P.ctx.isVisible()) return;
+  P.timer = setInterval(refresh, REFRESH_MS);
+}
+
+function stopLive() { if (P.timer) clearInterval(P.timer); P.timer = null; }
+
+// ---------------------------------------------------------------- export and import
+function download(format) {
+  log(`export ${format.toUpperCase()}: GAP/GGP of every parameter of the set`, "req");
+  const a = el("a", {href: `api/params/export?format=${format}`, download: ""});
+  document.body.append(a); a.click(); a.remove();
+}
+
+function changeRows(changes) {
+  const head = el("tr", {}, ...["", "#", "name", "current", "file"].map(h => el("th", {}, h)));
+  return [head, ...changes.map(c => el("tr", {},
+    el("td", {}, c.kind === "axis" ? `axis ${c.index}` : `bank ${c.index}`), el("td", {class: "num"}, c.number),
+    el("td", {}, c.name), el("td", {class: "num"}, c.current ?? "-"), el("td", {class: "num new"}, c.value)))];
+}
+
+function showPanel(...kids) {
+  const panel = $("param-import-panel");
+  panel.replaceChildren(...kids);
+  panel.hidden = kids.length === 0;
+}
+
+function refuse(message, problems) {
+  showPanel(el("div", {class: "import-error", id: "param-import-error"}, `Import refused, nothing applied: ${message}`),
+    ...(problems && problems.length > 1 ? [el("ul", {}, ...problems.slice(0, 20).map(p => el("li", {}, p)))] : []),
+    el("button", {id: "btn-import-close", onclick: () => showPanel()}, "Close"));
+  log(`import refused: ${message}`, "err");
+}
+
+async function postFile(path, text) {
+  const r = await fetch(path, {method: "POST", headers: {"Content-Type": "application/json", "X-OpenTMCL": "1"},
+                               body: JSON.stringify({text})});
+  let data = {};
+  try { data = await r.json(); } catch (_) { /* not JSON */ }
+  return {ok: r.ok, data, status: r.status};
+}
+
+async function importFile(file) {
+  if (!file) return;
+  const text = await file.text();
+  const r = await postFile("api/params/diff", text);
+  if (!r.ok) { refuse(r.data.error || `HTTP ${r.status}`, r.data.problems); return; }
+  const d = r.data;
+  P.pendingFile = text;
+  const warn = (d.warnings || []).map(w => el("div", {class: "hint"}, w));
+  if (!d.changes.length) {
+    showPanel(el("div", {id: "param-import-summary"}, `${file.name}: ${d.entries} values, all equal to the module's; nothing to apply.`),
+              ...warn, el("button", {id: "btn-import-close", onclick: () => showPanel()}, "Close"));
+    return;
+  }
+  showPanel(el("div", {id: "param-import-summary"}, `${file.name} (${d.module}, firmware ${d.firmware || "?"}): ` +
+                                                     `${d.changes.length} of ${d.entries} values differ`),
+    ...warn, el("table", {class: "params", id: "param-import-diff"}, ...changeRows(d.changes)),
+    el("div", {class: "toolbar"},
+      el("button", {id: "btn-import-apply", class: "primary", onclick: () => applyFile()}, `Apply ${d.changes.length} change(s)`),
+      el("button", {id: "btn-import-cancel", onclick: () => { P.pendingFile = null; showPanel(); log("import cancelled"); }}, "Cancel")));
+}
+
+async function applyFile() {
+  const text = P.pendingFile;
+  if (text === null) return;
+  P.pendingFile = null;
+  const r = await postFile("api/params/apply", text);
+  if (!r.ok) { refuse(r.data.error || `HTTP ${r.status}`, r.data.problems); return; }
+  for (const c of r.data.changes) {
+    log(`> ${mnemonic(c.kind)} ${c.number}, ${c.index}, ${c.value}`, "req");
+  }
+  showPanel(el("div", {id: "param-import-summary", class: "ok"}, `applied ${r.data.applied} change(s)`),
+            el("button", {id: "btn-import-close", onclick: () => showPanel()}, "Close"));
+  log(`  applied ${r.data.applied} change(s)`, "ok");
+  refresh();
 }
 
 OpenTMCL.registerView("parameters", {
   mount(root, ctx) {
+    P.ctx = ctx;
     root.innerHTML = MARKUP;
     const sel = $("param-axis");
     for (let i = 0; i < (ctx.overview ? ctx.overview.axes : 0); i++) sel.append(el("option", {value: i}, `${i}`));
     sel.addEventListener("change", loadParams);
     $("btn-params-reload").addEventListener("click", loadParams);
+    $("param-live").addEventListener("change", startLive);
     $("param-filter").addEventListener("input", renderParams);
     $("param-filter-writable").addEventListener("change", renderParams);
+    $("btn-params-export-json").addEventListener("click", () => download("json"));
+    $("btn-params-export-toml").addEventListener("click", () => download("toml"));
+    $("param-import").addEventListener("change", ev => { importFile(ev.target.files[0]); ev.target.value = ""; });
     loadParams();
   },
+  show() { if (P.axisParams) refresh(); startLive(); },
+  hide() { stopLive(); },
 });
 })();
