@@ -171,3 +171,30 @@ def test_number_literals_with_the_manuals_minus(dash):
 
     assert parse_number(f"{dash}2147483648") == -2**31
     assert parse_instruction(f"MVP ABS, 0, {dash}5") == (4, 0, 0, -5)
+
+
+@pytest.mark.parametrize("letter", ["1", "\u00c4", "AB", ""])
+def test_address_character_is_one_letter_a_to_z(letter):
+    """PD28-1021 3.4.2: "The address character is A when the module address is 1, B for modules
+    with address 2 and so on": a digit, a letter outside A..Z or two letters are refused, quoted."""
+    with pytest.raises(AsciiError, match=rf"^address character must be a letter A..Z, got {letter!r}$"):
+        ascii.letter_address(letter)
+    assert ascii.letter_address("z") == 26
+
+
+def test_reply_and_frame_decoding_defaults():
+    """TMCM-6212 3.2: a reply is nine bytes ending in a checksum; decoding checks the checksum
+    unless told not to, and a wrong length is named with what was decoded ("reply", "frame")."""
+    from opentmcl.protocol.frame import Reply, decode_frame
+
+    good = Reply(2, 1, 100, 6, -5000).encode()
+    bad = good[:8] + bytes([good[8] ^ 0xFF])
+    assert Reply.decode(bad, verify=False) == Reply(2, 1, 100, 6, -5000)
+    with pytest.raises(FrameError, match=r"^wrong checksum$"):
+        Reply.decode(bad)
+    with pytest.raises(FrameError, match=r"^reply must be 9 bytes, got 8$"):
+        Reply.decode(good[:8])
+    with pytest.raises(FrameError, match=r"^wrong checksum$"):
+        decode_frame(bad)
+    with pytest.raises(FrameError, match=r"^frame must be 9 bytes, got 10$"):
+        decode_frame(good + b"\0")
