@@ -66,3 +66,19 @@ def test_format_instruction_names_jump_targets_and_refuses_unwritable_fields():
     assert format_instruction(21, 1, 0, 5, labels={5: "loop"}) == "JC NZ, loop"
     assert format_instruction(1, 0, 0, 0) == "ROR 0, 0"
     assert format_instruction(1, 5, 0, 0) is None
+    assert format_instruction(24, 0, 0, 0) == "RSUB"  # 3.6.19 "Mnemonic: RSUB": no operand, no blank
+
+
+def test_frame_bytes_wrap_modulo_256_and_value_to_32_bit():
+    """TMCM-6212 3.1: four one-byte fields and a 32-bit value, "MSB first", then the checksum
+    (3.1.1, the 8-bit sum): each byte field is taken modulo 256 and the value wrapped to 32 bits
+    (frame.encode_frame), at both ends of every range."""
+    from opentmcl.protocol.frame import checksum, encode_frame, to_int32
+
+    assert encode_frame(256 + 1, 256 + 2, 256 + 3, 256 + 4, 2**32 + 5) == encode_frame(1, 2, 3, 4, 5)
+    assert encode_frame(255, 255, 255, 255, -1)[:8] == b"\xff" * 8
+    assert encode_frame(255, 255, 255, 255, -1)[8] == (8 * 255) & 0xFF
+    assert encode_frame(0, 0, 0, 0, 2**31)[4:8] == b"\x80\x00\x00\x00"
+    assert [to_int32(v) for v in (2**31 - 1, 2**31, 2**32 - 1, 2**32, -(2**31) - 1)] == \
+        [2**31 - 1, -(2**31), -1, 0, 2**31 - 1]
+    assert checksum(bytes([255, 1])) == 0 and checksum(bytes([255, 2])) == 1
