@@ -4,6 +4,7 @@
     python bench/mutation.py --layer protocol         # one layer
     python bench/mutation.py --layer firmware --sample 300 --seed 12   # a reproducible sample
     python bench/mutation.py --report                 # only print the results already recorded
+    python bench/mutation.py --layer protocol --retry survived   # after adding tests
 
 mutmut reads [tool.mutmut] in pyproject.toml, copies the tree into mutants/ and records each
 mutant's result there; mutants that have a result are not run again (unless --rerun), so an
@@ -62,10 +63,12 @@ def choose(layers: list[str], sample: int | None, seed: int) -> list[str]:
     return names
 
 
-def pending(names: list[str], layers: list[str]) -> list[str]:
-    """The names among `names` that have no result yet (mutmut reruns every name it is given)."""
+def pending(names: list[str], layers: list[str], retry: tuple[str, ...] = ()) -> list[str]:
+    """The names among `names` that have no result yet, or whose outcome is in `retry` (e.g.
+    "survived" after adding tests, "timeout" after raising the time limit; mutmut reruns every
+    name it is given)."""
     codes = {k: v for layer in layers for k, v in recorded(layer).items()}
-    return [n for n in names if codes.get(n) is None]
+    return [n for n in names if codes.get(n) is None or OUTCOME.get(codes[n], "suspicious") in retry]
 
 
 def run(names: list[str], layers: list[str], children: int, log: Path) -> int:
@@ -104,6 +107,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--max-children", type=int, default=1, help="parallel mutmut workers (default 1)")
     ap.add_argument("--report", action="store_true", help="print recorded results, run nothing")
     ap.add_argument("--rerun", action="store_true", help="run mutants that already have a result again")
+    ap.add_argument("--retry", action="append", default=[], choices=("survived", "timeout", "no tests"),
+                    help="run the mutants with this recorded outcome again (repeatable)")
     ap.add_argument("--survivors", action="store_true", help="list the surviving mutants")
     args = ap.parse_args(argv)
     if args.sample is not None and args.sample < 1:
@@ -111,7 +116,7 @@ def main(argv: list[str] | None = None) -> int:
     layers = args.layer or list(LAYERS)
     generate()
     names = choose(layers, args.sample, args.seed)
-    todo = names if args.rerun else pending(names, layers)
+    todo = names if args.rerun else pending(names, layers, tuple(args.retry))
     if todo and not args.report:
         code = run(todo, layers, args.max_children, ROOT / "mutants" / "mutation-run.log")
         if code:
