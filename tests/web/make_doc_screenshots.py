@@ -65,7 +65,8 @@ def main() -> None:
                 if view == "parameters":
                     page.wait_for_selector("#param-axis-4")
                 if view == "program":
-                    page.click("#gutter-8")
+                    page.locator("#gutter-8").scroll_into_view_if_needed()
+                    page.locator("#gutter-8").dispatch_event("mousedown", {"button": 0})
                 time.sleep(1.5)
                 page.screenshot(path=str(DOCS / f"dashboard-{view}.png"))
             page.click("#btn-stop-all")
