@@ -261,12 +261,13 @@ function updateIo(io) {
 async function stopAll() {
   const out = $("stop-all-result");
   out.className = "busy"; out.textContent = "stopping…";
-  log("> STOP ALL: program stop (128) and MST on every axis of every module", "req");
+  log("> STOP ALL: program stop (128) and MST on every axis of every module (served or found by the scan)", "req");
   try {
     const r = await api("../../api/stop-all", {});
     out.replaceChildren(...r.modules.map(m => el("span", {class: m.ok ? "ok" : "err", title: m.errors.join("; ")},
       `${m.module} @${m.address}: ${m.ok ? "stopped" : "error"}`)));
     out.className = r.ok ? "ok" : "err";
+    if (r.scan_cancelled) log("  the module scan was cancelled", "req");
     for (const m of r.modules) {
       log(`  ${m.module} (address ${m.address}): ${m.ok ? `MST ${m.axes_stopped.join(", ")}` : m.error}`, m.ok ? "ok" : "err");
     }

@@ -1,0 +1,75 @@
+"""Stop-all and the module scan on one link (issue 14 item 1: "sends MST to every axis of every
+module on the bus"; docs/dashboard.md "Stop all"): a running scan cannot hold stop-all back, and a
+module the scan found is stopped even when the dashboard does not serve it. The motors are read
+back over the wire (GAP 2, target speed, TMCM-6212 manual 4.1)."""
+from __future__ import annotations
+
+import pytest
+
+from .test_shell_scan import call, scan_to_end
+
+pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
+pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+
+ROR, GAP, TARGET_SPEED = 1, 6, 2
+
+
+def test_stop_all_cancels_a_baud_rate_scan_and_stops_the_motor():
+    """A baud-rate scan holds the serial link (docs/dashboard.md "Module scan": the dashboard's own
+    polling is held meanwhile). STOP ALL during it cancels the scan after its current address and
+    sends MST (manual 3.6.3) at once: the scan reports cancelled with addresses left unasked, and
+    motor 0 of the TMCM-6212 turned by ROR (3.6.1) has target speed 0 when stop-all answers."""
+    import opentmcl
+    from opentmcl import VirtualModule
+    from opentmcl.server.app import Server
+    from opentmcl.server.pty import PtyServer
+    from opentmcl.web import start_dashboard
+
+    server = Server([VirtualModule("TMCM-6212", address=1), VirtualModule("PD86-1180", address=2)])
+    pty = server.add(PtyServer(server.bus))
+    server.start()
+    link = opentmcl.connect(f"serial://{pty.path}?baud=9600")
+    handle = start_dashboard(link, "127.0.0.1", 0)
+    try:
+        link.request(ROR, 0, 0, 30000)
+        status, st = call(handle, "POST", "/api/scan", {"first": 3, "last": 255, "timeout": 0.05,
+                                                        "bauds": [9600, 19200]})
+        assert status == 200 and st["running"]
+        status, out = call(handle, "POST", "/api/stop-all", {})
+        assert status == 200 and out["ok"]
+        assert link.reply(GAP, TARGET_SPEED, 0).value == 0
+        scan = call(handle, "GET", "/api/scan")[1]
+        assert not scan["running"] and scan["cancelled"] and scan["done"] < scan["total"] == 2 * 253
+        assert out["scan_cancelled"]
+        assert link.client.transport.baud == 9600  # the link is back at its own rate
+    finally:
+        handle.stop()
+        link.close()
+        server.stop()
+
+
+def test_stop_all_stops_a_module_the_scan_found_but_the_dashboard_does_not_serve():
+    """`opentmcl dashboard --to tcp://...` serves address 1; the scan finds the PD86-1180 at 2 on
+    the same link. ROR 0, 1000 turns its motor (PD86-1180 manual 4.6.1); STOP ALL sends it MST
+    (4.6.3) too, and lists it in its result; its target speed reads 0 afterwards."""
+    import opentmcl
+    from opentmcl.web import start_dashboard
+
+    from .shellkit import bench
+
+    with bench(("TMCM-6212", 1), ("PD86-1180", 2)) as b:
+        link = opentmcl.connect(b.url)
+        handle = start_dashboard(link, "127.0.0.1", 0, url=b.url, on_stop=link.close)
+        try:
+            found = scan_to_end(handle, {"first": 1, "last": 3, "timeout": 0.05})["found"]
+            assert [(f["address"], f["served"]) for f in found] == [(1, True), (2, False)]
+            one = b.client(2)
+            one.request(ROR, 0, 0, 1000)
+            status, out = call(handle, "POST", "/api/stop-all", {})
+            assert status == 200 and out["ok"]
+            assert one.client.reply(GAP, TARGET_SPEED, 0).value == 0
+            assert [(m["address"], m["module"], m["axes_stopped"]) for m in out["modules"]] == \
+                [(1, "TMCM-6212", [0, 1, 2, 3, 4, 5]), (2, "PD86-1180", [0])]
+            assert out["scan_cancelled"] is False
+        finally:
+            handle.stop()
