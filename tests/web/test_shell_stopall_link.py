@@ -73,3 +73,32 @@ def test_stop_all_stops_a_module_the_scan_found_but_the_dashboard_does_not_serve
             assert out["scan_cancelled"] is False
         finally:
             handle.stop()
+
+
+# Motor 2 turns while the program waits 3 s (WAIT TICKS: "one tick is 10 milliseconds", manual 3.6.20); line 3
+# holds the breakpoint the dashboard single-steps to (docs/dashboard.md "Views", Program).
+STEPPED = "ROR 2, 30000\nWAIT TICKS, 0, 300\nMST 2\nStop:\n    JA Stop\n"
+
+
+def test_stop_all_does_not_wait_for_a_stepped_wait():
+    """Issue 14 item 1: stop-all "works while a program runs (it also stops the program)". With a
+    breakpoint, Run single-steps (130) towards it; STOP ALL during the stepped WAIT sends 128 (manual
+    3.6.36 "Stop application") at once: the program stops in its WAIT (135 type 1: PC 1) instead
+    of reaching the breakpoint at PC 2 first, and motor 2 (ROR, 3.6.1) gets MST (target speed 0)."""
+    from opentmcl.host.loader import Loader
+
+    from .shellkit import bench, wait_until
+
+    with bench(("TMCM-6212", 1)) as b:
+        h = b.handle
+        assert call(h, "POST", "/m/1/api/program/download", {"source": STEPPED})[0] == 200
+        assert call(h, "POST", "/m/1/api/program/breakpoints", {"lines": [3]})[1] == {"addresses": [2]}
+        assert call(h, "POST", "/m/1/api/program/run", {})[0] == 200
+        six = b.client(1)
+        wait_until(lambda: Loader(six).status().waiting, "the program in its WAIT")
+        status, out = call(h, "POST", "/api/stop-all", {})
+        assert status == 200 and out["ok"]
+        st = Loader(six).status()
+        assert (st.mode, st.pc) == (0, 1)
+        assert six.client.reply(GAP, TARGET_SPEED, 2).value == 0
+        assert call(h, "GET", "/m/1/api/program")[1]["state"]["stepping_to_breakpoint"] is False

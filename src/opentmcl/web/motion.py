@@ -25,12 +25,16 @@ def stop_module(d: Dashboard) -> dict[str, object]:
     """Stop `d`'s program (host-side stepping too), then MST on each axis. Every axis is tried even
     after an error; `ok` is False with the first error's text when any command failed."""
     errors: list[str] = []
-    d.cancel_run()
+    runner = d._runner
+    stepping = runner is not None and runner.is_alive()
+    d._cancel.set()  # the host-side stepping ends after its current step; 128 first, not its WAIT
     if STOP_APPLICATION in d.profile.opcodes:
-        try:
-            d._do(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
-        except DashboardError as exc:
-            errors.append(f"program stop: {exc}")
+        for _ in range(2 if stepping else 1):  # again after the join: a step sent meanwhile
+            try:
+                d._do(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
+            except DashboardError as exc:
+                errors.append(f"program stop: {exc}")
+            d.cancel_run()
     stopped = []
     for axis in range(d.profile.axes):
         try:
