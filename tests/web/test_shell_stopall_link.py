@@ -102,3 +102,34 @@ def test_stop_all_does_not_wait_for_a_stepped_wait():
         assert (st.mode, st.pc) == (0, 1)
         assert six.client.reply(GAP, TARGET_SPEED, 2).value == 0
         assert call(h, "GET", "/m/1/api/program")[1]["state"]["stepping_to_breakpoint"] is False
+
+
+def test_stop_all_ends_a_download_under_way():
+    """Between 132 "enter download mode" and 133 "exit download mode" commands "are not executed but
+    stored in the TMCL memory" (manual 3.6.36), so the dashboard holds the module for the whole
+    download. STOP ALL during a long download ends it at the next instruction (133 sent), then
+    sends MST: motor 0 turned by ROR (3.6.1) gets target speed 0, the module is out of download
+    mode, and the download is answered with a one-line error naming STOP ALL."""
+    import threading
+
+    from .shellkit import bench, wait_until
+
+    source = "ROR 1, 1000\n" * 4000 + "Stop:\n    JA Stop\n"
+    with bench(("TMCM-6212", 1)) as b:
+        h = b.handle
+        vm = b.server.bus.modules[0]
+        six = b.client(1)
+        six.request(ROR, 0, 0, 30000)
+        answer: list = []
+        loading = threading.Thread(target=lambda: answer.append(
+            call(h, "POST", "/m/1/api/program/download", {"source": source})))
+        loading.start()
+        try:
+            wait_until(lambda: vm.download_mode, "the module in download mode", every=0.001)
+            status, out = call(h, "POST", "/api/stop-all", {})
+        finally:
+            loading.join(60)
+        assert status == 200 and out["ok"]
+        assert answer[0][0] == 400 and "STOP ALL" in answer[0][1]["error"]
+        assert not vm.download_mode
+        assert six.client.reply(GAP, TARGET_SPEED, 0).value == 0

@@ -22,9 +22,10 @@ POSITION_KEYS = {"target_position": 0, "position": 1, "actual_speed": 3}
 
 
 def stop_module(d: Dashboard) -> dict[str, object]:
-    """Stop `d`'s program (host-side stepping too), then MST on each axis. Every axis is tried even
+    """End a download under way, stop `d`'s program (host-side stepping too), then MST on each axis. Every axis is tried even
     after an error; `ok` is False with the first error's text when any command failed."""
     errors: list[str] = []
+    d.abort_download.set()  # a download holds the module from 132 to 133: it ends at the next instruction
     runner = d._runner
     stepping = runner is not None and runner.is_alive()
     d._cancel.set()  # the host-side stepping ends after its current step; 128 first, not its WAIT
@@ -42,6 +43,7 @@ def stop_module(d: Dashboard) -> dict[str, object]:
             stopped.append(axis)
         except DashboardError as exc:
             errors.append(f"MST {axis}: {exc}")
+    d.abort_download.clear()
     return {"address": d.module.address, "module": d.profile.name, "ok": not errors,
             "axes_stopped": stopped, "error": errors[0] if errors else "",
             "errors": errors}
