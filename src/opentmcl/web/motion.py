@@ -22,8 +22,9 @@ POSITION_KEYS = {"target_position": 0, "position": 1, "actual_speed": 3}
 
 
 def stop_module(d: Dashboard) -> dict[str, object]:
-    """End a download under way, stop `d`'s program (host-side stepping too), then MST on each axis. Every axis is tried even
-    after an error; `ok` is False with the first error's text when any command failed."""
+    """End a download under way, stop `d`'s program (host-side stepping too), then MST on each axis.
+    Every axis is tried even after an error; `ok` is False with the first error's text when any
+    command failed."""
     errors: list[str] = []
     d.abort_download.set()  # a download holds the module from 132 to 133: it ends at the next instruction
     runner = d._runner
@@ -36,6 +37,8 @@ def stop_module(d: Dashboard) -> dict[str, object]:
             except DashboardError as exc:
                 errors.append(f"program stop: {exc}")
             d.cancel_run()
+    else:
+        d.cancel_run()
     stopped = []
     for axis in range(d.profile.axes):
         try:
