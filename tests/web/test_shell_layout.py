@@ -127,3 +127,28 @@ def test_no_console_errors_or_warnings_on_any_view(shell):
         open_view(page, name)
         page.wait_for_selector(ready[name], timeout=TIMEOUT_MS)
     assert not messages, messages
+
+
+@pytest.mark.parametrize("view", ["motion", "parameters"])
+def test_stop_all_stays_on_screen_when_a_view_scrolls(shell, view):
+    """Issue 14 item 1: "a stop-all button always visible on every page". The parameter table and
+    the six axes' motion tools are taller than a 1366x768 screen; scrolled to their end, STOP ALL is
+    still inside the viewport and on top (the element at its centre), and a mouse click at that
+    point (no scrolling first) stops motor 0 turned by ROR (manual 3.6.1): GAP 2 reads 0 (3.6.3)."""
+    page, six, messages, _ = shell
+    page.set_viewport_size({"width": 1366, "height": 768})
+    open_view(page, view)
+    page.wait_for_selector("#motion-5-rfs:not(:empty)" if view == "motion" else "#param-axis-4",
+                           timeout=TIMEOUT_MS)
+    assert page.evaluate("document.documentElement.scrollHeight") > 768  # the view does scroll
+    six.client.request(1, 0, 0, 30000)
+    page.evaluate("window.scrollTo(0, document.documentElement.scrollHeight)")
+    x, y, top, bottom, on_top = page.evaluate("""(() => {
+        const r = document.getElementById('btn-stop-all').getBoundingClientRect();
+        const x = r.x + r.width / 2, y = r.y + r.height / 2;
+        return [x, y, r.top, r.bottom, document.elementFromPoint(x, y)?.id ?? null]; })()""")
+    assert 0 <= top and bottom <= 768 and on_top == "btn-stop-all", (top, bottom, on_top)
+    page.mouse.click(x, y)
+    page.wait_for_function("document.getElementById('stop-all-result').className === 'ok'", timeout=TIMEOUT_MS)
+    assert six.client.reply(6, 2, 0).value == 0
+    assert not messages, messages

@@ -104,6 +104,7 @@ def test_open_a_module_the_dashboard_did_not_serve(browser):
     ({"first": 1, "last": 4, "timeout": 2.01}, "0.01..2.0"),
     ({"first": 1, "last": 4, "bauds": [9600]}, "no baud rate"),
     ({"first": 1, "last": 4, "bauds": "9600"}, "list of baud rates"),
+    ({"first": 1, "last": 4, "bauds": [9600, 19200, 9600]}, "9600 is given twice"),  # no longer scan
 ])
 def test_scan_bounds_are_checked(body, error):
     """Addresses 1..255 (GP66), a time-out of 0.01..2 s per address, baud rates only on a serial link:

@@ -85,3 +85,38 @@ def test_stop_all_route_refuses_a_foreign_origin():
         assert six.client.reply(6, 2, 0).value == 30000  # target speed untouched
         assert post(f"http://127.0.0.1:{b.handle.port}") == 200
         assert six.client.reply(6, 2, 0).value == 0
+
+
+# One WAIT of 300 s (WAIT TICKS: "one tick is 10 milliseconds", manual 3.6.20): a Step of it stays
+# under way until the WAIT ends or the program is stopped.
+LONG_WAIT = "Loop:\n    WAIT TICKS, 0, 30000\n    JA Loop\n"
+
+
+def test_stop_all_is_not_queued_behind_pending_requests(browser):
+    """Issue 14 item 1: stop-all "works while a program runs". A browser opens at most six
+    connections to one server; six Steps (130) of a 300 s WAIT keep all six busy. STOP ALL still
+    reaches the module: GAP 2 (target speed, manual 4.1) of motor 0 turned by ROR (3.6.1) reads 0,
+    command 135 reports the program stopped, and the six Steps end as "cancelled by STOP ALL"."""
+    from opentmcl.host.loader import Loader
+
+    with bench(("TMCM-6212", 1)) as b:
+        six = b.client(1)
+        messages: list[str] = []
+        page = watched_page(browser, b.handle.module_url(1), messages)
+        try:
+            page.evaluate("""source => OpenTMCL.api('api/program/download', {source})""", LONG_WAIT)
+            six.request(1, 0, 0, 30000)
+            page.evaluate("""() => { window.stepped = [];
+                for (let i = 0; i < 6; i++) OpenTMCL.api('api/program/step', {}).then(
+                    () => window.stepped.push('done'), e => window.stepped.push(e.message)); }""")
+            wait_until(lambda: Loader(six).status().waiting, "a Step waiting in the WAIT")
+            page.keyboard.press("Escape")
+            page.wait_for_function("document.getElementById('stop-all-result').className === 'ok'",
+                                   timeout=TIMEOUT_MS)
+            assert six.client.reply(6, 2, 0).value == 0
+            assert Loader(six).status().mode == 0
+            page.wait_for_function("window.stepped.length === 6", timeout=TIMEOUT_MS)
+            assert page.evaluate("window.stepped") == ["cancelled by STOP ALL"] * 6
+        finally:
+            page.close()
+        assert not messages, messages

@@ -2,7 +2,8 @@
 
     GET  /                         redirects to the first module's page
     GET  /api/modules              [{address, module, url}] of every module served
-    POST /api/stop-all             program stop (128) and MST on every axis of every module served
+    POST /api/stop-all             cancels a scan; program stop (128) and MST on every axis of every
+                                   module served or found by the scan
     GET  /api/scan                 the module scan's progress and findings; POST starts one
     POST /api/scan/cancel, /api/scan/open {address}: stop the scan; serve a module it found
     GET  /static/...               the page's script and style (no build step, no CDN)
@@ -47,7 +48,7 @@ from ..host import TmclError
 from . import motion
 from . import params as data_views
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
-from .scan import TIMEOUT_DEFAULT, Scanner
+from .scan import TIMEOUT_DEFAULT, TIMEOUT_MAX, Scanner
 from .service import FAST_HZ, Dashboard, DashboardError, Poller
 
 log = logging.getLogger("opentmcl.web")
@@ -225,7 +226,20 @@ class ModuleIndex:
 
     # --- stop-all and the scan ---
     async def stop_all(self, _request: Request) -> object:
-        return await run_in_threadpool(motion.stop_all, list(self.by_address.values()))
+        return await run_in_threadpool(self._stop_all)
+
+    def _stop_all(self) -> Json:
+        """A running scan is cancelled first: it holds the link for a request (a baud-rate scan for
+        all of it), and it gives the link back at its own rate after the current address."""
+        scanning = bool(self.scanner.status()["running"])
+        self.scanner.cancel()
+        self.scanner.join(2 * TIMEOUT_MAX + 1.0)  # the current address: version and GGP 66 requests
+        link = self.scanner.client
+        found = [(int(f["address"]), str(f["version"])) for f in self.scanner.status()["found"]  # type: ignore[attr-defined]
+                 if f["address"] not in self.by_address and f["baud"] in (None, getattr(link.transport, "baud", None))]
+        out = motion.stop_all(list(self.by_address.values()), link, found)
+        out["scan_cancelled"] = scanning
+        return out
 
     async def scan_status(self, _request: Request) -> object:
         return self.scanner.status()

@@ -1,16 +1,18 @@
 """Stop-all and the motion tools' read-outs (docs/dashboard.md "Stop all", "Motion").
 
 Stop-all stops the program (command 128, TMCM-6212 manual 3.6.36) and sends MST (3.6.3) to every
-axis of every module the dashboard serves, one module after the other; a module that fails does not
-keep the others from being stopped. The motion tools send their commands through the console
+axis of every module the dashboard serves, one module after the other, and of every module the
+module scan found on the link that the dashboard does not serve (yet); a module that fails does
+not keep the others from being stopped. The motion tools send their commands through the console
 (`Dashboard.console`), so the console log shows each instruction; `motion_info` gives the page the
 velocity unit, the velocity range and the reference search status (RFS STATUS, 3.6.11).
 """
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 
-from ..host import TmclError
+from ..host import Client, TmclError
+from ..host.module import profile_for_version
 from .service import Dashboard, DashboardError
 
 MST, RFS, STOP_APPLICATION = 3, 13, 128
@@ -20,15 +22,23 @@ POSITION_KEYS = {"target_position": 0, "position": 1, "actual_speed": 3}
 
 
 def stop_module(d: Dashboard) -> dict[str, object]:
-    """Stop `d`'s program (host-side stepping too), then MST on each axis. Every axis is tried even
-    after an error; `ok` is False with the first error's text when any command failed."""
+    """End a download under way, stop `d`'s program (host-side stepping too), then MST on each axis.
+    Every axis is tried even after an error; `ok` is False with the first error's text when any
+    command failed."""
     errors: list[str] = []
-    d.cancel_run()
+    d.abort_download.set()  # a download holds the module from 132 to 133: it ends at the next instruction
+    runner = d._runner
+    stepping = runner is not None and runner.is_alive()
+    d._cancel.set()  # the host-side stepping ends after its current step; 128 first, not its WAIT
     if STOP_APPLICATION in d.profile.opcodes:
-        try:
-            d._do(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
-        except DashboardError as exc:
-            errors.append(f"program stop: {exc}")
+        for _ in range(2 if stepping else 1):  # again after the join: a step sent meanwhile
+            try:
+                d._do(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
+            except DashboardError as exc:
+                errors.append(f"program stop: {exc}")
+            d.cancel_run()
+    else:
+        d.cancel_run()
     stopped = []
     for axis in range(d.profile.axes):
         try:
@@ -36,14 +46,41 @@ def stop_module(d: Dashboard) -> dict[str, object]:
             stopped.append(axis)
         except DashboardError as exc:
             errors.append(f"MST {axis}: {exc}")
+    d.abort_download.clear()
     return {"address": d.module.address, "module": d.profile.name, "ok": not errors,
             "axes_stopped": stopped, "error": errors[0] if errors else "",
             "errors": errors}
 
 
-def stop_all(dashboards: Iterable[Dashboard]) -> dict[str, object]:
-    """`stop_module` for every module; {"ok": all stopped, "modules": [...]}."""
+def stop_found(client: Client, address: int, version: str) -> dict[str, object]:
+    """Stop a module the scan found but the dashboard does not serve: 128 and MST on each axis of
+    the profile its version string names (all six of the largest profile when none matches)."""
+    errors: list[str] = []
+    try:
+        profile = profile_for_version(version)
+        name, axes, opcodes = profile.name, profile.axes, profile.opcodes
+    except TmclError:
+        name, axes, opcodes = version, 6, frozenset({STOP_APPLICATION})
+    stopped = []
+    for command, axis in ([(STOP_APPLICATION, 0)] if STOP_APPLICATION in opcodes else []) + \
+            [(MST, a) for a in range(axes)]:
+        try:
+            client.request(command, 0, axis, 0, address=address)
+            if command == MST:
+                stopped.append(axis)
+        except TmclError as exc:
+            errors.append(f"{'program stop' if command == STOP_APPLICATION else f'MST {axis}'}: {exc}")
+    return {"address": address, "module": name, "ok": not errors, "axes_stopped": stopped,
+            "error": errors[0] if errors else "", "errors": errors}
+
+
+def stop_all(dashboards: Iterable[Dashboard], client: Client | None = None,
+             found: Sequence[tuple[int, str]] = ()) -> dict[str, object]:
+    """`stop_module` for every module served, then `stop_found` on `client` for each (address,
+    version) the scan found and the dashboard does not serve; {"ok": all stopped, "modules": [...]}."""
     modules = [stop_module(d) for d in dashboards]
+    if client is not None:
+        modules += [stop_found(client, address, version) for address, version in found]
     return {"ok": all(m["ok"] for m in modules), "modules": modules}
 
 

@@ -44,6 +44,9 @@ def check_request(first: int, last: int, timeout: float, bauds: Sequence[int], k
     bad = [b for b in bauds if b not in BAUD_RATES]
     if bad:
         raise DashboardError(f"baud rate {bad[0]} is not one of {', '.join(map(str, BAUD_RATES))}")
+    twice = [b for i, b in enumerate(bauds) if b in bauds[:i]]
+    if twice:
+        raise DashboardError(f"baud rate {twice[0]} is given twice")
     if bauds and kind != "serial":
         raise DashboardError("this link has no baud rate to change (only a serial link has): "
                              "scan the addresses alone")

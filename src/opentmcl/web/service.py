@@ -105,6 +105,7 @@ class Dashboard:
         self.breakpoints: set[int] = set()
         self._runner: threading.Thread | None = None
         self._cancel = threading.Event()
+        self.abort_download = threading.Event()  # set by stop-all: a download ends at its next instruction
         self.closed = threading.Event()  # set by stop(): live connections end
         with self.lock:
             self.profile = module.profile
@@ -359,9 +360,17 @@ class Dashboard:
             return result
         prog = result.pop("_program")
         self.cancel_run()
+
+        def abort_point(_done: int, _total: int) -> None:
+            if self.abort_download.is_set():
+                raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
+        loader = Loader(self.module)
         try:
+            # Under the lock from 132 to 133: a command sent meanwhile would be stored, not executed
+            # (manual 3.6.36). Stop-all ends it between two instructions; verifying (134) needs no lock.
             with self.lock:
-                Loader(self.module).download(prog.instructions)
+                loader.download(prog.instructions, verify=False, progress=abort_point)
+            loader.verify(prog.instructions)
         except LoaderError as exc:
             raise DashboardError(str(exc)) from None
         except TmclError as exc:

@@ -14,15 +14,26 @@ const el = (tag, attrs = {}, ...kids) => {
 };
 
 // Every POST carries X-OpenTMCL: 1, a header a cross-site form cannot send (docs/dashboard.md).
-async function api(path, body) {
-  const opts = body === undefined ? {} :
+// The requests under way: STOP ALL aborts them first, so that the browser's few connections per
+// server (six) cannot keep it waiting, and a command still queued is not sent after the stop.
+const PENDING = new Set();
+async function api(path, body, {keep = false} = {}) {
+  const ctl = new AbortController();
+  const opts = body === undefined ? {signal: ctl.signal} :
     {method: "POST", headers: {"Content-Type": "application/json", "X-OpenTMCL": "1"},
-     body: JSON.stringify(body)};
-  const r = await fetch(path, opts);
-  let data = {};
-  try { data = await r.json(); } catch (_) { /* not JSON */ }
-  if (!r.ok) throw new Error(data.error || r.statusText);
-  return data;
+     body: JSON.stringify(body), signal: ctl.signal};
+  if (!keep) PENDING.add(ctl);
+  try {
+    const r = await fetch(path, opts);
+    let data = {};
+    try { data = await r.json(); } catch (_) { /* not JSON */ }
+    if (ctl.signal.aborted) throw new Error("cancelled by STOP ALL");
+    if (!r.ok) throw new Error(data.error || r.statusText);
+    return data;
+  } catch (e) {
+    if (e.name === "AbortError") throw new Error("cancelled by STOP ALL");
+    throw e;
+  } finally { PENDING.delete(ctl); }
 }
 
 const VIEWS = ["overview", "motion", "parameters", "charts", "program", "io"];
@@ -261,12 +272,15 @@ function updateIo(io) {
 async function stopAll() {
   const out = $("stop-all-result");
   out.className = "busy"; out.textContent = "stopping…";
-  log("> STOP ALL: program stop (128) and MST on every axis of every module", "req");
+  log("> STOP ALL: program stop (128) and MST on every axis of every module (served or found by the scan)", "req");
+  for (const ctl of PENDING) ctl.abort();
+  PENDING.clear();
   try {
-    const r = await api("../../api/stop-all", {});
+    const r = await api("../../api/stop-all", {}, {keep: true});
     out.replaceChildren(...r.modules.map(m => el("span", {class: m.ok ? "ok" : "err", title: m.errors.join("; ")},
       `${m.module} @${m.address}: ${m.ok ? "stopped" : "error"}`)));
     out.className = r.ok ? "ok" : "err";
+    if (r.scan_cancelled) log("  the module scan was cancelled", "req");
     for (const m of r.modules) {
       log(`  ${m.module} (address ${m.address}): ${m.ok ? `MST ${m.axes_stopped.join(", ")}` : m.error}`, m.ok ? "ok" : "err");
     }
