@@ -113,6 +113,23 @@ def test_without_seconds_a_loop_is_recorded_twice_then_the_recording_ends():
     assert longer.time[-1] == pytest.approx(3.0)
 
 
+def test_a_loop_that_waits_in_a_subroutine_is_recorded_twice():
+    """TMCM-6212 manual 3.6.18 CSUB example (examples/tmcm6212_3.6.18_call_subroutine.tmc): the
+    loop body (MVP, CSUB, MVP, CSUB, JA) spends all its time in the subroutine's WAITs, so the
+    program counter is hardly ever seen inside the body; each executed JA back is one pass, and the
+    recording ends at the start of the third pass - not at the 300 s cap."""
+    from pathlib import Path
+
+    source = (Path(__file__).resolve().parents[2] / "examples" / "tmcm6212_3.6.18_call_subroutine.tmc").read_text()
+    trace = _run(source)
+    pos = trace.column(0, "position")
+    out = sum(1 for a, b in zip(pos, pos[1:], strict=False) if a < 5000 <= b)
+    back = sum(1 for a, b in zip(pos, pos[1:], strict=False) if a >= 5000 > b)
+    assert out == 2 and back == 2
+    assert trace.time[-1] < 10.0
+    assert trace.column(0, "target")[-1] == 10000      # the third pass has just begun: MVP ABS 10000
+
+
 def test_a_polling_loop_is_waited_out_like_a_wait():
     """A loop that ends by itself (COMP / JC, manual 3.6.14-3.6.15) is no JA loop: the recording
     goes on until the program stops (position 20000 passed, MST, STOP), while a JA loop polling the
@@ -127,9 +144,13 @@ def test_a_polling_loop_is_waited_out_like_a_wait():
 
 def test_a_loop_shorter_than_the_interval_is_counted_from_the_executed_instructions():
     """A loop spends all its time in one WAIT: the program counter is the same at every sample, yet
-    the module executed the loop in between (WAIT TICKS 1 = 10 ms, manual 3.6.28; samples 0.1 s)."""
+    the module executed the loop in between (WAIT TICKS 1 = 10 ms, manual 3.6.28; samples 0.1 s):
+    about ten passes before the second sample, which ends the recording. A loop of 200 ms ends
+    it at the first sample after its second pass (0.4 s and a few instructions)."""
     trace = _run("Loop:\n    WAIT TICKS, 0, 1\n    JA Loop\n", interval=0.1)
-    assert len(trace) == 3
+    assert len(trace) == 2
+    slower = _run("Loop:\n    WAIT TICKS, 0, 20\n    JA Loop\n", interval=0.1)
+    assert slower.time[-1] == pytest.approx(0.5)
 
 
 def test_a_program_that_neither_stops_nor_loops_ends_at_the_cap():

@@ -55,6 +55,33 @@ def instruction_texts(program) -> dict[int, str]:
     return texts
 
 
+class JumpWatch:
+    """Counts the backward JA jumps an in-process virtual module executes, per JA address: each is
+    one pass through that loop, however short the loop or wherever it spends its time (a
+    subroutine, an interrupt). Wraps the interpreter's `_jump` and calls it unchanged."""
+
+    def __init__(self, vm) -> None:
+        self.vm = vm
+        self.interpreter = vm.interpreter
+        self.passes: dict[int, int] = {}
+        jump = self.interpreter._jump
+
+        def watched_jump(address: int) -> bool:
+            pc, code = vm.program_counter, vm.program.code
+            if 0 <= pc < len(code) and code[pc][0] == JA and 0 <= address <= pc:
+                self.passes[pc] = self.passes.get(pc, 0) + 1
+            return jump(address)
+
+        setattr(self.interpreter, "_jump", watched_jump)   # noqa: B010 - instance attribute
+
+    def loops(self) -> int:
+        """Passes of the loop that ran most often."""
+        return max(self.passes.values(), default=0)
+
+    def close(self) -> None:
+        self.interpreter.__dict__.pop("_jump", None)
+
+
 class ProgramWatch:
     """`until(trace)` of a program run: records marks, counts loop passes, says when to stop.
 
@@ -75,18 +102,26 @@ class ProgramWatch:
         self._seen: set[int] = set()
         self._pc: int | None = None
         self._executed: int | None = None
+        self.jumps = JumpWatch(vm) if hasattr(vm, "interpreter") and hasattr(vm, "program") else None
 
     def __call__(self, trace: Trace) -> bool:
         word = self.loader.request(135, 1).value & 0xFFFFFFFF
         mode, pc = word >> 24, word & 0xFFFF
         executed = getattr(getattr(self.vm, "interpreter", None), "executed", None)
-        self._count(pc, executed)
+        if self.jumps is not None:
+            self.loops = self.jumps.loops()
+        else:
+            self._count(pc, executed)
         if pc != self._pc and len(trace.marks) < MAX_MARKS:
             trace.marks.append(Mark(trace.time[-1], pc, self.texts.get(pc, "")))
         self._pc, self._executed = pc, executed
         if self.loops_wanted is not None and self.loops >= self.loops_wanted:
             return True
         return mode != RUNNING and self.stop_when_idle and idle(trace)
+
+    def close(self) -> None:
+        if self.jumps is not None:
+            self.jumps.close()
 
     def _count(self, pc: int, executed: int | None) -> None:
         if self._pc is None:
@@ -130,27 +165,28 @@ def record_program(module, program=None, axes=(0,), seconds: float | None = None
     vm = module.client.transport.local_module(module.address)
     watch = EngineWatch(vm, sampler.to_pps) if vm is not None and hasattr(vm, "axes") else None
     start: list[float] = []
-    until: Callable[[Trace], bool] | None = None
-    if program is not None:
-        loader = Loader(module)
-        code = loader.download(program, progress=download_progress)
-        loader.run(0)
-        until = ProgramWatch(loader, instruction_texts(code), stop_when_idle=stop_when_idle,
-                             loops=loops, vm=vm, bodies=loop_bodies(code))
-    elif stop_when_idle:
-        until = idle
-    inner = until
+    program_watch: ProgramWatch | None = None
+    try:   # the watches come off the module however the run ends
+        until: Callable[[Trace], bool] | None = idle if stop_when_idle else None
+        if program is not None:
+            loader = Loader(module)
+            code = loader.download(program, progress=download_progress)
+            until = program_watch = ProgramWatch(loader, instruction_texts(code), stop_when_idle=stop_when_idle,
+                                                 loops=loops, vm=vm, bodies=loop_bodies(code))
+            loader.run(0)
+        inner = until
 
-    def first_sample(trace: Trace) -> bool:   # the module's clock at the trace's time 0
-        if not start and vm is not None:
-            start.append(vm.time - trace.time[-1])
-        return inner(trace) if inner is not None else False
+        def first_sample(trace: Trace) -> bool:   # the module's clock at the trace's time 0
+            if not start and vm is not None:
+                start.append(vm.time - trace.time[-1])
+            return inner(trace) if inner is not None else False
 
-    try:
         trace = record(module, axes, seconds, interval, until=first_sample, sampler=sampler)
     finally:
         if watch is not None:
             watch.close()
+        if program_watch is not None:
+            program_watch.close()
     if watch is not None and start:
         trace.events = watch.events(start[0], axes)
     return trace
