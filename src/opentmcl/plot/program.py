@@ -3,12 +3,11 @@
 Each sample also reads the application status (command 135 type 1: mode and program counter,
 TMCM-6212 manual 3.6.36), so the trace knows which instruction ran when (at sample resolution:
 the instruction the program was at, usually a WAIT). A *loop* is the body of an unconditional
-jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17); a *loop pass* is
+jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17). On an in-process
+virtual module a *loop pass* is each executed JA back (`JumpWatch`); on another module it is
 counted when the program counter comes back to the first address inside such a body that it came
-back to (the anchor); on an in-process virtual module also when it is at the same address as one
-sample before but has executed instructions in between (a loop shorter than the sampling
-interval). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out like a WAIT.
-A return from an interrupt into a loop counts as a pass (docs/plots.md).
+back to (the anchor). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out
+like a WAIT. docs/plots.md.
 """
 from __future__ import annotations
 
