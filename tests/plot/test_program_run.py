@@ -130,6 +130,37 @@ def test_a_loop_that_waits_in_a_subroutine_is_recorded_twice():
     assert trace.column(0, "target")[-1] == 10000      # the third pass has just begun: MVP ABS 10000
 
 
+TIMER_LOOP = """
+#include Interrupts.inc
+    VECT TI_TIMER0, Tick
+    SGP TI_TIMER0, 3, 100       // timer 0 every 100 ms (manual 3.5.6.4)
+    EI TI_TIMER0
+    EI TI_GLOBAL
+    SAP 4, 0, 51200
+    SAP 5, 0, 51200
+Loop:
+    MVP ABS, 0, 51200
+    WAIT POS, 0, 0
+    MVP ABS, 0, 0
+    WAIT POS, 0, 0
+    JA Loop
+Tick:
+    SIO 0, 2, 1
+    RETI
+"""
+
+
+def test_a_timer_interrupt_is_no_loop_pass():
+    """TMCM-6212 manual 3.5.6.4: the timer interrupt runs its handler and RETI returns to where the
+    program was (here a WAIT POS inside the loop), every 100 ms. The loop itself takes two moves of
+    51200 µsteps per pass (about 4 s); the recording shows two passes, not 0.2 s of the first move."""
+    trace = _run(TIMER_LOOP)
+    pos = trace.column(0, "position")
+    assert sum(1 for a, b in zip(pos, pos[1:], strict=False) if a < 25600 <= b) == 2
+    assert sum(1 for a, b in zip(pos, pos[1:], strict=False) if a >= 25600 > b) == 2
+    assert trace.column(0, "target")[-1] == 51200      # the third pass has just begun
+
+
 def test_a_polling_loop_is_waited_out_like_a_wait():
     """A loop that ends by itself (COMP / JC, manual 3.6.14-3.6.15) is no JA loop: the recording
     goes on until the program stops (position 20000 passed, MST, STOP), while a JA loop polling the
