@@ -161,6 +161,15 @@ def test_a_timer_interrupt_is_no_loop_pass():
     assert trace.column(0, "target")[-1] == 51200      # the third pass has just begun
 
 
+def test_a_jump_to_itself_is_a_halt_not_a_loop():
+    """TMCM-6212 manual 3.6.17 JA: "End: JA End" jumps to itself forever and does nothing else - a
+    STOP that keeps running. The recording waits for the move to end (the axis at 51200 and still),
+    as after a STOP, instead of ending two samples into the move."""
+    trace = _run("    SAP 4, 0, 51200\n    MVP ABS, 0, 51200\nEnd:\n    JA End\n")
+    assert trace.column(0, "position")[-1] == 51200 and trace.column(0, "velocity")[-1] == 0
+    assert trace.time[-1] < 10.0 and trace.marks[-1].text.startswith("JA")
+
+
 def test_a_polling_loop_is_waited_out_like_a_wait():
     """A loop that ends by itself (COMP / JC, manual 3.6.14-3.6.15) is no JA loop: the recording
     goes on until the program stops (position 20000 passed, MST, STOP), while a JA loop polling the

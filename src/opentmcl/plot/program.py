@@ -7,7 +7,7 @@ jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17). On a
 virtual module a *loop pass* is each executed JA back (`JumpWatch`); on another module it is
 counted when the program counter comes back to the first address inside such a body that it came
 back to (the anchor). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out
-like a WAIT. docs/plots.md.
+like a WAIT; a JA to itself is a halt (the program counts as stopped there). docs/plots.md.
 """
 from __future__ import annotations
 
@@ -67,7 +67,7 @@ class JumpWatch:
 
         def watched_jump(address: int) -> bool:
             pc, code = vm.program_counter, vm.program.code
-            if 0 <= pc < len(code) and code[pc][0] == JA and 0 <= address <= pc:
+            if 0 <= pc < len(code) and code[pc][0] == JA and 0 <= address < pc:   # JA to itself: a halt
                 self.passes[pc] = self.passes.get(pc, 0) + 1
             return jump(address)
 
@@ -93,6 +93,7 @@ class ProgramWatch:
         self.loader = loader
         self.texts = texts
         self.bodies = list(bodies)
+        self.halts = {first for first, last in self.bodies if first == last}   # JA to itself
         self.stop_when_idle = stop_when_idle
         self.loops_wanted = loops
         self.vm = vm
@@ -116,7 +117,8 @@ class ProgramWatch:
         self._pc, self._executed = pc, executed
         if self.loops_wanted is not None and self.loops >= self.loops_wanted:
             return True
-        return mode != RUNNING and self.stop_when_idle and idle(trace)
+        running = mode == RUNNING and pc not in self.halts   # "End: JA End" is a STOP that spins
+        return not running and self.stop_when_idle and idle(trace)
 
     def close(self) -> None:
         if self.jumps is not None:
@@ -131,7 +133,7 @@ class ProgramWatch:
         self._seen.add(pc)
         if not back:
             return
-        if self.anchor is None and any(first <= pc <= last for first, last in self.bodies):
+        if self.anchor is None and pc not in self.halts and any(first <= pc <= last for first, last in self.bodies):
             self.anchor = pc
         if pc == self.anchor:
             self.loops += 1
