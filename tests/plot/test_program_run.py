@@ -262,3 +262,20 @@ def test_a_pd86_1180_hard_stop_is_reported_in_pps():
     (e,) = trace.events
     assert e.kind == "hard_stop" and e.before == pytest.approx(tmc429_velocity_to_pps(500, pulse_div))
     assert e.before == max(trace.column(0, "velocity"))
+
+
+def test_cli_without_seconds_takes_a_fine_interval(tmp_path):
+    """docs/plots.md: without --seconds a program runs at most 300 s, "fewer if the interval would
+    give more than 400000 samples" - so --interval 1e-5 is no error there (it was refused as
+    "10 s every 1e-05 s"); a scenario alone still records 10 s and is refused."""
+    src = tmp_path / "move.tmc"
+    src.write_text("    STOP\n")
+    png = tmp_path / "move.png"
+    done = subprocess.run([sys.executable, "-m", "opentmcl", "plot", str(src), "-o", str(png), "--interval", "1e-5",
+                           "--channels", "position"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    scenario = tmp_path / "world.toml"
+    scenario.write_text("[axis.0]\nstart = 0\n")
+    done = subprocess.run([sys.executable, "-m", "opentmcl", "plot", str(scenario), "-o", str(png), "--interval",
+                           "1e-5"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "samples" in done.stderr and "Traceback" not in done.stderr

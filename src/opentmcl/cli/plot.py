@@ -119,8 +119,9 @@ def run(args: argparse.Namespace) -> int:
     from ..plot import DEFAULT_CHANNELS, Trace, TraceError, channel_names, render
     from ..plot.trace import check_duration
 
+    derived = args.seconds is None and Path(args.file).suffix.lower() in PROGRAM_SUFFIXES   # capped to fit
     try:
-        check_duration(10.0 if args.seconds is None else args.seconds, args.interval)
+        check_duration(0.0 if derived else 10.0 if args.seconds is None else args.seconds, args.interval)
     except ValueError as exc:
         raise CliError(f"--seconds/--interval: {exc}") from None
     if Path(args.output).suffix.lower() not in (".png", ".svg"):
