@@ -170,6 +170,17 @@ def test_a_jump_to_itself_is_a_halt_not_a_loop():
     assert trace.time[-1] < 10.0 and trace.marks[-1].text.startswith("JA")
 
 
+def test_a_polling_loop_closed_by_ja_is_waited_out_too():
+    """The same poll written with a JA back and a JC out (manual 3.6.16 JC, 3.6.17 JA): the JC
+    can leave the loop, so it ends by itself and is waited out - the recording shows the axis
+    passing 20000 and stopping (MST), not two samples of the poll."""
+    poll = ("    ROR 0, 20000\nPoll:\n    GAP 1, 0\n    COMP 20000\n    JC GE, Done\n    JA Poll\n"
+            "Done:\n    MST 0\n    STOP\n")
+    trace = _run(poll)
+    assert trace.column(0, "position")[-1] >= 20000 and trace.column(0, "velocity")[-1] == 0
+    assert trace.marks[-1].text == "STOP"
+
+
 def test_a_polling_loop_is_waited_out_like_a_wait():
     """A loop that ends by itself (COMP / JC, manual 3.6.14-3.6.15) is no JA loop: the recording
     goes on until the program stops (position 20000 passed, MST, STOP), while a JA loop polling the

@@ -31,11 +31,19 @@ def auto_seconds(interval: float) -> float:
 
 
 JA = 22                 # TMCL opcode of JA (manual 3.4.1 Table 5)
+EXITS = (21, 49)        # JC, DJNZ: conditional jumps that may leave a loop
 
 
 def loop_bodies(program) -> list[tuple[int, int]]:
-    """(first, last) address of every loop: a JA whose target is at or before its own address."""
-    return [(ins[3], address) for address, ins in enumerate(program) if ins[0] == JA and 0 <= ins[3] <= address]
+    """(first, last) address of every loop: a JA whose target is at or before its own address,
+    unless a JC or DJNZ inside it jumps out (a polling loop: it ends by itself, like a WAIT)."""
+    code = list(program)
+
+    def leaves(first: int, last: int) -> bool:
+        return any(code[a][0] in EXITS and not first <= code[a][3] <= last for a in range(first, last + 1))
+
+    return [(ins[3], address) for address, ins in enumerate(code)
+            if ins[0] == JA and 0 <= ins[3] <= address and not leaves(ins[3], address)]
 
 
 def instruction_texts(program) -> dict[int, str]:
@@ -59,15 +67,17 @@ class JumpWatch:
     one pass through that loop, however short the loop or wherever it spends its time (a
     subroutine, an interrupt). Wraps the interpreter's `_jump` and calls it unchanged."""
 
-    def __init__(self, vm) -> None:
+    def __init__(self, vm, loops: Iterable[int] | None = None) -> None:
         self.vm = vm
+        wanted = None if loops is None else set(loops)   # the JA addresses that count
         self.interpreter = vm.interpreter
         self.passes: dict[int, int] = {}
         jump = self.interpreter._jump
 
         def watched_jump(address: int) -> bool:
             pc, code = vm.program_counter, vm.program.code
-            if 0 <= pc < len(code) and code[pc][0] == JA and 0 <= address < pc:   # JA to itself: a halt
+            if (0 <= pc < len(code) and code[pc][0] == JA and 0 <= address < pc   # JA to itself: a halt
+                    and (wanted is None or pc in wanted)):
                 self.passes[pc] = self.passes.get(pc, 0) + 1
             return jump(address)
 
@@ -102,7 +112,8 @@ class ProgramWatch:
         self._seen: set[int] = set()
         self._pc: int | None = None
         self._executed: int | None = None
-        self.jumps = JumpWatch(vm) if hasattr(vm, "interpreter") and hasattr(vm, "program") else None
+        has_vm = hasattr(vm, "interpreter") and hasattr(vm, "program")
+        self.jumps = JumpWatch(vm, [last for _, last in self.bodies]) if has_vm else None
 
     def __call__(self, trace: Trace) -> bool:
         word = self.loader.request(135, 1).value & 0xFFFFFFFF
