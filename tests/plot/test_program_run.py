@@ -113,6 +113,74 @@ def test_without_seconds_a_loop_is_recorded_twice_then_the_recording_ends():
     assert longer.time[-1] == pytest.approx(3.0)
 
 
+def test_a_loop_that_waits_in_a_subroutine_is_recorded_twice():
+    """TMCM-6212 manual 3.6.18 CSUB example (examples/tmcm6212_3.6.18_call_subroutine.tmc): the
+    loop body (MVP, CSUB, MVP, CSUB, JA) spends all its time in the subroutine's WAITs, so the
+    program counter is hardly ever seen inside the body; each executed JA back is one pass, and the
+    recording ends at the start of the third pass - not at the 300 s cap."""
+    from pathlib import Path
+
+    source = (Path(__file__).resolve().parents[2] / "examples" / "tmcm6212_3.6.18_call_subroutine.tmc").read_text()
+    trace = _run(source)
+    pos = trace.column(0, "position")
+    out = sum(1 for a, b in zip(pos, pos[1:], strict=False) if a < 5000 <= b)
+    back = sum(1 for a, b in zip(pos, pos[1:], strict=False) if a >= 5000 > b)
+    assert out == 2 and back == 2
+    assert trace.time[-1] < 10.0
+    assert trace.column(0, "target")[-1] == 10000      # the third pass has just begun: MVP ABS 10000
+
+
+TIMER_LOOP = """
+#include Interrupts.inc
+    VECT TI_TIMER0, Tick
+    SGP TI_TIMER0, 3, 100       // timer 0 every 100 ms (manual 3.5.6.4)
+    EI TI_TIMER0
+    EI TI_GLOBAL
+    SAP 4, 0, 51200
+    SAP 5, 0, 51200
+Loop:
+    MVP ABS, 0, 51200
+    WAIT POS, 0, 0
+    MVP ABS, 0, 0
+    WAIT POS, 0, 0
+    JA Loop
+Tick:
+    SIO 0, 2, 1
+    RETI
+"""
+
+
+def test_a_timer_interrupt_is_no_loop_pass():
+    """TMCM-6212 manual 3.5.6.4: the timer interrupt runs its handler and RETI returns to where the
+    program was (here a WAIT POS inside the loop), every 100 ms. The loop itself takes two moves of
+    51200 µsteps per pass (about 4 s); the recording shows two passes, not 0.2 s of the first move."""
+    trace = _run(TIMER_LOOP)
+    pos = trace.column(0, "position")
+    assert sum(1 for a, b in zip(pos, pos[1:], strict=False) if a < 25600 <= b) == 2
+    assert sum(1 for a, b in zip(pos, pos[1:], strict=False) if a >= 25600 > b) == 2
+    assert trace.column(0, "target")[-1] == 51200      # the third pass has just begun
+
+
+def test_a_jump_to_itself_is_a_halt_not_a_loop():
+    """TMCM-6212 manual 3.6.17 JA: "End: JA End" jumps to itself forever and does nothing else - a
+    STOP that keeps running. The recording waits for the move to end (the axis at 51200 and still),
+    as after a STOP, instead of ending two samples into the move."""
+    trace = _run("    SAP 4, 0, 51200\n    MVP ABS, 0, 51200\nEnd:\n    JA End\n")
+    assert trace.column(0, "position")[-1] == 51200 and trace.column(0, "velocity")[-1] == 0
+    assert trace.time[-1] < 10.0 and trace.marks[-1].text.startswith("JA")
+
+
+def test_a_polling_loop_closed_by_ja_is_waited_out_too():
+    """The same poll written with a JA back and a JC out (manual 3.6.16 JC, 3.6.17 JA): the JC
+    can leave the loop, so it ends by itself and is waited out - the recording shows the axis
+    passing 20000 and stopping (MST), not two samples of the poll."""
+    poll = ("    ROR 0, 20000\nPoll:\n    GAP 1, 0\n    COMP 20000\n    JC GE, Done\n    JA Poll\n"
+            "Done:\n    MST 0\n    STOP\n")
+    trace = _run(poll)
+    assert trace.column(0, "position")[-1] >= 20000 and trace.column(0, "velocity")[-1] == 0
+    assert trace.marks[-1].text == "STOP"
+
+
 def test_a_polling_loop_is_waited_out_like_a_wait():
     """A loop that ends by itself (COMP / JC, manual 3.6.14-3.6.15) is no JA loop: the recording
     goes on until the program stops (position 20000 passed, MST, STOP), while a JA loop polling the
@@ -127,9 +195,13 @@ def test_a_polling_loop_is_waited_out_like_a_wait():
 
 def test_a_loop_shorter_than_the_interval_is_counted_from_the_executed_instructions():
     """A loop spends all its time in one WAIT: the program counter is the same at every sample, yet
-    the module executed the loop in between (WAIT TICKS 1 = 10 ms, manual 3.6.28; samples 0.1 s)."""
+    the module executed the loop in between (WAIT TICKS 1 = 10 ms, manual 3.6.28; samples 0.1 s):
+    about ten passes before the second sample, which ends the recording. A loop of 200 ms ends
+    it at the first sample after its second pass (0.4 s and a few instructions)."""
     trace = _run("Loop:\n    WAIT TICKS, 0, 1\n    JA Loop\n", interval=0.1)
-    assert len(trace) == 3
+    assert len(trace) == 2
+    slower = _run("Loop:\n    WAIT TICKS, 0, 20\n    JA Loop\n", interval=0.1)
+    assert slower.time[-1] == pytest.approx(0.5)
 
 
 def test_a_program_that_neither_stops_nor_loops_ends_at_the_cap():
@@ -201,3 +273,20 @@ def test_a_pd86_1180_hard_stop_is_reported_in_pps():
     (e,) = trace.events
     assert e.kind == "hard_stop" and e.before == pytest.approx(tmc429_velocity_to_pps(500, pulse_div))
     assert e.before == max(trace.column(0, "velocity"))
+
+
+def test_cli_without_seconds_takes_a_fine_interval(tmp_path):
+    """docs/plots.md: without --seconds a program runs at most 300 s, "fewer if the interval would
+    give more than 400000 samples" - so --interval 1e-5 is no error there (it was refused as
+    "10 s every 1e-05 s"); a scenario alone still records 10 s and is refused."""
+    src = tmp_path / "move.tmc"
+    src.write_text("    STOP\n")
+    png = tmp_path / "move.png"
+    done = subprocess.run([sys.executable, "-m", "opentmcl", "plot", str(src), "-o", str(png), "--interval", "1e-5",
+                           "--channels", "position"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    scenario = tmp_path / "world.toml"
+    scenario.write_text("[axis.0]\nstart = 0\n")
+    done = subprocess.run([sys.executable, "-m", "opentmcl", "plot", str(scenario), "-o", str(png), "--interval",
+                           "1e-5"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2 and "samples" in done.stderr and "Traceback" not in done.stderr

@@ -206,6 +206,26 @@ def test_coolstep_settles_in_the_hysteresis_band(rig):
     assert cs == 14 and 32 <= sg < 64
 
 
+def test_coolstep_raises_the_current_up_to_the_run_current_scale_and_no_further(rig):
+    """TMCM-6212 manual 4.1 AP180: "The value goes up to the CS value and down to the portion of CS
+    as specified by SEIMIN"; AP171: "The current becomes incremented for each measured stallGuard2
+    value below the lower threshold". From the minimum (AP6 = 128: CS 16, SEIMIN 0: 7) a load no
+    current can hold (SG stays 0) drives AP180 back up to exactly 16 - the upper limit - and not
+    to 17 (steps of 2, AP171 = 1: 7, 9, ... 15, then capped at 16)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"by": "position", "steps": [[160000, 0.9]], "before": 0.05}}}})
+    r.sap(172, 1)
+    r.sap(171, 1)
+    r.cmd(1, 0, 0, 51200)
+    r.vm.advance(3)
+    assert r.gap(180) == 7 and r.gap(1) < 160000
+    seen = set()
+    for _ in range(100):
+        r.vm.advance(0.01)
+        seen.add(r.gap(180))
+    assert r.gap(1) > 160000 and r.gap(206) == 0
+    assert r.gap(180) == 128 >> 3 and max(seen) == 16
+
+
 def test_coolstep_off_below_the_threshold_speed(rig):
     """TMCM-6212 manual 4.1 AP182 "Above this speed coolStep becomes enabled"."""
     r = rig("TMCM-6212", {"axis": {"0": {"load": 0.05}}})

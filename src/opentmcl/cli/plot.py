@@ -121,19 +121,26 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
         m.close()
 
 
-def run(args: argparse.Namespace) -> int:
+def _check_duration(args: argparse.Namespace) -> None:
+    """Without --seconds a program's length is derived and capped to fit: only the interval counts."""
     from ..extras import MissingExtra, require
-    from ..plot import DEFAULT_CHANNELS, Trace, TraceError, channel_names, render
     from ..plot.trace import check_duration
 
+    derived = args.seconds is None and Path(args.file).suffix.lower() in PROGRAM_SUFFIXES
     try:
         require("plot", "opentmcl plot")   # before a recording that could not be drawn
     except MissingExtra as exc:
         raise CliError(str(exc)) from None
     try:
-        check_duration(10.0 if args.seconds is None else args.seconds, args.interval)
+        check_duration(0.0 if derived else 10.0 if args.seconds is None else args.seconds, args.interval)
     except ValueError as exc:
         raise CliError(f"--seconds/--interval: {exc}") from None
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..plot import DEFAULT_CHANNELS, Trace, TraceError, channel_names, render
+
+    _check_duration(args)
     if Path(args.output).suffix.lower() not in (".png", ".svg"):
         raise CliError(f"cannot write {args.output}: use a .png or .svg file name")
     axes = _axes(args.axes or "0")

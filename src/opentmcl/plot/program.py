@@ -3,12 +3,11 @@
 Each sample also reads the application status (command 135 type 1: mode and program counter,
 TMCM-6212 manual 3.6.36), so the trace knows which instruction ran when (at sample resolution:
 the instruction the program was at, usually a WAIT). A *loop* is the body of an unconditional
-jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17); a *loop pass* is
+jump back (JA to an address at or before its own, TMCM-6212 manual 3.6.17). On an in-process
+virtual module a *loop pass* is each executed JA back (`JumpWatch`); on another module it is
 counted when the program counter comes back to the first address inside such a body that it came
-back to (the anchor); on an in-process virtual module also when it is at the same address as one
-sample before but has executed instructions in between (a loop shorter than the sampling
-interval). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out like a WAIT.
-A return from an interrupt into a loop counts as a pass (docs/plots.md).
+back to (the anchor). Loops that end by themselves (JC, DJNZ: polling, counting) are waited out
+like a WAIT; a JA to itself is a halt (the program counts as stopped there). docs/plots.md.
 """
 from __future__ import annotations
 
@@ -32,11 +31,19 @@ def auto_seconds(interval: float) -> float:
 
 
 JA = 22                 # TMCL opcode of JA (manual 3.4.1 Table 5)
+EXITS = (21, 49)        # JC, DJNZ: conditional jumps that may leave a loop
 
 
 def loop_bodies(program) -> list[tuple[int, int]]:
-    """(first, last) address of every loop: a JA whose target is at or before its own address."""
-    return [(ins[3], address) for address, ins in enumerate(program) if ins[0] == JA and 0 <= ins[3] <= address]
+    """(first, last) address of every loop: a JA whose target is at or before its own address,
+    unless a JC or DJNZ inside it jumps out (a polling loop: it ends by itself, like a WAIT)."""
+    code = list(program)
+
+    def leaves(first: int, last: int) -> bool:
+        return any(code[a][0] in EXITS and not first <= code[a][3] <= last for a in range(first, last + 1))
+
+    return [(ins[3], address) for address, ins in enumerate(code)
+            if ins[0] == JA and 0 <= ins[3] <= address and not leaves(ins[3], address)]
 
 
 def instruction_texts(program) -> dict[int, str]:
@@ -55,6 +62,35 @@ def instruction_texts(program) -> dict[int, str]:
     return texts
 
 
+class JumpWatch:
+    """Counts the backward JA jumps an in-process virtual module executes, per JA address: each is
+    one pass through that loop, however short the loop or wherever it spends its time (a
+    subroutine, an interrupt). Wraps the interpreter's `_jump` and calls it unchanged."""
+
+    def __init__(self, vm, loops: Iterable[int] | None = None) -> None:
+        self.vm = vm
+        wanted = None if loops is None else set(loops)   # the JA addresses that count
+        self.interpreter = vm.interpreter
+        self.passes: dict[int, int] = {}
+        jump = self.interpreter._jump
+
+        def watched_jump(address: int) -> bool:
+            pc, code = vm.program_counter, vm.program.code
+            if (0 <= pc < len(code) and code[pc][0] == JA and 0 <= address < pc   # JA to itself: a halt
+                    and (wanted is None or pc in wanted)):
+                self.passes[pc] = self.passes.get(pc, 0) + 1
+            return jump(address)
+
+        setattr(self.interpreter, "_jump", watched_jump)   # noqa: B010 - instance attribute
+
+    def loops(self) -> int:
+        """Passes of the loop that ran most often."""
+        return max(self.passes.values(), default=0)
+
+    def close(self) -> None:
+        self.interpreter.__dict__.pop("_jump", None)
+
+
 class ProgramWatch:
     """`until(trace)` of a program run: records marks, counts loop passes, says when to stop.
 
@@ -67,6 +103,7 @@ class ProgramWatch:
         self.loader = loader
         self.texts = texts
         self.bodies = list(bodies)
+        self.halts = {first for first, last in self.bodies if first == last}   # JA to itself
         self.stop_when_idle = stop_when_idle
         self.loops_wanted = loops
         self.vm = vm
@@ -75,18 +112,28 @@ class ProgramWatch:
         self._seen: set[int] = set()
         self._pc: int | None = None
         self._executed: int | None = None
+        has_vm = hasattr(vm, "interpreter") and hasattr(vm, "program")
+        self.jumps = JumpWatch(vm, [last for _, last in self.bodies]) if has_vm else None
 
     def __call__(self, trace: Trace) -> bool:
         word = self.loader.request(135, 1).value & 0xFFFFFFFF
         mode, pc = word >> 24, word & 0xFFFF
         executed = getattr(getattr(self.vm, "interpreter", None), "executed", None)
-        self._count(pc, executed)
+        if self.jumps is not None:
+            self.loops = self.jumps.loops()
+        else:
+            self._count(pc, executed)
         if pc != self._pc and len(trace.marks) < MAX_MARKS:
             trace.marks.append(Mark(trace.time[-1], pc, self.texts.get(pc, "")))
         self._pc, self._executed = pc, executed
         if self.loops_wanted is not None and self.loops >= self.loops_wanted:
             return True
-        return mode != RUNNING and self.stop_when_idle and idle(trace)
+        running = mode == RUNNING and pc not in self.halts   # "End: JA End" is a STOP that spins
+        return not running and self.stop_when_idle and idle(trace)
+
+    def close(self) -> None:
+        if self.jumps is not None:
+            self.jumps.close()
 
     def _count(self, pc: int, executed: int | None) -> None:
         if self._pc is None:
@@ -97,7 +144,7 @@ class ProgramWatch:
         self._seen.add(pc)
         if not back:
             return
-        if self.anchor is None and any(first <= pc <= last for first, last in self.bodies):
+        if self.anchor is None and pc not in self.halts and any(first <= pc <= last for first, last in self.bodies):
             self.anchor = pc
         if pc == self.anchor:
             self.loops += 1
@@ -132,29 +179,30 @@ def record_program(module, program=None, axes=(0,), seconds: float | None = None
     vm = module.client.transport.local_module(module.address)
     watch = EngineWatch(vm, sampler.to_pps) if vm is not None and hasattr(vm, "axes") else None
     start: list[float] = []
-    until: Callable[[Trace], bool] | None = None
-    if program is not None:
-        loader = Loader(module)
-        code = loader.download(program, progress=download_progress)
-        loader.run(0)
-        until = ProgramWatch(loader, instruction_texts(code), stop_when_idle=stop_when_idle,
-                             loops=loops, vm=vm, bodies=loop_bodies(code))
-    elif stop_when_idle:
-        until = idle
-    inner = until
+    program_watch: ProgramWatch | None = None
+    try:   # the watches come off the module however the run ends
+        until: Callable[[Trace], bool] | None = idle if stop_when_idle else None
+        if program is not None:
+            loader = Loader(module)
+            code = loader.download(program, progress=download_progress)
+            until = program_watch = ProgramWatch(loader, instruction_texts(code), stop_when_idle=stop_when_idle,
+                                                 loops=loops, vm=vm, bodies=loop_bodies(code))
+            loader.run(0)
+        inner = until
 
-    def first_sample(trace: Trace) -> bool:   # the module's clock at the trace's time 0
-        if not start and vm is not None:
-            start.append(vm.time - trace.time[-1])
-        if sample_progress is not None:
-            sample_progress(round(trace.time[-1], 2), seconds)
-        return inner(trace) if inner is not None else False
+        def first_sample(trace: Trace) -> bool:   # the module's clock at the trace's time 0
+            if not start and vm is not None:
+                start.append(vm.time - trace.time[-1])
+            if sample_progress is not None:
+                sample_progress(round(trace.time[-1], 2), seconds)
+            return inner(trace) if inner is not None else False
 
-    try:
         trace = record(module, axes, seconds, interval, until=first_sample, sampler=sampler)
     finally:
         if watch is not None:
             watch.close()
+        if program_watch is not None:
+            program_watch.close()
     if watch is not None and start:
         trace.events = watch.events(start[0], axes)
     return trace
