@@ -106,12 +106,12 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
         raise CliError(str(exc)) from None
     try:
         if not is_program:  # FILE "-": record what the module does for --seconds
-            with Bar(0, "recording", unit="s") as bar:
+            with Bar(args.seconds or 0, "recording", unit="s") as bar:
                 return record_program(m, None, axes, args.seconds, args.interval, stop_when_idle=False,
                                       sample_progress=bar.to)
         program = read_program(args.file, module_name(m, args.module))
         n = len(program.instructions)
-        with Bar(n, "load", unit="instr") as load_bar, Bar(0, "recording", unit="s") as bar:
+        with Bar(n, "load", unit="instr") as load_bar, Bar(args.seconds or 0, "recording", unit="s") as bar:
             return record_program(m, program.instructions, axes, args.seconds, args.interval,
                                   stop_when_idle=not args.keep_going, sample_progress=bar.to,
                                   download_progress=load_bar.to)
