@@ -19,6 +19,26 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic"
 
 
 @pytest.fixture
+def client():
+    """A `TestClient` of one virtual TMCM-6212's dashboard app, sending what the page itself sends:
+    a loopback Host and the X-OpenTMCL header (web/guard.py). `client.dash`, `client.module`."""
+    from starlette.testclient import TestClient
+
+    import opentmcl
+    from opentmcl.web.app import create_app
+    from opentmcl.web.service import Dashboard
+
+    module = opentmcl.connect("sim://TMCM-6212")
+    transport = module.client.transport
+    dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
+    with TestClient(create_app(dash), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
+        c.dash, c.module = dash, module
+        yield c
+    dash.closed.set()
+    module.close()
+
+
+@pytest.fixture
 def served():
     """A running dashboard for sim://TMCM-6212 (real clock); yields the handle."""
     pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")

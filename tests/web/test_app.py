@@ -2,23 +2,6 @@
 from __future__ import annotations
 
 import pytest
-from starlette.testclient import TestClient  # its HTTP client comes from httpx2 (test extra)
-
-import opentmcl
-from opentmcl.web.app import create_app
-from opentmcl.web.service import Dashboard
-
-
-@pytest.fixture
-def client():
-    module = opentmcl.connect("sim://TMCM-6212")
-    transport = module.client.transport
-    dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    # The dashboard page's own requests: a loopback Host and the X-OpenTMCL header (guard.py).
-    with TestClient(create_app(dash), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
-        c.dash = dash
-        yield c
-    module.close()
 
 
 def test_page_and_static_files_are_served_without_cdn(client):

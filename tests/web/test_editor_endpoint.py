@@ -4,24 +4,6 @@ from __future__ import annotations
 
 from importlib import resources
 
-import pytest
-from starlette.testclient import TestClient  # its HTTP client comes from httpx2 (test extra)
-
-import opentmcl
-from opentmcl.web.app import create_app
-from opentmcl.web.service import Dashboard
-
-
-@pytest.fixture
-def client():
-    module = opentmcl.connect("sim://TMCM-6212")
-    transport = module.client.transport
-    dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    with TestClient(create_app(dash), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
-        c.dash = dash
-        yield c
-    module.close()
-
 
 def test_every_error_and_warning_with_its_position(client):
     """Issue 15 item 6: all errors at once, and the module's capability warnings - "ROR 7, 1000"

@@ -6,25 +6,9 @@ from __future__ import annotations
 import json
 
 import pytest
-from starlette.testclient import TestClient
-
-import opentmcl
-from opentmcl.web.app import create_app
-from opentmcl.web.service import Dashboard
 
 FOREIGN = {"Origin": "http://evil.example"}
 
-
-@pytest.fixture
-def client():
-    module = opentmcl.connect("sim://TMCM-6212")
-    transport = module.client.transport
-    dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    with TestClient(create_app(dash), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
-        c.module = module
-        yield c
-    dash.closed.set()
-    module.close()
 
 
 def gap(client, number: int, axis: int) -> int:
