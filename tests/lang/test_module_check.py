@@ -120,3 +120,17 @@ def test_the_manuals_own_slips_are_found():
     prog = assemble_file(timer, module="PD86-1180")
     assert [(d.line, d.message) for d in prog.warnings] == [
         (11, "SIO: PD86-1180 has no port 3 in I/O bank 2"), (13, "SIO: PD86-1180 has no port 3 in I/O bank 2")]
+
+
+def test_a_loaded_profile_is_the_target(tmp_path):
+    """assemble(module=PROFILE): a profile already loaded (e.g. the module a client talks to) is
+    checked as it is, even when its name is no built-in module's (docs/profiles.md)."""
+    from opentmcl.modules import load_profile
+
+    path = tmp_path / "two.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "TMCM-2212"\naxes = 2\n')
+    profile = load_profile(str(path))
+    prog = assemble("ROR 1, 10\nROR 2, 10\n", filename="m.tmc", module=profile)
+    assert prog.module == "TMCM-2212"
+    assert [(d.line, d.column, d.message) for d in prog.warnings] == [
+        (2, 5, "ROR: motor 2 does not exist on TMCM-2212 (motors 0..1)")]

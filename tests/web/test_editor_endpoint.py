@@ -49,3 +49,23 @@ def test_the_vendored_editor_is_served_with_its_licence(client):
     assert 'CodeMirror.version = "5.65.21"' in client.get("/static/vendor/codemirror/codemirror.js").text
     page = client.get("/m/1/").text
     assert page.index("vendor/codemirror/codemirror.js") < page.index("static/app.js")
+
+
+def test_a_module_with_its_own_profile_file_is_checked_by_that_profile(tmp_path):
+    """Issue 15 item 6: "the dashboard editor ... warn[s] or refuse[s] instructions the module cannot
+    execute"; docs/profiles.md: a module described by a profile file is checked by that file. The
+    editor of a two-axis variant assembles (it used to fail on the profile's name, which no built-in
+    module has) and names motor 2 as the first missing one."""
+    path = tmp_path / "two.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "TMCM-2212"\naxes = 2\n')
+    module = opentmcl.connect(f"sim://{path}", profile=str(path))
+    transport = module.client.transport
+    dash = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
+    try:
+        with TestClient(create_app(dash), base_url="http://127.0.0.1", headers={"X-OpenTMCL": "1"}) as c:
+            out = c.post("/m/1/api/program/assemble", json={"source": "ROR 1, 10\nROR 2, 10\n"}).json()
+    finally:
+        module.close()
+    assert out["ok"] is True and out["count"] == 3
+    assert [(d["line"], d["column"], d["message"]) for d in out["warnings"]] == [
+        (2, 5, "ROR: motor 2 does not exist on TMCM-2212 (motors 0..1)")]

@@ -716,11 +716,12 @@ def _profile(module: str | None) -> ModuleProfile | None:
 
 
 def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[str | os.PathLike[str]] = (),
-             module: str | None = None, append_stop: bool = True,
+             module: str | ModuleProfile | None = None, append_stop: bool = True,
              defines: Mapping[str, int] | None = None, origin: int = 0, strict: bool = False) -> Program:
     """Assemble TMCL source text; AsmError lists every error (and the warnings so far).
 
-    `module` ("TMCM-6212", "PD86-1180", "PD28-1021", an alias or a profile file NAME.toml) selects
+    `module` ("TMCM-6212", "PD86-1180", "PD28-1021", an alias, a profile file NAME.toml or a loaded
+    ModuleProfile, e.g. the profile of the module a client talks to) selects
     the bundled include files, checks that the program fits its memory (an error) and that the
     module can execute every instruction - its opcodes, motors, parameter banks and numbers, ports,
     coordinates and interrupts (`Program.warnings`; errors with `strict`). Without it the TMCM-6212
@@ -734,8 +735,11 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
     if not isinstance(source, str):
         raise TypeError(f"assemble() takes the source text (str or bytes), not {type(source).__name__}; "
                         "assemble_file() reads a file")
-    profile = _profile(module)
-    st = _State(module, [Path(p) for p in include_path], append_stop, filename, origin, strict=bool(strict))
+    if module is None or isinstance(module, str):
+        profile, key = _profile(module), module
+    else:
+        profile, key = module, module.name   # the name picks the bundled includes
+    st = _State(key, [Path(p) for p in include_path], append_stop, filename, origin, strict=bool(strict))
     where = _Where("<defines>", 0, "")
     for name, value in (defines or {}).items():
         st.constants[name] = [_Const(where, 0, _Expr("num", 0, value=int(value)))]
@@ -747,7 +751,7 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
 
 
 def assemble_file(path: str | os.PathLike[str], *, include_path: Iterable[str | os.PathLike[str]] = (),
-                  module: str | None = None, append_stop: bool = True,
+                  module: str | ModuleProfile | None = None, append_stop: bool = True,
                   defines: Mapping[str, int] | None = None, origin: int = 0, strict: bool = False) -> Program:
     """Assemble a source file; AsmError (line 0: no position) if it cannot be read."""
     p = Path(path)

@@ -340,7 +340,7 @@ class Dashboard:
                    "the dashboard includes only the bundled files (#include <tmcm6212.inc>), not paths"}
             return {"ok": False, "errors": [bad], "warnings": [], "diagnostics": [bad], "more": 0}
         try:
-            prog = assemble(source, filename="<editor>", module=self.profile.name)
+            prog = assemble(source, filename="<editor>", module=self.profile)  # a profile file's too
         except AsmError as exc:
             return {"ok": False, "errors": [d.as_dict() for d in exc.errors],
                     "warnings": [d.as_dict() for d in exc.warnings],
