@@ -135,6 +135,20 @@ def test_load_warns_and_strict_refuses_the_download(tmp_path):
     assert r.stderr == "opentmcl load: error: l.tmc:1:5: ROR: motor 7 does not exist on TMCM-6212 (motors 0..5)\n"
 
 
+def test_load_checks_a_binary_against_the_module_it_reaches(tmp_path):
+    """docs/tmcl-assembler.md: `load` knows its target (it asks command 136), so a .bin program is
+    checked too - motor 7 on the six-axis TMCM-6212 (manual 1 "Features": motors 0..5) warns, and
+    --strict refuses the download (it used to load unchecked)."""
+    (tmp_path / "b.tmc").write_text("ROR 7, 1000\nSTOP\n")
+    assert cli("asm", "b.tmc", cwd=tmp_path).returncode == 0
+    r = cli("load", "b.bin", "--to", "sim://TMCM-6212", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == "b.bin: warning: record 0: ROR: motor 7 does not exist on TMCM-6212 (motors 0..5)\n"
+    r = cli("load", "b.bin", "--to", "sim://TMCM-6212", "--strict", cwd=tmp_path)
+    assert r.returncode == 2 and r.stdout == ""
+    assert "record 0: ROR: motor 7 does not exist on TMCM-6212" in r.stderr
+
+
 def test_debug_strict_refuses_too(tmp_path):
     """`debug` shares the connection options of `run` and `load`: --strict refuses the program."""
     (tmp_path / "d.tmc").write_text("ROR 7, 1000\nSTOP\n")

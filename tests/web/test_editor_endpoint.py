@@ -4,6 +4,12 @@ from __future__ import annotations
 
 from importlib import resources
 
+from starlette.testclient import TestClient
+
+import opentmcl
+from opentmcl.web.app import create_app
+from opentmcl.web.service import Dashboard
+
 
 def test_every_error_and_warning_with_its_position(client):
     """Issue 15 item 6: all errors at once, and the module's capability warnings - "ROR 7, 1000"

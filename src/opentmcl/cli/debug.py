@@ -34,7 +34,7 @@ from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
 from . import CliError
-from .load import add_connection_options, download, module_name, read_program
+from .load import add_connection_options, download, read_program, target_name
 from .run import DEFAULT_MODULE, open_target
 
 if TYPE_CHECKING:
@@ -299,8 +299,8 @@ def run(args: argparse.Namespace) -> int:
     client, name = open_target(args)
     try:
         module = client.module(args.address, name)
-        if name is None and args.program.lower().endswith(".tmc"):
-            name = module_name(module, args.module)
+        if name is None:
+            name = target_name(module, args.module, args.program, args.strict)
         program = read_program(args.program, name or args.module or DEFAULT_MODULE, args.include, strict=args.strict)
         loader = Loader(module)
         try:

@@ -116,6 +116,18 @@ def module_name(module: Module, given: str | None) -> str:
         raise CliError(f"cannot tell the module type ({exc}); give --module") from None
 
 
+def target_name(module: Module, given: str | None, program: str, strict: bool) -> str | None:
+    """The module type a program is checked against (docs/tmcl-assembler.md, "Checking against a
+    module"): a .tmc file needs it (its include files); a .bin file is checked when it can be
+    told, and --strict refuses to load one unchecked."""
+    if given or program.lower().endswith(".tmc") or strict:
+        return module_name(module, given)
+    try:
+        return module_name(module, None)
+    except CliError:
+        return None
+
+
 def download(loader: Loader, instructions: list, *, start: int = 0, verify: bool = True) -> None:
     """`Loader.download` with a progress bar (on a terminal only): the instructions written, then
     the ones read back (134)."""
@@ -143,7 +155,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(str(exc)) from None
     try:
         module = client.module(args.address)
-        name = module_name(module, args.module) if args.program.lower().endswith(".tmc") else args.module
+        name = target_name(module, args.module, args.program, args.strict)
         program = read_program(args.program, name, args.include, origin=args.start, strict=args.strict)
         loader = Loader(module)
         try:

@@ -23,7 +23,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from . import CliError
-from .load import add_connection_options, check_connection_options, download, module_name, read_program
+from .load import add_connection_options, check_connection_options, download, read_program, target_name
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
@@ -118,8 +118,8 @@ def run(args: argparse.Namespace) -> int:
     client, name = open_target(args)
     try:
         module = client.module(args.address, name)
-        if name is None and args.program.lower().endswith(".tmc"):
-            name = module_name(module, args.module)
+        if name is None:
+            name = target_name(module, args.module, args.program, args.strict)
         program = read_program(args.program, name or args.module, args.include, strict=args.strict)
         try:
             specs = [s for item in args.watch for s in item.split(",") if s.strip()]
