@@ -130,3 +130,18 @@ def test_zoom_holds_the_window_and_live_follows_again(page, served):
                          "window.dashboard.charts.position.plot.scales.x.max]") == span
     page.click("#chart-position .btn-live")
     page.wait_for_function(f"window.dashboard.charts.position.plot.scales.x.max > {span[1]}", timeout=TIMEOUT_MS)
+
+
+def test_a_failing_poll_is_reported_once_in_the_console_log(page, served):
+    """Issue 14 item 7 ("no console errors" hidden, none swallowed) and docs/dashboard-charts.md: when
+    the dashboard goes away under a live chart, the failing sample poll is named once in the
+    console log ("charts: ..."), not at every poll, and not silently dropped."""
+    open_charts(page)
+    chart = add_chart(page, "global:0:132")
+    wait_count(page, chart, 3)
+    served.stop()
+    page.wait_for_function("document.getElementById('console-log').innerText.includes('charts: ')",
+                           timeout=TIMEOUT_MS)
+    page.wait_for_timeout(2000)  # several more polls (POLL_MS) fail the same way
+    lines = [t for t in page.inner_text("#console-log").splitlines() if t.startswith("charts: ")]
+    assert len(lines) == 1, lines

@@ -173,3 +173,33 @@ def test_store_and_restore_on_a_module_with_stap(browser, served_bus):
     finally:
         page.close()
     assert not errors, f"JavaScript errors on the page: {errors}"
+
+
+def test_a_value_the_manual_forbids_inside_the_range_is_refused_on_the_page(browser):
+    """PD86-1180 manual 7.2 (encoder prescaler, axis parameter 210): "The values 1, 2, 4, and 16
+    must not be used for <p>." The range shown names them; 16 is refused on the page and no SAP is
+    sent (GAP 210 over the wire keeps its value); 17, the next value, is written and read back."""
+    from .shellkit import bench, open_view, watched_page
+
+    with bench(("PD86-1180", 1)) as b:
+        module = b.client(1)
+        before = module.reply(6, 210, 0).value
+        messages: list[str] = []
+        page = watched_page(browser, b.handle.module_url(1), messages)
+        try:
+            open_view(page, "parameters")
+            page.wait_for_selector("#param-axis-210", timeout=TIMEOUT_MS)
+            row = page.inner_text("xpath=//input[@id='param-axis-210']/ancestor::tr")
+            assert "except 1, 2, 4, 16" in row
+            page.fill("#param-axis-210", "16")
+            page.press("#param-axis-210", "Enter")
+            page.wait_for_selector("#param-axis-210.failed", timeout=TIMEOUT_MS)
+            assert "except 1, 2, 4, 16" in page.get_attribute("#param-axis-210", "title")
+            assert "SAP 210, 0, 16" not in page.inner_text("#console-log")
+            assert module.reply(6, 210, 0).value == before
+            page.fill("#param-axis-210", "17")
+            page.press("#param-axis-210", "Enter")
+            page.wait_for_selector("#param-axis-210.saved", timeout=TIMEOUT_MS)
+            assert module.reply(6, 210, 0).value == 17
+        finally:
+            page.close()

@@ -78,7 +78,7 @@ class Sample:
 
 def _param_info(p, axis_or_bank) -> dict:
     return {"number": p.number, "name": p.name, "title": p.title, "unit": p.unit, "min": p.min, "max": p.max,
-            "access": p.access, "description": p.description, "values": list(p.values),
+            "access": p.access, "description": p.description, "values": list(p.values), "excluded": list(p.excluded),
             "bank": p.bank if p.bank is not None else axis_or_bank, "writable": p.writable,
             "readable": p.readable, "storable": p.storable}
 

@@ -260,8 +260,11 @@ async function poll() {
         push(chart, row[1], chart.series.map(s => column.has(s.key) ? row[column.get(s.key)] : null));
       }
     }
+    C.pollError = null;
   } catch (e) {
-    if (/subscribe again/.test(e.message)) { C.client = null; C.lastSeq = 0; resubscribe(); }  // expired, or a new server else log(`charts: ${e.message}`, "err");
+    if (/subscribe again/.test(e.message)) { C.client = null; C.lastSeq = 0; resubscribe(); }  // expired, or a new server
+    else if (e.message !== C.pollError) log(`charts: ${e.message}`, "err");  // once, not at every poll
+    C.pollError = e.message;
   } finally { C.inFlight = false; }
 }
 

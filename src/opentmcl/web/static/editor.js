@@ -89,12 +89,19 @@ const MARKUP = `
     </div>
     <div id="asm-errors"></div>`;
 
-const EXAMPLE = `// Move motor 0 back and forth (TMCM-6212 manual 2.4)
-    SAP 4, 0, 51200        // maximum positioning speed
-    SAP 5, 0, 51200        // maximum acceleration
+// The starting program, with the values of the module's own manual example: internal units (0..2047)
+// on the PD86-1180 (manual 3.2), pps on the others (TMCM-6212 manual 2.4). 51200 is out of range
+// for a TMC429 module, whose SAP would refuse it with status 4 and leave the motor at rest.
+function example(ov) {
+  const pps = !ov || (ov.velocity_unit || "pps") === "pps";  // the unit of AP3 (web/service.py overview)
+  const [speed, accel, target, manual] = pps ? [51200, 51200, 51200, "TMCM-6212 manual 2.4"]
+                                             : [500, 50, 10000, `${ov.module} manual 3.2`];
+  return `// Move motor 0 back and forth (${manual})
+    SAP 4, 0, ${speed}        // maximum positioning speed
+    SAP 5, 0, ${accel}        // maximum acceleration
     SGP 0, 2, 0            // user variable 0 counts the moves
 Loop:
-    MVP ABS, 0, 51200
+    MVP ABS, 0, ${target}
     WAIT POS, 0, 0
     MVP ABS, 0, 0
     WAIT POS, 0, 0
@@ -103,6 +110,7 @@ Loop:
     AGP 0, 2
     JA Loop
 `;
+}
 
 const SOURCE_KEY = `opentmcl-source ${location.pathname}`;  // each module keeps its own program
 const BP_GUTTER = "cm-breakpoints", DIAG_GUTTER = "cm-asm-diagnostics";
@@ -239,10 +247,10 @@ function showProgramState(p) {
 }
 
 // ------------------------------------------------------------------ setup
-function setupEditor(root) {
+function setupEditor(root, ov) {
   CodeMirror.defineMode("tmcl", tmclMode);
   const cm = CodeMirror($("program-editor"), {
-    value: localStorage.getItem(SOURCE_KEY) || EXAMPLE, mode: "tmcl", lineNumbers: true, indentUnit: 4,
+    value: localStorage.getItem(SOURCE_KEY) || example(ov), mode: "tmcl", lineNumbers: true, indentUnit: 4,
     tabSize: 4, indentWithTabs: false, gutters: [DIAG_GUTTER, BP_GUTTER, "CodeMirror-linenumbers"],
     extraKeys: {Tab: c => c.replaceSelection("    ")}, viewportMargin: 200,
   });
@@ -288,7 +296,7 @@ window.OpenTMCL.programEditor = {
 OpenTMCL.registerView("program", {
   mount(root, ctx) {
     root.innerHTML = MARKUP;
-    setupEditor(root);
+    setupEditor(root, ctx.overview);
     ctx.onState(st => showProgramState(st.program));
     loadProgram();
   },

@@ -33,16 +33,17 @@ const MARKUP = `
 const axisNow = () => Number($("param-axis").value || 0);
 const mnemonic = (kind, store, restore) => kind === "axis" ? (restore ? "RSAP" : store ? "STAP" : "SAP")
                                                             : (restore ? "RSGP" : store ? "STGP" : "SGP");
-const rangeText = p => p.values.length ? p.values.join(", ") : `${p.min} … ${p.max}`;
+const excludedText = p => (p.excluded || []).length ? ` except ${p.excluded.join(", ")}` : "";  // e.g. PD86-1180 7.2 AP210
+const rangeText = p => p.values.length ? p.values.join(", ") : `${p.min} … ${p.max}${excludedText(p)}`;
 
-// A value the manual allows for parameter p (profile data: min/max or the list of values).
+// A value the manual allows for parameter p (profile data: min/max minus excluded, or the list of values).
 function checkValue(p, text) {
   const t = String(text).trim();
   if (!/^[-+]?(0x[0-9a-f]+|\d+)$/i.test(t)) return {error: `"${t}" is not an integer`};
   const neg = t.startsWith("-"), body = t.replace(/^[-+]/, "");
   const v = (neg ? -1 : 1) * Number(body.toLowerCase().startsWith("0x") ? parseInt(body, 16) : body);
   if (!Number.isSafeInteger(v)) return {error: `${t} is too large`};
-  const ok = p.values.length ? p.values.includes(v) : v >= p.min && v <= p.max;
+  const ok = p.values.length ? p.values.includes(v) : v >= p.min && v <= p.max && !(p.excluded || []).includes(v);
   if (!ok) return {error: `${p.title} takes ${rangeText(p)}${p.unit ? " [" + p.unit + "]" : ""}, not ${v}`};
   return {value: v};
 }
