@@ -65,8 +65,8 @@ def main() -> None:
                 if view == "parameters":
                     page.wait_for_selector("#param-axis-4")
                 if view == "program":
-                    page.locator("#gutter-8").scroll_into_view_if_needed()
-                    page.locator("#gutter-8").dispatch_event("mousedown", {"button": 0})
+                    # line 8's number; its breakpoint marker is re-drawn at every state update, never "stable"
+                    page.click(".CodeMirror-code > div:nth-child(8) .CodeMirror-linenumber", force=True)
                 time.sleep(1.5)
                 page.screenshot(path=str(DOCS / f"dashboard-{view}.png"))
             page.click("#btn-stop-all")
