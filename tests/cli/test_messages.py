@@ -84,3 +84,16 @@ def test_a_connection_the_peer_closed_is_a_sentence_not_an_errno():
     text = str(err.value)
     assert "Errno" not in text and "failed" not in text
     assert text.startswith(f"{t.name}: the other end closed the connection while sending; check that")
+
+
+def test_a_refused_tcp_connection_names_the_likely_fix():
+    """Issue 15 item 5: "the cause once, and the likely fix": a port where nothing listens is refused
+    by the peer; the line says so once and points at the server that would answer (exit 3, docs/cli.md)."""
+    with socket.socket() as s:   # a loopback port that was free a moment ago: nothing listens there
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    done = cli("send", "GAP 1, 0", "--to", f"tcp://127.0.0.1:{port}")
+    line = one_line(done)
+    assert done.returncode == 3
+    assert line == (f"opentmcl send: error: tcp://127.0.0.1:{port}: connection refused; is a TMCL server "
+                    f"listening on port {port} (e.g. `opentmcl serve --tcp 127.0.0.1:{port}`)?")

@@ -27,7 +27,11 @@ class TcpTransport(StreamTransport):
         try:
             self._sock = socket.create_connection((host, port), timeout=connect_timeout)
         except TimeoutError:
-            raise TmclConnectionError(f"tcp://{host}:{port}: no connection within {connect_timeout:g} s") from None
+            raise TmclConnectionError(f"tcp://{host}:{port}: no connection within {connect_timeout:g} s; "
+                                      "check the host name, the port and any firewall between") from None
+        except ConnectionRefusedError:
+            raise TmclConnectionError(f"tcp://{host}:{port}: connection refused; is a TMCL server listening "
+                                      f"on port {port} (e.g. `opentmcl serve --tcp {host}:{port}`)?") from None
         except OSError as exc:
             raise TmclConnectionError(f"tcp://{host}:{port}: {exc.strerror or exc}") from None
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
