@@ -81,7 +81,8 @@ def test_a_global_parameter_chart_follows_the_tick_timer(page, served):
     wait_count(page, chart, 5)
     ys = page.evaluate(f"window.dashboard.charts['{chart}'].series[0].y")
     after = served.dashboard.module.reply(10, 132, 0).value
-    assert ys == sorted(ys) and ys[-1] > ys[0] and ys[-1] <= after
+    ys = [y for y in ys if y is not None]   # a read that failed (a loaded machine) is a gap, not a value
+    assert len(ys) >= 2 and ys == sorted(ys) and ys[-1] > ys[0] and ys[-1] <= after
 
 
 def test_several_charts_axes_and_removal(page, served):

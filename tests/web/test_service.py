@@ -211,3 +211,11 @@ def test_live_charts_keep_sixty_seconds_at_twenty_samples_a_second_or_more():
         assert kept[0].t > 0  # the oldest ones are dropped
     finally:
         module.close()
+
+
+def test_program_states_are_numbered_in_the_order_they_are_read(dash):
+    """A Step's answer and a live update can cross on their way to the page: each program state
+    (command 135, manual 3.6.35) carries the number of its reading, later readings larger, so the
+    editor drops one older than what it shows (docs/dashboard-program.md)."""
+    first, second = dash.program_state(), dash.program_state()
+    assert isinstance(first["seq"], int) and second["seq"] > first["seq"]

@@ -11,6 +11,7 @@ the rest of the axis state and the program status; the web layer reads the sampl
 from __future__ import annotations
 
 import contextlib
+import itertools
 import logging
 import re
 import threading
@@ -94,6 +95,7 @@ class Dashboard:
         self.url = url
         self.lock = threading.RLock()
         self.clock = clock
+        self._state_seq = itertools.count(1)   # orders program states read at different times
         self.start = clock()
         self.connected = True
         self.last_error = ""
@@ -451,6 +453,7 @@ class Dashboard:
         """Mode, PC (135 type 1), A (type 2), X (type 3), flags (type 4) and the user variables."""
         from ..host.debugger import describe_flags
 
+        seq = next(self._state_seq)   # taken before the read: a later state has a larger number
         st = self._try(lambda: self._loader().status())
         if st is None:
             return {"mode": None}
@@ -463,7 +466,7 @@ class Dashboard:
         variables = {}
         for n in self._variables_shown():
             variables[n] = self._try(lambda i=n: self.module.reply(10, i, USER_BANK).value)
-        return {"mode": st.mode, "mode_name": st.mode_name, "waiting": st.waiting, "pc": st.pc, "line": line,
+        return {"seq": seq, "mode": st.mode, "mode_name": st.mode_name, "waiting": st.waiting, "pc": st.pc, "line": line,
                 "a": st.accumulator, "x": st.x_register, "flags": describe_flags(st.flags),
                 "variables": variables, "breakpoints": sorted(self.breakpoints),
                 "stepping_to_breakpoint": self._runner is not None and self._runner.is_alive()}

@@ -5,7 +5,7 @@
 (() => {
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
-const D = {cm: null, breakpoints: new Set(), currentLine: null, downloaded: false, marks: [], lineCount: 0,
+const D = {cm: null, stateSeq: 0, breakpoints: new Set(), currentLine: null, downloaded: false, marks: [], lineCount: 0,
            diagnostics: []};
 
 // ------------------------------------------------------------------ the TMCL mode
@@ -235,6 +235,8 @@ function setCurrentLine(line) {
 
 function showProgramState(p) {
   if (!p || p.mode === null || p.mode === undefined) return;
+  // a state read before the one shown (a live update that crossed a Step's answer) is stale
+  if (p.seq !== undefined) { if (p.seq < D.stateSeq) return; D.stateSeq = p.seq; }
   $("prog-mode").textContent = p.mode_name + (p.waiting ? " (waiting)" : "") + (p.stepping_to_breakpoint ? " (to breakpoint)" : "");
   $("prog-pc").textContent = p.pc;
   $("prog-line").textContent = p.line ?? "-";
