@@ -97,3 +97,54 @@ def test_a_refused_tcp_connection_names_the_likely_fix():
     assert done.returncode == 3
     assert line == (f"opentmcl send: error: tcp://127.0.0.1:{port}: connection refused; is a TMCL server "
                     f"listening on port {port} (e.g. `opentmcl serve --tcp 127.0.0.1:{port}`)?")
+
+
+def _silent_server() -> tuple[socket.socket, list]:
+    """A real TCP peer that accepts and never answers (a module at another address)."""
+    server = socket.create_server(("127.0.0.1", 0))
+    held: list = []
+    threading.Thread(target=lambda: held.append(server.accept()), daemon=True).start()
+    return server, held
+
+
+@pytest.mark.parametrize("command", ["load", "run", "debug"])
+def test_no_reply_while_finding_the_module_type_does_not_send_the_user_to_module(tmp_path, command):
+    """Issue 15 item 5: "for no reply name the address, baud rate and host address to check". When
+    the version request (136) goes unanswered, giving --module would only move the same silence to
+    the next request: the line is the no-reply error with its checks, once, and no "give --module"."""
+    source = tmp_path / "p.tmc"
+    source.write_text("STOP\n")
+    server, held = _silent_server()
+    try:
+        done = cli(command, str(source), "--to", f"tcp://127.0.0.1:{server.getsockname()[1]}",
+                   "--address", "5", "--timeout", "0.3")
+    finally:
+        server.close()
+        for conn, _ in held:
+            conn.close()
+    line = one_line(done)
+    assert done.returncode == 3
+    assert "give --module" not in line and "cannot tell the module type" not in line
+    assert "no reply from module 5" in line and line.count("check ") == 1 and "GP66" in line
+
+
+def test_a_server_that_closes_at_once_names_the_likely_fix():
+    """Issue 15 item 5: "one line, the cause once, and the likely fix". `opentmcl serve` closes a
+    client beyond --max-clients at once (docs/endpoints.md); the client's line says what to check."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def accept_and_close():
+        conn, _ = server.accept()
+        conn.shutdown(socket.SHUT_WR)   # an orderly close: the client reads end of stream
+        time.sleep(2)
+        conn.close()
+
+    threading.Thread(target=accept_and_close, daemon=True).start()
+    try:
+        done = cli("send", "GAP 1, 0", "--to", f"tcp://127.0.0.1:{server.getsockname()[1]}", "--timeout", "1")
+    finally:
+        server.close()
+    line = one_line(done)
+    assert done.returncode == 3
+    assert "the server closed the connection; check that it is still running" in line
+    assert "--max-clients" in line

@@ -53,7 +53,9 @@ class TcpTransport(StreamTransport):
         except OSError as exc:
             raise TmclConnectionError(link_error(self.name, "receiving", exc)) from None
         if not chunk:
-            raise TmclConnectionError(f"{self.name}: connection closed by the server")
+            raise TmclConnectionError(
+                f"{self.name}: the server closed the connection; check that it is still running and "
+                "has room for another client (opentmcl serve --max-clients), then connect again")
         return chunk
 
     def reset_input(self) -> None:
