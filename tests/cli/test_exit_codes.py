@@ -141,3 +141,16 @@ def test_help_epilog_lists_every_status():
     for code in range(5):
         assert f"\n  {code}  " in block
     assert "please report" in block and "no reply" in block and "error status" in block
+
+
+@pytest.mark.parametrize("kind", ["missing", "directory"])
+def test_2_for_a_profile_check_file_that_cannot_be_read(tmp_path, kind):
+    """Issue 15 item 4: "2 usage/bad input ... (and for `replay`-like checks, the code the command
+    documents)": `profile check` documents 1 for a file with errors; a FILE that cannot be read at
+    all is bad input, 2, with the one-line `opentmcl profile: error:` form, as `replay` does."""
+    path = tmp_path / "p.toml"
+    if kind == "directory":
+        path.mkdir()
+    done = cli("profile", "check", str(path))
+    assert done.returncode == 2
+    assert one_line(done).startswith(f"opentmcl profile: error: cannot read {path}: ")
