@@ -148,3 +148,23 @@ def test_a_server_that_closes_at_once_names_the_likely_fix():
     assert done.returncode == 3
     assert "the server closed the connection; check that it is still running" in line
     assert "--max-clients" in line
+
+
+@pytest.mark.parametrize("command", [("demo", "--scenario"), ("run", "PROG", "--scenario"),
+                                     ("serve", "-m", "TMCM-6212", "--tcp", "127.0.0.1:0", "--scenario")])
+@pytest.mark.parametrize("kind", ["missing", "syntax"])
+def test_a_scenario_file_error_names_the_file_once(tmp_path, command, kind):
+    """Issue 15 item 5: "one line, the cause once". `demo --scenario missing.toml` said `cannot use
+    scenario missing.toml: cannot read scenario missing.toml: ...`: the file is named once."""
+    program = tmp_path / "p.tmc"
+    program.write_text("STOP\n")
+    scenario = tmp_path / "world.toml"
+    if kind == "syntax":
+        scenario.write_text("this is = = not toml\n")
+    args = [str(program) if a == "PROG" else a for a in command]
+    done = cli(*args, str(scenario))
+    line = one_line(done)
+    assert done.returncode == 2 and line.count(str(scenario)) == 1, line
+    if kind == "missing":
+        assert line.endswith(f"cannot read scenario {scenario}: No such file or directory")
+

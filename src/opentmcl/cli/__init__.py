@@ -32,6 +32,13 @@ class CliError(Exception):
         self.code = code
 
 
+def about_file(path: object, exc: BaseException, what: str) -> str:
+    """`exc`'s message about the file `path`, naming the file once: as it is when it names the
+    file already (a read or syntax error), else after ``cannot load WHAT PATH:``."""
+    text = str(exc.args[0] if isinstance(exc, KeyError) and exc.args else exc)
+    return text if str(path) in text else f"cannot load {what} {path}: {text}"
+
+
 def same_file(a: str, b: str) -> bool:
     """Do two paths name one file (so writing one would destroy the other)?"""
     if a == "-" or b == "-":

@@ -19,7 +19,7 @@ import threading
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
-from . import CliError
+from . import CliError, about_file
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
@@ -133,7 +133,7 @@ def load_scenario(path: str | None) -> Scenario | None:
     try:
         return load(path)
     except (OSError, ValueError, KeyError) as exc:
-        raise CliError(f"cannot load scenario {path}: {exc}") from None
+        raise CliError(about_file(path, exc, "scenario")) from None
 
 
 def build_modules(args: argparse.Namespace) -> list:
