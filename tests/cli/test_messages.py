@@ -168,3 +168,27 @@ def test_a_scenario_file_error_names_the_file_once(tmp_path, command, kind):
     if kind == "missing":
         assert line.endswith(f"cannot read scenario {scenario}: No such file or directory")
 
+
+
+def test_bytes_that_are_no_reply_name_the_likely_fix():
+    """Issue 15 item 5: "the cause once, and the likely fix". A peer that answers nine bytes with a
+    wrong checksum (TMCM-6212 manual 3.1.1
+    (3.1.1: "adding up all bytes (including the module address byte) using 8-bit addition") is no TMCL module at that baud rate: exit 3, and the line says what to check."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def answer_garbage():
+        conn, _ = server.accept()
+        conn.recv(9)
+        conn.sendall(b"\xff" * 9)
+        time.sleep(2)
+        conn.close()
+
+    threading.Thread(target=answer_garbage, daemon=True).start()
+    try:
+        done = cli("send", "GAP 1, 0", "--to", f"tcp://127.0.0.1:{server.getsockname()[1]}", "--timeout", "1")
+    finally:
+        server.close()
+    line = one_line(done)
+    assert done.returncode == 3 and "reply with wrong checksum: ff ff ff ff ff ff ff ff ff" in line
+    assert line.endswith("check the baud rate (serial), that the port or socket leads to a TMCL module "
+                         "and that one host talks at a time")

@@ -139,11 +139,15 @@ def status_hint(exc: BaseException, args: object) -> str:
 
 
 def hint_for(exc: BaseException, args: object) -> str:
-    """A likely fix appended to the message of a no-reply error or an error status, else ""."""
-    from ..host.errors import TmclTimeout
+    """A likely fix appended to the message of a no-reply error, bytes that are no reply or an
+    error status, else ""."""
+    from ..host.errors import TmclProtocolError, TmclTimeout
 
     if "check " in str(exc) or " see `" in str(exc):
         return ""
+    if isinstance(_root(exc), TmclProtocolError):
+        return ("; bytes that are no TMCL reply: check the baud rate (serial), that the port or socket "
+                "leads to a TMCL module and that one host talks at a time")
     if not isinstance(_root(exc), TmclTimeout):
         return status_hint(exc, args)
     return "; " + no_reply_hint(getattr(args, "url", None), getattr(args, "address", None),
