@@ -171,9 +171,9 @@ def test_a_scenario_file_error_names_the_file_once(tmp_path, command, kind):
 
 
 def test_bytes_that_are_no_reply_name_the_likely_fix():
-    """Issue 15 item 5: "the cause once, and the likely fix". A peer that answers nine bytes with a
-    wrong checksum (TMCM-6212 manual 3.1.1
-    (3.1.1: "adding up all bytes (including the module address byte) using 8-bit addition") is no TMCL module at that baud rate: exit 3, and the line says what to check."""
+    """Issue 15 item 5: "the cause once, and the likely fix". A peer that answers nine bytes whose
+    checksum is wrong (TMCM-6212 manual 3.1.1: "adding up all bytes (including the module address
+    byte) using 8-bit addition") is no TMCL module at that baud rate: exit 3, and what to check."""
     server = socket.create_server(("127.0.0.1", 0))
 
     def answer_garbage():
