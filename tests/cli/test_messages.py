@@ -192,3 +192,19 @@ def test_bytes_that_are_no_reply_name_the_likely_fix():
     assert done.returncode == 3 and "reply with wrong checksum: ff ff ff ff ff ff ff ff ff" in line
     assert line.endswith("check the baud rate (serial), that the port or socket leads to a TMCL module "
                          "and that one host talks at a time")
+
+
+@pytest.mark.parametrize("command", [("serve", "-m", "TMCM-6212"), ("proxy", "--to", SIM)])
+def test_a_tcp_port_in_use_names_the_likely_fix_without_the_errno(command):
+    """Issue 15 item 5: "one line, the cause once, and the likely fix". A port another program
+    listens on said `cannot start server: [Errno 98] Address already in use`."""
+    held = socket.create_server(("127.0.0.1", 0))
+    spec = f"127.0.0.1:{held.getsockname()[1]}"
+    try:
+        done = cli(*command, "--tcp", spec)
+    finally:
+        held.close()
+    line = one_line(done)
+    assert done.returncode == 2 and "Errno" not in line
+    assert f"Address already in use (--tcp {spec}); another program" in line
+    assert line.endswith("listens there: stop it or choose another port")

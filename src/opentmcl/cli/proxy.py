@@ -17,7 +17,7 @@ import sys
 import threading
 from typing import TYPE_CHECKING
 
-from . import CliError
+from . import CliError, start_error
 from .exits import NO_REPLY
 
 if TYPE_CHECKING:
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         proxy.start()
     except OSError as exc:
-        raise CliError(f"cannot start proxy: {exc}") from None
+        raise start_error("proxy", exc, args.tcp) from None
     stop = threading.Event()
     previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:

@@ -19,7 +19,7 @@ import threading
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
-from . import CliError, about_file
+from . import CliError, about_file, start_error
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
@@ -303,7 +303,7 @@ def _run(args: argparse.Namespace) -> int:
         server = build_server(args)
         server.start()
     except OSError as exc:
-        raise CliError(f"cannot start server: {exc}") from None
+        raise start_error("server", exc, args.tcp) from None
     except ImportError as exc:
         raise CliError(f"cannot start server: {exc}") from None
     except Exception as exc:  # python-can reports a missing interface with its own errors
