@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
                     "warning: %s reached its size limit; relaying goes on, capturing stopped", args.log)
             error = getattr(proxy.upstream, "error", None)
             if error:
-                if args.to.startswith("tcp://") and "closed" in error:  # e.g. serve's idle timeout
+                if args.to.startswith("tcp://") and "closed" in error and "--idle-timeout" not in error:  # e.g. serve's idle timeout
                     error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
                 print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
                 return NO_REPLY   # the module's link broke (docs/cli.md)

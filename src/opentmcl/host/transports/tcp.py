@@ -54,8 +54,9 @@ class TcpTransport(StreamTransport):
             raise TmclConnectionError(link_error(self.name, "receiving", exc)) from None
         if not chunk:
             raise TmclConnectionError(
-                f"{self.name}: the server closed the connection; check that it is still running and "
-                "has room for another client (opentmcl serve --max-clients), then connect again")
+                f"{self.name}: connection closed by the server; check that it is still running, has room "
+                "for another client and keeps idle ones (opentmcl serve --max-clients, --idle-timeout 0), "
+                "then connect again")
         return chunk
 
     def reset_input(self) -> None:
