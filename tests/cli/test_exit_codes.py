@@ -141,3 +141,34 @@ def test_help_epilog_lists_every_status():
     for code in range(5):
         assert f"\n  {code}  " in block
     assert "please report" in block and "no reply" in block and "error status" in block
+
+
+@pytest.mark.parametrize("kind", ["missing", "directory"])
+def test_2_for_a_profile_check_file_that_cannot_be_read(tmp_path, kind):
+    """Issue 15 item 4: "2 usage/bad input ... (and for `replay`-like checks, the code the command
+    documents)": `profile check` documents 1 for a file with errors; a FILE that cannot be read at
+    all is bad input, 2, with the one-line `opentmcl profile: error:` form, as `replay` does."""
+    path = tmp_path / "p.toml"
+    if kind == "directory":
+        path.mkdir()
+    done = cli("profile", "check", str(path))
+    assert done.returncode == 2
+    assert one_line(done).startswith(f"opentmcl profile: error: cannot read {path}: ")
+
+
+@pytest.mark.parametrize(("instruction", "url", "status", "fix"), [
+    ("SAP 4, 0, 99999999", SIM, "status 4 (Invalid value)",
+     "check the value, motor and bank against the module's ranges: see `opentmcl profile show TMCM-6212`"),
+    ("SAP 250, 0, 1", "sim://PD86-1180", "status 3 (Wrong type)",
+     "the module has no such type or parameter number: see `opentmcl profile show PD86-1180`"),
+    ("200, 0, 0, 0", SIM, "status 2 (Invalid command)",
+     "the module has no such command: check the command number in its manual"),
+])
+def test_4_error_status_names_the_likely_fix(instruction, url, status, fix):
+    """Issue 15 item 5: "Errors that help: one line, the cause once, and the likely fix". The
+    status codes of TMCM-6212 manual 3.2.1 (table 4: 2 Invalid command, 3 Wrong type, 4 Invalid
+    value) each end with what to check; the module's ranges are in `opentmcl profile show`."""
+    done = cli("send", instruction, "--to", url)
+    line = one_line(done)
+    assert done.returncode == 4 and status in line and line.endswith(f"at module 1; {fix}"), line
+    assert line.count(status) == 1

@@ -97,3 +97,115 @@ def test_a_refused_tcp_connection_names_the_likely_fix():
     assert done.returncode == 3
     assert line == (f"opentmcl send: error: tcp://127.0.0.1:{port}: connection refused; is a TMCL server "
                     f"listening on port {port} (e.g. `opentmcl serve --tcp 127.0.0.1:{port}`)?")
+
+
+def _silent_server() -> tuple[socket.socket, list]:
+    """A real TCP peer that accepts and never answers (a module at another address)."""
+    server = socket.create_server(("127.0.0.1", 0))
+    held: list = []
+    threading.Thread(target=lambda: held.append(server.accept()), daemon=True).start()
+    return server, held
+
+
+@pytest.mark.parametrize("command", ["load", "run", "debug"])
+def test_no_reply_while_finding_the_module_type_does_not_send_the_user_to_module(tmp_path, command):
+    """Issue 15 item 5: "for no reply name the address, baud rate and host address to check". When
+    the version request (136) goes unanswered, giving --module would only move the same silence to
+    the next request: the line is the no-reply error with its checks, once, and no "give --module"."""
+    source = tmp_path / "p.tmc"
+    source.write_text("STOP\n")
+    server, held = _silent_server()
+    try:
+        done = cli(command, str(source), "--to", f"tcp://127.0.0.1:{server.getsockname()[1]}",
+                   "--address", "5", "--timeout", "0.3")
+    finally:
+        server.close()
+        for conn, _ in held:
+            conn.close()
+    line = one_line(done)
+    assert done.returncode == 3
+    assert "give --module" not in line and "cannot tell the module type" not in line
+    assert "no reply from module 5" in line and line.count("check ") == 1 and "GP66" in line
+
+
+def test_a_server_that_closes_at_once_names_the_likely_fix():
+    """Issue 15 item 5: "one line, the cause once, and the likely fix". `opentmcl serve` closes a
+    client beyond --max-clients at once (docs/endpoints.md); the client's line says what to check."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def accept_and_close():
+        conn, _ = server.accept()
+        conn.shutdown(socket.SHUT_WR)   # an orderly close: the client reads end of stream
+        time.sleep(2)
+        conn.close()
+
+    threading.Thread(target=accept_and_close, daemon=True).start()
+    try:
+        done = cli("send", "GAP 1, 0", "--to", f"tcp://127.0.0.1:{server.getsockname()[1]}", "--timeout", "1")
+    finally:
+        server.close()
+    line = one_line(done)
+    assert done.returncode == 3
+    assert line.endswith(": connection closed by the server; check that it is still running, has room for "
+                         "another client and keeps idle ones (opentmcl serve --max-clients, --idle-timeout 0), "
+                         "then connect again")
+
+
+@pytest.mark.parametrize("command", [("demo", "--scenario"), ("run", "PROG", "--scenario"),
+                                     ("serve", "-m", "TMCM-6212", "--tcp", "127.0.0.1:0", "--scenario")])
+@pytest.mark.parametrize("kind", ["missing", "syntax"])
+def test_a_scenario_file_error_names_the_file_once(tmp_path, command, kind):
+    """Issue 15 item 5: "one line, the cause once". `demo --scenario missing.toml` said `cannot use
+    scenario missing.toml: cannot read scenario missing.toml: ...`: the file is named once."""
+    program = tmp_path / "p.tmc"
+    program.write_text("STOP\n")
+    scenario = tmp_path / "world.toml"
+    if kind == "syntax":
+        scenario.write_text("this is = = not toml\n")
+    args = [str(program) if a == "PROG" else a for a in command]
+    done = cli(*args, str(scenario))
+    line = one_line(done)
+    assert done.returncode == 2 and line.count(str(scenario)) == 1, line
+    if kind == "missing":
+        assert line.endswith(f"cannot read scenario {scenario}: No such file or directory")
+
+
+
+def test_bytes_that_are_no_reply_name_the_likely_fix():
+    """Issue 15 item 5: "the cause once, and the likely fix". A peer that answers nine bytes whose
+    checksum is wrong (TMCM-6212 manual 3.1.1: "adding up all bytes (including the module address
+    byte) using 8-bit addition") is no TMCL module at that baud rate: exit 3, and what to check."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def answer_garbage():
+        conn, _ = server.accept()
+        conn.recv(9)
+        conn.sendall(b"\xff" * 9)
+        time.sleep(2)
+        conn.close()
+
+    threading.Thread(target=answer_garbage, daemon=True).start()
+    try:
+        done = cli("send", "GAP 1, 0", "--to", f"tcp://127.0.0.1:{server.getsockname()[1]}", "--timeout", "1")
+    finally:
+        server.close()
+    line = one_line(done)
+    assert done.returncode == 3 and "reply with wrong checksum: ff ff ff ff ff ff ff ff ff" in line
+    assert line.endswith("check the baud rate (serial), that the port or socket leads to a TMCL module "
+                         "and that one host talks at a time")
+
+
+@pytest.mark.parametrize("command", [("serve", "-m", "TMCM-6212"), ("proxy", "--to", SIM)])
+def test_a_tcp_port_in_use_names_the_likely_fix_without_the_errno(command):
+    """Issue 15 item 5: "one line, the cause once, and the likely fix". A port another program
+    listens on said `cannot start server: [Errno 98] Address already in use`."""
+    held = socket.create_server(("127.0.0.1", 0))
+    spec = f"127.0.0.1:{held.getsockname()[1]}"
+    try:
+        done = cli(*command, "--tcp", spec)
+    finally:
+        held.close()
+    line = one_line(done)
+    assert done.returncode == 2 and "Errno" not in line
+    assert f"Address already in use (--tcp {spec}); another program" in line
+    assert line.endswith("listens there: stop it or choose another port")

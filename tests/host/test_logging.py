@@ -61,13 +61,20 @@ def test_can_frames_have_no_address_byte_and_no_checksum():
 
 
 def test_what_is_not_one_frame_is_shown_as_bytes_only():
-    """A wrong checksum, a part of a frame and the version string (command 136 type 0: host
-    address and eight characters, manual 3.6.36) are not decoded as a reply."""
+    """A wrong checksum and a part of a frame are not decoded as a reply."""
     bad = MVP[:8] + bytes([(MVP[8] + 1) & 0xFF])
     assert frame_text(bad) == f"[{bad.hex(' ')}]"
     assert frame_text(MVP[:5]) == f"[{MVP[:5].hex(' ')}]"
+
+
+def test_the_version_string_reply_is_text_plus_hex():
+    """Issue 15 item 3: "every frame at DEBUG as TMCL text plus hex". TMCM-6212 manual table 13:
+    136 type 0 "Return firmware version in string format (special reply)": the host address and
+    eight characters, which the log shows as text too; the same bytes sent as a request are not."""
     version = b"\x02" + b"6212V105"
-    assert frame_text(version, request=False) == f"[{version.hex(' ')}]"
+    assert frame_text(version, request=False) == f'version "6212V105" to 2  [{version.hex(" ")}]'
+    assert frame_text(version, request=True) == f"[{version.hex(' ')}]"
+    assert frame_text(b"\x02" + b"6212V10\x1f", request=False).startswith("[")   # not printable
 
 
 def test_nothing_is_formatted_while_debug_is_off(monkeypatch, caplog):

@@ -32,6 +32,24 @@ class CliError(Exception):
         self.code = code
 
 
+def about_file(path: object, exc: BaseException, what: str) -> str:
+    """`exc`'s message about the file `path`, naming the file once: as it is when it names the
+    file already (a read or syntax error), else after ``cannot load WHAT PATH:``."""
+    text = str(exc.args[0] if isinstance(exc, KeyError) and exc.args else exc)
+    return text if str(path) in text else f"cannot load {what} {path}: {text}"
+
+
+def start_error(what: str, exc: OSError, tcp: str | None) -> CliError:
+    """`cannot start WHAT: cause` without the errno, and for an address in use the likely fix."""
+    import errno
+
+    text = f"cannot start {what}: {exc.strerror or exc}"
+    if exc.errno == errno.EADDRINUSE:
+        text += (f" (--tcp {tcp})" if tcp else "") + ("; another program (an earlier `opentmcl serve` or "
+                                                      "`proxy`?) listens there: stop it or choose another port")
+    return CliError(text)
+
+
 def same_file(a: str, b: str) -> bool:
     """Do two paths name one file (so writing one would destroy the other)?"""
     if a == "-" or b == "-":

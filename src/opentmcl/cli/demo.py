@@ -9,7 +9,7 @@ import argparse
 import math
 from typing import TYPE_CHECKING
 
-from . import CliError
+from . import CliError, about_file
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
@@ -102,7 +102,7 @@ def _world_demo(args: argparse.Namespace) -> int:
     except KeyError as exc:
         raise CliError(str(exc.args[0] if exc.args else exc)) from None
     except ValueError as exc:
-        raise CliError(f"cannot use scenario {args.scenario}: {exc}") from None
+        raise CliError(about_file(args.scenario, exc, "scenario")) from None
     _request_all(vm)
     trace = Trace(_shown_axes(args.axes, vm.profile.axes) if args.axes else None)
     trace.record(vm, args.duration, args.interval)

@@ -106,12 +106,50 @@ def no_reply_hint(url: str | None, address: int | None, host_address: int | None
     return "check " + ", ".join(parts[:-1]) + " and " + parts[-1]
 
 
-def hint_for(exc: BaseException, args: object) -> str:
-    """A likely fix appended to the message of a no-reply error, else ""."""
-    from ..host.errors import TmclTimeout
+# What to check for an error status (TMCM-6212 manual 3.2.1, table 4); the manual names no fix
+# for 5 (EEPROM locked) and 6 (not available), so those get none (docs/assumptions.md).
+_STATUS_CHECKS = {
+    1: "the frame arrived damaged: check the cabling, the baud rate and that one host talks at a time",
+    2: "the module has no such command: check the command number in its manual",
+    3: "the module has no such type or parameter number: see `opentmcl profile show {module}`",
+    4: "check the value, motor and bank against the module's ranges: see `opentmcl profile show {module}`",
+}
 
-    if not isinstance(_root(exc), TmclTimeout) or "check " in str(exc):
+
+def _module_of(args: object) -> str:
+    """The module type the command names (--module, a sim:// URL), else the placeholder NAME."""
+    given = getattr(args, "module", None)
+    if isinstance(given, str) and given:
+        return given
+    url = getattr(args, "url", None) or ""
+    if url.lower().startswith("sim://"):
+        name = urllib.parse.urlsplit(url).netloc
+        return name or "NAME"
+    return "NAME"
+
+
+def status_hint(exc: BaseException, args: object) -> str:
+    """The likely fix for an error status a module answered, else ""."""
+    from ..host.errors import TmclStatusError
+
+    root = _root(exc)
+    if not isinstance(root, TmclStatusError) or root.status not in _STATUS_CHECKS:
         return ""
+    return "; " + _STATUS_CHECKS[root.status].format(module=_module_of(args))
+
+
+def hint_for(exc: BaseException, args: object) -> str:
+    """A likely fix appended to the message of a no-reply error, bytes that are no reply or an
+    error status, else ""."""
+    from ..host.errors import TmclProtocolError, TmclTimeout
+
+    if "check " in str(exc) or " see `" in str(exc):
+        return ""
+    if isinstance(_root(exc), TmclProtocolError):
+        return ("; bytes that are no TMCL reply: check the baud rate (serial), that the port or socket "
+                "leads to a TMCL module and that one host talks at a time")
+    if not isinstance(_root(exc), TmclTimeout):
+        return status_hint(exc, args)
     return "; " + no_reply_hint(getattr(args, "url", None), getattr(args, "address", None),
                                 getattr(args, "host_address", None))
 

@@ -105,13 +105,16 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def module_name(module: Module, given: str | None) -> str:
-    """The module type: --module, else the profile found from the version string (136)."""
-    from ..host import TmclError
+    """The module type: --module, else the profile found from the version string (136). A module
+    that does not answer is that error (its own hint, exit 3): --module would not help."""
+    from ..host import TmclConnectionError, TmclError, TmclTimeout
 
     if given:
         return given
     try:
         return module.profile.name
+    except (TmclTimeout, TmclConnectionError):
+        raise
     except (TmclError, KeyError) as exc:
         raise CliError(f"cannot tell the module type ({exc}); give --module") from None
 

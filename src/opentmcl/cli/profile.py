@@ -43,6 +43,11 @@ def run_check(args: argparse.Namespace) -> int:
     from ..modules.profile import builtin_raw, parse_profile
     from ..modules.profile_file import ProfileError, resolve, validate
 
+    try:  # a FILE that cannot be read is bad input (2, docs/cli.md), not a file with errors (1)
+        with open(args.file, "rb"):
+            pass
+    except OSError as exc:
+        raise CliError(f"cannot read {args.file}: {exc.strerror or exc}") from None
     try:
         data = resolve(args.file, builtin_raw)
     except ProfileError as exc:

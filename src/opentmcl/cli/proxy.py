@@ -17,7 +17,7 @@ import sys
 import threading
 from typing import TYPE_CHECKING
 
-from . import CliError
+from . import CliError, start_error
 from .exits import NO_REPLY
 
 if TYPE_CHECKING:
@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         proxy.start()
     except OSError as exc:
-        raise CliError(f"cannot start proxy: {exc}") from None
+        raise start_error("proxy", exc, args.tcp) from None
     stop = threading.Event()
     previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
                     "warning: %s reached its size limit; relaying goes on, capturing stopped", args.log)
             error = getattr(proxy.upstream, "error", None)
             if error:
-                if args.to.startswith("tcp://") and "closed" in error:  # e.g. serve's idle timeout
+                if args.to.startswith("tcp://") and "closed" in error and "--idle-timeout" not in error:  # e.g. serve's idle timeout
                     error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
                 print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
                 return NO_REPLY   # the module's link broke (docs/cli.md)

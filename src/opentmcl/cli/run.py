@@ -22,7 +22,7 @@ import argparse
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
-from . import CliError
+from . import CliError, about_file
 from .load import add_connection_options, check_connection_options, download, read_program, target_name
 
 if TYPE_CHECKING:
@@ -65,7 +65,7 @@ def _scenario(path: str | None) -> Scenario | None:
     try:
         return load_scenario(path)
     except (OSError, ValueError, KeyError) as exc:
-        raise CliError(f"cannot load scenario {path}: {exc}") from None
+        raise CliError(about_file(path, exc, "scenario")) from None
 
 
 def open_target(args: argparse.Namespace) -> tuple[Client, str | None]:

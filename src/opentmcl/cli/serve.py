@@ -19,7 +19,7 @@ import threading
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
-from . import CliError
+from . import CliError, about_file, start_error
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
@@ -133,7 +133,7 @@ def load_scenario(path: str | None) -> Scenario | None:
     try:
         return load(path)
     except (OSError, ValueError, KeyError) as exc:
-        raise CliError(f"cannot load scenario {path}: {exc}") from None
+        raise CliError(about_file(path, exc, "scenario")) from None
 
 
 def build_modules(args: argparse.Namespace) -> list:
@@ -303,7 +303,7 @@ def _run(args: argparse.Namespace) -> int:
         server = build_server(args)
         server.start()
     except OSError as exc:
-        raise CliError(f"cannot start server: {exc}") from None
+        raise start_error("server", exc, args.tcp) from None
     except ImportError as exc:
         raise CliError(f"cannot start server: {exc}") from None
     except Exception as exc:  # python-can reports a missing interface with its own errors

@@ -61,10 +61,13 @@ def _reply_text(host: int, module: int, status: int, command: int, value: int) -
 def frame_text(data: bytes, frame_format: str = "serial", *, request: bool = True) -> str:
     """One frame as TMCL text plus its bytes in hex: a request as the manual writes the
     instruction (``MVP ABS, 0, 51200``), a reply as its addresses, status, command and value.
-    Anything else (part of a frame, a wrong checksum, ASCII text, the 136 version string) is
-    shown as its bytes only."""
+    The 136 version string reply (host address and eight characters, no checksum) is shown as
+    ``version "6212V105" to 2``; anything else (part of a frame, a wrong checksum, ASCII text) as
+    its bytes only."""
     raw = bytes(data)
     hexed = f"[{raw.hex(' ')}]"
+    if _is_version_reply(raw, frame_format, request):
+        return f'version "{raw[1:].decode("ascii")}" to {raw[0]}  {hexed}'
     if frame_format == "can":  # no address byte, no checksum on the request's CAN ID side
         fields = raw[:3] if request and len(raw) == 8 else raw[:4] if not request and len(raw) == 7 else None
         value = raw[3:7]
@@ -80,6 +83,13 @@ def frame_text(data: bytes, frame_format: str = "serial", *, request: bool = Tru
     if frame_format == "can":  # module address, status, command, value
         return f"{_reply_text(-1, fields[0], fields[1], fields[2], number)}  {hexed}"
     return f"{_reply_text(fields[0], fields[1], fields[2], fields[3], number)}  {hexed}"
+
+
+def _is_version_reply(raw: bytes, frame_format: str, request: bool) -> bool:
+    """A serial reply of the host address and eight printable characters whose last byte is no
+    checksum: the answer to 136 type 0 (a checksummed frame stays a reply)."""
+    return (not request and frame_format != "can" and len(raw) == 9 and sum(raw[:8]) & 0xFF != raw[8]
+            and all(0x20 <= b < 0x7F for b in raw[1:]))
 
 
 def log_frame(arrow: str, data: bytes, frame_format: str) -> None:

@@ -53,7 +53,10 @@ class TcpTransport(StreamTransport):
         except OSError as exc:
             raise TmclConnectionError(link_error(self.name, "receiving", exc)) from None
         if not chunk:
-            raise TmclConnectionError(f"{self.name}: connection closed by the server")
+            raise TmclConnectionError(
+                f"{self.name}: connection closed by the server; check that it is still running, has room "
+                "for another client and keeps idle ones (opentmcl serve --max-clients, --idle-timeout 0), "
+                "then connect again")
         return chunk
 
     def reset_input(self) -> None:
