@@ -70,19 +70,21 @@ def frame_text(data: bytes, frame_format: str = "serial", *, request: bool = Tru
         return f'version "{raw[1:].decode("ascii")}" to {raw[0]}  {hexed}'
     if frame_format == "can":  # no address byte, no checksum on the request's CAN ID side
         fields = raw[:3] if request and len(raw) == 8 else raw[:4] if not request and len(raw) == 7 else None
-        value = raw[3:7]
-    else:
-        whole = len(raw) == 9 and sum(raw[:8]) & 0xFF == raw[8]
-        fields = (raw[1:4] if request else raw[:4]) if whole else None
-        value = raw[4:8]
-    if fields is None:
+        if fields is None:
+            return hexed
+        number = int.from_bytes(raw[3:7], "big", signed=True)
+        if request:
+            return f"{_request_text(fields[0], fields[1], fields[2], number)}  {hexed}"
+        return f"{_reply_text(-1, fields[0], fields[1], fields[2], number)}  {hexed}"  # module, status, command
+    from ..protocol.frame import FrameError, decode_frame
+
+    try:
+        b1, b2, b3, b4, number = decode_frame(raw)   # the one nine-byte codec (manual 3.1)
+    except FrameError:
         return hexed
-    number = int.from_bytes(value, "big", signed=True)
-    if request:
-        return f"{_request_text(fields[0], fields[1], fields[2], number)}  {hexed}"
-    if frame_format == "can":  # module address, status, command, value
-        return f"{_reply_text(-1, fields[0], fields[1], fields[2], number)}  {hexed}"
-    return f"{_reply_text(fields[0], fields[1], fields[2], fields[3], number)}  {hexed}"
+    if request:   # address, command, type, motor/bank
+        return f"{_request_text(b2, b3, b4, number)}  {hexed}"
+    return f"{_reply_text(b1, b2, b3, b4, number)}  {hexed}"   # host, module, status, command
 
 
 def _is_version_reply(raw: bytes, frame_format: str, request: bool) -> bool:
