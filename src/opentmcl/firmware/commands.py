@@ -315,6 +315,8 @@ HANDLERS: dict[int, CommandHandler] = {
     25: cmd_ei, 26: cmd_di, 39: cmd_aco, 136: cmd_136, 137: cmd_137, 138: cmd_138, 139: cmd_139,
 }
 PROGRAM_CONTROL = frozenset(range(128, 136))
+PURE_READS = frozenset({6, 10, 13, 15, 31, 136})
+"""GAP, GGP, RFS type 2 (status), GIO, GCO, version: they change no engine's next event."""
 
 
 def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
@@ -325,7 +327,10 @@ def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, 
             return vm.store_instruction(command, type, motor, value)
         if command not in vm.opcodes:
             return _INVALID_COMMAND, 0
-        vm.sync()
+        if command in PURE_READS and (command != 13 or type == 2):
+            vm.sync_for_read()
+        else:
+            vm.sync()  # a write or a motion command: the engines' next events are looked up again
         if command in PROGRAM_CONTROL:
             return vm.program_control(command, type, value)
         return HANDLERS.get(command, cmd_no_effect)(vm, type, motor, value, program)

@@ -99,6 +99,7 @@ class GlobalParameters:
         if key == (0, 81):
             self._set_protection(self.ram[key], value)
         self.ram[key] = value
+        vm.forget_requests()  # GP66, GP76, GP87 are in the pre-bound replies (dispatch.py)
 
     def _set_lock(self, value: int) -> None:
         if value == LOCK_CODE:
@@ -146,6 +147,7 @@ class GlobalParameters:
             raise TmclStatus(3)
         stored = vm.eeprom.get_global(bank, number)
         self.ram[key] = p.default if stored is None else stored
+        vm.forget_requests()
 
     def _check_unlocked(self) -> None:
         if self.eeprom_locked:

@@ -15,11 +15,12 @@ import struct
 
 from ..modules.profile import ModuleProfile, load_profile
 from ..motion import CLOCK_HZ
-from ..protocol.frame import FRAME_LEN, Reply, Request, to_int32
+from ..protocol.frame import FRAME_LEN, Reply, encode_frame
 from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .axis import Axis
 from .commands import NO_SUPPRESS, StatusReply, execute
+from .dispatch import Entry, entry, reply_bytes
 from .eeprom import Eeprom
 from .globals import GlobalParameters
 from .interpreter import Interpreter
@@ -36,6 +37,9 @@ _ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
 EEPROM_MAGIC, MAGIC_VALUE = (0, 64), 0xE4
 _HEARTBEATS = (("serial", (0, 68)), ("can", (0, 82)))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
+_FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
+_FAST_INTERFACES = ("serial", "can")
+_MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
 
 
 class VirtualModule:
@@ -52,6 +56,8 @@ class VirtualModule:
         self.scenario = scenario
         self.now = 0
         self._events: list[bytes] = []
+        self._requests: dict[bytes, Entry] = {}
+        self._download_mode = False
         self.world = World(self, scenario)
         self.power_up()
 
@@ -96,6 +102,7 @@ class VirtualModule:
         self.ascii = AsciiInterface(self)
         # GP67 bit 0: start up in ASCII mode (PD28-1021 manual 3.4.4)
         self.ascii_mode = self.profile.ascii_mode and bool(self.globals.get_raw(0, 67) & 1)
+        self._requests = {}  # new axes, globals, I/O banks: the pre-bound handlers are stale
         self.download_mode = False
         self.download_pointer = 0
         self.program_counter = 0
@@ -109,6 +116,7 @@ class VirtualModule:
         self._engine_next: int | None = None
         self._axis_next: list[int | None] = [None] * len(self.axes)
         self._synced_at = -1
+        self._engines = [ax.engine for ax in self.axes]
         for ax in self.axes:
             ax.world = self.world
         self.world.power_up()
@@ -122,6 +130,7 @@ class VirtualModule:
             raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
         self._address_override = address
         self.globals.ram[_ADDRESS] = address
+        self.forget_requests()
 
     def stored_global(self, bank: int, number: int) -> int | None:
         """The value of a global parameter in the EEPROM (None when it is not stored there)."""
@@ -150,7 +159,25 @@ class VirtualModule:
         `interface` is the link the frame came over: "serial" (or "rs232", "rs485": the module
         answers only its address GP66 / secondary address GP87), "usb" (the address byte is
         ignored, the reply carries the module's own address) or "can". CAN requests restart the
-        CAN heartbeat GP82, the others the serial heartbeat GP68 (docs/endpoints.md)."""
+        CAN heartbeat GP82, the others the serial heartbeat GP68 (docs/endpoints.md).
+
+        A read that has a pre-bound handler skips the general path (dispatch.py): the table is
+        keyed by the whole frame, so one lookup checks length, address, command, type, motor
+        and checksum at once. Every other frame takes the general path (`_handle_general`)."""
+        try:
+            fast = self._requests.get(frame)
+        except TypeError:  # a mutable buffer: the general path reads it
+            fast = None
+        if fast is not None and (interface == "serial" or interface == "can"):
+            now = self.now
+            self._last_command[interface] = now  # touch(): restart the heartbeat
+            self._heartbeat_fired = False
+            if self._synced_at != now:
+                self._sync_engines()
+            return fast()
+        return self._handle_general(frame, interface)
+
+    def _handle_general(self, frame: bytes, interface: str) -> bytes:
         if len(frame) != FRAME_LEN:
             return b""
         target, command, type_, motor, value, check = _REQUEST.unpack(frame)
@@ -167,21 +194,44 @@ class VirtualModule:
         if out.__class__ is bytes:  # special reply format (136 type 0, 134)
             return out
         status, result = out
-        if status == _OK and command not in NO_SUPPRESS and self.globals.ram.get(_SUPPRESS) == 1:
-            return b""
+        if status == _OK:
+            if command not in NO_SUPPRESS and self.globals.ram.get(_SUPPRESS) == 1:
+                return b""
+            if command in _FAST_COMMANDS and interface in _FAST_INTERFACES and not self._download_mode:
+                self._bind(frame, command, type_, motor)
         return self._reply(status, command, result, address)
+
+    def _bind(self, frame: bytes, command: int, type_: int, motor: int) -> None:
+        """Keep the pre-bound handler of a read that has just succeeded on the general path."""
+        fast = entry(self, command, type_, motor)
+        if fast is not None:
+            if len(self._requests) >= _MAX_BOUND:  # a host varying the ignored value field
+                self._requests = {}
+            self._requests[bytes(frame)] = fast
+
+    def forget_requests(self) -> None:
+        """Drop the pre-bound handlers (an address, the host address or the module's state
+        changed); the general path binds them again on the next reads."""
+        self._requests = {}
+
+    @property
+    def download_mode(self) -> bool:
+        """Command 132 is storing instructions (3.6.36): no pre-bound handler answers then."""
+        return self._download_mode
+
+    @download_mode.setter
+    def download_mode(self, on: bool) -> None:
+        if on:
+            self._requests = {}
+        self._download_mode = on
 
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0) -> Reply | None:
         """Convenience for tests and tools: encode, handle, decode."""
-        raw = self.handle(Request(self.address, command, type, motor, value).encode())
-        return Reply.decode(raw, verify=False) if len(raw) == FRAME_LEN else None
+        raw = self.handle(encode_frame(self.address, command, type, motor, value))
+        return Reply(*_REPLY.unpack_from(raw)) if len(raw) == FRAME_LEN else None
 
     def _reply(self, status: int, command: int, value: int, address: int | None = None) -> bytes:
-        module = self.address if address is None else address
-        if not -0x8000_0000 <= value <= 0x7FFF_FFFF:
-            value = to_int32(value)
-        body = _REPLY.pack(self.host_address & 0xFF, module & 0xFF, status, command, value)
-        return body + bytes((sum(body) & 0xFF,))
+        return reply_bytes(self.host_address, self.address if address is None else address, status, command, value)
 
     def touch(self, interface: str = "serial") -> None:
         """A command arrived: restart that interface's heartbeat (GP68 serial / GP82 CAN)."""
@@ -246,13 +296,22 @@ class VirtualModule:
     def sync(self) -> None:
         """Bring every axis engine to `now` (before reading or commanding it); their next
         events are looked up again afterwards, since a command may change them."""
-        now = self.now
-        if self._synced_at != now:
-            for ax in self.axes:
-                if ax.engine.now < now:
-                    ax.engine.advance(now)
-            self._synced_at = now
+        if self._synced_at != self.now:
+            self._sync_engines()
         self._engines_dirty = True
+
+    def sync_for_read(self) -> None:
+        """Bring every axis engine to `now` for a pure read (GAP, GGP, GIO, GCO): advancing
+        an engine within its segment leaves its next event, so the engines stay clean."""
+        if self._synced_at != self.now:
+            self._sync_engines()
+
+    def _sync_engines(self) -> None:
+        now = self.now
+        for engine in self._engines:
+            if engine.now < now:
+                engine.advance(now)
+        self._synced_at = now
 
     def _engine_event(self) -> int | None:
         if self._engines_dirty:
