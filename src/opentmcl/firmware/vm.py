@@ -209,6 +209,10 @@ class VirtualModule:
                 self._requests = {}
             self._requests[bytes(frame)] = fast
 
+    def is_prebound(self, frame: bytes) -> bool:
+        """Whether `frame` is answered by a pre-bound handler (tests, benchmarks)."""
+        return bytes(frame) in self._requests
+
     def forget_requests(self) -> None:
         """Drop the pre-bound handlers (an address, the host address or the module's state
         changed); the general path binds them again on the next reads."""
