@@ -102,7 +102,6 @@ class VirtualModule:
         self.ascii = AsciiInterface(self)
         # GP67 bit 0: start up in ASCII mode (PD28-1021 manual 3.4.4)
         self.ascii_mode = self.profile.ascii_mode and bool(self.globals.get_raw(0, 67) & 1)
-        self._requests = {}  # new axes, globals, I/O banks: the pre-bound handlers are stale
         self.download_mode = False
         self.download_pointer = 0
         self.program_counter = 0
@@ -112,15 +111,20 @@ class VirtualModule:
         self._armed = 0              # motors whose arrival will be reported
         self._last_command = {"serial": self.now, "can": self.now}
         self._heartbeat_fired = False
-        self._engines_dirty = True
         self._engine_next: int | None = None
         self._axis_next: list[int | None] = [None] * len(self.axes)
-        self._synced_at = -1
-        self._engines = [ax.engine for ax in self.axes]
+        self._reset_request_path()
         for ax in self.axes:
             ax.world = self.world
         self.world.power_up()
         self.interpreter.power_up()
+
+    def _reset_request_path(self) -> None:
+        """New axes, globals and I/O banks: the pre-bound handlers are stale, the engines unsynced."""
+        self._requests = {}
+        self._engines = [ax.engine for ax in self.axes]
+        self._engines_dirty = True
+        self._synced_at = -1
 
     # --- addressing -------------------------------------------------------------
     def assign_address(self, address: int) -> None:
