@@ -24,7 +24,8 @@ if TYPE_CHECKING:
     from .vm import VirtualModule
 
 Entry = Callable[[], bytes]
-GAP, GGP, GIO = 6, 10, 15
+Setter = Callable[[int], None]
+SAP, GAP, SGP, GGP, GIO = 5, 6, 9, 10, 15
 OK = 100
 USER_BANK = 2
 # GGP values that are not plain RAM: 73 lock, 128 status, 129 download mode, 130 PC, 132 tick, 133 random
@@ -104,3 +105,15 @@ def entry(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | No
         return None
     head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
     return _packed(head, read)
+
+
+def setter(vm: VirtualModule, command: int, type_: int, motor: int) -> Setter | None:
+    """The pre-bound write of a SAP or SGP: the same setter `execute` reaches (`Axis.set`,
+    `GlobalParameters.set`, which check the value and raise the status), bound to its axis or bank."""
+    if command not in vm.opcodes:
+        return None
+    if command == SAP and 0 <= motor < len(vm.axes):
+        return partial(vm.axes[motor].set, type_)
+    if command == SGP and motor == USER_BANK:  # other banks: each SGP drops the tables anyway
+        return partial(vm.globals.set, motor, type_)
+    return None

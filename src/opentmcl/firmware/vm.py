@@ -20,7 +20,7 @@ from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .axis import Axis
 from .commands import NO_SUPPRESS, StatusReply, execute
-from .dispatch import Entry, entry, reply_bytes
+from .dispatch import Entry, Setter, entry, reply_bytes, setter
 from .eeprom import Eeprom
 from .globals import GlobalParameters
 from .interpreter import Interpreter
@@ -28,6 +28,7 @@ from .interrupts import Interrupts
 from .io import IOBanks
 from .program import ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
+from .status import TmclStatus
 from .world import ScenarioSource, World
 
 TICKS_PER_MS = CLOCK_HZ // 1000
@@ -39,6 +40,8 @@ _HEARTBEATS = (("serial", (0, 68)), ("can", (0, 82)))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
 _FAST_INTERFACES = ("serial", "can")
+_WRITE_COMMANDS = frozenset({5, 9})  # SAP, SGP: pre-bound setters (dispatch.py)
+_VALUE = struct.Struct(">i")
 _MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
 
 
@@ -57,6 +60,7 @@ class VirtualModule:
         self.now = 0
         self._events: list[bytes] = []
         self._requests: dict[bytes, Entry] = {}
+        self._writes: dict[bytes, Setter] = {}
         self._download_mode = False
         self.world = World(self, scenario)
         self.power_up()
@@ -122,6 +126,7 @@ class VirtualModule:
     def _reset_request_path(self) -> None:
         """New axes, globals and I/O banks: the pre-bound handlers are stale, the engines unsynced."""
         self._requests = {}
+        self._writes = {}
         self._engines = [ax.engine for ax in self.axes]
         self._engines_dirty = True
         self._synced_at = -1
@@ -184,6 +189,12 @@ class VirtualModule:
     def _handle_general(self, frame: bytes, interface: str) -> bytes:
         if len(frame) != FRAME_LEN:
             return b""
+        try:
+            write = self._writes.get(frame[:4])
+        except TypeError:
+            write = None
+        if write is not None and sum(frame[:8]) & 0xFF == frame[8] and interface in _FAST_INTERFACES:
+            return self._write(write, frame, interface)
         target, command, type_, motor, value, check = _REQUEST.unpack(frame)
         ram = self.globals.ram
         address = ram.get(_ADDRESS, 0)  # replies come from the address the request went to, even after SGP 66
@@ -201,26 +212,46 @@ class VirtualModule:
         if status == _OK:
             if command not in NO_SUPPRESS and self.globals.ram.get(_SUPPRESS) == 1:
                 return b""
-            if command in _FAST_COMMANDS and interface in _FAST_INTERFACES and not self._download_mode:
+            if interface in _FAST_INTERFACES and not self._download_mode:
                 self._bind(frame, command, type_, motor)
         return self._reply(status, command, result, address)
 
     def _bind(self, frame: bytes, command: int, type_: int, motor: int) -> None:
-        """Keep the pre-bound handler of a read that has just succeeded on the general path."""
-        fast = entry(self, command, type_, motor)
-        if fast is not None:
-            if len(self._requests) >= _MAX_BOUND:  # a host varying the ignored value field
-                self._requests = {}
-            self._requests[bytes(frame)] = fast
+        """Keep the pre-bound handler of a read (keyed by the frame) or of a SAP/SGP (keyed by its
+        first four bytes) that has just succeeded on the general path."""
+        if command in _FAST_COMMANDS:
+            fast = entry(self, command, type_, motor)
+            if fast is not None:
+                if len(self._requests) >= _MAX_BOUND:  # a host varying the ignored value field
+                    self._requests = {}
+                self._requests[bytes(frame)] = fast
+        elif command in _WRITE_COMMANDS:
+            write = setter(self, command, type_, motor)
+            if write is not None:
+                self._writes[bytes(frame[:4])] = write
+
+    def _write(self, write: Setter, frame: bytes, interface: str) -> bytes:
+        """A pre-bound SAP/SGP: what `execute` does for it, without the lookups."""
+        self.touch(interface)
+        self.sync()  # a write may change an engine's next event
+        command, address = frame[1], self.address  # the reply comes from the address before the write
+        try:
+            write(_VALUE.unpack_from(frame, 4)[0])
+        except TmclStatus as exc:
+            return self._reply(exc.status, command, 0, address)
+        if self.globals.ram.get(_SUPPRESS) == 1:  # kept although an SGP 255 drops the tables
+            return b""
+        return self._reply(_OK, command, 0, address)
 
     def is_prebound(self, frame: bytes) -> bool:
         """Whether `frame` is answered by a pre-bound handler (tests, benchmarks)."""
-        return bytes(frame) in self._requests
+        return bytes(frame) in self._requests or bytes(frame[:4]) in self._writes
 
     def forget_requests(self) -> None:
         """Drop the pre-bound handlers (an address, the host address or the module's state
         changed); the general path binds them again on the next reads."""
         self._requests = {}
+        self._writes = {}
 
     @property
     def download_mode(self) -> bool:
@@ -230,7 +261,7 @@ class VirtualModule:
     @download_mode.setter
     def download_mode(self, on: bool) -> None:
         if on:
-            self._requests = {}
+            self.forget_requests()
         self._download_mode = on
 
     def request(self, command: int, type: int = 0, motor: int = 0, value: int = 0) -> Reply | None:
