@@ -25,6 +25,7 @@ if TYPE_CHECKING:
 
 Entry = Callable[[], bytes]
 Setter = Callable[[int], None]
+Read = Callable[[], int]
 SAP, GAP, SGP, GGP, GIO = 5, 6, 9, 10, 15
 OK = 100
 USER_BANK = 2
@@ -44,7 +45,7 @@ def reply_bytes(host: int, module: int, status: int, command: int, value: int) -
     return _TAIL.pack(head, value, (sum(head) + value + (value >> 8) + (value >> 16) + (value >> 24)) & 0xFF)
 
 
-def _packed(head: bytes, read: Callable[[], int]) -> Entry:
+def _packed(head: bytes, read: Read) -> Entry:
     """A handler answering `read()` behind the fixed first four reply bytes."""
     head_sum, pack = sum(head), _TAIL.pack
 
@@ -56,7 +57,7 @@ def _packed(head: bytes, read: Callable[[], int]) -> Entry:
     return entry
 
 
-def _axis_read(vm: VirtualModule, number: int, motor: int) -> Callable[[], int] | None:
+def _axis_read(vm: VirtualModule, number: int, motor: int) -> Read | None:
     if not 0 <= motor < len(vm.axes):
         return None  # status 4 (commands._axis)
     ax = vm.axes[motor]
@@ -70,10 +71,10 @@ def _axis_read(vm: VirtualModule, number: int, motor: int) -> Callable[[], int] 
     attribute = _ENGINE_READS.get(number)
     if attribute is not None and (number < 135 or hasattr(e, attribute)):
         return partial(attrgetter(attribute), e)
-    return cast(Callable[[], int], partial(ax.ram.get, number, ax.params[number].default))
+    return cast("Read", partial(ax.ram.get, number, ax.params[number].default))
 
 
-def _global_read(vm: VirtualModule, number: int, bank: int) -> Callable[[], int] | None:
+def _global_read(vm: VirtualModule, number: int, bank: int) -> Read | None:
     if bank == USER_BANK:
         if not 0 <= number < len(vm.user_vars):
             return None
@@ -85,7 +86,7 @@ def _global_read(vm: VirtualModule, number: int, bank: int) -> Callable[[], int]
     return partial(vm.globals.ram.__getitem__, key)
 
 
-def _io_read(vm: VirtualModule, port: int, bank: int) -> Callable[[], int] | None:
+def _io_read(vm: VirtualModule, port: int, bank: int) -> Read | None:
     key = (bank, port)
     if port == 255 or key not in vm.io.ports:
         return None

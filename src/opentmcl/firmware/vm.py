@@ -41,7 +41,6 @@ _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
 _FAST_INTERFACES = ("serial", "can")
 _WRITE_COMMANDS = frozenset({5, 9})  # SAP, SGP: pre-bound setters (dispatch.py)
-_VALUE = struct.Struct(">i")
 _MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
 
 
@@ -61,6 +60,7 @@ class VirtualModule:
         self._events: list[bytes] = []
         self._requests: dict[bytes, Entry] = {}
         self._writes: dict[bytes, Setter] = {}
+        self._entries: dict[bytes, Entry | None] = {}
         self._download_mode = False
         self.world = World(self, scenario)
         self.power_up()
@@ -126,6 +126,7 @@ class VirtualModule:
     def _reset_request_path(self) -> None:
         """New axes, globals and I/O banks: the pre-bound handlers are stale, the engines unsynced."""
         self._requests = {}
+        self._entries = {}
         self._writes = {}
         self._engines = [ax.engine for ax in self.axes]
         self._engines_dirty = True
@@ -189,12 +190,6 @@ class VirtualModule:
     def _handle_general(self, frame: bytes, interface: str) -> bytes:
         if len(frame) != FRAME_LEN:
             return b""
-        try:
-            write = self._writes.get(frame[:4])
-        except TypeError:
-            write = None
-        if write is not None and sum(frame[:8]) & 0xFF == frame[8] and interface in _FAST_INTERFACES:
-            return self._write(write, frame, interface)
         target, command, type_, motor, value, check = _REQUEST.unpack(frame)
         ram = self.globals.ram
         address = ram.get(_ADDRESS, 0)  # replies come from the address the request went to, even after SGP 66
@@ -202,6 +197,10 @@ class VirtualModule:
             return b""
         if sum(frame[:8]) & 0xFF != check:
             return self._reply(_WRONG_CHECKSUM, command, 0, address)
+        if self._writes and interface in _FAST_INTERFACES:
+            write = self._writes.get(bytes(frame[:4]))
+            if write is not None:
+                return self._write(write, command, value, address, interface)
         self.touch("can" if interface == "can" else "serial")
         out = execute(self, command, type_, motor, value, program=False)
         if out is None:  # no reply (command 137)
@@ -220,7 +219,8 @@ class VirtualModule:
         """Keep the pre-bound handler of a read (keyed by the frame) or of a SAP/SGP (keyed by its
         first four bytes) that has just succeeded on the general path."""
         if command in _FAST_COMMANDS:
-            fast = entry(self, command, type_, motor)
+            shape = bytes(frame[:4])  # frames differing in the value field share one handler
+            fast = self._entries.get(shape) or self._entries.setdefault(shape, entry(self, command, type_, motor))
             if fast is not None:
                 if len(self._requests) >= _MAX_BOUND:  # a host varying the ignored value field
                     self._requests = {}
@@ -230,13 +230,12 @@ class VirtualModule:
             if write is not None:
                 self._writes[bytes(frame[:4])] = write
 
-    def _write(self, write: Setter, frame: bytes, interface: str) -> bytes:
+    def _write(self, write: Setter, command: int, value: int, address: int, interface: str) -> bytes:
         """A pre-bound SAP/SGP: what `execute` does for it, without the lookups."""
         self.touch(interface)
         self.sync()  # a write may change an engine's next event
-        command, address = frame[1], self.address  # the reply comes from the address before the write
         try:
-            write(_VALUE.unpack_from(frame, 4)[0])
+            write(value)
         except TmclStatus as exc:
             return self._reply(exc.status, command, 0, address)
         if self.globals.ram.get(_SUPPRESS) == 1:  # kept although an SGP 255 drops the tables
@@ -251,6 +250,7 @@ class VirtualModule:
         """Drop the pre-bound handlers (an address, the host address or the module's state
         changed); the general path binds them again on the next reads."""
         self._requests = {}
+        self._entries = {}
         self._writes = {}
 
     @property
