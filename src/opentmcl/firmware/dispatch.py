@@ -8,7 +8,8 @@ address, status, command, value MSB first, checksum) without the general path's 
 
 `entry()` answers None for every request it does not cover (a wrong type, a motor the module
 lacks, world-driven parameters, GAP 207 which clears flags, the GGPs whose values come from
-elsewhere, GIO 255); those keep taking the general path (`commands.execute`).
+elsewhere, GIO 255); those keep taking the general path (`commands.execute`). The world's axis
+numbers are read when a handler is bound: code that changes them must call `vm.forget_requests()`.
 """
 from __future__ import annotations
 
