@@ -203,6 +203,8 @@ class _Phase:
         i_lo = self.i0 + 1
         if i_hi < i_lo:
             return 0
+        if self.delta == 0:                      # constant velocity: every tick adds |v| >> 8
+            return (i_hi - i_lo + 1) * (self.w0 >> 8)
         rp, pp = self.ramp_period, self.pulse_period
         if pp >= rp:
             m = pp // rp
@@ -388,7 +390,8 @@ class Tmc429Ramp:
         self._pulse_div = 0
         self._ramp_div = 0
         self._mode = RAMP_MODE
-        self._cached_plan: _Plan | None = None   # _plan(None) of the present state
+        self._cached_plan: _Plan | None = None   # _plan(None) of the state at its phase's t0
+        self._plan_base = (0, 0, 0, 0)           # (x, acc, acc_dir, v) at that t0 (a linear phase)
 
     # ------------------------------------------------------------------ registers
     @property
@@ -1035,26 +1038,37 @@ class Tmc429Ramp:
 
     # ------------------------------------------------------------------ time
     def _jump(self, phase: _Phase | _Follow, t: int) -> None:
-        """Move the state to cycle t inside `phase` (closed form)."""
+        """Move the state to cycle t inside `phase` (closed form).
+
+        A linear phase of the cached plan is evaluated from its start (`_plan_base`) and the
+        plan stays cached: it is the closed form of the motion from t0 up to its event whatever
+        the instants it is read at, so a jump inside it costs one evaluation and no planning
+        (docs/motion.md "Lazy reads"). Any other phase starts at `now`."""
         if t <= self.now:
             return
-        self._cached_plan = None
         if isinstance(phase, _Follow):
+            self._cached_plan = None
             if t == phase.t0 + phase.end_offset:
                 self._follow_end(phase)
             else:
                 self._follow(t, None)
             return
+        cached = self._cached_plan
+        if cached is not None and cached[2] is phase:
+            x, acc, acc_dir, v = self._plan_base
+        else:
+            self._cached_plan = None
+            x, acc, acc_dir, v = self._x, self._acc, self._acc_dir, self._v
         i = t // phase.pulse_period
         if i >= phase.i_dir:
             total = phase.acc0 + phase.pulse_sum(i)
-            steps, self._acc = total >> 11, total & 2047
-            self._x = (self._x + phase.direction * steps) % self._modulus
+            steps, acc = total >> 11, total & 2047
+            x = (x + phase.direction * steps) % self._modulus
             if phase.direction:
-                self._acc_dir = phase.direction
-        k = t // phase.ramp_period - phase.j0
+                acc_dir = phase.direction
         if phase.delta != 0:
-            self._v = phase.direction * phase.w(k)
+            v = phase.direction * phase.w(t // phase.ramp_period - phase.j0)
+        self._x, self._acc, self._acc_dir, self._v = x, acc, acc_dir, v
         self.now = t
 
     def advance(self, until: int) -> None:
@@ -1077,8 +1091,21 @@ class Tmc429Ramp:
         (None: nothing changes without a new register write)."""
         if self._cached_plan is None:
             self._cached_plan = self._memo_plan()
+            self._plan_base = (self._x, self._acc, self._acc_dir, self._v)
         event, clamp, _phase = self._cached_plan
         return _min_opt(event, clamp)
+
+    def next_event_after(self, until: int) -> tuple[bool, int | None]:
+        """(True, what next_event() would say after advance(until)) when the cached plan is a
+        linear phase whose closed form holds up to `until` -- found without moving the state;
+        (False, None) otherwise (then advance and ask)."""
+        cached = self._cached_plan
+        if cached is None or until < self.now:
+            return False, None
+        event, clamp, phase = cached
+        if type(phase) is not _Phase or (event is not None and event <= until):
+            return False, None
+        return True, _min_opt(event, clamp)
 
     def _memo_plan(self) -> _Plan:
         """`_plan(None)`, memoised by the whole state relative to now (`_Memo`): the
@@ -1105,6 +1132,8 @@ class Tmc429Ramp:
         if until < self.now:
             raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
         out: list[tuple[int, int]] = []
+        if self._cached_plan is not None and self._cached_plan[2].t0 != self.now:
+            self._cached_plan = None     # its steps count from t0: list only those after now
         while self.now < until:
             if self._cached_plan is not None:
                 event, _clamp, phase = self._cached_plan

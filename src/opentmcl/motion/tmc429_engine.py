@@ -58,28 +58,58 @@ class Tmc429Engine(RampEngine):
     """
 
     def __init__(self, *, p_reduction: float = 0.01) -> None:
-        self.ramp = Tmc429Ramp(position_bits=POSITION_BITS)
+        self._ramp = Tmc429Ramp(position_bits=POSITION_BITS)
+        self._pending: int | None = None     # cycle of an `advance` not yet applied to the core
         self.p_reduction = p_reduction
         self._params = {"max_positioning_speed": 0, "max_acceleration": 0, "minimum_speed": 1,
                         "ramp_mode": 0, "ramp_divisor": 0, "pulse_divisor": 0}
-        self.ramp.set(v_min=1)
+        self._ramp.set(v_min=1)
         self._recompute_p()
 
-    # --- clock --------------------------------------------------------------------
+    # --- clock (lazy: docs/motion.md "Lazy reads") ----------------------------------
+    @property
+    def ramp(self) -> Tmc429Ramp:
+        """The TMC429 axis, brought to `now` first."""
+        if self._pending is not None:
+            self._catch_up()
+        return self._ramp
+
+    def _catch_up(self) -> None:
+        """Apply the stored `advance`: the core jumps to that cycle exactly (one closed-form
+        evaluation inside a cached linear phase, Tmc429Ramp._jump)."""
+        until, self._pending = self._pending, None
+        if until is not None:
+            self._ramp.advance(until)
+
     @property
     def now(self) -> int:
-        return self.ramp.now
+        p = self._pending
+        return self._ramp.now if p is None else p
 
     @now.setter
     def now(self, value: int) -> None:  # RampEngine declares `now` as a plain attribute
-        if value != self.ramp.now:
-            self.ramp.advance(value)
+        if value != self.now:
+            self.advance(value)
 
     def advance(self, until: int) -> None:
-        self.ramp.advance(until)
+        """Move to cycle `until`; only the cycle is stored, the core follows when the state is
+        read or written (every other member) -- exactly as if it had moved at once."""
+        if type(until) is not int:
+            self.ramp.advance(until)
+            return
+        if until < self.now:
+            raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
+        if until > self._ramp.now:
+            self._pending = until
 
     def next_event(self) -> int | None:
-        return self.ramp.next_event()
+        p = self._pending
+        if p is not None:
+            known, event = self._ramp.next_event_after(p)
+            if known:
+                return event
+            self._catch_up()
+        return self._ramp.next_event()
 
     def time_at_position(self, position: int) -> int | None:
         return self.ramp.time_at_position(position)
@@ -87,7 +117,9 @@ class Tmc429Engine(RampEngine):
     # --- state --------------------------------------------------------------------
     @property
     def position(self) -> int:
-        return _s32(self.ramp.x_actual)
+        if self._pending is not None:
+            self._catch_up()
+        return _s32(self._ramp.x_actual)
 
     @property
     def velocity(self) -> int:
