@@ -391,7 +391,8 @@ class Tmc429Ramp:
         self._ramp_div = 0
         self._mode = RAMP_MODE
         self._cached_plan: _Plan | None = None   # _plan(None) of the state at its phase's t0
-        self._plan_base = (0, 0, 0, 0)           # (x, acc, acc_dir, v) at that t0 (a linear phase)
+        self._plan_base: tuple[_Phase, int, int, int, int] | None = None
+        """(phase, x, acc, acc_dir, v) at the t0 of a cached linear phase `_jump_within` moved in."""
 
     # ------------------------------------------------------------------ registers
     @property
@@ -1038,27 +1039,42 @@ class Tmc429Ramp:
 
     # ------------------------------------------------------------------ time
     def _jump(self, phase: _Phase | _Follow, t: int) -> None:
-        """Move the state to cycle t inside `phase` (closed form).
-
-        A linear phase of the cached plan is evaluated from its start (`_plan_base`) and the
-        plan stays cached: it is the closed form of the motion from t0 up to its event whatever
-        the instants it is read at, so a jump inside it costs one evaluation and no planning
-        (docs/motion.md "Lazy reads"). Any other phase starts at `now`."""
+        """Move the state to cycle t inside `phase` (closed form)."""
         if t <= self.now:
             return
+        self._cached_plan = None
         if isinstance(phase, _Follow):
-            self._cached_plan = None
             if t == phase.t0 + phase.end_offset:
                 self._follow_end(phase)
             else:
                 self._follow(t, None)
             return
-        cached = self._cached_plan
-        if cached is not None and cached[2] is phase:
-            x, acc, acc_dir, v = self._plan_base
-        else:
-            self._cached_plan = None
-            x, acc, acc_dir, v = self._x, self._acc, self._acc_dir, self._v
+        base = self._plan_base
+        if base is not None and base[0] is phase:   # moved on by `_jump_within`: back to t0
+            _phase, self._x, self._acc, self._acc_dir, self._v = base
+        i = t // phase.pulse_period
+        if i >= phase.i_dir:
+            total = phase.acc0 + phase.pulse_sum(i)
+            steps, self._acc = total >> 11, total & 2047
+            self._x = (self._x + phase.direction * steps) % self._modulus
+            if phase.direction:
+                self._acc_dir = phase.direction
+        k = t // phase.ramp_period - phase.j0
+        if phase.delta != 0:
+            self._v = phase.direction * phase.w(k)
+        self.now = t
+
+    def _jump_within(self, phase: _Phase, t: int) -> None:
+        """`_jump` inside the linear phase of the cached plan, keeping the plan: the phase is the
+        closed form of the motion from its t0 up to its event, read at any cycle, so the state is
+        evaluated from the state at t0 (`_plan_base`, kept on the first such jump) and the next
+        advance or next_event needs no planning (docs/motion.md "Lazy reads")."""
+        if t <= self.now:
+            return
+        base = self._plan_base
+        if base is None or base[0] is not phase:    # the state is still at t0
+            base = self._plan_base = (phase, self._x, self._acc, self._acc_dir, self._v)
+        _phase, x, acc, acc_dir, v = base
         i = t // phase.pulse_period
         if i >= phase.i_dir:
             total = phase.acc0 + phase.pulse_sum(i)
@@ -1076,8 +1092,12 @@ class Tmc429Ramp:
         if until < self.now:
             raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
         while self.now < until:
-            if self._cached_plan is not None:
-                event, _clamp, phase = self._cached_plan   # the first event, valid for any until
+            cached = self._cached_plan
+            if cached is not None:
+                event, _clamp, phase = cached   # the first event, valid for any until
+                if (event is None or event > until) and type(phase) is _Phase:
+                    self._jump_within(phase, until)
+                    return
             else:
                 event, _clamp, phase = self._plan(until)
             if event is None or event > until:
@@ -1091,7 +1111,6 @@ class Tmc429Ramp:
         (None: nothing changes without a new register write)."""
         if self._cached_plan is None:
             self._cached_plan = self._memo_plan()
-            self._plan_base = (self._x, self._acc, self._acc_dir, self._v)
         event, clamp, _phase = self._cached_plan
         return _min_opt(event, clamp)
 

@@ -60,6 +60,7 @@ class Tmc429Engine(RampEngine):
     def __init__(self, *, p_reduction: float = 0.01) -> None:
         self._ramp = Tmc429Ramp(position_bits=POSITION_BITS)
         self._pending: int | None = None     # cycle of an `advance` not yet applied to the core
+        self._event: int | None = None       # what next_event() said last (None: unknown or never)
         self.p_reduction = p_reduction
         self._params = {"max_positioning_speed": 0, "max_acceleration": 0, "minimum_speed": 1,
                         "ramp_mode": 0, "ramp_divisor": 0, "pulse_divisor": 0}
@@ -92,24 +93,35 @@ class Tmc429Engine(RampEngine):
             self.advance(value)
 
     def advance(self, until: int) -> None:
-        """Move to cycle `until`; only the cycle is stored, the core follows when the state is
-        read or written (every other member) -- exactly as if it had moved at once."""
+        """Move to cycle `until`. Before the next event the engine last reported only the cycle is
+        stored; the core follows when the state is read or written (every other member), exactly
+        as if it had moved at once. At or after that event the core moves now."""
+        event = self._event
+        if event is not None and type(until) is int and until >= event:
+            self._pending = None          # an event is due: the core moves (and checks) now
+            self._ramp.advance(until)
+            return
         if type(until) is not int:
             self.ramp.advance(until)
             return
-        if until < self.now:
+        r = self._ramp
+        p = self._pending
+        if until < (r.now if p is None else p):
             raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
-        if until > self._ramp.now:
+        if until > r.now:
             self._pending = until
 
     def next_event(self) -> int | None:
         p = self._pending
-        if p is not None:
+        if p is None:
+            event = self._ramp.next_event()
+        else:
             known, event = self._ramp.next_event_after(p)
-            if known:
-                return event
-            self._catch_up()
-        return self._ramp.next_event()
+            if not known:
+                self._catch_up()
+                event = self._ramp.next_event()
+        self._event = event
+        return event
 
     def time_at_position(self, position: int) -> int | None:
         return self.ramp.time_at_position(position)
