@@ -1,10 +1,10 @@
-"""Lazy advance and reads of the TMC429 core and the PD86-1180 engine (docs/motion.md "Lazy reads").
+"""Jumps inside cached phases of the TMC429 core and the PD86-1180 engine (docs/motion-tmc429.md
+"Lazy reads").
 
 The ramp is the TMC4210/TMC429 ramp generator, datasheet ch. 6.1 (6.1.9 ramp_mode target
 velocity, 6.1.12 pulse generator; docs/motion-tmc429.md); PD86-1180 firmware manual ch. 5 maps
-AP0/AP1/AP3/AP4/AP5/AP8 onto it. Inside a cached linear phase the core jumps from the phase's
-start without re-planning, and `Tmc429Engine.advance` only stores the cycle until the state is
-read. The oracle is the per-tick model tests/motion/tmc429_reference.py: positions, velocities
+AP0/AP1/AP3/AP4/AP5/AP8 onto it. Inside the linear phase next_event() cached, `advance` jumps
+from the phase's start without re-planning, however often it is called. The oracle is the per-tick model tests/motion/tmc429_reference.py: positions, velocities
 (with the hidden fraction) and accumulators must be its values at every instant read, whether
 the instant is inside a phase, at its event, or after a register write in the middle of one.
 """
@@ -68,22 +68,6 @@ def test_steps_listed_after_lazy_jumps_are_the_models(regs, target, waits, after
     assert state(fast) == state(ref)
 
 
-def test_next_event_after_answers_only_inside_the_cached_phase():
-    """A cruise in velocity_mode (6.1.10.1: V_TARGET reached, nothing changes) is one phase
-    without an event; during an acceleration the answer is known up to the cycle before the
-    ramp reaches V_TARGET and not from that cycle (the event) on."""
-    r = Tmc429Ramp(position_bits=32)
-    r.set(mode=VELOCITY_MODE, v_max=2047, a_max=10, v_target=100)
-    assert r.next_event_after(0) == (False, None)           # nothing cached yet
-    event = r.next_event()
-    assert event == 32 * 2560                                # 100 * 256 / 10 ramp ticks of 32
-    assert r.next_event_after(event - 1) == (True, event)
-    assert r.next_event_after(event) == (False, None)
-    r.advance(event)
-    assert r.v_internal == 100 * 256 and r.next_event() is None
-    assert r.next_event_after(event + 10**9) == (True, None)
-
-
 # --- the PD86-1180 engine ---------------------------------------------------------------------
 MIRRORED = ("x_target", "v_min", "v_max", "a_max", "pmul", "pdiv", "pulse_div", "ramp_div", "mode")
 
@@ -136,8 +120,8 @@ def s32(x: int) -> int:
 @given(session)
 def test_engine_polled_lazily_matches_per_tick_model(steps):
     """PD86-1180 manual ch. 5: AP1 (actual position), AP3 (actual speed) and AP8 (position
-    reached) read while polling -- advances stored, next_event() asked or not, reads at
-    arbitrary cycles and right after MVP/ROR/SAP in the middle of a phase -- are the per-tick
+    reached) read while polling -- many advances inside one cached phase, next_event() asked or
+    not, reads at arbitrary cycles and right after MVP/ROR/SAP in the middle of a phase -- are the per-tick
     model's X_ACTUAL, V_ACTUAL and position reached at that cycle."""
     e, ref = engine(), ReferenceRamp(position_bits=32)
     mirror(e, ref, ("configure",))
@@ -190,11 +174,12 @@ def test_engine_reading_does_not_change_later_behaviour(steps):
     assert state(busy.ramp) == state(quiet.ramp)
 
 
-def test_engine_advance_rejects_the_past_at_once():
-    """Bad input gets a clear error when it is given, not at a later read: a stored advance
-    still counts as the present."""
+def test_engine_advance_rejects_the_past():
+    """Bad input gets a clear error: a cycle before the present one, also right after a jump
+    inside the cached phase."""
     e = engine()
     e.move_to(10_000)
+    e.next_event()
     e.advance(1000)
     e.advance(1000)                       # the same cycle again is fine
     with pytest.raises(ValueError, match="cannot go back in time"):

@@ -1114,18 +1114,6 @@ class Tmc429Ramp:
         event, clamp, _phase = self._cached_plan
         return _min_opt(event, clamp)
 
-    def next_event_after(self, until: int) -> tuple[bool, int | None]:
-        """(True, what next_event() would say after advance(until)) when the cached plan is a
-        linear phase whose closed form holds up to `until` -- found without moving the state;
-        (False, None) otherwise (then advance and ask)."""
-        cached = self._cached_plan
-        if cached is None or until < self.now:
-            return False, None
-        event, clamp, phase = cached
-        if type(phase) is not _Phase or (event is not None and event <= until):
-            return False, None
-        return True, _min_opt(event, clamp)
-
     def _memo_plan(self) -> _Plan:
         """`_plan(None)`, memoised by the whole state relative to now (`_Memo`): the
         registers, dx, the velocity, the accumulator and the phase of the tick clocks."""

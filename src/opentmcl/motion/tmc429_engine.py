@@ -58,70 +58,28 @@ class Tmc429Engine(RampEngine):
     """
 
     def __init__(self, *, p_reduction: float = 0.01) -> None:
-        self._ramp = Tmc429Ramp(position_bits=POSITION_BITS)
-        self._pending: int | None = None     # cycle of an `advance` not yet applied to the core
-        self._event: int | None = None       # what next_event() said last (None: unknown or never)
+        self.ramp = Tmc429Ramp(position_bits=POSITION_BITS)
         self.p_reduction = p_reduction
         self._params = {"max_positioning_speed": 0, "max_acceleration": 0, "minimum_speed": 1,
                         "ramp_mode": 0, "ramp_divisor": 0, "pulse_divisor": 0}
-        self._ramp.set(v_min=1)
+        self.ramp.set(v_min=1)
         self._recompute_p()
 
-    # --- clock (lazy: docs/motion.md "Lazy reads") ----------------------------------
-    @property
-    def ramp(self) -> Tmc429Ramp:
-        """The TMC429 axis, brought to `now` first."""
-        if self._pending is not None:
-            self._catch_up()
-        return self._ramp
-
-    def _catch_up(self) -> None:
-        """Apply the stored `advance`: the core jumps to that cycle exactly (one closed-form
-        evaluation inside a cached linear phase, Tmc429Ramp._jump)."""
-        until, self._pending = self._pending, None
-        if until is not None:
-            self._ramp.advance(until)
-
+    # --- clock --------------------------------------------------------------------
     @property
     def now(self) -> int:
-        p = self._pending
-        return self._ramp.now if p is None else p
+        return self.ramp.now
 
     @now.setter
     def now(self, value: int) -> None:  # RampEngine declares `now` as a plain attribute
-        if value != self.now:
-            self.advance(value)
+        if value != self.ramp.now:
+            self.ramp.advance(value)
 
     def advance(self, until: int) -> None:
-        """Move to cycle `until`. Before the next event the engine last reported only the cycle is
-        stored; the core follows when the state is read or written (every other member), exactly
-        as if it had moved at once. At or after that event the core moves now."""
-        event = self._event
-        if event is not None and type(until) is int and until >= event:
-            self._pending = None          # an event is due: the core moves (and checks) now
-            self._ramp.advance(until)
-            return
-        if type(until) is not int:
-            self.ramp.advance(until)
-            return
-        r = self._ramp
-        p = self._pending
-        if until < (r.now if p is None else p):
-            raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
-        if until > r.now:
-            self._pending = until
+        self.ramp.advance(until)
 
     def next_event(self) -> int | None:
-        p = self._pending
-        if p is None:
-            event = self._ramp.next_event()
-        else:
-            known, event = self._ramp.next_event_after(p)
-            if not known:
-                self._catch_up()
-                event = self._ramp.next_event()
-        self._event = event
-        return event
+        return self.ramp.next_event()
 
     def time_at_position(self, position: int) -> int | None:
         return self.ramp.time_at_position(position)
@@ -129,9 +87,7 @@ class Tmc429Engine(RampEngine):
     # --- state --------------------------------------------------------------------
     @property
     def position(self) -> int:
-        if self._pending is not None:
-            self._catch_up()
-        return _s32(self._ramp.x_actual)
+        return _s32(self.ramp.x_actual)
 
     @property
     def velocity(self) -> int:
