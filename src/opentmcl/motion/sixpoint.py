@@ -505,6 +505,9 @@ class SixPointRampEngine(RampEngine):
         self._target_abs = 0      # the same, unwrapped (microsteps)
         self._vt_pps = Fraction(0)
         self._queue = SegmentQueue([Segment(0, None, 0, 0, 0, None)])
+        self._read_at = -1                      # the lazy read (`_read`): tick, plan, values
+        self._read_pieces: list[Segment] | None = None
+        self._read_step = self._read_v = self._read_pos = 0
 
     # --- parameters -----------------------------------------------------
     def _checked(self, params: dict[str, object]) -> dict[str, Fraction]:
@@ -581,30 +584,62 @@ class SixPointRampEngine(RampEngine):
             return seg, seg.p0, 0
         return seg, seg.p_at(self.now), seg.v_at(self.now)
 
+    def _read(self) -> None:
+        """Evaluate the state at now (lazy reads): `advance` only stores the tick; the first
+        read at a tick evaluates the closed form of the piece holding it (`Segment.step`,
+        `Segment.v_at`, inlined) and keeps step counter, wrapped position and velocity for that
+        tick and plan, so further reads at the same tick are two comparisons and a field
+        access. The key is the tick and the queue's piece list, which every command and AP1
+        overwrite replace (`advance` only drops pieces that ended)."""
+        now = self.now
+        queue = self._queue
+        pieces = queue.pieces
+        seg = pieces[0]
+        k0, k1, p0, v0, a, _rest = seg
+        if k1 is not None and k1 <= now:
+            k0, k1, p0, v0, a, _rest = queue.at(now)
+        if v0 == 0 and a == 0:
+            q, v = p0 // PSCALE, 0
+        else:
+            dt = now - k0
+            p = p0 + (2 * v0 + a * dt) * dt
+            backwards = v0 < 0 if v0 else a < 0
+            q, v = (-((-p) // PSCALE) if backwards else p // PSCALE), v0 + a * dt
+        self._read_step, self._read_v = q, v
+        self._read_pos = ((q + (1 << 31)) & 0xFFFF_FFFF) - (1 << 31)  # wrap32
+        self._read_at, self._read_pieces = now, pieces
+
     def _step(self) -> int:
-        seg = self._seg()
-        if seg.v0 == 0 and seg.a == 0:
-            return seg.p0 // PSCALE
-        return seg.step(self.now)
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        return self._read_step
+
+    def _v(self) -> int:
+        """Actual velocity at now in engine units (lazy, see `_read`)."""
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        return self._read_v
 
     @property
     def position(self) -> int:
-        return wrap32(self._step())
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        return self._read_pos
 
     @property
     def velocity_exact(self) -> Fraction:
         """Actual signed velocity in pps, exact."""
-        return Fraction(self._seg().v_at(self.now) * CLOCK_HZ, DEN)
+        return Fraction(self._v() * CLOCK_HZ, DEN)
 
     @property
     def velocity(self) -> int:
         """Actual signed velocity (AP3) in pps, truncated towards zero."""
-        n = self._seg().v_at(self.now) * CLOCK_HZ
+        n = self._v() * CLOCK_HZ
         return n // DEN if n >= 0 else -((-n) // DEN)
 
     @property
     def moving(self) -> bool:
-        return self._seg().v_at(self.now) != 0
+        return self._v() != 0
 
     @property
     def target_position(self) -> int:
@@ -622,14 +657,9 @@ class SixPointRampEngine(RampEngine):
     @property
     def position_reached(self) -> bool:
         """AP8: actual position equals target position and the motor stands."""
-        seg = self._queue.pieces[0]  # inline `_seg()`: polled after every event
-        k1 = seg.k1
-        if k1 is not None and k1 <= self.now:
-            seg = self._queue.at(self.now)
-        if seg.v0 == 0 and seg.a == 0:
-            p0 = seg.p0
-            return p0 == self._target_abs * PSCALE or wrap32(p0 // PSCALE) == self._target
-        return seg.v_at(self.now) == 0 and wrap32(seg.step(self.now)) == self._target
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        return self._read_v == 0 and self._read_pos == self._target
 
     @property
     def segments(self) -> tuple[Segment, ...]:
@@ -724,7 +754,7 @@ class SixPointRampEngine(RampEngine):
 
     @property
     def direction(self) -> int:
-        v = self._queue.at(self.now).v_at(self.now)
+        v = self._v()
         return (v > 0) - (v < 0)
 
     @property

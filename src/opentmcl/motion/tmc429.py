@@ -203,6 +203,8 @@ class _Phase:
         i_lo = self.i0 + 1
         if i_hi < i_lo:
             return 0
+        if self.delta == 0:                      # constant velocity: every tick adds |v| >> 8
+            return (i_hi - i_lo + 1) * (self.w0 >> 8)
         rp, pp = self.ramp_period, self.pulse_period
         if pp >= rp:
             m = pp // rp
@@ -388,7 +390,9 @@ class Tmc429Ramp:
         self._pulse_div = 0
         self._ramp_div = 0
         self._mode = RAMP_MODE
-        self._cached_plan: _Plan | None = None   # _plan(None) of the present state
+        self._cached_plan: _Plan | None = None   # _plan(None) of the state at its phase's t0
+        self._plan_base: tuple[_Phase, int, int, int, int] | None = None
+        """(phase, x, acc, acc_dir, v) at the t0 of a cached linear phase `_jump_within` moved in."""
 
     # ------------------------------------------------------------------ registers
     @property
@@ -1045,6 +1049,9 @@ class Tmc429Ramp:
             else:
                 self._follow(t, None)
             return
+        base = self._plan_base
+        if base is not None and base[0] is phase:   # moved on by `_jump_within`: back to t0
+            _phase, self._x, self._acc, self._acc_dir, self._v = base
         i = t // phase.pulse_period
         if i >= phase.i_dir:
             total = phase.acc0 + phase.pulse_sum(i)
@@ -1057,13 +1064,40 @@ class Tmc429Ramp:
             self._v = phase.direction * phase.w(k)
         self.now = t
 
+    def _jump_within(self, phase: _Phase, t: int) -> None:
+        """`_jump` inside the linear phase of the cached plan, keeping the plan: the phase is the
+        closed form of the motion from its t0 up to its event, read at any cycle, so the state is
+        evaluated from the state at t0 (`_plan_base`, kept on the first such jump) and the next
+        advance or next_event needs no planning (docs/motion.md "Lazy reads")."""
+        if t <= self.now:
+            return
+        base = self._plan_base
+        if base is None or base[0] is not phase:    # the state is still at t0
+            base = self._plan_base = (phase, self._x, self._acc, self._acc_dir, self._v)
+        _phase, x, acc, acc_dir, v = base
+        i = t // phase.pulse_period
+        if i >= phase.i_dir:
+            total = phase.acc0 + phase.pulse_sum(i)
+            steps, acc = total >> 11, total & 2047
+            x = (x + phase.direction * steps) % self._modulus
+            if phase.direction:
+                acc_dir = phase.direction
+        if phase.delta != 0:
+            v = phase.direction * phase.w(t // phase.ramp_period - phase.j0)
+        self._x, self._acc, self._acc_dir, self._v = x, acc, acc_dir, v
+        self.now = t
+
     def advance(self, until: int) -> None:
         """Jump to cycle `until` (>= now), exactly as the per-tick model would."""
         if until < self.now:
             raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
         while self.now < until:
-            if self._cached_plan is not None:
-                event, _clamp, phase = self._cached_plan   # the first event, valid for any until
+            cached = self._cached_plan
+            if cached is not None:
+                event, _clamp, phase = cached   # the first event, valid for any until
+                if (event is None or event > until) and type(phase) is _Phase:
+                    self._jump_within(phase, until)
+                    return
             else:
                 event, _clamp, phase = self._plan(until)
             if event is None or event > until:
@@ -1105,6 +1139,8 @@ class Tmc429Ramp:
         if until < self.now:
             raise ValueError(f"cannot go back in time: until={until} < now={self.now}")
         out: list[tuple[int, int]] = []
+        if self._cached_plan is not None and self._cached_plan[2].t0 != self.now:
+            self._cached_plan = None     # its steps count from t0: list only those after now
         while self.now < until:
             if self._cached_plan is not None:
                 event, _clamp, phase = self._cached_plan
