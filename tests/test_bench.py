@@ -81,3 +81,18 @@ def test_compare_with_a_file_that_is_not_a_result_is_a_clear_error(tmp_path):
     assert done.returncode == 2
     assert "not a results file of bench/run.py" in done.stderr and "Traceback" not in done.stderr
     assert not (tmp_path / "x.json").exists()
+
+
+def test_profile_polling_prints_the_top_functions_by_tottime():
+    out = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "50", "--top", "5"],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    assert "Ordered by: internal time" in out and "due to restriction <5>" in out
+    header = next(i for i, line in enumerate(out.splitlines()) if line.split()[:2] == ["ncalls", "tottime"])
+    assert len([line for line in out.splitlines()[header + 1:] if line.strip()]) == 5
+
+
+def test_profile_polling_refuses_a_count_that_is_not_positive():
+    done = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "0"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "must be a positive whole number" in done.stderr
+    assert "Traceback" not in done.stderr
