@@ -121,7 +121,12 @@ PAIRS = {
     "endpoints pty round trips/s: ours": ("endpoints pty bare echo round trips/s", ">= 0.5 of echo"),
     "endpoints TCP round trips/s: our client (opentmcl.connect)": ("endpoints TCP round trips/s: PyTrinamic client",
                                                                    ">= 1x PyTrinamic"),
-    "proxy through the proxy (capture on), median ms": ("proxy direct round trip, median ms", "< 1 ms added"),
+    "proxy through the proxy (capture on), median ms": ("proxy direct round trip, median ms", ""),
+}
+GOALS = {  # the older figures' targets, in the goal column
+    "proxy added by the proxy, ms (target < 1)": "< 1 ms",
+    "memory world trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": "< 100 MB",
+    "memory plot trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": "< 100 MB",
 }
 
 
@@ -131,6 +136,8 @@ def pair(figures: list[Figure]) -> None:
         f, r = by_name.get(name), by_name.get(ref)
         if f is not None and r is not None:
             f.reference, f.reference_name, f.goal = r.value, r.name, goal
+    for f in figures:
+        f.goal = GOALS.get(f.name, f.goal)
 
 
 def measure(quick: bool) -> list[Figure]:
@@ -187,21 +194,24 @@ def report(figures: list[Figure]) -> str:
     return table(rows)
 
 
-def document(figures: list[Figure], quick: bool) -> dict:
-    return {"commit": commit(), "python": platform.python_version(), "implementation": platform.python_implementation(),
+def document(figures: list[Figure], quick: bool, commit_id: str | None = None) -> dict:
+    return {"commit": commit_id or commit(), "python": platform.python_version(), "implementation": platform.python_implementation(),
             "opentmcl": str(Path(opentmcl.__file__).resolve().parent), "quick": quick,
             "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
             "figures": {f.name: f.as_json() for f in figures}}
 
 
 def compare(old: dict, new: dict) -> str:
-    """Old next to new for every figure of either run, with new / old."""
-    rows = [["figure", "old", "new", "new/old"]]
+    """Old next to new for every figure of either run, with new / old; then each run's ratio
+    value / reference, which does not depend on the load of the machine during that run."""
+    rows = [["figure", "old", "new", "new/old", "old ratio", "new ratio"]]
     names = list(new["figures"]) + [n for n in old["figures"] if n not in new["figures"]]
     for name in names:
-        a = old["figures"].get(name, {}).get("value")
-        b = new["figures"].get(name, {}).get("value")
-        rows.append([name, number(a), number(b), f"{b / a:.2f}" if a and b is not None else "-"])
+        a, b = old["figures"].get(name, {}), new["figures"].get(name, {})
+        va, vb = a.get("value"), b.get("value")
+        ra, rb = a.get("ratio"), b.get("ratio")
+        rows.append([name, number(va), number(vb), f"{vb / va:.2f}" if va and vb is not None else "-",
+                     "-" if ra is None else f"{ra:.3f}", "-" if rb is None else f"{rb:.3f}"])
     return f"old: {old.get('commit')}\nnew: {new.get('commit')}\n" + table(rows)
 
 
@@ -210,6 +220,8 @@ def main(argv: list[str] | None = None) -> dict:
     ap.add_argument("--quick", action="store_true", help="short run")
     ap.add_argument("--json", type=Path, default=RESULTS, metavar="PATH", help="write the figures here as JSON")
     ap.add_argument("--compare", type=Path, metavar="OLD.json", help="print an earlier run next to this one")
+    ap.add_argument("--commit", metavar="TEXT", help="the commit to record, where the measured opentmcl is not a "
+                    "git checkout (a `git archive` tree)")
     args = ap.parse_args(argv)
     old = None
     if args.compare is not None:
@@ -220,7 +232,7 @@ def main(argv: list[str] | None = None) -> dict:
             ap.error(f"--compare {args.compare}: not a results file of bench/run.py ({exc})")
     figures = measure(args.quick)
     print(report(figures))
-    doc = document(figures, args.quick)
+    doc = document(figures, args.quick, args.commit)
     args.json.parent.mkdir(parents=True, exist_ok=True)
     args.json.write_text(json.dumps(doc, indent=1) + "\n")
     print(f"\nwritten to {args.json}")

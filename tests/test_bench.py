@@ -38,9 +38,10 @@ def load_run():
 
 def test_bench_quick_runs_and_reports_every_figure(tmp_path):
     out_file = tmp_path / "quick.json"
-    out = subprocess.run([sys.executable, str(RUN), "--quick", "--json", str(out_file)], capture_output=True,
-                         text=True, timeout=300, check=True).stdout
+    out = subprocess.run([sys.executable, str(RUN), "--quick", "--json", str(out_file), "--commit", "abc123"],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
     doc = json.loads(out_file.read_text())
+    assert doc["commit"] == "abc123"
     assert doc["python"] == f"{sys.version_info.major}.{sys.version_info.minor}.{sys.version_info.micro}"
     assert doc["commit"] and doc["quick"] is True
     figures = doc["figures"]
@@ -64,13 +65,14 @@ def test_bench_quick_runs_and_reports_every_figure(tmp_path):
 
 def test_compare_prints_old_next_to_new_with_the_ratio():
     run = load_run()
-    old = {"commit": "a", "figures": {"x": {"value": 100.0}, "gone": {"value": 1.0}}}
-    new = {"commit": "b", "figures": {"x": {"value": 250.0}, "n/a one": {"value": None}}}
+    old = {"commit": "a", "figures": {"x": {"value": 100.0, "ratio": 0.25}, "gone": {"value": 1.0, "ratio": None}}}
+    new = {"commit": "b", "figures": {"x": {"value": 250.0, "ratio": 0.5}, "n/a one": {"value": None, "ratio": None}}}
     lines = run.compare(old, new).splitlines()
+    assert lines[:2] == ["old: a", "new: b"]
     row = next(line for line in lines if line.startswith("x "))
-    assert row.split()[1:] == ["100", "250", "2.50"]
-    assert next(line for line in lines if line.startswith("n/a one")).split()[-3:] == ["n/a", "n/a", "-"]
-    assert next(line for line in lines if line.startswith("gone")).split()[1:] == ["1.00", "n/a", "-"]
+    assert row.split()[1:] == ["100", "250", "2.50", "0.250", "0.500"]
+    assert next(line for line in lines if line.startswith("n/a one")).split()[-5:] == ["n/a", "n/a", "-", "-", "-"]
+    assert next(line for line in lines if line.startswith("gone")).split()[1:] == ["1.00", "n/a", "-", "-", "-"]
 
 
 def test_compare_with_a_file_that_is_not_a_result_is_a_clear_error(tmp_path):
