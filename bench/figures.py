@@ -11,6 +11,16 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
+clock: Callable[[], float] = time.perf_counter
+"""What the in-process scenarios time with: wall time (default), or this process's CPU time
+(`bench/run.py --cpu`, `use_cpu_time()`), which on a shared machine leaves out the time other
+processes had the core. Scenarios across processes (TCP, pty, proxy) always use wall time."""
+
+
+def use_cpu_time() -> None:
+    global clock
+    clock = time.process_time
+
 
 @dataclass
 class Figure:
@@ -41,10 +51,10 @@ def timed(step: Callable[[], float], budget: float) -> float:
     passed; return units per wall second."""
     step()  # warm-up, not counted
     done = 0.0
-    start = time.perf_counter()
+    start = clock()
     while True:
         done += step()
-        elapsed = time.perf_counter() - start
+        elapsed = clock() - start
         if elapsed >= budget:
             return done / elapsed
 

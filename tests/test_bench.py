@@ -41,7 +41,7 @@ def test_bench_quick_runs_and_reports_every_figure(tmp_path):
     out = subprocess.run([sys.executable, str(RUN), "--quick", "--json", str(out_file), "--commit", "abc123"],
                          capture_output=True, text=True, timeout=300, check=True).stdout
     doc = json.loads(out_file.read_text())
-    assert doc["commit"] == "abc123"
+    assert doc["commit"] == "abc123" and doc["clock"] == "wall"
     assert doc["python"] == f"{sys.version_info.major}.{sys.version_info.minor}.{sys.version_info.micro}"
     assert doc["commit"] and doc["quick"] is True
     figures = doc["figures"]
