@@ -4,15 +4,16 @@
 
 Each figure stands next to its yardstick, measured in the same run over the same transport:
 
-- our server (`opentmcl.server`, a TMCM-6212 answering GAP 1 = actual position, TMCM-6212
-  manual 3.6.6) against a bare echo server that sends every received byte straight back
-  (target: ours >= 50 % of the echo rate); the client is the same plain socket / pyserial loop
-  for both (send nine bytes, read nine bytes), run in a separate Python process as a host program
-  is; each pair is measured in interleaved rounds and the best round of each is kept (the least
-  disturbed one on a busy machine);
+- our server (`opentmcl serve --module TMCM-6212 --tcp` / `--pty`, a TMCM-6212 answering GAP 1 =
+  actual position, TMCM-6212 manual 3.6.6) against a bare echo server that sends every received
+  byte straight back (target: ours >= 50 % of the echo rate). Every server runs in a process of
+  its own, started by this benchmark (the echo servers: this file with `--echo tcp|pty`); the
+  client is the same plain socket / pyserial loop for both (send nine bytes, read nine bytes), in
+  this process, which does nothing else meanwhile. Each pair is measured in interleaved rounds and
+  the best round of each is kept (the least disturbed one on a busy machine);
 - our client (`opentmcl.connect("tcp://...")`, `Module.request`) against PyTrinamic's
-  (`socket_serial_tmcl` interface, `get_axis_parameter`) on the same served virtual module, both
-  in this process (target: ours at least as fast). Skipped when PyTrinamic is not installed.
+  (`socket_serial_tmcl` interface, `get_axis_parameter`) on the same served virtual module, in
+  this process (target: ours at least as fast). Skipped when PyTrinamic is not installed.
 """
 from __future__ import annotations
 
@@ -20,19 +21,17 @@ import argparse
 import os
 import select
 import socket
-import subprocess
 import sys
-import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-from opentmcl import VirtualModule
 from opentmcl.protocol.frame import Request
-from opentmcl.server import PtyServer, Server, TcpServer
+from procs import endpoint, start, start_tool, stop
 
 GAP_1 = Request(1, 6, 1, 0, 0).encode()  # GAP 1, 0: actual position (manual 3.6.6)
 FRAME = len(GAP_1)
+READY_LINE = "Press Ctrl-C to stop."
 
 
 def rate(round_trip: Callable[[], None], seconds: float, warmup: int = 20) -> float:
@@ -40,95 +39,76 @@ def rate(round_trip: Callable[[], None], seconds: float, warmup: int = 20) -> fl
     for _ in range(warmup):
         round_trip()
     n = 0
-    start = time.perf_counter()
-    end = start + seconds
+    start_t = time.perf_counter()
+    end = start_t + seconds
     while True:
         for _ in range(50):
             round_trip()
         n += 50
         now = time.perf_counter()
         if now >= end:
-            return n / (now - start)
+            return n / (now - start_t)
 
 
-# --- bare echo servers: the yardsticks -----------------------------------------------------
+# --- bare echo servers: the yardsticks, each run as `bench_endpoints.py --echo KIND` ---------
 
-@contextmanager
-def tcp_echo_server():
-    """A TCP server on loopback that writes back what it reads; yields (host, port)."""
+def serve_tcp_echo() -> None:
+    """A TCP server on loopback that writes back what it reads, one connection at a time."""
     listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     listener.bind(("127.0.0.1", 0))
     listener.listen(1)
-    stop = threading.Event()
-
-    def serve():
-        listener.settimeout(0.2)
-        while not stop.is_set():
-            try:
-                conn, _ = listener.accept()
-            except (TimeoutError, OSError):
-                continue
-            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            with conn:
-                while True:
-                    try:
-                        data = conn.recv(4096)
-                    except OSError:
-                        break
-                    if not data:
-                        break
-                    conn.sendall(data)
-
-    thread = threading.Thread(target=serve, daemon=True)
-    thread.start()
-    try:
-        yield listener.getsockname()
-    finally:
-        stop.set()
-        listener.close()
-        thread.join(timeout=5)
+    host, port = listener.getsockname()
+    print(f"tcp tcp://{host}:{port}\n{READY_LINE}", flush=True)
+    while True:
+        conn, _ = listener.accept()
+        conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        with conn:
+            while True:
+                try:
+                    data = conn.recv(4096)
+                except OSError:
+                    break
+                if not data:
+                    break
+                conn.sendall(data)
 
 
-@contextmanager
-def pty_echo_server():
-    """A pseudo-terminal whose master writes back what it reads; yields the slave path."""
+def serve_pty_echo() -> None:
+    """A pseudo-terminal whose master writes back what it reads."""
     import tty
 
     master, slave = os.openpty()
     tty.setraw(slave)
-    stop = threading.Event()
-
-    def serve():
-        while not stop.is_set():
-            ready, _, _ = select.select([master], [], [], 0.2)
-            if ready:
-                try:
-                    data = os.read(master, 4096)
-                except OSError:
-                    return
-                os.write(master, data)
-
-    thread = threading.Thread(target=serve, daemon=True)
-    thread.start()
-    try:
-        yield os.ttyname(slave)
-    finally:
-        stop.set()
-        thread.join(timeout=5)
-        os.close(master)
-        os.close(slave)
+    print(f"pty {os.ttyname(slave)}\n{READY_LINE}", flush=True)
+    while True:
+        select.select([master], [], [])
+        try:
+            data = os.read(master, 4096)
+        except OSError:  # no client has the slave open at the moment
+            time.sleep(0.01)
+            continue
+        os.write(master, data)
 
 
 @contextmanager
-def our_server(tcp: bool = True, pty: bool = False):
-    server = Server([VirtualModule("TMCM-6212", address=1)])
-    tcp_ep = server.add(TcpServer(server.bus, "127.0.0.1", 0)) if tcp else None
-    pty_ep = server.add(PtyServer(server.bus)) if pty else None
-    server.start()
+def echo_server(kind: str) -> Iterator[str]:
+    """An echo server in its own process; yields its address (tcp://HOST:PORT or the pty path)."""
+    proc, lines = start([sys.executable, os.path.abspath(__file__), "--echo", kind])
     try:
-        yield tcp_ep, pty_ep
+        yield endpoint(lines, kind)
     finally:
-        server.stop()
+        stop(proc)
+
+
+@contextmanager
+def our_server(kind: str) -> Iterator[str]:
+    """`opentmcl serve` of one TMCM-6212 in its own process; yields the tcp:// URL or pty path."""
+    option = ["--tcp", "127.0.0.1:0"] if kind == "tcp" else ["--pty"]
+    proc, lines = start_tool("serve", "--module", "TMCM-6212", *option)
+    try:
+        yield endpoint(lines, kind)
+    finally:
+        stop(proc)
 
 
 # --- the same plain clients for both -----------------------------------------------------
@@ -167,9 +147,9 @@ def client_rates(seconds: float) -> dict:
     from opentmcl.host import connect
 
     out = {}
-    with our_server() as (tcp, _):
-        host, port = tcp.address
-        module = connect(f"tcp://{host}:{port}")
+    with our_server("tcp") as url:
+        host, port = url.removeprefix("tcp://").rsplit(":", 1)
+        module = connect(url)
         try:
             out["ours"] = rate(lambda: module.request(6, 1, 0), seconds)
         finally:
@@ -186,42 +166,35 @@ def client_rates(seconds: float) -> dict:
     return out
 
 
-def client_process(kind: str, target: str, seconds: float) -> float:
-    """Run the plain client loop in a separate Python process, as a real host program is: the
-    rates then include the wake-ups across processes but no contention for this process's GIL."""
-    out = subprocess.run([sys.executable, __file__, "--client", kind, target, str(seconds)],
-                         capture_output=True, text=True, timeout=60 + 10 * seconds, check=True)
-    return float(out.stdout.strip())
+def client_rate(kind: str, target: str, seconds: float) -> float:
+    if kind == "tcp":
+        host, port = target.removeprefix("tcp://").rsplit(":", 1)
+        return socket_rate((host, int(port)), seconds)
+    return serial_rate(target, seconds)
 
 
-def best_of(rounds: int, *contexts) -> list[float]:
-    """Best rate of each (server context, kind, target-of-endpoint) over `rounds` interleaved rounds:
-    on a busy machine the best round is the least disturbed one, and interleaving puts both
-    servers under the same load."""
-    best = [0.0] * len(contexts)
-    for _ in range(rounds):
-        for i, (context, kind, target_of, seconds) in enumerate(contexts):
-            with context() as endpoint:
-                best[i] = max(best[i], client_process(kind, target_of(endpoint), seconds))
-    return best
+def best_pair(kind: str, rounds: int, seconds: float) -> tuple[float, float]:
+    """Best rate of our server and of the echo server over `rounds` interleaved rounds: on a
+    busy machine the best round is the least disturbed one, and interleaving puts both servers
+    under the same load. Both server processes run for the whole measurement."""
+    ours = echo = 0.0
+    with our_server(kind) as ours_at, echo_server(kind) as echo_at:
+        for _ in range(rounds):
+            ours = max(ours, client_rate(kind, ours_at, seconds))
+            echo = max(echo, client_rate(kind, echo_at, seconds))
+    return ours, echo
 
 
 def measure(quick: bool = False) -> dict:
     """Round trips per second and the ratios against their yardsticks (higher is better)."""
-    rounds, seconds = (2, 0.2) if quick else (5, 0.5)
+    rounds, seconds = (1, 0.15) if quick else (5, 0.5)
     results: dict[str, float] = {}
-    ours, echo = best_of(
-        rounds,
-        (our_server, "tcp", lambda eps: "{}:{}".format(*eps[0].address), seconds),
-        (tcp_echo_server, "tcp", lambda address: "{}:{}".format(*address), seconds))
+    ours, echo = best_pair("tcp", rounds, seconds)
     results["TCP round trips/s: ours"] = ours
     results["TCP bare echo round trips/s"] = echo
     results["TCP ours/echo ratio (target >= 0.5)"] = ours / echo
     if sys.platform != "win32":
-        ours, echo = best_of(
-            rounds,
-            (lambda: our_server(tcp=False, pty=True), "serial", lambda eps: eps[1].path, seconds),
-            (pty_echo_server, "serial", lambda path: path, seconds))
+        ours, echo = best_pair("pty", rounds, seconds)
         results["pty round trips/s: ours"] = ours
         results["pty bare echo round trips/s"] = echo
         results["pty ours/echo ratio (target >= 0.5)"] = ours / echo
@@ -236,16 +209,10 @@ def measure(quick: bool = False) -> dict:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--client", nargs=3, metavar=("KIND", "TARGET", "SECONDS"),
-                    help="internal: run the plain client loop (tcp HOST:PORT or serial PATH), print the rate")
+    ap.add_argument("--echo", choices=("tcp", "pty"), help="internal: run a bare echo server (until SIGTERM)")
     args = ap.parse_args()
-    if args.client:
-        kind, target, seconds = args.client
-        if kind == "tcp":
-            host, _, port = target.rpartition(":")
-            print(socket_rate((host, int(port)), float(seconds)))
-        else:
-            print(serial_rate(target, float(seconds)))
+    if args.echo:
+        serve_tcp_echo() if args.echo == "tcp" else serve_pty_echo()
         return
     results = measure(args.quick)
     width = max(map(len, results))

@@ -13,43 +13,15 @@ from __future__ import annotations
 
 import argparse
 import os
-import select
-import signal
 import socket
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 
 from opentmcl.protocol.frame import Request
+from procs import endpoint, start_tool, stop
 
 GAP_1 = Request(1, 6, 1, 0, 0).encode()
-
-
-def start(*args: str) -> tuple[subprocess.Popen, str]:
-    """A tool process and the tcp:// URL it announced."""
-    proc = subprocess.Popen([sys.executable, "-m", "opentmcl", *args], stdout=subprocess.PIPE)
-    deadline = time.monotonic() + 30
-    buf = b""
-    while b"Press Ctrl-C" not in buf:
-        ready, _, _ = select.select([proc.stdout], [], [], max(0.0, deadline - time.monotonic()))
-        ch = os.read(proc.stdout.fileno(), 1) if ready else b""
-        if not ch:
-            proc.kill()
-            raise RuntimeError(f"{args[0]} did not start: {buf!r}")
-        buf += ch
-    url = next(line.split()[1] for line in buf.decode().splitlines() if line.strip().startswith("tcp "))
-    return proc, url
-
-
-def stop(proc: subprocess.Popen) -> None:
-    proc.send_signal(signal.SIGTERM)
-    try:
-        proc.wait(timeout=20)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
 
 
 def median_round_trip(url: str, n: int) -> float:
@@ -70,11 +42,13 @@ def median_round_trip(url: str, n: int) -> float:
 
 def measure(quick: bool = False) -> dict[str, float]:
     rounds, n = (2, 200) if quick else (5, 1000)
-    server, direct_url = start("serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0")
+    server, lines = start_tool("serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0")
+    direct_url = endpoint(lines, "tcp")
     with tempfile.TemporaryDirectory() as tmp:
         try:
-            proxy, proxy_url = start("proxy", "--to", direct_url, "--tcp", "127.0.0.1:0", "--log",
-                                     os.path.join(tmp, "bench.jsonl"))
+            proxy, lines = start_tool("proxy", "--to", direct_url, "--tcp", "127.0.0.1:0", "--log",
+                                      os.path.join(tmp, "bench.jsonl"))
+            proxy_url = endpoint(lines, "tcp")
             try:
                 direct, proxied = [], []
                 for _ in range(rounds):

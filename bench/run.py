@@ -1,17 +1,27 @@
 """OpenTMCL benchmarks: one command, figures measured side by side in one run.
 
-    python bench/run.py            # full run (about a minute)
-    python bench/run.py --quick    # short run, as CI does it (tests/test_bench.py)
+    python bench/run.py                      # full run (a few minutes on a busy machine)
+    python bench/run.py --quick              # short run, as CI does it (tests/test_bench.py)
+    python bench/run.py --json PATH          # where the table goes as JSON (default bench/results/latest.json)
+    python bench/run.py --compare OLD.json   # also print OLD next to this run, with new / old
 
-Prints, for the virtual module core:
+Every figure has a name, a value, the reference it is compared with (measured in the same run;
+"-" where a figure has none), the ratio value / reference and the goal (docs/performance.md):
+
+- the request path of a polling host (bench_polling.py): the minimal-handler floor against
+  `vm.handle`; `connect("sim://")` `Module.request` against `vm.handle`; a host polling GAP 8 + GAP 1
+  of 1 or 6 moving TMCM-6212 axes every 10 ms or 500 ms of virtual time through `vm.handle`,
+  `Module.request` and `Module.request_many` (issue 16);
+- the served bus of 1/2/4/8 modules (bench_bus.py) and the interpreter with GAP in its loop, with
+  and without a 1 ms timer interrupt (bench_interp.py);
 - virtual seconds per wall second, TMCM-6212 with six axes doing back-and-forth MVP moves (target >= 3600);
 - virtual seconds per wall second, PD86-1180 at pulse_div = ramp_div = 0 (target >= 100);
 - speed-up of the event-driven TMC429 engine over the per-tick reference model (exact agreement checked);
 - in-process round trips per second through VirtualModule.handle (target >= 50,000);
 - the engines alone (bench_sixpoint.py, bench_tmc429.py);
-- round trips through TCP and the pseudo-terminal next to a bare echo server on the same transport
-  (target: ours >= 50 % of echo), and our client against PyTrinamic on the same module (target >= 1)
-  (bench_endpoints.py);
+- round trips through TCP and the pseudo-terminal next to a bare echo server on the same transport,
+  each server in a process of its own (target: ours >= 50 % of echo), and our client against
+  PyTrinamic on the same module (target >= 1) (bench_endpoints.py);
 - memory of the world and plot traces in MB per hour of recording at 10 ms, compact columns next to
   the old dict-per-row / list-per-channel layouts (target < 100 MB; bench_trace.py).
 - the round-trip time `opentmcl proxy` adds on loopback, next to a direct connection to the same served
@@ -20,6 +30,9 @@ Prints, for the virtual module core:
 from __future__ import annotations
 
 import argparse
+import json
+import platform
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -27,11 +40,17 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # for tests.motion (the per-tick oracle)
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import bench_bus  # noqa: E402
 import bench_endpoints  # noqa: E402
+import bench_interp  # noqa: E402
+import bench_polling  # noqa: E402
 import bench_proxy  # noqa: E402
 import bench_sixpoint  # noqa: E402
 import bench_tmc429  # noqa: E402
 import bench_trace  # noqa: E402
+import figures as figures_module  # noqa: E402
+import opentmcl  # noqa: E402
+from figures import Figure, figures_of, use_cpu_time  # noqa: E402
 from opentmcl import VirtualModule  # noqa: E402
 from opentmcl.motion import CLOCK_HZ  # noqa: E402
 from opentmcl.protocol.frame import Request  # noqa: E402
@@ -94,25 +113,141 @@ def bench_round_trips(n: int) -> float:
     return n / (time.perf_counter() - start)
 
 
+RESULTS = Path(__file__).resolve().parent / "results" / "latest.json"
+
+# Figures of the older benchmarks that have a yardstick in the same run: figure -> (its
+# reference among the figures, goal of the ratio).
+PAIRS = {
+    "endpoints TCP round trips/s: ours": ("endpoints TCP bare echo round trips/s", ">= 0.5 of echo"),
+    "endpoints pty round trips/s: ours": ("endpoints pty bare echo round trips/s", ">= 0.5 of echo"),
+    "endpoints TCP round trips/s: our client (opentmcl.connect)": ("endpoints TCP round trips/s: PyTrinamic client",
+                                                                   ">= 1x PyTrinamic"),
+    "proxy through the proxy (capture on), median ms": ("proxy direct round trip, median ms", ""),
+}
+GOALS = {  # the older figures' targets, in the goal column
+    "proxy added by the proxy, ms (target < 1)": "< 1 ms",
+    "memory world trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": "< 100 MB",
+    "memory plot trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": "< 100 MB",
+}
+
+
+def pair(figures: list[Figure]) -> None:
+    by_name = {f.name: f for f in figures}
+    for name, (ref, goal) in PAIRS.items():
+        f, r = by_name.get(name), by_name.get(ref)
+        if f is not None and r is not None:
+            f.reference, f.reference_name, f.goal = r.value, r.name, goal
+    for f in figures:
+        f.goal = GOALS.get(f.name, f.goal)
+
+
+def measure(quick: bool) -> list[Figure]:
+    scale = 0.1 if quick else 1.0
+    out = bench_polling.measure(quick) + bench_bus.measure(quick) + bench_interp.measure(quick)
+    out += [Figure("6212 six axes, 10-revolution moves, virtual s per wall s (target >= 3600)",
+                   bench_6212(3600 * scale), goal=">= 3600"),
+            Figure("6212 six axes, short fast moves, virtual s per wall s", bench_6212_short(300 * scale)),
+            Figure("PD86-1180 pulse_div=ramp_div=0, virtual s per wall s (target >= 100)", bench_1180(20 * scale),
+                   goal=">= 100")]
+    for label, older in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure),
+                         ("endpoints", bench_endpoints.measure), ("memory", bench_trace.measure),
+                         ("proxy", bench_proxy.measure)):
+        out += figures_of(label, older(quick=quick))
+    out.append(Figure("in-process round trips per s (target >= 50000)", bench_round_trips(int(200000 * scale)),
+                      goal=">= 50,000"))
+    pair(out)
+    return out
+
+
+def commit() -> str:
+    """The commit of the opentmcl package measured (not of this script), or why it is unknown."""
+    where = Path(opentmcl.__file__).resolve().parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=where, capture_output=True, text=True,
+                              timeout=10, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "."], cwd=where, capture_output=True,
+                               text=True, timeout=10, check=True).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return f"unknown ({where} is not a git checkout)"
+    return head + (" (uncommitted changes)" if dirty else "")
+
+
+def number(value: float | None) -> str:
+    if value is None:
+        return "n/a"
+    return f"{value:,.2f}" if abs(value) < 100 else f"{value:,.0f}"
+
+
+def table(rows: list[list[str]]) -> str:
+    widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
+    lines = []
+    for r in rows:
+        cells = [r[0].ljust(widths[0])] + [c.rjust(w) for c, w in zip(r[1:-1], widths[1:-1], strict=True)] + [r[-1]]
+        lines.append("  ".join(cells).rstrip())
+    return "\n".join(lines)
+
+
+def report(figures: list[Figure]) -> str:
+    rows = [["figure", "value", "reference", "ratio", "goal"]]
+    for f in figures:
+        rows.append([f.name, number(f.value), "-" if f.reference is None else number(f.reference),
+                     "-" if f.ratio is None else f"{f.ratio:.3f}", f.goal])
+    return table(rows)
+
+
+def document(figures: list[Figure], quick: bool, commit_id: str | None = None) -> dict:
+    return {"commit": commit_id or commit(), "python": platform.python_version(), "implementation": platform.python_implementation(),
+            "opentmcl": str(Path(opentmcl.__file__).resolve().parent), "quick": quick,
+            "clock": "cpu" if figures_module.clock is time.process_time else "wall",
+            "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()),
+            "figures": {f.name: f.as_json() for f in figures}}
+
+
+def compare(old: dict, new: dict) -> str:
+    """Old next to new for every figure of either run, with new / old; then each run's ratio
+    value / reference, which does not depend on the load of the machine during that run."""
+    rows = [["figure", "old", "new", "new/old", "old ratio", "new ratio"]]
+    names = list(new["figures"]) + [n for n in old["figures"] if n not in new["figures"]]
+    for name in names:
+        a, b = old["figures"].get(name, {}), new["figures"].get(name, {})
+        va, vb = a.get("value"), b.get("value")
+        ra, rb = a.get("ratio"), b.get("ratio")
+        rows.append([name, number(va), number(vb), f"{vb / va:.2f}" if va and vb is not None else "-",
+                     "-" if ra is None else f"{ra:.3f}", "-" if rb is None else f"{rb:.3f}"])
+    return f"old: {old.get('commit')}\nnew: {new.get('commit')}\n" + table(rows)
+
+
 def main(argv: list[str] | None = None) -> dict:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="short run")
+    ap.add_argument("--json", type=Path, default=RESULTS, metavar="PATH", help="write the figures here as JSON")
+    ap.add_argument("--compare", type=Path, metavar="OLD.json", help="print an earlier run next to this one")
+    ap.add_argument("--cpu", action="store_true", help="time the in-process scenarios (polling, bus, interpreter) "
+                    "with this process's CPU time instead of wall time: steadier on a shared machine")
+    ap.add_argument("--commit", metavar="TEXT", help="the commit to record, where the measured opentmcl is not a "
+                    "git checkout (a `git archive` tree)")
     args = ap.parse_args(argv)
-    scale = 0.1 if args.quick else 1.0
-    results: dict[str, float] = {}
-    results["6212 six axes, 10-revolution moves, virtual s per wall s (target >= 3600)"] = bench_6212(3600 * scale)
-    results["6212 six axes, short fast moves, virtual s per wall s"] = bench_6212_short(300 * scale)
-    results["PD86-1180 pulse_div=ramp_div=0, virtual s per wall s (target >= 100)"] = bench_1180(20 * scale)
-    for label, measure in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure),
-                           ("endpoints", bench_endpoints.measure), ("memory", bench_trace.measure),
-                           ("proxy", bench_proxy.measure)):
-        for key, value in measure(quick=args.quick).items():
-            results[f"{label} {key}"] = value
-    results["in-process round trips per s (target >= 50000)"] = bench_round_trips(int(200000 * scale))
-    width = max(map(len, results))
-    for key, value in results.items():
-        print(f"{key:<{width}}  {value:>14,.2f}" if value < 100 else f"{key:<{width}}  {value:>14,.0f}")
-    return results
+    old = None
+    if args.compare is not None:
+        try:
+            old = json.loads(args.compare.read_text())
+            old["figures"]
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            ap.error(f"--compare {args.compare}: not a results file of bench/run.py ({exc})")
+    if args.cpu:
+        use_cpu_time()
+    figures = measure(args.quick)
+    if args.cpu:
+        print("in-process scenarios timed with CPU time: read 'wall s' in their names as 'CPU s'")
+    print(report(figures))
+    doc = document(figures, args.quick, args.commit)
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(doc, indent=1) + "\n")
+    print(f"\nwritten to {args.json}")
+    if old is not None:
+        print()
+        print(compare(old, doc))
+    return doc
 
 
 if __name__ == "__main__":

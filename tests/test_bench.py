@@ -1,21 +1,100 @@
 """CI runs a short version of every benchmark (DEVELOPERS.md: slow checks run short in CI).
 
-No timing is asserted here: speed is measured by `python bench/run.py`, never in unit tests.
+No timing is asserted here: speed is measured by `python bench/run.py`, never in unit tests. What
+is pinned: the one command runs, prints its table, writes the JSON document (commit, Python
+version, per figure value / reference / ratio / goal), every scenario of issue 16 produced a
+positive figure next to its reference, and `--compare` reads such a document.
 """
+import importlib.util
+import json
 import subprocess
 import sys
 from pathlib import Path
 
+from opentmcl.host.module import Module
+
 ROOT = Path(__file__).resolve().parent.parent
+RUN = ROOT / "bench" / "run.py"
+
+ISSUE_16 = ("floor: vm.handle GAP round trips/s", "sim:// Module.request GAP round trips/s",
+            "polling 1 axis every 10 ms: vm.handle", "polling 6 axes every 10 ms: vm.handle",
+            "polling 1 axis every 500 ms: Module.request,", "polling 6 axes every 500 ms: Module.request,",
+            "polling 6 axes every 10 ms: Module.request_many",
+            "served bus of 1 TMCM-6212", "served bus of 8 TMCM-6212",
+            "interpreter GAP loop, standing axis, instructions", "interpreter GAP loop, moving axis, 1 ms timer")
+OLDER = ("6212 six axes, 10-revolution moves", "PD86-1180 pulse_div=ramp_div=0", "TMC429 fast vs per-tick speed-up",
+         "in-process round trips per s", "memory world trace MB per hour at 10 ms",
+         "memory plot trace MB per hour at 10 ms", "proxy added by the proxy, ms", "endpoints TCP round trips/s: ours",
+         "endpoints pty round trips/s: ours")
 
 
-def test_bench_quick_runs_and_reports_every_figure():
-    out = subprocess.run([sys.executable, str(ROOT / "bench" / "run.py"), "--quick"], capture_output=True,
-                         text=True, timeout=300, check=True).stdout
-    for label in ("6212 six axes, 10-revolution moves", "PD86-1180 pulse_div=ramp_div=0",
-                  "TMC429 fast vs per-tick speed-up", "in-process round trips per s",
-                  "memory world trace MB per hour at 10 ms", "memory plot trace MB per hour at 10 ms",
-                  "proxy added by the proxy, ms"):
-        assert label in out
-    figures = [float(line.rsplit(None, 1)[-1].replace(",", "")) for line in out.splitlines() if line.strip()]
-    assert figures and all(f > 0 for f in figures)
+def load_run():
+    sys.path.insert(0, str(ROOT / "bench"))
+    spec = importlib.util.spec_from_file_location("bench_run", RUN)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_bench_quick_runs_and_reports_every_figure(tmp_path):
+    out_file = tmp_path / "quick.json"
+    out = subprocess.run([sys.executable, str(RUN), "--quick", "--json", str(out_file), "--commit", "abc123"],
+                         capture_output=True, text=True, timeout=300, check=True).stdout
+    doc = json.loads(out_file.read_text())
+    assert doc["commit"] == "abc123" and doc["clock"] == "wall"
+    assert doc["python"] == f"{sys.version_info.major}.{sys.version_info.minor}.{sys.version_info.micro}"
+    assert doc["commit"] and doc["quick"] is True
+    figures = doc["figures"]
+    for label in ISSUE_16 + OLDER:
+        matching = [name for name in figures if name.startswith(label)]
+        assert matching, label
+        assert label in out  # the table shows it too
+    batched = hasattr(Module, "request_many")
+    for name, f in figures.items():
+        assert set(f) == {"value", "reference", "reference_name", "ratio", "goal"}, name
+        if f["value"] is None:  # n/a only where the client has no request_many
+            assert "request_many" in name and not batched, name
+            continue
+        assert f["value"] > 0, name
+        if f["reference"] is not None:
+            assert f["reference"] > 0 and f["ratio"] == f["value"] / f["reference"], name
+    for label in ISSUE_16:  # every issue-16 figure stands next to a reference
+        for name in (n for n in figures if n.startswith(label)):
+            assert figures[name]["reference"] is not None, name
+
+
+def test_compare_prints_old_next_to_new_with_the_ratio():
+    run = load_run()
+    old = {"commit": "a", "figures": {"x": {"value": 100.0, "ratio": 0.25}, "gone": {"value": 1.0, "ratio": None}}}
+    new = {"commit": "b", "figures": {"x": {"value": 250.0, "ratio": 0.5}, "n/a one": {"value": None, "ratio": None}}}
+    lines = run.compare(old, new).splitlines()
+    assert lines[:2] == ["old: a", "new: b"]
+    row = next(line for line in lines if line.startswith("x "))
+    assert row.split()[1:] == ["100", "250", "2.50", "0.250", "0.500"]
+    assert next(line for line in lines if line.startswith("n/a one")).split()[-5:] == ["n/a", "n/a", "-", "-", "-"]
+    assert next(line for line in lines if line.startswith("gone")).split()[1:] == ["1.00", "n/a", "-", "-", "-"]
+
+
+def test_compare_with_a_file_that_is_not_a_result_is_a_clear_error(tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text("[1, 2]")
+    done = subprocess.run([sys.executable, str(RUN), "--compare", str(bad), "--json", str(tmp_path / "x.json")],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2
+    assert "not a results file of bench/run.py" in done.stderr and "Traceback" not in done.stderr
+    assert not (tmp_path / "x.json").exists()
+
+
+def test_profile_polling_prints_the_top_functions_by_tottime():
+    out = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "50", "--top", "5"],
+                         capture_output=True, text=True, timeout=120, check=True).stdout
+    assert "Ordered by: internal time" in out and "due to restriction <5>" in out
+    header = next(i for i, line in enumerate(out.splitlines()) if line.split()[:2] == ["ncalls", "tottime"])
+    assert len([line for line in out.splitlines()[header + 1:] if line.strip()]) == 5
+
+
+def test_profile_polling_refuses_a_count_that_is_not_positive():
+    done = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "0"],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2 and "must be a positive whole number" in done.stderr
+    assert "Traceback" not in done.stderr

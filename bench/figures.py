@@ -1,0 +1,73 @@
+"""A benchmark figure next to its reference, and the timing helpers the scenarios share.
+
+A figure is (name, value, reference, goal): `reference` is measured in the same run (a yardstick
+such as the minimal handler, or the slower path the figure is compared with), so `ratio` =
+value / reference does not depend on how loaded the machine was. `value` None means "n/a" (the
+code under test lacks the API the scenario needs).
+"""
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+clock: Callable[[], float] = time.perf_counter
+"""What the in-process scenarios time with: wall time (default), or this process's CPU time
+(`bench/run.py --cpu`, `use_cpu_time()`), which on a shared machine leaves out the time other
+processes had the core. Scenarios across processes (TCP, pty, proxy) always use wall time."""
+
+
+def use_cpu_time() -> None:
+    global clock
+    clock = time.process_time
+
+
+@dataclass
+class Figure:
+    name: str
+    value: float | None
+    reference: float | None = None
+    goal: str = ""
+    reference_name: str = ""
+
+    @property
+    def ratio(self) -> float | None:
+        if self.value is None or not self.reference:
+            return None
+        return self.value / self.reference
+
+    def as_json(self) -> dict:
+        return {"value": self.value, "reference": self.reference, "reference_name": self.reference_name,
+                "ratio": self.ratio, "goal": self.goal}
+
+
+def figures_of(label: str, values: dict[str, float]) -> list[Figure]:
+    """The figures of an older benchmark that reports plain values (no reference)."""
+    return [Figure(f"{label} {key}", value) for key, value in values.items()]
+
+
+def timed(step: Callable[[], float], budget: float) -> float:
+    """Call `step()` (which returns the units of work it did) until `budget` wall seconds have
+    passed; return units per wall second."""
+    step()  # warm-up, not counted
+    done = 0.0
+    start = clock()
+    while True:
+        done += step()
+        elapsed = clock() - start
+        if elapsed >= budget:
+            return done / elapsed
+
+
+def best_of(rounds: int, measures: list[Callable[[], float | None]]) -> list[float | None]:
+    """Best result of each measure over `rounds` interleaved rounds: on a busy machine the best
+    round is the least disturbed one, and interleaving puts every measure under the same load.
+    A measure that returns None (n/a) stays None."""
+    best: list[float | None] = [None] * len(measures)
+    for _ in range(rounds):
+        for i, measure in enumerate(measures):
+            got = measure()
+            if got is not None:
+                prev = best[i]
+                best[i] = got if prev is None else max(prev, got)
+    return best
