@@ -172,7 +172,7 @@ class ModuleBus:
         entries = table.get(frame[0]) if table is not None else None
         if entries is None or self._always:
             entries = self._targets(frame[0])
-        tried = None
+        tried: list | None = None
         while entries:
             for vm, key, handle in entries:
                 try:
