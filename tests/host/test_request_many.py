@@ -20,7 +20,7 @@ from opentmcl.host import (
     open_bus,
 )
 from opentmcl.host.client import MAX_BATCH, VersionReply
-from opentmcl.host.transports.inprocess import InProcessTransport
+from opentmcl.host.transports.inprocess import Clock, InProcessTransport
 from opentmcl.protocol.frame import Reply, Request
 from opentmcl.protocol.replies import MemoryReply
 
@@ -250,3 +250,31 @@ def test_over_tcp_matches_in_process(tcp_url):
 def test_module_request_many_is_the_clients():
     m = sim()
     assert m.request_many([(GGP, 66, 0, 0)], timeout=1.0) == m.client.request_many([(GGP, 66, 0, 0)])
+
+
+class Jump(Clock):
+    """A clock whose every sync lets one virtual second pass (events land in the buffer then)."""
+
+    def sync(self, transport):
+        transport.advance(1.0)
+
+
+class Watched(InProcessTransport):
+    """Overrides send: the client takes the usual path (the reference for the lean one)."""
+
+    def send(self, data):
+        super().send(data)
+
+
+@pytest.mark.parametrize("transport", [InProcessTransport, Watched])
+@pytest.mark.parametrize("many", [False, True])
+def test_an_event_from_the_clock_sync_is_taken_before_the_reply(transport, many):
+    """The 138 event produced while a request's sync lets time pass (manual 3.6.35) is registered
+    by that request, on the lean path as on the usual one."""
+    t = transport(VirtualModule("TMCM-6212", address=1), clock=Jump())
+    c = Client(t)
+    c.request(138, 0, 0, 1)
+    c.request(MVP, 0, 0, 100)
+    answer = c.request_many([(GAP, 1, 0, 0)])[0] if many else c.request(GAP, 1, 0)
+    assert answer.value == 100
+    assert c.pending_events() == 1

@@ -238,7 +238,8 @@ class Client:
         target = self.address if address is None else address
         frames = []
         for index, item in enumerate(requests):
-            if isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) != 4:
+            if not (item.__class__ is tuple and len(item) == 4) and (
+                    isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) != 4):
                 raise TmclTypeError(f"requests[{index}] must be a (command, type, motor, value) tuple, "
                                     f"got {item!r}")
             frame = _lean_frame(target, *item)

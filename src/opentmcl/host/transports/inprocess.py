@@ -240,7 +240,7 @@ class InProcessTransport(Transport, Generic[M]):
             self.clock.sync(self)
             module = self.modules[0]
             handle, drain = module.handle, module.drain_events
-            rx = self._rx
+            rx = self._rx  # a real clock's sync may have put events there
             for event in drain():  # an event before the first frame: the usual way
                 rx += event
             if rx:
@@ -266,11 +266,11 @@ class InProcessTransport(Transport, Generic[M]):
             replies = self.exchange([frame])
             return None if replies is None else replies[0]
         with self._lock:
-            self.clock.sync(self)
+            self.clock.sync(self)  # a real clock collects the events of the time that passed
             module = self.modules[0]
             events = module.drain_events()
-            reply = b"" if events else module.handle(frame)
-            if not events:
+            reply = b"" if events or self._rx else module.handle(frame)
+            if not events and not self._rx:
                 events = module.drain_events()
                 if not events and len(reply) == 9:
                     return reply
