@@ -109,6 +109,18 @@ def _takes_interface(vm) -> bool:
         return False
 
 
+def _bound_handle(vm, takes: bool, interface: str):
+    """`vm.handle` for frames of `interface`: the bound method itself when that is its default
+    (no keyword to pass on the hot path), else with the keyword bound."""
+    if not takes:
+        return vm.handle
+    try:
+        default = inspect.signature(vm.handle).parameters["interface"].default
+    except (TypeError, ValueError, KeyError):
+        default = None
+    return vm.handle if default == interface else partial(vm.handle, interface=interface)
+
+
 class ModuleBus:
     """Virtual modules sharing one bus; thread-safe; time paced to `clock`."""
 
@@ -127,7 +139,7 @@ class ModuleBus:
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
         # (module, its handle() for serial / USB frames) looked up once: the per-frame path is hot.
         self._serial_handlers, self._usb_handlers = (
-            [(vm, id(vm), partial(vm.handle, interface=interface) if self._interface_kw[id(vm)] else vm.handle)
+            [(vm, id(vm), _bound_handle(vm, self._interface_kw[id(vm)], interface))
              for vm in self.modules] for interface in ("serial", USB))
         self._map: dict[int, list] | None = None  # address byte -> [(vm, key, handle)], built on use
         self._always = [entry for entry in self._serial_handlers if not _mappable(entry[0])]
