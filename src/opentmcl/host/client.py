@@ -152,20 +152,10 @@ class Client:
         Command 136 type 0 returns a `VersionReply`, command 134 a `MemoryReply` (the stored
         instruction); command 137 sends no reply and returns None.
         """
-        exchange = self._exchange_one
-        if exchange is not None and command != 134 and command != 136 and command != 137:
-            frame = _lean_frame(self.address if address is None else address, command, type, motor, value)
-            if frame is not None:
-                wait = self.timeout if timeout is None else check_timeout(timeout)
-                with self._lock:
-                    if not self._dirty:
-                        reply = exchange(frame)
-                        if reply is None:
-                            return self._read_reply(_request_of(frame), wait)
-                        if sum(reply[:8]) & 0xFF == reply[8] and reply[1] == frame[0] and reply[3] == frame[1] \
-                                and reply[2] in _PLAIN:
-                            return Reply(*_BODY.unpack_from(reply))
-                        return self._lean_reply(frame, reply, wait)
+        if self._exchange_one is not None:
+            lean = self._lean(command, type, motor, value, address, timeout)
+            if lean is not None:
+                return lean
         req, timeout = self._prepare(command, type, motor, value, address, timeout)
         with self._lock:
             self._send(req)
@@ -184,6 +174,10 @@ class Client:
         if has_special_reply(command, type):
             raise TmclValueError(f"command {command} type {type} has no reply in the normal format "
                                  "(manual 3.2); use Client.request")
+        if self._exchange_one is not None:
+            lean = self._lean(command, type, motor, value, address, timeout)
+            if lean is not None:
+                return lean
         req, timeout = self._prepare(command, type, motor, value, address, timeout)
         with self._lock:
             self._send(req)
@@ -283,6 +277,28 @@ class Client:
         if req.command == READ_PROGRAM_MEMORY:
             return self._read_memory(req, timeout)
         return self._read_reply(req, timeout)
+
+    def _lean(self, command: int, type: int, motor: int, value: int, address: int | None,
+              timeout: float | None) -> Reply | None:
+        """`request` on the in-process lean path (`exchange_one`), or None when it does not apply:
+        a special reply (134, 136, 137), a field that is not a plain int in range, a dirty link."""
+        exchange = self._exchange_one
+        if exchange is None or command == 134 or command == 136 or command == 137:
+            return None
+        frame = _lean_frame(self.address if address is None else address, command, type, motor, value)
+        if frame is None:
+            return None
+        wait = self.timeout if timeout is None else check_timeout(timeout)
+        with self._lock:
+            if self._dirty:
+                return None
+            reply = exchange(frame)
+            if reply is None:
+                return self._read_reply(_request_of(frame), wait)
+            if sum(reply[:8]) & 0xFF == reply[8] and reply[1] == frame[0] and reply[3] == frame[1] \
+                    and reply[2] in _PLAIN:
+                return Reply(*_BODY.unpack_from(reply))
+            return self._lean_reply(frame, reply, wait)
 
     def _lean_reply(self, frame: bytes, reply: bytes, timeout: float) -> Reply:
         """The in-process reply to `frame` without the receive buffer, when it is the plain
