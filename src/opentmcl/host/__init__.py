@@ -18,6 +18,7 @@ from .errors import (
     AxisNumberError,
     TmclAddressError,
     TmclArgumentError,
+    TmclBatchError,
     TmclConnectionError,
     TmclError,
     TmclProtocolError,
@@ -32,7 +33,8 @@ from .module import Axis, Module, profile_for_version
 from .transport import Transport
 
 __all__ = [
-    "SCHEMES", "Axis", "AxisNumberError", "Client", "Module", "TmclArgumentError", "TmclConnectionError",
+    "SCHEMES", "Axis", "AxisNumberError", "Client", "Module", "TmclArgumentError", "TmclBatchError",
+    "TmclConnectionError",
     "TmclError", "TmclAddressError", "TmclProtocolError", "TmclStatusError", "TmclTimeout", "TmclTypeError",
     "TmclValueError", "Transport", "UnknownAttributeError", "UnknownParameterError", "VersionReply", "connect",
     "open_bus", "open_transport", "profile_for_version", "register_transport", "transport_schemes",

@@ -1,14 +1,17 @@
 """Request/reply client over any `Transport` (TMCM-6212 manual 3.1, 3.2, 3.6.35, 3.6.36).
 
 One request is in flight at a time ("Do not send the next command before
-having received the reply!", manual 3.2); a lock lets threads share a client.
+having received the reply!", manual 3.2) unless `request_many` is asked to send
+a window of them (`Transport.window`); a lock lets threads share a client.
 Replies are matched to the request by module address and command number;
 unsolicited "target position reached" replies (status 128, command 138) that
 arrive in between are kept and handed to `wait_position_reached`.
 """
 from __future__ import annotations
 
+import struct
 import threading
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
@@ -17,6 +20,7 @@ from ..protocol.replies import MemoryReply, is_version_request
 from ..protocol.status import Status, is_success
 from .errors import (
     TmclAddressError,
+    TmclBatchError,
     TmclProtocolError,
     TmclStatusError,
     TmclTimeout,
@@ -42,6 +46,12 @@ NO_REPLY = frozenset({RESTORE_FACTORY_SETTINGS})
 CAN_REPLY_LEN = 7  # module address, status, command, value (PD86-1180 manual 4.2)
 CAN_VERSION_LEN = 8  # the eight characters of the version string (PD86-1180 manual 4.6.39)
 _WAIT_SLICE = 0.05  # seconds the lock is held at a time while waiting for an event
+MAX_BATCH = 256
+"""The most requests one `Client.request_many` call takes (a longer batch: `TmclBatchError`)."""
+_BODY = struct.Struct(">BBBBi")  # the first eight bytes of a frame (manual 3.1)
+_SUCCESS = frozenset(int(s) for s in Status if is_success(s))  # 100, 101 and 128 (`is_success`)
+_EVENT = (int(Status.POSITION_REACHED_EVENT), REQUEST_TARGET_POSITION_REACHED_EVENT)
+_PLAIN = (int(Status.OK), int(Status.LOADED))  # success statuses that are never an event
 
 
 @dataclass(frozen=True, slots=True)
@@ -86,6 +96,22 @@ def has_special_reply(command: int, type: int) -> bool:
     return command in NO_REPLY or command == READ_PROGRAM_MEMORY or is_version_request(command, type)
 
 
+def _lean_frame(address: int, command: int, type: int, motor: int, value: int) -> bytes | None:
+    """The request frame when every field is a plain int in range (the common case), else None:
+    `Client._prepare` then checks and names what is wrong."""
+    if (address.__class__ is int and command.__class__ is int and type.__class__ is int
+            and motor.__class__ is int and value.__class__ is int
+            and 0 <= address <= 255 and 0 <= command <= 255 and 0 <= type <= 255 and 0 <= motor <= 255
+            and -0x8000_0000 <= value <= 0x7FFF_FFFF):
+        body = _BODY.pack(address, command, type, motor, value)
+        return body + bytes((sum(body) & 0xFF,))
+    return None
+
+
+def _request_of(frame: bytes) -> Request:
+    return Request(*_BODY.unpack_from(frame))
+
+
 def check_address(value: int) -> int:
     """A module address: an int 0..255 (the address byte of the frame, manual 3.1)."""
     return _check_byte("address", value)
@@ -110,6 +136,12 @@ class Client:
         self._events: dict[int, int] = {}  # module address -> OR of motor masks not yet consumed
         self._lock = threading.RLock()
         self._dirty = False  # a reply was lost or garbled: discard pending input before the next request
+        # The lean path of an in-process link (transports/inprocess.py `exchange`), looked up once.
+        serial = transport.frame_format == "serial"
+        self._exchange: Callable[[list[bytes]], list[bytes] | None] | None = getattr(
+            transport, "exchange", None) if serial else None
+        self._exchange_one: Callable[[bytes], bytes | None] | None = getattr(
+            transport, "exchange_one", None) if serial else None
 
     # ------------------------------------------------------------------ requests
 
@@ -120,6 +152,10 @@ class Client:
         Command 136 type 0 returns a `VersionReply`, command 134 a `MemoryReply` (the stored
         instruction); command 137 sends no reply and returns None.
         """
+        if self._exchange_one is not None:
+            lean = self._lean(command, type, motor, value, address, timeout)
+            if lean is not None:
+                return lean
         req, timeout = self._prepare(command, type, motor, value, address, timeout)
         with self._lock:
             self._send(req)
@@ -138,6 +174,10 @@ class Client:
         if has_special_reply(command, type):
             raise TmclValueError(f"command {command} type {type} has no reply in the normal format "
                                  "(manual 3.2); use Client.request")
+        if self._exchange_one is not None:
+            lean = self._lean(command, type, motor, value, address, timeout)
+            if lean is not None:
+                return lean
         req, timeout = self._prepare(command, type, motor, value, address, timeout)
         with self._lock:
             self._send(req)
@@ -150,6 +190,152 @@ class Client:
         with self._lock:
             self._send(req)
             return self._read_memory(req, timeout)
+
+    def request_many(self, requests: Sequence[tuple[int, int, int, int]], *, address: int | None = None,
+                     timeout: float | None = None) -> list[Answer]:
+        """Send several requests (``(command, type, motor, value)`` tuples) to `address` and return
+        their answers in order, each as `request` returns it.
+
+        Every request is checked before anything is sent (a bad one: TmclValueError/TmclTypeError
+        naming its index; more than `MAX_BATCH`: TmclBatchError). Up to `Transport.window` requests
+        are in flight at once (in-process: all of them, after one time sync). Every request is sent
+        and every reply read, also after one answered with an error status; then the first
+        `TmclStatusError` is raised, with its `index` in the batch and the `answers` of all (None
+        at a failed one), so the link stays in step. A timeout stops the batch at once
+        (`TmclTimeout`, requests after the window not sent); replies still on the way are
+        discarded before the next request, as after a timeout of `request`. `timeout` is per reply.
+        """
+        frames, timeout = self._prepare_many(requests, address, timeout)
+        if not frames:
+            return []
+        with self._lock:
+            exchange = self._exchange
+            special = any(f[1] == 134 or f[1] == 136 or f[1] == 137 for f in frames)
+            if exchange is not None and not self._dirty and not special:
+                replies = exchange(frames)
+                if replies is not None:
+                    return self._lean_replies(frames, replies, timeout)
+                return self._read_batch([_request_of(f) for f in frames], timeout, sent=True)
+            return self._read_batch([_request_of(f) for f in frames], timeout, sent=False)
+
+    def _prepare_many(self, requests: Sequence[tuple[int, int, int, int]], address: int | None,
+                      timeout: float | None) -> tuple[list[bytes], float]:
+        """The checked request frames (nine bytes each) and the time-out per reply."""
+        if isinstance(requests, (str, bytes)) or not isinstance(requests, Sequence):
+            raise TmclTypeError("requests must be a sequence of (command, type, motor, value) tuples, "
+                                f"got {type(requests).__name__}")
+        if len(requests) > MAX_BATCH:
+            raise TmclBatchError(f"a batch takes at most {MAX_BATCH} requests, got {len(requests)}; "
+                                 "split it into several request_many calls")
+        timeout = self.timeout if timeout is None else check_timeout(timeout)
+        self._check_reachable(address)
+        target = self.address if address is None else address
+        frames = []
+        for index, item in enumerate(requests):
+            if not (item.__class__ is tuple and len(item) == 4) and (
+                    isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) != 4):
+                raise TmclTypeError(f"requests[{index}] must be a (command, type, motor, value) tuple, "
+                                    f"got {item!r}")
+            frame = _lean_frame(target, *item)
+            if frame is None:  # not plain ints in range: checked (and named) the long way
+                try:
+                    frame = self._prepare(*item, address, timeout)[0].encode()
+                except TmclValueError as exc:
+                    raise TmclValueError(f"requests[{index}]: {exc}") from None
+                except TmclTypeError as exc:
+                    raise TmclTypeError(f"requests[{index}]: {exc}") from None
+            frames.append(frame)
+        return frames, timeout
+
+    def _read_batch(self, reqs: list[Request], timeout: float, *, sent: bool) -> list[Answer]:
+        """Send the requests a window at a time (unless `sent`) and read the answers in order."""
+        window = len(reqs) if sent else max(1, self.transport.window)
+        answers: list[Answer] = []
+        first: TmclStatusError | None = None
+        for start in range(0, len(reqs), window):
+            chunk = reqs[start:start + window]
+            if not sent:
+                self._send_many(chunk)
+            for req in chunk:
+                try:
+                    answers.append(self._read_answer(req, timeout))
+                except TmclStatusError as exc:
+                    if first is None:
+                        first, exc.index = exc, len(answers)
+                    answers.append(None)
+        if first is not None:
+            first.answers = list(answers)
+            raise first
+        return answers
+
+    def _read_answer(self, req: Request, timeout: float) -> Answer:
+        """The answer to a request already sent, as `request` reads it."""
+        if req.command in NO_REPLY:
+            return None
+        if is_version_request(req.command, req.type):
+            return self._read_version(req, timeout)
+        if req.command == READ_PROGRAM_MEMORY:
+            return self._read_memory(req, timeout)
+        return self._read_reply(req, timeout)
+
+    def _lean(self, command: int, type: int, motor: int, value: int, address: int | None,
+              timeout: float | None) -> Reply | None:
+        """`request` on the in-process lean path (`exchange_one`), or None when it does not apply:
+        a special reply (134, 136, 137), a field that is not a plain int in range, a dirty link."""
+        exchange = self._exchange_one
+        if exchange is None or command == 134 or command == 136 or command == 137:
+            return None
+        frame = _lean_frame(self.address if address is None else address, command, type, motor, value)
+        if frame is None:
+            return None
+        wait = self.timeout if timeout is None else check_timeout(timeout)
+        with self._lock:
+            if self._dirty:
+                return None
+            reply = exchange(frame)
+            if reply is None:
+                return self._read_reply(_request_of(frame), wait)
+            if sum(reply[:8]) & 0xFF == reply[8] and reply[1] == frame[0] and reply[3] == frame[1] \
+                    and reply[2] in _PLAIN:
+                return Reply(*_BODY.unpack_from(reply))
+            return self._lean_reply(frame, reply, wait)
+
+    def _lean_reply(self, frame: bytes, reply: bytes, timeout: float) -> Reply:
+        """The in-process reply to `frame` without the receive buffer, when it is the plain
+        matching reply; anything else goes back to the transport and is read the usual way."""
+        if sum(reply[:8]) & 0xFF == reply[8] and reply[1] == frame[0] and reply[3] == frame[1] \
+                and (reply[2], reply[3]) != _EVENT:
+            fields = _BODY.unpack_from(reply)
+            if fields[2] in _SUCCESS:
+                return Reply(*fields)
+            req = _request_of(frame)
+            raise TmclStatusError(fields[2], req, Reply(*fields))
+        self.transport.unread(reply)  # type: ignore[attr-defined]
+        return self._read_reply(_request_of(frame), timeout)
+
+    def _lean_replies(self, frames: list[bytes], replies: list[bytes], timeout: float) -> list[Answer]:
+        """`_lean_reply` for a batch: plain matching replies decoded at once, else all of them
+        back to the transport and read the usual way (errors after every reply was read)."""
+        answers: list[Answer] = []
+        first: TmclStatusError | None = None
+        for index, (frame, reply) in enumerate(zip(frames, replies, strict=True)):
+            if sum(reply[:8]) & 0xFF != reply[8] or reply[1] != frame[0] or reply[3] != frame[1] \
+                    or (reply[2], reply[3]) == _EVENT:
+                self.transport.unread(b"".join(replies))  # type: ignore[attr-defined]
+                return self._read_batch([_request_of(f) for f in frames], timeout, sent=True)
+            fields = _BODY.unpack_from(reply)
+            answer = Reply(*fields)
+            if fields[2] not in _SUCCESS:
+                if first is None:
+                    first = TmclStatusError(fields[2], _request_of(frame), answer)
+                    first.index = index
+                answers.append(None)
+            else:
+                answers.append(answer)
+        if first is not None:
+            first.answers = answers
+            raise first
+        return answers
 
     def _prepare(self, command: int, type: int, motor: int, value: int, address: int | None,
                  timeout: float | None) -> tuple[Request, float]:
@@ -185,6 +371,13 @@ class Client:
         if self.transport.frame_format == "can":
             data = data[1:]  # the CAN ID carries the module address
         self.transport.send(data)
+
+    def _send_many(self, reqs: list[Request]) -> None:
+        if self._dirty:
+            self.transport.reset_input()
+            self._dirty = False
+        cut = 1 if self.transport.frame_format == "can" else 0  # the CAN ID carries the address
+        self.transport.send_many([req.encode()[cut:] for req in reqs])
 
     def _remaining(self, deadline: float) -> float:
         return max(0.0, deadline - self.transport.monotonic())

@@ -17,6 +17,7 @@ KeyError: ``module.axes[6]`` on a six-axis module). The message is one line.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from ..protocol.frame import Reply, Request
 from ..protocol.opcodes import format_instruction
@@ -38,7 +39,14 @@ class TmclError(Exception):
 
 
 class TmclStatusError(TmclError):
-    """The module answered with a status other than 100/101 (manual 3.2.1)."""
+    """The module answered with a status other than 100/101 (manual 3.2.1).
+
+    Raised by `Client.request_many` after every reply of the batch was read: `index` is the
+    position of the (first) failed request in the batch, `answers` the answers of the batch
+    (None at each failed request); both None for a single request."""
+
+    index: int | None = None
+    answers: Sequence[object] | None = None
 
     def __init__(self, status: int, request: Request, reply: Reply | None = None):
         self.status = status
@@ -82,6 +90,10 @@ class TmclArgumentError(TmclError):
 
 class TmclValueError(TmclArgumentError, ValueError):
     """An argument of the right type but out of range (e.g. a value beyond 32 bits, timeout=-1)."""
+
+
+class TmclBatchError(TmclValueError):
+    """A `request_many` batch longer than `opentmcl.host.client.MAX_BATCH`; nothing was sent."""
 
 
 class TmclTypeError(TmclArgumentError, TypeError):

@@ -12,7 +12,7 @@ and answers bad ones with a status code, which raises `TmclStatusError`.
 """
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from typing import SupportsIndex, overload
 
 from ..modules.names import NameIndex
@@ -425,6 +425,12 @@ class Module:
                 timeout: float | None = None) -> Answer:
         """Send one request to this module; see `Client.request`."""
         return self.client.request(command, type, motor, value, address=self.address, timeout=timeout)
+
+    def request_many(self, requests: Sequence[tuple[int, int, int, int]], *,
+                     timeout: float | None = None) -> list[Answer]:
+        """Several ``(command, type, motor, value)`` requests to this module, answers in order;
+        see `Client.request_many`."""
+        return self.client.request_many(requests, address=self.address, timeout=timeout)
 
     def reply(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
               timeout: float | None = None) -> Reply:

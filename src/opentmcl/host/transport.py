@@ -104,10 +104,19 @@ class Transport(ABC):
     """Abstract byte transport. Implementations must be safe to close twice."""
 
     frame_format: str = "serial"
+    window: int = 1
+    """Requests `Client.request_many` may have in flight at once (sent before their replies are
+    read). 1 unless the link is known to take more: a real module's receive buffer is not
+    documented (docs/assumptions.md "Request-many and pipelining")."""
 
     @abstractmethod
     def send(self, data: bytes) -> None:
         """Send all of `data`; raise `TmclConnectionError` if the link is gone."""
+
+    def send_many(self, frames: list[bytes]) -> None:
+        """Send several frames one after the other (a stream link writes them at once)."""
+        for frame in frames:
+            self.send(frame)
 
     @abstractmethod
     def recv(self, n: int, timeout: float) -> bytes:
@@ -187,6 +196,14 @@ class StreamTransport(Transport):
             log_frame("->", data, self.frame_format)
         self._write(data)
 
+    def send_many(self, frames: list[bytes]) -> None:
+        """The frames in one write: a window of requests in flight (`window`)."""
+        self._check_open()
+        if log.isEnabledFor(DEBUG):
+            for frame in frames:
+                log_frame("->", frame, self.frame_format)
+        self._write(b"".join(frames))
+
     def recv(self, n: int, timeout: float) -> bytes:
         self._check_open()
         deadline = time.monotonic() + max(0.0, timeout)
@@ -222,6 +239,24 @@ def link_error(name: str, action: str, exc: OSError) -> str:
         return f"{name}: {action} timed out; check that the server or module still reads its link"
     cause = exc.strerror or str(exc)
     return f"{name}: {action} failed: {cause}"
+
+
+def url_window(query: dict[str, str], default: int, url: str) -> int:
+    """``?window=N`` of a stream URL: requests in flight in `Client.request_many`, 1..MAX_WINDOW."""
+    text = query.get("window")
+    if text is None:
+        return default
+    try:
+        window = int(text)
+    except ValueError:
+        raise TmclUrlError(f"bad window {text!r} in {url!r}; give a whole number 1..{MAX_WINDOW}") from None
+    if not 1 <= window <= MAX_WINDOW:
+        raise TmclUrlError(f"window must be 1..{MAX_WINDOW}, got {window}")
+    return window
+
+
+MAX_WINDOW = 64
+"""The most requests a stream link may have in flight (`?window=`)."""
 
 
 def url_query(url: urllib.parse.SplitResult, known: tuple[str, ...]) -> dict[str, str]:

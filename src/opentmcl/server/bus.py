@@ -8,8 +8,16 @@ modules' virtual time is advanced to the wall clock, so virtual time is paced
 to real time however many endpoints talk to the modules at once.
 
 The modules filter addresses themselves (a module returns b"" for a frame
-addressed to another module), so a serial frame is offered to every module
-and the replies of those that answer are returned.
+addressed to another module); to spare that call to every module, a serial
+frame goes only to the modules an address map names for its address byte
+(RS485 address GP66 and secondary address GP87, TMCM-6212 manual 5.1), the
+modules in ASCII mode left out. The map is built again after anything that
+may change it: a command other than those in `KEEPS_MAP` or an SGP to bank 0
+(SGP 66/87, RSGP, command 137, 139, program control), time passing (a TMCL
+program may SGP 66), ASCII input, a frame to an address the map does not
+know, and a mapped module that stays silent and no longer has the address.
+A link that stands for USB (the address byte is ignored) and modules
+without `accepts_address` and `globals.get_raw` get every frame, as before.
 
 `RealTimeRunner` is the background thread that keeps time moving while no
 request arrives, and hands unsolicited replies (the command-138 "target
@@ -77,11 +85,40 @@ costs the same however short the step, so a burst of requests shares one advance
 lag the wall clock by at most this much (docs/assumptions.md)."""
 
 
+KEEPS_MAP = frozenset({1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 13, 14, 15, 30, 31, 32, 135, 136, 138})
+"""Commands that cannot change a module's addresses or mode (motion, axis parameters, GGP, STGP,
+I/O, coordinates, status and version, command 138); SGP (9) only to banks other than 0."""
+SGP = 9
+
+
+def _changes_map(frame: bytes) -> bool:
+    """Can the module that handled `frame` have changed its address (GP66/GP87) or mode?"""
+    command = frame[1]
+    return command not in KEEPS_MAP and not (command == SGP and frame[3] != 0)
+
+
+def _mappable(vm) -> bool:
+    return callable(getattr(vm, "accepts_address", None)) and callable(
+        getattr(getattr(vm, "globals", None), "get_raw", None))
+
+
 def _takes_interface(vm) -> bool:
     try:
         return "interface" in inspect.signature(vm.handle).parameters
     except (TypeError, ValueError):
         return False
+
+
+def _bound_handle(vm, takes: bool, interface: str):
+    """`vm.handle` for frames of `interface`: the bound method itself when that is its default
+    (no keyword to pass on the hot path), else with the keyword bound."""
+    if not takes:
+        return vm.handle
+    try:
+        default = inspect.signature(vm.handle).parameters["interface"].default
+    except (TypeError, ValueError, KeyError):
+        default = None
+    return vm.handle if default == interface else partial(vm.handle, interface=interface)
 
 
 class ModuleBus:
@@ -102,14 +139,87 @@ class ModuleBus:
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
         # (module, its handle() for serial / USB frames) looked up once: the per-frame path is hot.
         self._serial_handlers, self._usb_handlers = (
-            [(vm, id(vm), partial(vm.handle, interface=interface) if self._interface_kw[id(vm)] else vm.handle)
+            [(vm, id(vm), _bound_handle(vm, self._interface_kw[id(vm)], interface))
              for vm in self.modules] for interface in ("serial", USB))
+        self._map: dict[int, list] | None = None  # address byte -> [(vm, key, handle)], built on use
+        self._always = [entry for entry in self._serial_handlers if not _mappable(entry[0])]
+
+    # -- the address map -------------------------------------------------
+    def invalidate(self) -> None:
+        """Build the address map again before the next frame (call after changing a module's
+        GP66/GP87 or ASCII mode other than through the bus)."""
+        self._map = None
+
+    def _build_map(self) -> dict[int, list]:
+        table: dict[int, list] = {}
+        for entry in self._serial_handlers:
+            vm = entry[0]
+            if getattr(vm, "ascii_mode", False) is True or not _mappable(vm):
+                continue  # ASCII mode reads the line as text (server/stream.py); unmapped: `_always`
+            get = vm.globals.get_raw
+            primary, secondary = get(0, vmapi.GP_SERIAL_ADDRESS), get(0, vmapi.GP_SERIAL_SECONDARY)
+            table.setdefault(primary, []).append(entry)
+            if secondary and secondary != primary:
+                table.setdefault(secondary, []).append(entry)
+        self._map = table
+        return table
+
+    def _targets(self, address: int) -> list:
+        """The (vm, key, handle) a frame to `address` goes to, in module order."""
+        table = self._map
+        entries = None if table is None else table.get(address)
+        if entries is None:  # not built, or no module had the address when it was: look again
+            entries = self._build_map().get(address, [])
+        if self._always:
+            order = {id(e[0]): i for i, e in enumerate(self._serial_handlers)}
+            entries = sorted([*entries, *self._always], key=lambda e: order[id(e[0])])
+        return entries
+
+    def _binary_frame(self, frame: bytes, channel: Channel | None,
+                      catch: bool = True) -> list[tuple[object, bytes, str]]:
+        """A 9-byte frame to the modules of its address (the map): [(module, reply, "binary")].
+        A module that raises is logged and skipped when `catch`, else the error propagates."""
+        out = []
+        table = self._map
+        entries = table.get(frame[0]) if table is not None else None
+        if entries is None or self._always:
+            entries = self._targets(frame[0])
+        tried: list | None = None
+        while entries:
+            for vm, key, handle in entries:
+                try:
+                    reply = handle(frame)
+                except Exception:  # a module bug: bad input is answered with a status code
+                    self._map = None
+                    if not catch:
+                        raise
+                    logging.getLogger("opentmcl.server").exception("module failed on frame %s", frame.hex(" "))
+                    continue
+                if reply:
+                    out.append((vm, reply, "binary"))
+                    if channel is not None:
+                        self._route[key] = channel
+                elif self._addressed(vm, frame[0]):
+                    if channel is not None:  # addressed but silent (GP255): reachable for its events
+                        self._route[key] = channel
+                elif tried is None:
+                    tried = []  # the map was stale: look again below
+            if tried is None:
+                break
+            tried.extend(entries)
+            seen = {id(e[0]) for e in tried}
+            entries = [e for e in self._build_map().get(frame[0], []) if id(e[0]) not in seen]
+        command = frame[1]
+        if command not in KEEPS_MAP and (command != SGP or frame[3] == 0):
+            self._map = None
+        return out
 
     # -- time -----------------------------------------------------------
     def sync(self) -> None:
         """Advance every module's virtual time to the wall clock, unless less than `min_step`
         has passed since the last advance (then the modules stay at most that far behind)."""
-        if self._clock() - self._last < self.min_step:
+        dt = self._clock() - self._last
+        if dt <= 0 or dt < self.min_step:
             return  # the common case on a busy link: no lock needed to find it out
         with self.lock:
             now = self._clock()
@@ -118,6 +228,7 @@ class ModuleBus:
                 for vm in self.modules:
                     vm.advance(dt)
                 self._last = now
+                self._map = None  # a TMCL program may have changed an address (SGP 66)
 
     # -- requests -------------------------------------------------------
     def _handle(self, vm, frame: bytes, interface: str) -> bytes:
@@ -130,6 +241,8 @@ class ModuleBus:
         replies = []
         with self.lock:
             self.sync()
+            if len(frame) == 9 and getattr(channel, "interface", None) != USB:
+                return [(vm, reply) for vm, reply, _kind in self._binary_frame(frame, channel, catch=False)]
             for vm in self.modules:
                 if getattr(vm, "ascii_mode", False) is True:
                     continue  # reads the line as text (server/stream.py)
@@ -142,6 +255,8 @@ class ModuleBus:
         """One 9-byte frame to every module, all in binary mode: [(module, reply, "binary")] for
         each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
         usb = getattr(channel, "interface", None) == USB
+        if not usb and len(frame) == 9:
+            return self._binary_frame(frame, channel)
         out = []
         route = self._route
         for vm, key, handle in self._usb_handlers if usb else self._serial_handlers:
@@ -162,6 +277,8 @@ class ModuleBus:
         """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced."""
         usb = getattr(channel, "interface", None) == USB
         reply = self._handle(vm, frame, USB if usb else "serial")
+        if len(frame) == 9 and _changes_map(frame):
+            self._map = None
         if channel is not None and (reply or usb or (frame and self._addressed(vm, frame[0]))):
             # A module that was addressed but stayed silent (reply suppressed)
             # still becomes reachable for its events through this channel.
@@ -172,6 +289,7 @@ class ModuleBus:
         """Bytes for a module in ASCII mode (PD28-1021 manual 3.4): its echo and reply text, and the
         bytes after a BIN line that are binary again. The caller holds `lock` and has synced."""
         out = vm.feed_ascii(data)
+        self._map = None  # ASCII commands may change an address, BIN the mode
         leftover = b"" if getattr(vm, "ascii_mode", False) is True else bytes(vm.ascii.leftover)
         if out and channel is not None:
             self._route[id(vm)] = channel

@@ -90,8 +90,11 @@ class SerialSession:
         if self.pace_bytes and data:
             self._wait_on_the_line(len(data), start)
         outputs = self.stream.feed(data, self._clock() - self._busy if now is None else now, self)
-        for vm, out, kind in outputs:
+        if len(outputs) == 1:
+            vm, out, kind = outputs[0]
             self.send_reply(vm, out, pause=kind == BINARY)
+        elif outputs:
+            self._send_together(outputs)
         self.bytes_received += len(data)
         if now is None:
             self._busy += self._clock() - start
@@ -106,6 +109,38 @@ class SerialSession:
         wait = self._rx_free - self._clock()
         if wait > 0:
             self._sleep(wait)
+
+    def _send_together(self, outputs: list) -> None:
+        """Several replies from one read (a pipelining host): those with no telegram pause and no
+        pacing due go out in one write, in order; a reply with a pause is written on its own."""
+        pending = bytearray()
+        for vm, out, kind in outputs:
+            if not self.pace_bytes and not self._pause(vm, kind == BINARY):
+                pending += out
+                continue
+            if pending:
+                with self._write_lock:
+                    self._write(bytes(pending))
+                pending.clear()
+            self.send_reply(vm, out, pause=kind == BINARY)
+        if pending:
+            with self._write_lock:
+                self._write(bytes(pending))
+
+    def _reader(self, vm) -> Callable[[int], int] | None:
+        if id(vm) not in self._readers:
+            self._readers[id(vm)] = vmapi.raw_reader(vm)
+        return self._readers[id(vm)]
+
+    def _pause(self, vm, pause: bool) -> float:
+        """Seconds of telegram pause (GP75, ms) before a reply of `vm`; 0 on USB or if not `pause`."""
+        if not pause or self.interface == USB:
+            return 0.0
+        reader = self._reader(vm)
+        if reader is not None:
+            return reader(vmapi.GP_TELEGRAM_PAUSE) / 1000.0
+        with self.bus.lock:
+            return vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0
 
     def deliver(self, vm, reply: bytes) -> None:
         """An unsolicited reply (command 138 event) for the host on this link."""

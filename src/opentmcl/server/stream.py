@@ -27,6 +27,7 @@ from logging import DEBUG
 from typing import NamedTuple
 
 from ..protocol.frame import FRAME_LEN
+from .bus import KEEPS_MAP
 from .framer import DEFAULT_GAP, SerialFramer
 
 log = logging.getLogger("opentmcl.server.stream")  # every frame at DEBUG (docs/host.md "Logging")
@@ -102,21 +103,45 @@ class SerialStream:
         bus = self.bus
         if data.__class__ is not bytes:
             data = bytes(data)
-        if len(data) == FRAME_LEN and not self._partial:
-            # The common case, kept lean: one whole frame while every module is between
-            # frames and in binary mode.
+        size = len(data)
+        if size >= FRAME_LEN and not self._partial:
+            # The common case, kept lean: whole frames while every module is between frames and
+            # in binary mode (one frame, or several sent at once by a pipelining host).
             with bus.lock:
                 for vm in bus.modules:
                     if getattr(vm, "ascii_mode", False) is True:
                         break
                 else:
                     bus.sync()
-                    self.frames += 1
-                    outputs = bus.serial_frames(data, channel)
-                    if log.isEnabledFor(DEBUG):
-                        _log_frames(data, outputs)
-                    return outputs
+                    if size == FRAME_LEN:
+                        self.frames += 1
+                        outputs = bus.serial_frames(data, channel)
+                        if log.isEnabledFor(DEBUG):
+                            _log_frames(data, outputs)
+                        return outputs
+                    return self._feed_frames(data, now, channel)
         return self._feed_each(data, now, channel)
+
+    def _feed_frames(self, data: bytes, now: float, channel) -> list:
+        """Several frames (and maybe the start of another) while every module is in binary mode:
+        each frame to the bus in turn, in order; once a frame may have switched a module to ASCII
+        (command 139, or 137 with GP67 bit 0 stored), the rest goes the general way."""
+        bus = self.bus
+        outputs: list = []
+        pos, size = 0, len(data)
+        while size - pos >= FRAME_LEN:
+            frame = data[pos:pos + FRAME_LEN]
+            pos += FRAME_LEN
+            self.frames += 1
+            out = bus.serial_frames(frame, channel)
+            if log.isEnabledFor(DEBUG):
+                _log_frames(frame, out)
+            outputs += out
+            if frame[1] not in KEEPS_MAP and any(in_ascii_mode(vm) for vm in bus.modules):
+                break
+        if pos < size:
+            outputs += self._feed_each(data[pos:], now, channel)
+        return outputs
 
     def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
         """The general case: every module reads the bytes in its own mode."""

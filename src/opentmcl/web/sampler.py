@@ -135,19 +135,13 @@ class Sampler:
         with self.lock:
             self._expire(self.clock())
             wanted = {s: None for c in self.clients.values() for s in c.series}
-        values = {s: self._read(s) for s in wanted}
+        values = dict(zip(wanted, self.d.read_many([(KINDS[s[0]], s[2], s[1], 0) for s in wanted]), strict=True))
         t = round(self.d.clock() - self.d.start, 4)
         seq = next(self.seq)
         with self.lock:
             for c in self.clients.values():
                 c.rows.append([seq, t, *(values.get(s) for s in c.series)])
             return len(self.clients)
-
-    def _read(self, s: Series) -> int | None:
-        kind, index, number = s
-        module = self.d.module
-        value = self.d._try(lambda: module.reply(KINDS[kind], number, index).value)
-        return value if isinstance(value, int) else None
 
     def _ensure_thread(self) -> None:
         with self.lock:

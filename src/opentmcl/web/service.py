@@ -20,6 +20,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from ..host import Module, TmclError, TmclStatusError, VersionReply
+from ..protocol.frame import Reply
 from ..protocol.status import message
 
 log = logging.getLogger("opentmcl.web")
@@ -128,6 +129,22 @@ class Dashboard:
             self.last_error = str(exc)
             return default
 
+    def read_many(self, requests: list[tuple[int, int, int, int]]) -> list[int | None]:
+        """The values of several reads (GAP/GGP/GIO) in one `request_many`, in order: None for a
+        read the module refused (its status) and for all of them when the link failed."""
+        if not requests:
+            return []
+
+        def run() -> list[int | None]:
+            answers: list[object]
+            try:
+                answers = list(self.module.request_many(requests))
+            except TmclStatusError as exc:  # the others were read: keep their values
+                answers = list(exc.answers or [None] * len(requests))
+            return [a.value if isinstance(a, Reply) else None for a in answers]
+
+        return self._try(run, [None] * len(requests))
+
     @contextlib.contextmanager
     def _user_action(self):
         """Errors of a user action: a status error becomes DashboardError with the manual's text; a
@@ -173,10 +190,8 @@ class Dashboard:
     # --- sampling --------------------------------------------------------------------------
     def sample_fast(self) -> Sample:
         """Position (axis parameter 1) and actual speed (3) of every axis."""
-        pos, vel = [], []
-        for ax in range(self.profile.axes):
-            pos.append(self._try(lambda a=ax: self.module.reply(6, 1, a).value))
-            vel.append(self._try(lambda a=ax: self.module.reply(6, 3, a).value))
+        values = self.read_many([(6, n, ax, 0) for ax in range(self.profile.axes) for n in (1, 3)])
+        pos, vel = values[0::2], values[1::2]
         self.seq += 1
         s = Sample(self.seq, round(self.clock() - self.start, 4), pos, vel)
         self.samples.append(s)
@@ -185,12 +200,10 @@ class Dashboard:
     def sample_slow(self) -> dict:
         """Axis cards, outputs/inputs and program status."""
         have = self.profile.axis_parameters
-        axes = []
-        for ax in range(self.profile.axes):
-            card = {}
-            for key, num in CARD_PARAMS.items():
-                card[key] = self._try(lambda n=num, a=ax: self.module.reply(6, n, a).value) if num in have else None
-            axes.append(card)
+        shown = [num for num in CARD_PARAMS.values() if num in have]
+        values = iter(self.read_many([(6, num, ax, 0) for ax in range(self.profile.axes) for num in shown]))
+        axes = [{key: next(values) if num in have else None for key, num in CARD_PARAMS.items()}
+                for _ in range(self.profile.axes)]
         state = {"axes": axes, "io": self.read_io(), "program": self.program_state(),
                  "connected": self.connected, "last_error": self.last_error}
         self.state = state
@@ -295,8 +308,10 @@ class Dashboard:
     def read_io(self) -> list[dict]:
         out = []
         forced = self._forced()
-        for io in sorted(self.profile.io.values(), key=lambda i: (i.bank, i.port)):
-            value = self._try(lambda i=io: self.module.reply(15, i.port, i.bank).value) if "R" in io.access else None
+        ports = sorted(self.profile.io.values(), key=lambda i: (i.bank, i.port))
+        values = iter(self.read_many([(15, io.port, io.bank, 0) for io in ports if "R" in io.access]))
+        for io in ports:
+            value = next(values) if "R" in io.access else None
             out.append({"bank": io.bank, "port": io.port, "name": io.name, "kind": io.kind, "value": value,
                         "forced": forced.get((io.bank, io.port))})
         return out
@@ -463,9 +478,8 @@ class Dashboard:
             src = prog.source[st.pc]
             if src is not None and src.file == "<editor>":
                 line = src.line
-        variables = {}
-        for n in self._variables_shown():
-            variables[n] = self._try(lambda i=n: self.module.reply(10, i, USER_BANK).value)
+        shown = self._variables_shown()
+        variables = dict(zip(shown, self.read_many([(10, n, USER_BANK, 0) for n in shown]), strict=True))
         return {"seq": seq, "mode": st.mode, "mode_name": st.mode_name, "waiting": st.waiting, "pc": st.pc, "line": line,
                 "a": st.accumulator, "x": st.x_register, "flags": describe_flags(st.flags),
                 "variables": variables, "breakpoints": sorted(self.breakpoints),

@@ -152,6 +152,7 @@ class InProcessTransport(Transport, Generic[M]):
     """Transport to one or more VirtualModule-like objects (`SimulatedModule`) in this process."""
 
     frame_format = "serial"
+    window = 1 << 16  # a whole batch is handed over at once: nothing is lost in between
 
     def __init__(self, modules: M | Iterable[M], clock: str | Clock = "virtual") -> None:
         if isinstance(modules, Iterable):
@@ -165,6 +166,8 @@ class InProcessTransport(Transport, Generic[M]):
         self._rx = bytearray()
         self._closed = False
         self._lock = threading.RLock()  # `lock`: the modules are not thread-safe; one caller at a time
+        cls = type(self)  # a subclass that watches send/recv gets every frame through them
+        self._lean = cls.send is InProcessTransport.send and cls.recv is InProcessTransport.recv
 
     @property
     def module(self) -> M:
@@ -193,17 +196,104 @@ class InProcessTransport(Transport, Generic[M]):
             self._collect_events()
 
     def send(self, data: bytes) -> None:
+        self._send_frames([data])
+
+    def send_many(self, frames: list[bytes]) -> None:
+        """Hand the frames to every module in turn, after one time sync for all of them."""
+        if not self._lean:
+            for frame in frames:
+                self.send(frame)
+            return
+        self._send_frames(frames)
+
+    def _send_frames(self, frames: list[bytes]) -> None:
         with self.lock:
             self._check_open()
-            if log.isEnabledFor(DEBUG):
-                log_frame("->", data, self.frame_format)
+            debug = log.isEnabledFor(DEBUG)
             self.clock.sync(self)
             self._collect_events()
-            for m in self.modules:
-                reply = m.handle(bytes(data))
-                if reply:
-                    self._rx += reply
+            for data in frames:
+                if debug:
+                    log_frame("->", data, self.frame_format)
+                frame = data if data.__class__ is bytes else bytes(data)
+                for m in self.modules:
+                    reply = m.handle(frame)
+                    if reply:
+                        self._rx += reply
+                self._collect_events()
+
+    def exchange(self, frames: list[bytes]) -> list[bytes] | None:
+        """The lean path of `Client`: one time sync, each frame to the modules, and the replies
+        returned as they are when every frame got exactly one 9-byte reply, no event arrived and
+        nothing was waiting to be read. Otherwise (or with DEBUG logging on) the replies and events
+        are left in the receive buffer in arrival order, as `send_many` leaves them, and None is
+        returned: the client then reads them the usual way."""
+        if not self._lean:
+            for frame in frames:
+                self.send(frame)
+            return None
+        if self._rx or log.isEnabledFor(DEBUG) or len(self.modules) != 1:
+            self._send_frames(frames)
+            return None
+        with self.lock:
+            self._check_open()
+            self.clock.sync(self)
+            module = self.modules[0]
+            handle, drain = module.handle, module.drain_events
+            rx = self._rx  # a real clock's sync may have put events there
+            for event in drain():  # an event before the first frame: the usual way
+                rx += event
+            if rx:
+                self._queue(frames, handle)
+                return None
+            replies = []
+            for index, frame in enumerate(frames):
+                reply = handle(frame)
+                replies.append(reply)
+                events = drain()
+                if len(reply) != 9 or events:
+                    for done in replies:
+                        rx += done
+                    for event in events:
+                        rx += event
+                    self._queue(frames[index + 1:], handle)
+                    return None
+            return replies
+
+    def exchange_one(self, frame: bytes) -> bytes | None:
+        """`exchange` of one frame: its reply, or None with everything left in the buffer."""
+        if self._rx or self._closed or not self._lean or len(self.modules) != 1 or log.isEnabledFor(DEBUG):
+            replies = self.exchange([frame])
+            return None if replies is None else replies[0]
+        with self._lock:
+            self.clock.sync(self)  # a real clock collects the events of the time that passed
+            module = self.modules[0]
+            events = module.drain_events()
+            reply = b"" if events or self._rx else module.handle(frame)
+            if not events and not self._rx:
+                events = module.drain_events()
+                if not events and len(reply) == 9:
+                    return reply
+                self._rx += reply
+                for event in events:
+                    self._rx += event
+                return None
+            for event in events:
+                self._rx += event
+            self._queue([frame], module.handle)
+            return None
+
+    def _queue(self, frames: list[bytes], handle: Callable[[bytes], bytes]) -> None:
+        """`send_many` without the sync (done): replies and events into the receive buffer."""
+        for frame in frames:
+            self._rx += handle(frame)
             self._collect_events()
+
+    def unread(self, data: bytes) -> None:
+        """Put bytes back in front of the receive buffer (the client's lean path gives back a
+        reply it does not read itself)."""
+        with self.lock:
+            self._rx[:0] = data
 
     def recv(self, n: int, timeout: float) -> bytes:
         with self.lock:

@@ -2,12 +2,18 @@
 
     serial:///dev/ttyUSB0?baud=9600        (POSIX path)
     serial://COM3?baud=115200              (Windows port name)
+    serial:///dev/pts/5?window=8           (`opentmcl serve --pty`: 8 requests in flight)
 
 `baud` defaults to 9600, the modules' default (global parameter 65). Any other
 pyserial port name works too, including pyserial URLs given as
 ``serial://?port=URL`` (e.g. ``port=opentmcl://TMCM-6212``). Before pyserial opens a port
 URL, the hook registered for its scheme (`register_port_handler`) runs, so pyserial knows
 handlers that live in other layers: the root package registers ``opentmcl://``.
+
+`window` (default 1) is how many requests `Client.request_many` sends before reading their
+replies. A real module's receive buffer is not documented and the manual says "Do not send the
+next command before having received the reply!" (TMCM-6212 manual 3.2), so more only on request,
+e.g. for our pty server (docs/assumptions.md "Request-many and pipelining").
 """
 from __future__ import annotations
 
@@ -19,7 +25,7 @@ from typing import Protocol
 
 from ... import registry
 from ..errors import TmclConnectionError, TmclTypeError, TmclUrlError
-from ..transport import StreamTransport, link_error, log, register_checked, url_query
+from ..transport import StreamTransport, link_error, log, register_checked, url_query, url_window
 
 DEFAULT_BAUD = 9600
 
@@ -96,7 +102,7 @@ def open_error(port: str, exc: BaseException) -> str:
 class SerialTransport(StreamTransport):
     """A pyserial port; `recv` returns exactly n bytes or raises `TmclTimeout`."""
 
-    def __init__(self, port: str, baud: int = DEFAULT_BAUD) -> None:
+    def __init__(self, port: str, baud: int = DEFAULT_BAUD, window: int = 1) -> None:
         import serial
 
         if not isinstance(port, str):
@@ -104,6 +110,7 @@ class SerialTransport(StreamTransport):
         prepare_port(port)
         super().__init__()
         self.port = port
+        self.window = window
         self.name = f"serial port {port}"
         try:
             self._ser: PyserialPort = serial.serial_for_url(port, baudrate=baud, timeout=0.1, write_timeout=5.0)
@@ -152,7 +159,8 @@ class SerialTransport(StreamTransport):
 
 def open_serial(url: urllib.parse.SplitResult) -> SerialTransport:
     """Factory for ``serial:///dev/ttyX?baud=N``, ``serial://COM3?baud=N`` or ``serial://?port=URL``."""
-    query = url_query(url, ("port", "baud"))
+    query = url_query(url, ("port", "baud", "window"))
+    window = url_window(query, 1, url.geturl())
     port = query.get("port") or (url.netloc + url.path if url.netloc else url.path)
     if not port:
         raise TmclUrlError(f"serial URL names no port, e.g. serial:///dev/ttyUSB0, got {url.geturl()!r}")
@@ -162,4 +170,4 @@ def open_serial(url: urllib.parse.SplitResult) -> SerialTransport:
         raise TmclUrlError(f"bad baud rate in {url.geturl()!r}") from None
     if baud <= 0:
         raise TmclUrlError(f"bad baud rate {baud}")
-    return SerialTransport(port, baud)
+    return SerialTransport(port, baud, window)

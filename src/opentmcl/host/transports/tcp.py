@@ -3,7 +3,12 @@
 For `opentmcl serve --tcp` and for Ethernet-to-serial converters in front of
 a real module, which carry the serial line's bytes unchanged.
 
-    tcp://HOST:PORT[?connect_timeout=SECONDS]
+    tcp://HOST:PORT[?connect_timeout=SECONDS&window=N]
+
+`window` (default 8) is how many requests `Client.request_many` sends before it reads their
+replies; our servers answer frames that arrive together in order (docs/endpoints.md). In front
+of a real module (an Ethernet-to-serial converter) use ``window=1``: its receive buffer is not
+documented (docs/assumptions.md).
 """
 from __future__ import annotations
 
@@ -11,17 +16,20 @@ import socket
 import urllib.parse
 
 from ..errors import TmclConnectionError, TmclUrlError, check_timeout
-from ..transport import StreamTransport, link_error, log, url_query
+from ..transport import StreamTransport, link_error, log, url_query, url_window
 
 DEFAULT_CONNECT_TIMEOUT = 5.0
+DEFAULT_WINDOW = 8
 
 
 class TcpTransport(StreamTransport):
     """A connected TCP socket; `recv` returns exactly n bytes or raises `TmclTimeout`."""
 
-    def __init__(self, host: str, port: int, connect_timeout: float = DEFAULT_CONNECT_TIMEOUT) -> None:
+    def __init__(self, host: str, port: int, connect_timeout: float = DEFAULT_CONNECT_TIMEOUT,
+                 window: int = DEFAULT_WINDOW) -> None:
         connect_timeout = check_timeout(connect_timeout, "connect_timeout")
         super().__init__()
+        self.window = window
         self.host, self.port = host, port
         self.name = f"tcp://{host}:{port}"
         try:
@@ -80,8 +88,9 @@ class TcpTransport(StreamTransport):
 
 
 def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
-    """Factory for ``tcp://HOST:PORT[?connect_timeout=S]``."""
-    query = url_query(url, ("connect_timeout",))
+    """Factory for ``tcp://HOST:PORT[?connect_timeout=S&window=N]``."""
+    query = url_query(url, ("connect_timeout", "window"))
+    window = url_window(query, DEFAULT_WINDOW, url.geturl())
     try:
         port = url.port
     except ValueError:
@@ -95,4 +104,4 @@ def open_tcp(url: urllib.parse.SplitResult) -> TcpTransport:
     if not 0 < connect_timeout < float("inf"):  # also NaN
         raise TmclUrlError(f"connect_timeout must be a positive, finite number of seconds, "
                                   f"got {connect_timeout}")
-    return TcpTransport(url.hostname, port, connect_timeout)
+    return TcpTransport(url.hostname, port, connect_timeout, window)
