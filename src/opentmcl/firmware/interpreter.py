@@ -39,10 +39,17 @@ STACK_DEPTH = 8               # "The number of entries in the internal stack is 
 READS_VALUE = frozenset({6, 10, 15, 31})  # GAP, GGP, GIO, GCO (and RFS STATUS) load the accumulator
 CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number from public TMCL headers)
 # Instructions that neither read nor change anything outside the program's registers, flags,
-# stack and user variables (SGP/GGP/AGP on bank 2), or only the I/O ports (SIO, GIO: inputs change
-# only at world events or host commands): they may run ahead of the motors (_run_ahead).
-PURE = frozenset({14, 15, 19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
+# stack and user variables (SGP/GGP/AGP on bank 2), or only the outputs (SIO): they may run
+# ahead of the motors (_run_ahead).
+PURE = frozenset({14, 19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
 PURE_ON_BANK_2 = frozenset({9, 10, 35})
+# Reads that may also run ahead, at their own tick (_run_ahead): GAP (not of world-computed
+# parameters nor AP207, which clears the error flags when read), GGP of any bank, GIO (an
+# analog input changes between events: it is read at the instruction's tick).
+READS_AHEAD = frozenset({6, 10, 15})
+# After any other instruction (SAP, SGP, motion, EI/DI/VECT, WAIT, STOP, ...) the module's
+# cached next event (VirtualModule._limit_event) is looked up again: it may have moved.
+RETI = 38
 
 
 @dataclass
@@ -76,7 +83,6 @@ class Interpreter:
         self.last_error: tuple[int, int, int] | None = None  # (pc, command, status)
         self.executed = 0                   # instructions executed since power-up
         self._t: int | None = None          # tick of an instruction run ahead of vm.now
-        self._probing = False
 
     @property
     def waiting(self) -> bool:
@@ -89,29 +95,38 @@ class Interpreter:
             self.run(0)
 
     def next_event(self) -> int | None:
-        """Absolute tick at which the program next needs service, > vm.now, or None."""
+        """Absolute tick at which the program next needs service, > vm.now, or None
+        (latches what occurred up to now first; `own_event` plus the timers)."""
+        vm = self.vm
+        now = vm.now
+        vm.interrupts.poll(now)
+        t = self.own_event()
+        timer = vm.interrupts.next_timer_event(now, refresh=False)
+        if timer is not None and (t is None or timer < t):
+            t = max(timer, now + 1)
+        return t
+
+    def own_event(self) -> int | None:
+        """The program's own next tick (instruction, WAIT timeout or check, dispatch from a
+        WAIT), > vm.now, or None; timers are the module's (`VirtualModule._limit_event`)."""
         vm = self.vm
         now = vm.now
         status = vm.application_status
-        if self._probing:
-            return vm.interrupts.next_timer_event(now)
         if status not in (RUNNING, STEPPING):
-            vm.interrupts.poll(now)  # keep the timers' phase
             return None
-        vm.interrupts.poll(now)
+        w = self.wait
+        if w is None:
+            t = self.next_time
+            if status != RUNNING or t is None:
+                return None
+            return t if t > now else now + 1
         candidates = []
-        if self.wait is not None:
-            if self.wait.deadline is not None:
-                candidates.append(self.wait.deadline)
-            if status == RUNNING and vm.interrupts.next_dispatch() is not None:
-                candidates.append(now + 1)
-            if wait.satisfied(vm, self.wait):  # met outside an event: host command, after RETI
-                candidates.append(now + 1)
-        elif status == RUNNING and self.next_time is not None:
-            candidates.append(self.next_time)
-        timer = vm.interrupts.next_timer_event(now, refresh=False)
-        if timer is not None:
-            candidates.append(timer)
+        if w.deadline is not None:
+            candidates.append(w.deadline)
+        if status == RUNNING and vm.interrupts.next_dispatch() is not None:
+            candidates.append(now + 1)
+        if wait.satisfied(vm, w):  # met outside an event: host command, after RETI
+            candidates.append(now + 1)
         if not candidates:
             return None
         return max(min(candidates), now + 1)
@@ -129,6 +144,7 @@ class Interpreter:
             return
         if self.wait is not None or (self.next_time is not None and self.next_time <= now):
             if self._dispatch_interrupt():
+                self._run_ahead()
                 return
         if self.wait is None and self.next_time is not None and self.next_time <= now:
             self._execute_next()
@@ -136,33 +152,60 @@ class Interpreter:
 
     def _run_ahead(self) -> None:
         """Execute pure instructions (PURE) at their own ticks without stopping the motors'
-        clock, up to the next event of anything else and never past the end of the current
-        `advance` (vm.horizon). The result is the same as one event per instruction: nothing a
-        pure instruction reads can change in between, and no host command arrives during an
-        `advance`. A tight polling loop then costs one event per loop pass, not per instruction."""
+        clock, up to the next event of anything else (`VirtualModule._limit_event`) and never
+        past the end of the current `advance` (vm.horizon). The result is the same as one event
+        per instruction: nothing a pure instruction reads can change in between, and no host
+        command arrives during an `advance`. A tight polling loop then costs one event per loop
+        pass, not per instruction.
+
+        Reads (READS_AHEAD: GAP of a parameter the world does not compute, GGP) and RETI run
+        ahead too when the world does nothing between its events (`World.quiet`): time moves
+        to the read's tick and the engines follow it there, exactly as an event would; no
+        engine, world, heartbeat or timer event lies before the limit, so such an event would
+        only run the instruction."""
         vm = self.vm
         horizon = getattr(vm, "horizon", None) if self.run_ahead else None
+        if horizon is None:
+            return
         code = vm.program.code
-        limit = None
-        while (vm.application_status == RUNNING and self.wait is None and self.next_time is not None
-               and horizon is not None and self.next_time < horizon
-               and 0 <= vm.program_counter < len(code) and vm.interrupts.next_dispatch() is None):
-            command, _, bank, _ = code[vm.program_counter]
-            if not (command in PURE or (command in PURE_ON_BANK_2 and bank == 2)):
-                break
-            if limit is None:
-                self._probing = True
-                try:
-                    limit = vm._next_event(horizon)
-                finally:
-                    self._probing = False
-            if self.next_time >= limit:
-                break
-            self._t = self.next_time
-            try:
+        size = len(code)
+        ints = vm.interrupts
+        limit = -1          # not looked up yet
+        quiet = None
+        world_numbers = vm.world.axis_numbers
+        try:
+            while True:
+                t = self.next_time
+                if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
+                    break
+                pc = vm.program_counter
+                if not 0 <= pc < size or (ints.pending and ints.next_dispatch() is not None):
+                    break
+                command, type_, bank, _ = code[pc]
+                if command in PURE or (command in PURE_ON_BANK_2 and bank == 2):
+                    read = False
+                elif command in READS_AHEAD and (command != 6 or (type_ not in world_numbers and type_ != 207)):
+                    read = True
+                elif command == RETI and self.saved is not None and self.saved.wait is None:
+                    read = False
+                else:
+                    break
+                if limit == -1:
+                    nxt = vm._limit_event()
+                    limit = horizon if nxt is None else nxt
+                if t >= limit:
+                    break
+                if read or command == RETI:
+                    if quiet is None:
+                        quiet = vm.world.quiet()
+                    if not quiet:
+                        break
+                    if read:
+                        vm.now = t              # the read's own tick: the engines follow there
+                self._t = t
                 self._execute_next()
-            finally:
-                self._t = None
+        finally:
+            self._t = None
 
     # --- control commands 128-131 (manual 3.6.36) ------------------------------------------
     def run(self, address: int | None) -> None:
@@ -287,6 +330,7 @@ class Interpreter:
         self.executed += 1
         handler = FLOW.get(command)
         available = command in vm.profile.opcodes
+        keeps, dirty = self._keeps_events(command, type, motor), vm._engines_dirty
         try:
             if handler is not None and available:
                 if handler(self, type, motor, value):  # True: the handler set the PC itself
@@ -299,8 +343,20 @@ class Interpreter:
                 self._generic(command, type, motor, value)
         except TmclStatus as exc:
             self._fail(command, exc.status)
+        finally:
+            if keeps:  # the engines at most followed to now: their plans and events stay
+                vm._engines_dirty = dirty
+            else:
+                vm._limit_ok = False
         vm.program_counter = pc + 1
         self._pause_or_continue()
+
+    def _keeps_events(self, command: int, type: int, bank: int) -> bool:
+        """Can this instruction leave every event but the program's own where it was? Pure
+        instructions, the reads that may run ahead and RETI."""
+        if command in PURE or command == RETI or (command in PURE_ON_BANK_2 and bank == 2):
+            return True
+        return command in READS_AHEAD and (command != 6 or (type not in self.vm.world.axis_numbers and type != 207))
 
     def _generic(self, command: int, type: int, motor: int, value: int) -> None:
         """Motion, parameter, I/O and coordinate commands: the direct-mode handler, then the
