@@ -171,13 +171,8 @@ class Interrupts:
             if (mode & LOW_HIGH and level) or (mode & HIGH_LOW and not level):
                 self.pending.add(n)
 
-    polled_at = -1
-    """Tick of the last `poll` (VirtualModule._limit_event skips a second one when nothing
-    that a poll sees was written since)."""
-
     def poll(self, now: int) -> None:
         """Latch what occurred up to tick `now` (timers, level transitions)."""
-        self.polled_at = now
         self._refresh_timers(now)
         self._run_timers(now)
         if self.enabled and self.global_enable:

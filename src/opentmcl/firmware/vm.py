@@ -219,7 +219,6 @@ class VirtualModule:
         the call and looked up again only after a write that can move it (docs/architecture.md
         "Time"); host commands come between calls, so every call starts afresh."""
         self.horizon = until  # the interpreter may run pure instructions ahead up to here
-        self._limit_ok = False
         try:
             while self.now < until:
                 nxt = self._next_event(until)
@@ -231,7 +230,7 @@ class VirtualModule:
                 self._after_step()
                 self.interpreter.service()
         finally:
-            self._limit_ok = False
+            self._limit_ok = False  # host commands come next
         self.sync()
 
     def _engine_step(self, now: int) -> None:
@@ -245,7 +244,6 @@ class VirtualModule:
                 if self._armed >> i & 1:
                     self._report_arrival(i)
         self._engine_next = min((t for t in times if t is not None), default=None)
-        self._limit_ok = False  # a new ramp phase moves the world's events too
 
     def _report_arrival(self, i: int) -> None:
         if self.axes[i].engine.position_reached:
@@ -293,8 +291,9 @@ class VirtualModule:
     def _limit_event(self) -> int | None:
         """Next event of the engines, heartbeats, timers and world (all but the program's own
         schedule), > now or None. Cached while `_limit_ok`; a write that can move it clears the
-        flag (engine events and commands via `_engines_dirty`, world checks, a fired heartbeat,
-        a program instruction that is not a pure read) and reaching it makes it stale."""
+        flag (commands via `_engines_dirty`, world checks, a program instruction that is not pure,
+        a read or RETI) and reaching it makes it stale (engine events, timers, heartbeats: the
+        event is the limit itself)."""
         now = self.now
         t = self._limit
         held = self._limit_ok and not self._engines_dirty  # no write since the last look-up
@@ -308,7 +307,7 @@ class VirtualModule:
         if hb is not None and now < hb and (best is None or hb < best):
             best = hb
         ints = self.interrupts
-        if not (held and ints.polled_at == now):  # polled at this tick with no write since: the same
+        if not held:  # else reached: an event tick, polled by the interpreter with no write since
             ints.poll(now)  # latch what a command just did (levels) and re-phase rewritten timers
         t = ints.next_timer_event(now, refresh=False)
         if t is not None and now < t and (best is None or t < best):
@@ -344,7 +343,6 @@ class VirtualModule:
         hb = self._heartbeat_deadline()
         if hb is not None and self.now >= hb:
             self._heartbeat_fired = True
-            self._limit_ok = False
             self.sync()
             for ax in self.axes:  # GP68: "the motor will be stopped"
                 ax.engine.hard_stop()
