@@ -6,8 +6,9 @@ Time: every instruction takes INSTRUCTION_TICKS of the 16 MHz clock (100 µs, i.
 10000 TMCL instructions per second) and takes effect at the end of its slot; a
 WAIT ends at its condition or timeout and the next instruction follows one slot
 later; dispatching an interrupt and returning from it (RETI) take one slot each.
-`VirtualModule.advance_to` asks `next_event()` when the program next needs
-service and calls `service()` at every event tick, so a run is deterministic.
+`VirtualModule.advance_to` asks `own_event()` when the program next needs
+service (timers are the module's) and calls `service()` at every event tick,
+so a run is deterministic.
 
 Registers live on the virtual module: vm.accumulator, vm.x_register, vm.flags
 (flags.py), vm.program_counter, vm.application_status. Direct-mode commands go
@@ -50,6 +51,7 @@ READS_AHEAD = frozenset({6, 10, 15})
 # After any other instruction (SAP, SGP, motion, EI/DI/VECT, WAIT, STOP, ...) the module's
 # cached next event (VirtualModule._limit_event) is looked up again: it may have moved.
 RETI = 38
+OTHER, PURE_KIND, READ_KIND, RETI_KIND = 0, 1, 2, 3   # Interpreter._kind
 
 
 @dataclass
@@ -83,6 +85,7 @@ class Interpreter:
         self.last_error: tuple[int, int, int] | None = None  # (pc, command, status)
         self.executed = 0                   # instructions executed since power-up
         self._t: int | None = None          # tick of an instruction run ahead of vm.now
+        self._kinds: dict[tuple[int, int, int, int], int] = {}  # instruction -> _kind
 
     @property
     def waiting(self) -> bool:
@@ -172,7 +175,7 @@ class Interpreter:
         ints = vm.interrupts
         limit = -1          # not looked up yet
         quiet = None
-        world_numbers = vm.world.axis_numbers
+        kinds = self._kinds
         try:
             while True:
                 t = self.next_time
@@ -181,26 +184,23 @@ class Interpreter:
                 pc = vm.program_counter
                 if not 0 <= pc < size or (ints.pending and ints.next_dispatch() is not None):
                     break
-                command, type_, bank, _ = code[pc]
-                if command in PURE or (command in PURE_ON_BANK_2 and bank == 2):
-                    read = False
-                elif command in READS_AHEAD and (command != 6 or (type_ not in world_numbers and type_ != 207)):
-                    read = True
-                elif command == RETI and self.saved is not None and self.saved.wait is None:
-                    read = False
-                else:
+                ins = code[pc]
+                kind = kinds.get(ins)
+                if kind is None:
+                    kind = kinds[ins] = self._kind(ins[0], ins[1], ins[2])
+                if not kind or (kind == RETI_KIND and (self.saved is None or self.saved.wait is not None)):
                     break
                 if limit == -1:
                     nxt = vm._limit_event()
                     limit = horizon if nxt is None else nxt
                 if t >= limit:
                     break
-                if read or command == RETI:
+                if kind != PURE_KIND:
                     if quiet is None:
                         quiet = vm.world.quiet()
                     if not quiet:
                         break
-                    if read:
+                    if kind == READ_KIND:
                         vm.now = t              # the read's own tick: the engines follow there
                 self._t = t
                 self._execute_next()
@@ -326,11 +326,15 @@ class Interpreter:
             vm.application_status = STOPPED
             self.next_time = None
             return
-        command, type, motor, value = vm.program.code[pc]
+        ins = vm.program.code[pc]
+        command, type, motor, value = ins
         self.executed += 1
         handler = FLOW.get(command)
-        available = command in vm.profile.opcodes
-        keeps, dirty = self._keeps_events(command, type, motor), vm._engines_dirty
+        available = command in vm.opcodes
+        kind = self._kinds.get(ins)
+        if kind is None:
+            kind = self._kinds[ins] = self._kind(command, type, motor)
+        dirty = vm._engines_dirty
         try:
             if handler is not None and available:
                 if handler(self, type, motor, value):  # True: the handler set the PC itself
@@ -344,19 +348,25 @@ class Interpreter:
         except TmclStatus as exc:
             self._fail(command, exc.status)
         finally:
-            if keeps:  # the engines at most followed to now: their plans and events stay
+            if kind:  # the engines at most followed to now: their plans and events stay
                 vm._engines_dirty = dirty
             else:
                 vm._limit_ok = False
         vm.program_counter = pc + 1
-        self._pause_or_continue()
+        if vm.application_status == RUNNING:  # _pause_or_continue
+            t = self._t
+            self.next_time = (vm.now if t is None else t) + INSTRUCTION_TICKS
+        else:
+            self.next_time = None
 
-    def _keeps_events(self, command: int, type: int, bank: int) -> bool:
-        """Can this instruction leave every event but the program's own where it was? Pure
-        instructions, the reads that may run ahead and RETI."""
-        if command in PURE or command == RETI or (command in PURE_ON_BANK_2 and bank == 2):
-            return True
-        return command in READS_AHEAD and (command != 6 or (type not in self.vm.world.axis_numbers and type != 207))
+    def _kind(self, command: int, type: int, bank: int) -> int:
+        """OTHER, or what keeps every event but the program's own where it was: PURE, READ (the
+        reads that may run ahead), or RETI_KIND."""
+        if command in PURE or (command in PURE_ON_BANK_2 and bank == 2):
+            return PURE_KIND
+        if command in READS_AHEAD and (command != 6 or (type not in self.vm.world.axis_numbers and type != 207)):
+            return READ_KIND
+        return RETI_KIND if command == RETI else OTHER
 
     def _generic(self, command: int, type: int, motor: int, value: int) -> None:
         """Motion, parameter, I/O and coordinate commands: the direct-mode handler, then the

@@ -18,9 +18,10 @@ Sources:
 - stallGuard 15 + axis and deviation 21 + axis: the physical-world model calls
   `trigger(n)` (there is no level to poll).
 
-Levels are sampled whenever the virtual module asks for its next event and at
+Levels are sampled whenever the virtual module looks its next event up again
+(at the start of every `advance`, after every write that can move it) and at
 every event tick, so a transition made between two `advance` calls (e.g.
-`vm.io.drive_input`) is seen at the time it was made.
+`vm.io.drive_input`) or by a command is seen at the time it was made.
 """
 from __future__ import annotations
 
