@@ -45,9 +45,11 @@ CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number fro
 PURE = frozenset({14, 19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
 PURE_ON_BANK_2 = frozenset({9, 10, 35})
 # Reads that may also run ahead, at their own tick (_run_ahead): GAP (not of world-computed
-# parameters nor AP207, which clears the error flags when read), GGP of any bank, GIO (an
-# analog input changes between events: it is read at the instruction's tick).
+# parameters nor AP207, which clears the error flags when read), the tick timer GGP 132, GIO (an
+# input the world drives, e.g. analog, changes between events: it is read at the instruction's
+# tick). Other GGPs read RAM and registers only: they are pure.
 READS_AHEAD = frozenset({6, 10, 15})
+TICK_TIMER = (132, 0)
 # After any other instruction (SAP, SGP, motion, EI/DI/VECT, WAIT, STOP, ...) the module's
 # cached next event (VirtualModule._limit_event) is looked up again: it may have moved.
 RETI = 38
@@ -176,6 +178,7 @@ class Interpreter:
         limit = -1          # not looked up yet
         quiet = None
         kinds = self._kinds
+        sources = vm.io.sources      # inputs the world drives (they change over time)
         try:
             while True:
                 t = self.next_time
@@ -195,7 +198,7 @@ class Interpreter:
                     limit = horizon if nxt is None else nxt
                 if t >= limit:
                     break
-                if kind != PURE_KIND:
+                if kind != PURE_KIND and not (ins[0] == 15 and not sources):  # GIO of undriven inputs: pure
                     if quiet is None:
                         quiet = vm.world.quiet()
                     if not quiet:
@@ -362,7 +365,7 @@ class Interpreter:
     def _kind(self, command: int, type: int, bank: int) -> int:
         """OTHER, or what keeps every event but the program's own where it was: PURE, READ (the
         reads that may run ahead), or RETI_KIND."""
-        if command in PURE or (command in PURE_ON_BANK_2 and bank == 2):
+        if command in PURE or (command in PURE_ON_BANK_2 and bank == 2) or (command == 10 and (type, bank) != TICK_TIMER):
             return PURE_KIND
         if command in READS_AHEAD and (command != 6 or (type not in self.vm.world.axis_numbers and type != 207)):
             return READ_KIND
@@ -386,8 +389,8 @@ class Interpreter:
 
     def _load(self, value: int) -> None:
         vm = self.vm
-        vm.accumulator = to_int32(value)
-        vm.flags = flags.after_load(vm.flags, vm.accumulator)
+        a = vm.accumulator = value if -0x8000_0000 <= value <= 0x7FFF_FFFF else to_int32(value)
+        vm.flags = (vm.flags & ~flags.ZERO) | (flags.ZERO if a == 0 else 0)  # flags.after_load
 
     def _jump(self, address: int) -> bool:
         """Set the PC (a jump outside program memory is ignored: status 4 in `last_error`)."""

@@ -335,9 +335,14 @@ class VirtualModule:
         if self._heartbeat_fired:
             return None
         ram = self.globals.ram
-        deadlines = [self._last_command[iface] + ms * TICKS_PER_MS
-                     for iface, key in _HEARTBEATS if (ms := ram.get(key, 0))]
-        return min(deadlines) if deadlines else None
+        best = None
+        for iface, key in _HEARTBEATS:
+            ms = ram.get(key, 0)
+            if ms:
+                t = self._last_command[iface] + ms * TICKS_PER_MS
+                if best is None or t < best:
+                    best = t
+        return best
 
     def _after_step(self) -> None:
         hb = self._heartbeat_deadline()
