@@ -53,7 +53,7 @@ TICK_TIMER = (132, 0)
 # After any other instruction (SAP, SGP, motion, EI/DI/VECT, WAIT, STOP, ...) the module's
 # cached next event (VirtualModule._limit_event) is looked up again: it may have moved.
 RETI = 38
-OTHER, PURE_KIND, READ_KIND, RETI_KIND = 0, 1, 2, 3   # Interpreter._kind
+OTHER, PURE_KIND, READ_KIND, RETI_KIND, GIO_KIND = 0, 1, 2, 3, 4   # Interpreter._kind, _ahead_kind
 
 
 @dataclass
@@ -163,8 +163,9 @@ class Interpreter:
         command arrives during an `advance`. A tight polling loop then costs one event per loop
         pass, not per instruction.
 
-        Reads (READS_AHEAD: GAP of a parameter the world does not compute, GGP) and RETI run
-        ahead too when the world does nothing between its events (`World.quiet`): time moves
+        Reads (READS_AHEAD: GAP of a parameter the world does not compute, the tick timer, GIO
+        of an input the world drives) and RETI run ahead too when the world does nothing
+        between its events (`World.quiet`): time moves
         to the read's tick and the engines follow it there, exactly as an event would; no
         engine, world, heartbeat or timer event lies before the limit, so such an event would
         only run the instruction."""
@@ -172,43 +173,51 @@ class Interpreter:
         horizon = getattr(vm, "horizon", None) if self.run_ahead else None
         if horizon is None:
             return
-        code = vm.program.code
-        size = len(code)
-        ints = vm.interrupts
         limit = -1          # not looked up yet
         quiet = None
-        kinds = self._kinds
         sources = vm.io.sources      # inputs the world drives (they change over time)
         try:
-            while True:
+            while (kind := self._ahead_kind(horizon)) is not None:
                 t = self.next_time
-                if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
-                    break
-                pc = vm.program_counter
-                if not 0 <= pc < size or (ints.pending and ints.next_dispatch() is not None):
-                    break
-                ins = code[pc]
-                kind = kinds.get(ins)
-                if kind is None:
-                    kind = kinds[ins] = self._kind(ins[0], ins[1], ins[2])
-                if not kind or (kind == RETI_KIND and (self.saved is None or self.saved.wait is not None)):
-                    break
                 if limit == -1:
                     nxt = vm._limit_event()
                     limit = horizon if nxt is None else nxt
-                if t >= limit:
+                if t is None or t >= limit:
                     break
-                if kind != PURE_KIND and not (ins[0] == 15 and not sources):  # GIO of undriven inputs: pure
+                if kind != PURE_KIND and not (kind == GIO_KIND and not sources):  # GIO of undriven inputs: pure
                     if quiet is None:
                         quiet = vm.world.quiet()
                     if not quiet:
                         break
-                    if kind == READ_KIND:
+                    if kind != RETI_KIND:
                         vm.now = t              # the read's own tick: the engines follow there
                 self._t = t
                 self._execute_next()
         finally:
             self._t = None
+
+    def _ahead_kind(self, horizon: int) -> int | None:
+        """The kind of the next instruction (`_kind`; GIO_KIND for GIO) if the program goes on
+        with it before `horizon` without a WAIT, an interrupt to enter or leaving memory, and it
+        is one that may run ahead; else None."""
+        vm = self.vm
+        t = self.next_time
+        if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
+            return None
+        pc = vm.program_counter
+        code = vm.program.code
+        ints = vm.interrupts
+        if not 0 <= pc < len(code) or (ints.pending and ints.next_dispatch() is not None):
+            return None
+        ins = code[pc]
+        kind = self._kinds.get(ins)
+        if kind is None:
+            kind = self._kinds[ins] = self._kind(ins[0], ins[1], ins[2])
+        if kind == READ_KIND and ins[0] == 15:
+            return GIO_KIND
+        if not kind or (kind == RETI_KIND and (self.saved is None or self.saved.wait is not None)):
+            return None
+        return kind
 
     # --- control commands 128-131 (manual 3.6.36) ------------------------------------------
     def run(self, address: int | None) -> None:
