@@ -264,3 +264,25 @@ def test_wait_that_timed_out_during_an_interrupt_ends_after_reti():
     w.vm.advance(1 / CLOCK_HZ)
     assert w.vm.interpreter.executed == 4 + 1 + 10 * 4 + 1   # GGP 9, 2 at 171201
     both(src, 0.05)
+
+
+def test_world_check_between_events_moves_the_next_one():
+    """docs/world.md: a load over time is checked at every event tick ("re-evaluated every
+    millisecond"); TMCM-6212 manual 4.1 AP212 "Maximum encoder deviation", 3.5.6.1 interrupt 21
+    "Deviation axis 0". A rising load makes the motor lose steps at one of the program's ticks;
+    from there counter and encoder drift apart, and the deviation limit is crossed before the next
+    millisecond of the load: the check that found the step loss must make the module look again."""
+    src = """
+        VECT 21, D
+        EI 21
+        EI 255
+        SAP 212, 0, 40
+        ROR 0, 20000
+    L:  GAP 1, 0
+        CALCX ADD
+        JA L
+    D:  GAP 1, 0
+        AGP 1, 2
+        RETI"""
+    w = both(src, 0.3, {"axis": {"0": {"load": {"by": "time", "ramp": [[0, 0.0], [0.3, 1.5]]}}}})
+    assert w.vm.user_vars[1] != 0 and w.vm.axes[0].engine.velocity == 0
