@@ -140,7 +140,7 @@ class Interpreter:
         """Execute what is due at vm.now: finish a WAIT, take an interrupt, run one instruction."""
         vm = self.vm
         now = vm.now
-        vm.interrupts.poll(now)
+        vm.interrupts.poll(now, refresh=not vm._limit_ok)  # periods are written only by commands
         if vm.application_status not in (RUNNING, STEPPING):
             return
         if self.wait is not None:

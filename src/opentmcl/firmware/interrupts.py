@@ -172,9 +172,11 @@ class Interrupts:
             if (mode & LOW_HIGH and level) or (mode & HIGH_LOW and not level):
                 self.pending.add(n)
 
-    def poll(self, now: int) -> None:
-        """Latch what occurred up to tick `now` (timers, level transitions)."""
-        self._refresh_timers(now)
+    def poll(self, now: int, refresh: bool = True) -> None:
+        """Latch what occurred up to tick `now` (timers, level transitions). `refresh` False:
+        no period was written since the last look (VirtualModule._limit_ok)."""
+        if refresh:
+            self._refresh_timers(now)
         self._run_timers(now)
         if self.enabled and self.global_enable:
             self._sample_levels()
