@@ -6,8 +6,9 @@ Time: every instruction takes INSTRUCTION_TICKS of the 16 MHz clock (100 µs, i.
 10000 TMCL instructions per second) and takes effect at the end of its slot; a
 WAIT ends at its condition or timeout and the next instruction follows one slot
 later; dispatching an interrupt and returning from it (RETI) take one slot each.
-`VirtualModule.advance_to` asks `next_event()` when the program next needs
-service and calls `service()` at every event tick, so a run is deterministic.
+`VirtualModule.advance_to` asks `own_event()` when the program next needs
+service (timers are the module's) and calls `service()` at every event tick,
+so a run is deterministic.
 
 Registers live on the virtual module: vm.accumulator, vm.x_register, vm.flags
 (flags.py), vm.program_counter, vm.application_status. Direct-mode commands go
@@ -39,10 +40,20 @@ STACK_DEPTH = 8               # "The number of entries in the internal stack is 
 READS_VALUE = frozenset({6, 10, 15, 31})  # GAP, GGP, GIO, GCO (and RFS STATUS) load the accumulator
 CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number from public TMCL headers)
 # Instructions that neither read nor change anything outside the program's registers, flags,
-# stack and user variables (SGP/GGP/AGP on bank 2), or only the I/O ports (SIO, GIO: inputs change
-# only at world events or host commands): they may run ahead of the motors (_run_ahead).
-PURE = frozenset({14, 15, 19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
+# stack and user variables (SGP/GGP/AGP on bank 2), or only the outputs (SIO): they may run
+# ahead of the motors (_run_ahead).
+PURE = frozenset({14, 19, 20, 21, 22, 23, 24, 33, 40, 41, 42, 43, 44, 45, 48, 49, 55, 56, 57, CALL})
 PURE_ON_BANK_2 = frozenset({9, 10, 35})
+# Reads that may also run ahead, at their own tick (_run_ahead): GAP (not of world-computed
+# parameters nor AP207, which clears the error flags when read), the tick timer GGP 132, GIO (an
+# input the world drives, e.g. analog, changes between events: it is read at the instruction's
+# tick). Other GGPs read RAM and registers only: they are pure.
+READS_AHEAD = frozenset({6, 10, 15})
+TICK_TIMER = (132, 0)
+# After any other instruction (SAP, SGP, motion, EI/DI/VECT, WAIT, STOP, ...) the module's
+# cached next event (VirtualModule._limit_event) is looked up again: it may have moved.
+RETI = 38
+OTHER, PURE_KIND, READ_KIND, RETI_KIND, GIO_KIND = 0, 1, 2, 3, 4   # Interpreter._kind, _ahead_kind
 
 
 @dataclass
@@ -76,7 +87,7 @@ class Interpreter:
         self.last_error: tuple[int, int, int] | None = None  # (pc, command, status)
         self.executed = 0                   # instructions executed since power-up
         self._t: int | None = None          # tick of an instruction run ahead of vm.now
-        self._probing = False
+        self._kinds: dict[tuple[int, int, int, int], int] = {}  # instruction -> _kind
 
     @property
     def waiting(self) -> bool:
@@ -89,29 +100,38 @@ class Interpreter:
             self.run(0)
 
     def next_event(self) -> int | None:
-        """Absolute tick at which the program next needs service, > vm.now, or None."""
+        """Absolute tick at which the program next needs service, > vm.now, or None
+        (latches what occurred up to now first; `own_event` plus the timers)."""
+        vm = self.vm
+        now = vm.now
+        vm.interrupts.poll(now)
+        t = self.own_event()
+        timer = vm.interrupts.next_timer_event(now, refresh=False)
+        if timer is not None and (t is None or timer < t):
+            t = max(timer, now + 1)
+        return t
+
+    def own_event(self) -> int | None:
+        """The program's own next tick (instruction, WAIT timeout or check, dispatch from a
+        WAIT), > vm.now, or None; timers are the module's (`VirtualModule._limit_event`)."""
         vm = self.vm
         now = vm.now
         status = vm.application_status
-        if self._probing:
-            return vm.interrupts.next_timer_event(now)
         if status not in (RUNNING, STEPPING):
-            vm.interrupts.poll(now)  # keep the timers' phase
             return None
-        vm.interrupts.poll(now)
+        w = self.wait
+        if w is None:
+            t = self.next_time
+            if status != RUNNING or t is None:
+                return None
+            return t if t > now else now + 1
         candidates = []
-        if self.wait is not None:
-            if self.wait.deadline is not None:
-                candidates.append(self.wait.deadline)
-            if status == RUNNING and vm.interrupts.next_dispatch() is not None:
-                candidates.append(now + 1)
-            if wait.satisfied(vm, self.wait):  # met outside an event: host command, after RETI
-                candidates.append(now + 1)
-        elif status == RUNNING and self.next_time is not None:
-            candidates.append(self.next_time)
-        timer = vm.interrupts.next_timer_event(now, refresh=False)
-        if timer is not None:
-            candidates.append(timer)
+        if w.deadline is not None:
+            candidates.append(w.deadline)
+        if status == RUNNING and vm.interrupts.next_dispatch() is not None:
+            candidates.append(now + 1)
+        if wait.satisfied(vm, w):  # met outside an event: host command, after RETI
+            candidates.append(now + 1)
         if not candidates:
             return None
         return max(min(candidates), now + 1)
@@ -120,7 +140,7 @@ class Interpreter:
         """Execute what is due at vm.now: finish a WAIT, take an interrupt, run one instruction."""
         vm = self.vm
         now = vm.now
-        vm.interrupts.poll(now)
+        vm.interrupts.poll(now, refresh=not vm._limit_ok)  # periods are written only by commands
         if vm.application_status not in (RUNNING, STEPPING):
             return
         if self.wait is not None:
@@ -129,6 +149,7 @@ class Interpreter:
             return
         if self.wait is not None or (self.next_time is not None and self.next_time <= now):
             if self._dispatch_interrupt():
+                self._run_ahead()
                 return
         if self.wait is None and self.next_time is not None and self.next_time <= now:
             self._execute_next()
@@ -136,33 +157,67 @@ class Interpreter:
 
     def _run_ahead(self) -> None:
         """Execute pure instructions (PURE) at their own ticks without stopping the motors'
-        clock, up to the next event of anything else and never past the end of the current
-        `advance` (vm.horizon). The result is the same as one event per instruction: nothing a
-        pure instruction reads can change in between, and no host command arrives during an
-        `advance`. A tight polling loop then costs one event per loop pass, not per instruction."""
+        clock, up to the next event of anything else (`VirtualModule._limit_event`) and never
+        past the end of the current `advance` (vm.horizon). The result is the same as one event
+        per instruction: nothing a pure instruction reads can change in between, and no host
+        command arrives during an `advance`. A tight polling loop then costs one event per loop
+        pass, not per instruction.
+
+        Reads (READS_AHEAD: GAP of a parameter the world does not compute, the tick timer, GIO
+        of an input the world drives) and RETI run ahead too when the world does nothing
+        between its events (`World.quiet`): time moves
+        to the read's tick and the engines follow it there, exactly as an event would; no
+        engine, world, heartbeat or timer event lies before the limit, so such an event would
+        only run the instruction."""
         vm = self.vm
         horizon = getattr(vm, "horizon", None) if self.run_ahead else None
-        code = vm.program.code
-        limit = None
-        while (vm.application_status == RUNNING and self.wait is None and self.next_time is not None
-               and horizon is not None and self.next_time < horizon
-               and 0 <= vm.program_counter < len(code) and vm.interrupts.next_dispatch() is None):
-            command, _, bank, _ = code[vm.program_counter]
-            if not (command in PURE or (command in PURE_ON_BANK_2 and bank == 2)):
-                break
-            if limit is None:
-                self._probing = True
-                try:
-                    limit = vm._next_event(horizon)
-                finally:
-                    self._probing = False
-            if self.next_time >= limit:
-                break
-            self._t = self.next_time
-            try:
+        if horizon is None:
+            return
+        limit = -1          # not looked up yet
+        quiet = None
+        sources = vm.io.sources      # inputs the world drives (they change over time)
+        try:
+            while (kind := self._ahead_kind(horizon)) is not None:
+                t = self.next_time
+                if limit == -1:
+                    nxt = vm._limit_event()
+                    limit = horizon if nxt is None else nxt
+                if t is None or t >= limit:
+                    break
+                if kind != PURE_KIND and not (kind == GIO_KIND and not sources):  # GIO of undriven inputs: pure
+                    if quiet is None:
+                        quiet = vm.world.quiet()
+                    if not quiet:
+                        break
+                    if kind != RETI_KIND:
+                        vm.now = t              # the read's own tick: the engines follow there
+                self._t = t
                 self._execute_next()
-            finally:
-                self._t = None
+        finally:
+            self._t = None
+
+    def _ahead_kind(self, horizon: int) -> int | None:
+        """The kind of the next instruction (`_kind`; GIO_KIND for GIO) if the program goes on
+        with it before `horizon` without a WAIT, an interrupt to enter or leaving memory, and it
+        is one that may run ahead; else None."""
+        vm = self.vm
+        t = self.next_time
+        if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
+            return None
+        pc = vm.program_counter
+        code = vm.program.code
+        ints = vm.interrupts
+        if not 0 <= pc < len(code) or (ints.pending and ints.next_dispatch() is not None):
+            return None
+        ins = code[pc]
+        kind = self._kinds.get(ins)
+        if kind is None:
+            kind = self._kinds[ins] = self._kind(ins[0], ins[1], ins[2])
+        if kind == READ_KIND and ins[0] == 15:
+            return GIO_KIND
+        if not kind or (kind == RETI_KIND and (self.saved is None or self.saved.wait is not None)):
+            return None
+        return kind
 
     # --- control commands 128-131 (manual 3.6.36) ------------------------------------------
     def run(self, address: int | None) -> None:
@@ -283,10 +338,15 @@ class Interpreter:
             vm.application_status = STOPPED
             self.next_time = None
             return
-        command, type, motor, value = vm.program.code[pc]
+        ins = vm.program.code[pc]
+        command, type, motor, value = ins
         self.executed += 1
         handler = FLOW.get(command)
-        available = command in vm.profile.opcodes
+        available = command in vm.opcodes
+        kind = self._kinds.get(ins)
+        if kind is None:
+            kind = self._kinds[ins] = self._kind(command, type, motor)
+        dirty = vm._engines_dirty
         try:
             if handler is not None and available:
                 if handler(self, type, motor, value):  # True: the handler set the PC itself
@@ -299,8 +359,26 @@ class Interpreter:
                 self._generic(command, type, motor, value)
         except TmclStatus as exc:
             self._fail(command, exc.status)
+        finally:
+            if kind:  # the engines at most followed to now: their plans and events stay
+                vm._engines_dirty = dirty
+            else:
+                vm._limit_ok = False
         vm.program_counter = pc + 1
-        self._pause_or_continue()
+        if vm.application_status == RUNNING:  # _pause_or_continue
+            t = self._t
+            self.next_time = (vm.now if t is None else t) + INSTRUCTION_TICKS
+        else:
+            self.next_time = None
+
+    def _kind(self, command: int, type: int, bank: int) -> int:
+        """OTHER, or what keeps every event but the program's own where it was: PURE, READ (the
+        reads that may run ahead), or RETI_KIND."""
+        if command in PURE or (command in PURE_ON_BANK_2 and bank == 2) or (command == 10 and (type, bank) != TICK_TIMER):
+            return PURE_KIND
+        if command in READS_AHEAD and (command != 6 or (type not in self.vm.world.axis_numbers and type != 207)):
+            return READ_KIND
+        return RETI_KIND if command == RETI else OTHER
 
     def _generic(self, command: int, type: int, motor: int, value: int) -> None:
         """Motion, parameter, I/O and coordinate commands: the direct-mode handler, then the
@@ -320,8 +398,8 @@ class Interpreter:
 
     def _load(self, value: int) -> None:
         vm = self.vm
-        vm.accumulator = to_int32(value)
-        vm.flags = flags.after_load(vm.flags, vm.accumulator)
+        a = vm.accumulator = value if -0x8000_0000 <= value <= 0x7FFF_FFFF else to_int32(value)
+        vm.flags = (vm.flags & ~flags.ZERO) | (flags.ZERO if a == 0 else 0)  # flags.after_load
 
     def _jump(self, address: int) -> bool:
         """Set the PC (a jump outside program memory is ignored: status 4 in `last_error`)."""

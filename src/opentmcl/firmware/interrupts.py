@@ -18,9 +18,10 @@ Sources:
 - stallGuard 15 + axis and deviation 21 + axis: the physical-world model calls
   `trigger(n)` (there is no level to poll).
 
-Levels are sampled whenever the virtual module asks for its next event and at
+Levels are sampled whenever the virtual module looks its next event up again
+(at the start of every `advance`, after every write that can move it) and at
 every event tick, so a transition made between two `advance` calls (e.g.
-`vm.io.drive_input`) is seen at the time it was made.
+`vm.io.drive_input`) or by a command is seen at the time it was made.
 """
 from __future__ import annotations
 
@@ -171,9 +172,11 @@ class Interrupts:
             if (mode & LOW_HIGH and level) or (mode & HIGH_LOW and not level):
                 self.pending.add(n)
 
-    def poll(self, now: int) -> None:
-        """Latch what occurred up to tick `now` (timers, level transitions)."""
-        self._refresh_timers(now)
+    def poll(self, now: int, refresh: bool = True) -> None:
+        """Latch what occurred up to tick `now` (timers, level transitions). `refresh` False:
+        no period was written since the last look (VirtualModule._limit_ok)."""
+        if refresh:
+            self._refresh_timers(now)
         self._run_timers(now)
         if self.enabled and self.global_enable:
             self._sample_levels()

@@ -302,16 +302,24 @@ class VirtualModule:
 
         Engines are advanced lazily: each only at its own events, before a
         command touches them (`sync`) and at the end. A lagging engine's flags
-        (position reached, mode) cannot change before its next event."""
+        (position reached, mode) cannot change before its next event.
+
+        The next event of everything but the program (`_limit_event`) is cached during
+        the call and looked up again only after a write that can move it (docs/architecture.md
+        "Time"); host commands come between calls, so every call starts afresh."""
         self.horizon = until  # the interpreter may run pure instructions ahead up to here
-        while self.now < until:
-            nxt = self._next_event(until)
-            self.now = nxt
-            if nxt == self._engine_next:
-                self._engine_step(nxt)
-            self.world.service()
-            self._after_step()
-            self.interpreter.service()
+        try:
+            while self.now < until:
+                nxt = self._next_event(until)
+                self.now = nxt
+                if nxt == self._engine_next:
+                    self._engine_step(nxt)
+                if self.world.service():
+                    self._limit_ok = False
+                self._after_step()
+                self.interpreter.service()
+        finally:
+            self._limit_ok = False  # host commands come next
         self.sync()
 
     def _engine_step(self, now: int) -> None:
@@ -363,22 +371,61 @@ class VirtualModule:
             self._engines_dirty = False
         return self._engine_next
 
+    _limit: int | None = None
+    _limit_ok = False   # `_limit` is valid (only inside `advance_to`)
+    event_cache = True  # False: look every event up afresh (the reference the tests compare with)
+
     def _next_event(self, until: int) -> int:
+        now = self.now
         nxt = until
-        t = self._engine_event()
-        if t is not None and self.now < t < nxt:
+        t = self._limit_event()
+        if t is not None and now < t < nxt:
             nxt = t
-        hb = self._heartbeat_deadline()
-        if hb is not None and self.now < hb < nxt:
-            nxt = hb
-        for t in (self.interpreter.next_event(), self.world.next_event()):
-            if t is not None and self.now < t < nxt:
-                nxt = t
+        t = self.interpreter.own_event()
+        if t is not None and now < t < nxt:
+            nxt = t
         return nxt
+
+    def _limit_event(self) -> int | None:
+        """Next event of the engines, heartbeats, timers and world (all but the program's own
+        schedule), > now or None. Cached while `_limit_ok`; a write that can move it clears the
+        flag (commands via `_engines_dirty`, world checks, a program instruction that is not pure,
+        a read or RETI) and reaching it makes it stale (engine events, timers, heartbeats: the
+        event is the limit itself)."""
+        now = self.now
+        t = self._limit
+        held = self._limit_ok and not self._engines_dirty  # no write since the last look-up
+        if held and (t is None or t > now):
+            return t
+        best = None
+        t = self._engine_event()
+        if t is not None and now < t:
+            best = t
+        hb = self._heartbeat_deadline()
+        if hb is not None and now < hb and (best is None or hb < best):
+            best = hb
+        ints = self.interrupts
+        if not held:  # else reached: an event tick, polled by the interpreter with no write since
+            ints.poll(now)  # latch what a command just did (levels) and re-phase rewritten timers
+        t = ints.next_timer_event(now, refresh=False)
+        if t is not None and now < t and (best is None or t < best):
+            best = t
+        dirty = self._engines_dirty  # the world's look-up syncs lagging engines: no plan changes
+        t = self.world.next_event(same_axes=held)
+        self._engines_dirty = dirty
+        if t is not None and now < t and (best is None or t < best):
+            best = t
+        self._limit = best
+        self._limit_ok = self.event_cache
+        return best
 
     def next_event_in(self) -> float | None:
         """Seconds until the next internal event (engine, heartbeat, program, world), or None."""
-        nxt = self._next_event(self.now + 2**62)
+        self._limit_ok = False  # between `advance` calls: no cache (host commands came)
+        try:
+            nxt = self._next_event(self.now + 2**62)
+        finally:
+            self._limit_ok = False
         return None if nxt == self.now + 2**62 else (nxt - self.now) / CLOCK_HZ
 
     def _heartbeat_deadline(self) -> int | None:
@@ -386,9 +433,14 @@ class VirtualModule:
         if self._heartbeat_fired:
             return None
         ram = self.globals.ram
-        deadlines = [self._last_command[iface] + ms * TICKS_PER_MS
-                     for iface, key in _HEARTBEATS if (ms := ram.get(key, 0))]
-        return min(deadlines) if deadlines else None
+        best = None
+        for iface, key in _HEARTBEATS:
+            ms = ram.get(key, 0)
+            if ms:
+                t = self._last_command[iface] + ms * TICKS_PER_MS
+                if best is None or t < best:
+                    best = t
+        return best
 
     def _after_step(self) -> None:
         hb = self._heartbeat_deadline()

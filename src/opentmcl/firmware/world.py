@@ -118,13 +118,18 @@ class World:
         twin = io.twins.get(key)
         return (threshold(port),) if twin is not None else ()
 
-    def next_event(self) -> int | None:
+    def next_event(self, same_axes: bool = False) -> int | None:
+        """Absolute tick of the next world event. `same_axes`: nothing was written since the last
+        call that can make an axis need events or not (`AxisWorld.interesting`)."""
         best = None
-        for aw in self.axes_world:
-            if aw.interesting():
-                t = aw.next_event()
-                if t is not None and (best is None or t < best):
-                    best = t
+        if same_axes:
+            watched = self._watched
+        else:
+            self._watched = watched = [aw for aw in self.axes_world if aw.interesting()]
+        for aw in watched:
+            t = aw.next_event()
+            if t is not None and (best is None or t < best):
+                best = t
         if self.inputs or self.shutdown is not None:
             t = self._next_input_change()
             if t is not None and (best is None or t < best):
@@ -151,16 +156,36 @@ class World:
         self._input_cache = (key, best)
         return best
 
-    def service(self) -> None:
+    def service(self) -> bool:
+        """The checks due at this event tick; True when any ran (the next events may have moved)."""
         vm = self.vm
+        acted = False
         if self.shutdown is not None:
             self._check_shutdown()
+            acted = True
         now = vm.now
-        for aw in self.axes_world:
-            if aw.interesting() and aw.needs_check(now):
+        # the axes that need events, as found by the last look-up while that still holds
+        # (VirtualModule._limit_ok: no write since that can make an axis need them)
+        watched = self._watched if vm._limit_ok else [aw for aw in self.axes_world if aw.interesting()]
+        for aw in watched:
+            if aw.needs_check(now):
                 if aw.engine.now < now:
                     vm.sync()
                 aw.check()
+                acted = True
+        return acted
+
+    def quiet(self) -> bool:
+        """Does `service` do nothing at a tick that is none of the world's events? Not with a
+        SHUTDOWN pin (checked at every tick) nor with a load over time on an axis that needs
+        events (checked at every tick too)."""
+        if self.shutdown is not None:
+            return False
+        watched = self._watched if self.vm._limit_ok else [aw for aw in self.axes_world if aw.interesting()]
+        return not any(aw.load.by == "time" for aw in watched)
+
+    _watched: list[AxisWorld] = []
+    """The axes found interesting by the last `next_event`."""
 
     def _check_shutdown(self) -> None:
         """PD86-1180 GP80: 1 high active, 2 low active; an active SHUTDOWN pin stops the motors
