@@ -334,3 +334,33 @@ def test_reads_keep_the_engines_clean_writes_mark_them():
     assert all(ax.engine.now == vm.now for ax in vm.axes)
     vm.handle(frame(5, 4, 0, 500))
     assert vm._engines_dirty
+
+
+@pytest.mark.parametrize("interface", ["usb", "rs485", "rs232"])
+def test_every_link_binds_frames_for_the_module_address(interface):
+    """A served single module is a USB link by default (docs/endpoints.md) and a bus an RS485
+    line: their reads of the module's own address (GP66) are bound like serial ones and answer
+    the same bytes as the general path (TMCM-6212 manual 3.2 reply format)."""
+    vm = busy("TMCM-6212")
+    raw = frame(6, 1, 3)
+    first = vm.handle(raw, interface=interface)
+    assert vm.is_prebound(raw)
+    vm.advance(0.01)
+    assert vm.handle(raw, interface=interface) == general(vm, raw, interface) != first
+
+
+@pytest.mark.parametrize("interface", ["usb", "rs485"])
+def test_bound_requests_on_usb_and_rs485_restart_the_serial_heartbeat(interface):
+    """TMCM-6212 5.1 GP68: "If the module does not receive a command within this time the motor
+    will be stopped". USB and RS485 requests are serial requests for the heartbeat: a bound GAP
+    and a bound SAP every 80 ms keep a 100 ms heartbeat from stopping the motor."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    vm.handle(frame(9, 68, 0, 100))
+    vm.handle(frame(1, 0, 0, 20000))  # ROR
+    for i in range(6):
+        vm.advance(0.08)
+        vm.handle(frame(6, 3, 0) if i % 2 else frame(5, 4, 0, 51200 + i), interface=interface)
+    assert vm.is_prebound(frame(6, 3, 0)) and vm.is_prebound(frame(5, 4, 0, 1))
+    assert vm.request(6, 3, 0).value != 0
+    vm.advance(0.11)
+    assert vm.request(6, 3, 0).value == 0

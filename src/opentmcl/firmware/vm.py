@@ -39,7 +39,9 @@ EEPROM_MAGIC, MAGIC_VALUE = (0, 64), 0xE4
 _HEARTBEATS = (("serial", (0, 68)), ("can", (0, 82)))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
-_FAST_INTERFACES = ("serial", "can")
+_HEARTBEAT_OF = {"serial": "serial", "rs485": "serial", "rs232": "serial", "usb": "serial",
+                 "can": "can"}  # the heartbeat a link's requests restart: GP68 / GP82
+_FAST_INTERFACES = tuple(_HEARTBEAT_OF)  # every link may use the pre-bound handlers
 _WRITE_COMMANDS = frozenset({5, 9})  # SAP, SGP: pre-bound setters (dispatch.py)
 _MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
 
@@ -178,9 +180,10 @@ class VirtualModule:
             fast = self._requests.get(frame)
         except TypeError:  # a mutable buffer: the general path reads it
             fast = None
-        if fast is not None and (interface == "serial" or interface == "can"):
+        heartbeat = _HEARTBEAT_OF.get(interface)
+        if fast is not None and heartbeat is not None:
             now = self.now
-            self._last_command[interface] = now  # touch(): restart the heartbeat
+            self._last_command[heartbeat] = now  # touch(): restart the heartbeat
             self._heartbeat_fired = False
             if self._synced_at != now:
                 self._sync_engines()
@@ -211,7 +214,9 @@ class VirtualModule:
         if status == _OK:
             if command not in NO_SUPPRESS and self.globals.ram.get(_SUPPRESS) == 1:
                 return b""
-            if interface in _FAST_INTERFACES and not self._download_mode:
+            if interface in _FAST_INTERFACES and not self._download_mode and (
+                    interface != "usb" or self.accepts_address(target)):
+                # a USB frame is bound only if the serial link would take it too: the table is shared
                 self._bind(frame, command, type_, motor)
         return self._reply(status, command, result, address)
 
@@ -232,7 +237,7 @@ class VirtualModule:
 
     def _write(self, write: Setter, command: int, value: int, address: int, interface: str) -> bytes:
         """A pre-bound SAP/SGP: what `execute` does for it, without the lookups."""
-        self.touch(interface)
+        self.touch(_HEARTBEAT_OF[interface])
         self.sync()  # a write may change an engine's next event
         try:
             write(value)
@@ -320,7 +325,7 @@ class VirtualModule:
                 self.interpreter.service()
         finally:
             self._limit_ok = False  # host commands come next
-        self.sync()
+        self.sync_for_read()  # every event up to `until` is done: the engines' next events stand
 
     def _engine_step(self, now: int) -> None:
         """Advance the engines whose event is due now; report arrivals (command 138)."""
