@@ -1,0 +1,113 @@
+"""Edges of the assembler and disassembler that the lang mutation sample found unpinned
+(docs/mutation.md, "lang (sample of 150)"): error positions and messages, the 4 MiB input cap,
+the program's file name, and the labels the disassembler chooses."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl.lang import disassemble
+from opentmcl.lang.assembler import AsmError, assemble, assemble_file
+from opentmcl.limits import TEXT_MAX
+
+
+def _error(src: str, **kw) -> AsmError:
+    with pytest.raises(AsmError) as err:
+        assemble(src, **kw)
+    return err.value
+
+
+def test_a_constant_named_like_a_label_is_an_error_at_its_name():
+    """docs/tmcl-assembler.md: "each [error] on one line as `file:line:column: message`": the
+    column of a constant that repeats a label's name is that of the name."""
+    e = _error("Loop: MST 0\n  Loop = 1")
+    assert (e.line, e.column, e.message) == (2, 3, "'Loop' is already a label (defined at <source>:1)")
+
+
+@pytest.mark.parametrize("line", ["#include", '#include ""', "#include <>", "#include // no name"])
+def test_include_without_a_file_name(line):
+    """docs/assumptions.md (Assembler): "#include accepts `file`, `"file"` or `<file>`" - each
+    form without a name is an error naming the expected form."""
+    e = _error(line)
+    assert (e.line, e.column, e.message) == (1, 1, "expected a file name: #include <file>")
+
+
+def test_operand_count_errors_use_singular_and_plural():
+    """TMCM-6212 3.6.2 "Mnemonic: ROL <axis>, <velocity>", 3.6.21 "Mnemonic: STOP": one operand
+    too few or too many is an error at the last operand, "1 operand" / "2 operands"."""
+    assert assemble("ROL 0, 51200").instructions[0] == (2, 0, 0, 51200)
+    e = _error("ROL 0")
+    assert (e.column, e.message) == (5, "ROL does not take 1 operand; expected ROL <motor>, <value>")
+    e = _error("STOP 1, 2")
+    assert (e.column, e.message) == (9, "STOP does not take 2 operands; expected STOP")
+
+
+@pytest.mark.parametrize("src", ["X =", "X =   "])
+def test_a_constant_without_an_expression(src):
+    """7.3 "Using Symbolic Constants" (``Name = value``): no value is an error after the ``=``."""
+    e = _error(src)
+    assert (e.line, e.column, e.message) == (1, 4, "missing operand")
+
+
+def test_a_second_definition_is_evaluated_where_it_stands():
+    """docs/assumptions.md (Assembler): "a redefinition with the same value is allowed"; an
+    undefined name in the second definition is an error on that line, at that name."""
+    assert assemble("X = 1\nX = 2 - 1\nSAP 4, 0, X").instructions[0].value == 1
+    e = _error("X = 1\nX = Y\nSAP 4, 0, X")
+    assert (e.line, e.column, e.message) == (2, 5, "undefined symbol 'Y'")
+
+
+def test_program_keeps_its_file_name_and_the_listing_shows_bare_line_numbers(tmp_path):
+    """Program.filename is the source's name; in the listing its lines show as numbers only,
+    an include file's as ``file:line``."""
+    (tmp_path / "sub.inc").write_text("MST 1\n")
+    path = tmp_path / "main.tmc"
+    path.write_text("MST 0\n#include sub.inc\n")
+    prog = assemble_file(path)
+    assert prog.filename == str(path)
+    rows = prog.listing().splitlines()
+    assert rows[0] == "0000  03 00 00 00 00 00 00 03       1  MST 0"
+    assert rows[1] == f"0001  03 00 01 00 00 00 00 04  {tmp_path / 'sub.inc'}:1  MST 1"
+    assert assemble("MST 0").filename == "<source>"
+    assert assemble("MST 0").listing().splitlines()[0].endswith("     1  MST 0")
+
+
+def test_source_file_of_4_mib_is_read_and_one_byte_more_is_refused(tmp_path):
+    """docs/tmcl-assembler.md "Input sizes": "a source file (and each include file) may have at most
+    4 MiB": exactly TEXT_MAX bytes assemble; one more is an error with no position (line 0)."""
+    assert TEXT_MAX == 4 * 1024 * 1024
+    ok, big = tmp_path / "ok.tmc", tmp_path / "big.tmc"
+    ok.write_text("// " + "x" * (TEXT_MAX - 4) + "\n")
+    big.write_text("// " + "x" * (TEXT_MAX - 3) + "\n")
+    assert ok.stat().st_size == TEXT_MAX and big.stat().st_size == TEXT_MAX + 1
+    assert assemble_file(ok).instructions == [(28, 0, 0, 0)]
+    with pytest.raises(AsmError) as err:
+        assemble_file(big)
+    e = err.value
+    assert (e.file, e.line, e.column) == (str(big), 0, 0)
+    assert e.message == "program source is larger than the 4 MiB limit"
+
+
+def test_include_file_over_4_mib_is_an_error_at_the_include(tmp_path):
+    """The same cap for each include file: the error is at the #include line and gives the reason."""
+    (tmp_path / "big.inc").write_text("// " + "x" * (TEXT_MAX - 3) + "\n")
+    e = _error("MST 0\n#include big.inc", filename=str(tmp_path / "main.tmc"))
+    assert (e.line, e.column) == (2, 1)
+    assert e.message == f"cannot read include file {tmp_path / 'big.inc'}: program source is larger than the 4 MiB limit"
+
+
+def test_disassembler_takes_the_first_given_label_by_name():
+    """Two names for one address: the first in alphabetical order is used, whatever the order of
+    the mapping."""
+    prog = [(22, 0, 0, 0), (28, 0, 0, 0)]  # JA 0 (3.6.17 "JA <label>"), STOP
+    for labels in ({"b": 0, "a": 0}, {"a": 0, "b": 0}):
+        assert disassemble(prog, labels=labels, comments=False) == "a:\n    JA a\n"
+
+
+def test_generated_label_does_not_repeat_a_given_one():
+    """A jump target without a given name gets ``L<address>``; when a given label already has
+    that name (``L1`` at address 0 here), ``_`` is appended, and the text re-assembles to the same
+    records."""
+    prog = [(22, 0, 0, 1), (3, 0, 0, 0), (28, 0, 0, 0)]  # JA 1, MST 0, STOP
+    text = disassemble(prog, labels={"L1": 0}, comments=False)
+    assert text == "L1:\n    JA L1_\nL1_:\n    MST 0\n"
+    assert assemble(text).instructions == prog
