@@ -111,3 +111,69 @@ def test_generated_label_does_not_repeat_a_given_one():
     text = disassemble(prog, labels={"L1": 0}, comments=False)
     assert text == "L1:\n    JA L1_\nL1_:\n    MST 0\n"
     assert assemble(text).instructions == prog
+
+
+# --- the second half of the sample (--sample 300) ---------------------------------------------
+
+def test_raw_with_too_few_operands_is_an_error_at_the_last_one():
+    """docs/tmcl-assembler.md: "`RAW command, type, motor, value` emits any record verbatim":
+    four operands; fewer is an error at the last operand given, at the mnemonic when none is."""
+    assert assemble("RAW 136, 1, 0, 0").instructions[0] == (136, 1, 0, 0)
+    for src, col in (("RAW", 1), ("  RAW", 3), ("RAW 1, 2, 3", 11)):
+        e = _error(src)
+        assert (e.column, e.message) == (col, "expected RAW <command>, <type>, <motor>, <value>")
+
+
+@pytest.mark.parametrize(("src", "col", "usage"), [
+    ("MVP ABS, , 1", 10, "MVP ABS|REL|COORD, <motor>, <value>"),
+    ("RAW 1, , 0, 0", 8, "RAW <command>, <type>, <motor>, <value>"),
+])
+def test_an_empty_operand_names_the_usage(src, col, usage):
+    """Operands are separated by commas (docs/tmcl-assembler.md "Source format"); nothing between
+    two commas is an error at the second one's operand, with the command's operand forms."""
+    e = _error(src)
+    assert (e.column, e.message) == (col, f"empty operand; expected {usage}")
+
+
+def test_a_redefinition_names_the_line_of_the_first_definition():
+    """docs/assumptions.md (Assembler): "a different value is an error": at the second definition,
+    naming where the first one is."""
+    e = _error("X = 1\n\nX = 2\nMST X")
+    assert (e.line, e.column, e.message) == (3, 1, "constant 'X' redefined as 2 (was 1 at <source>:1)")
+
+
+def test_assemble_file_passes_the_defines(tmp_path):
+    """`defines` are extra constants (assemble's docstring), for a file as for a text."""
+    path = tmp_path / "d.tmc"
+    path.write_text("SAP 4, 0, Speed\n")
+    assert assemble_file(path, defines={"Speed": 51200}).instructions[0] == (5, 4, 0, 51200)
+
+
+@pytest.mark.parametrize("origin", [0, 1, 5])
+def test_listing_shows_a_label_after_the_last_instruction(origin):
+    """A label after the last instruction (the end of a `#nostop` program) is the address after it
+    and ends the listing, at any load address."""
+    prog = assemble("#nostop\nMST 0\nEnd:", origin=origin)
+    assert prog.labels == {"End": origin + 1}
+    assert prog.listing().splitlines()[-1].strip() == "End:"
+
+
+def test_a_profile_file_that_cannot_be_used_has_no_position(tmp_path):
+    """docs/assumptions.md (Assembler, Diagnostics): "A diagnostic without a position (unreadable
+    file, bad `--module`) prints `file: message`" - line and column 0."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text("not toml [[[\n")
+    e = _error("MST 0", module=str(bad))
+    assert (e.file, e.line, e.column) == (str(bad), 0, 0)
+    assert e.message.startswith(f"cannot use the module profile: {bad}: not TOML")
+    assert str(e).startswith(f"{bad}: cannot use the module profile")
+
+
+def test_global_parameter_access_in_the_warning():
+    """TMCM-6212 5.1 (Bank 0): GP128 "TMCL application status ... R" cannot be written (SGP), GP132 "TMCL
+    tick timer ... RW" can, but has no E, so STGP cannot store it (Table 15, the access letters)."""
+    warnings = assemble("SGP 128, 0, 1\nSGP 132, 0, 1\nSTGP 132, 0", module="TMCM-6212").warnings
+    assert [(w.line, w.message) for w in warnings] == [
+        (1, "SGP: global parameter 128 (tmcl_application_status) of TMCM-6212 cannot be written"),
+        (3, "STGP: global parameter 132 (tick_timer) of TMCM-6212 cannot be stored to or restored from EEPROM"),
+    ]
