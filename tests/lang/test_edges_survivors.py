@@ -177,3 +177,55 @@ def test_global_parameter_access_in_the_warning():
         (1, "SGP: global parameter 128 (tmcl_application_status) of TMCM-6212 cannot be written"),
         (3, "STGP: global parameter 132 (tick_timer) of TMCM-6212 cannot be stored to or restored from EEPROM"),
     ]
+
+
+# --- names the previous round listed (not in this draw; docs/mutation.md) ---------------------
+
+def test_defines_are_constants_from_the_options():
+    """`defines` are extra constants (`asm -D NAME=VALUE`): one the source defines again with
+    another value, or uses as a label, is an error that names `<defines>` (no line: 0)."""
+    assert assemble("X = 1\nMST X", defines={"X": 1}).instructions[0] == (3, 0, 1, 0)
+    e = _error("X = 2\nMST X", defines={"X": 1})
+    assert (e.line, e.column, e.message) == (1, 1, "constant 'X' redefined as 2 (was 1 at <defines>:0)")
+    e = _error("X: MST 0", defines={"X": 1})
+    assert e.message == "'X' is already a constant (defined at <defines>:0)"
+
+
+@pytest.mark.parametrize(("operand", "message"), [("*2", "unexpected '*' in expression"),
+                                                  (")", "unexpected ')' in expression")])
+def test_an_operator_that_cannot_start_an_expression(operand, message):
+    """Only ``+ - ~`` and ``(`` may start an expression (docs/tmcl-assembler.md "Source format")."""
+    e = _error(f"SAP 4, 0, {operand}")
+    assert (e.column, e.message) == (11, message)
+
+
+@pytest.mark.parametrize(("expr", "value"), [("(1|2)", 3), ("(6^3)", 5), ("-(1|2)", -3), ("(1|2)*2", 6)])
+def test_parentheses_hold_every_operator_level(expr, value):
+    """C semantics: inside parentheses the lowest-precedence operators (``|``, ``^``) are read too."""
+    assert assemble(f"SAP 4, 0, {expr}").instructions[0].value == value
+
+
+def test_binfile_checksum_error_names_the_byte_offset():
+    """docs/tmcl-assembler.md "Binary file format": 8-byte records; a wrong checksum names the
+    record and its byte offset (8 x record) with both checksums in hex."""
+    from opentmcl.lang import binfile
+    data = bytearray(binfile.encode([binfile.Instruction(3), binfile.Instruction(28)]))
+    data[15] ^= 1
+    with pytest.raises(binfile.BinFileError) as err:
+        binfile.decode(bytes(data))
+    assert str(err.value) == "record 1 (byte offset 8): wrong checksum 1Dh, expected 1Ch"
+
+
+def test_binfile_read_takes_1_mib_and_refuses_one_byte_more(tmp_path):
+    """docs/tmcl-assembler.md "Input sizes": "a binary image ... at most 1 MiB = 131072 records";
+    an all-zero record is a valid one (checksum 0)."""
+    from opentmcl.lang import binfile
+    from opentmcl.limits import IMAGE_MAX
+    assert IMAGE_MAX == 131072 * 8
+    ok, big = tmp_path / "ok.bin", tmp_path / "big.bin"
+    ok.write_bytes(bytes(IMAGE_MAX))
+    big.write_bytes(bytes(IMAGE_MAX + 1))
+    assert len(binfile.read(ok)) == 131072
+    with pytest.raises(binfile.BinFileError) as err:
+        binfile.read(big)
+    assert str(err.value) == "binary program image is larger than the 1 MiB limit"
