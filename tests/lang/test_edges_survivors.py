@@ -229,3 +229,44 @@ def test_binfile_read_takes_1_mib_and_refuses_one_byte_more(tmp_path):
     with pytest.raises(binfile.BinFileError) as err:
         binfile.read(big)
     assert str(err.value) == "binary program image is larger than the 1 MiB limit"
+
+
+# --- a further draw of 450 (docs/mutation.md) --------------------------------------------------
+
+@pytest.mark.parametrize(("expr", "value"), [("-7 % 3", -1), ("7 % -3", 1), ("7 % 3", 1),
+                                             ("-7 / 2", -3), ("7 / -2", -3), ("-7 / -2", 3)])
+def test_division_and_remainder_follow_c(expr, value):
+    """docs/assumptions.md (Assembler): "C integer semantics (`/` truncates toward zero, `%` takes
+    the dividend's sign)"."""
+    assert assemble(f"SAP 4, 0, {expr}").instructions[0].value == value
+
+
+def test_nostop_takes_no_argument():
+    """`#nostop` (docs/tmcl-assembler.md): alone it drops the STOP; with an argument it is an error."""
+    assert assemble("MST 0\n#nostop // a comment").instructions == [(3, 0, 0, 0)]
+    e = _error("#nostop 1")
+    assert (e.line, e.column, e.message) == (1, 1, "#nostop takes no argument")
+
+
+def test_unknown_module_is_an_error_of_the_options():
+    """A module name that is no profile: one error of `<options>` without a position; nothing more
+    is counted (AsmError.more, warnings_more 0)."""
+    e = _error("MST 0", module="TMCM-9999")
+    assert (e.file, e.line, e.column) == ("<options>", 0, 0)
+    assert e.message.startswith("unknown module 'TMCM-9999'; known: PD28-1021, PD86-1180, TMCM-6212")
+    assert (e.more, e.warnings_more, len(e.errors), e.warnings) == (0, 0, 1, [])
+
+
+def test_assemble_refuses_what_is_no_text():
+    with pytest.raises(TypeError, match=r"^assemble\(\) takes the source text \(str or bytes\), not int; "
+                                        r"assemble_file\(\) reads a file$"):
+        assemble(123)  # type: ignore[arg-type]
+
+
+def test_binfile_of_a_partial_record_names_the_record():
+    """8-byte records: 9 bytes are record 0 and one byte of record 1; 16 bytes are two records."""
+    from opentmcl.lang import binfile
+    assert len(binfile.decode(bytes(16))) == 2
+    with pytest.raises(binfile.BinFileError) as err:
+        binfile.decode(bytes(9))
+    assert str(err.value) == "length 9 is not a multiple of 8 bytes (record 1 is incomplete)"

@@ -72,3 +72,25 @@ def test_help_describes_the_generator(capsys):
     out = " ".join(capsys.readouterr().out.split())
     assert "Write the bundled include files from the module profiles (modules/data/*.toml)." in out
     assert out.startswith("usage: python -m opentmcl.lang.gen_includes")
+
+
+def test_an_interrupt_name_without_ti_prefix_gets_one():
+    """The TI_ names of TMCM-6212 3.5.6.4 (TI_TIMER0): a profile name without the prefix is
+    written as TI_ + its CamelCase in upper case."""
+    prof = load_profile("TMCM-6212")
+    timer = dataclasses.replace(prof.interrupts[0], name="timer_0")
+    text = gen_includes.interrupt_file(dataclasses.replace(prof, interrupts={**prof.interrupts, 0: timer}))
+    assert "\nTI_TIMER0 " in text
+
+
+def test_global_parameters_are_listed_by_bank_then_number():
+    """"the bank is given in each comment": bank 0 first, then the others in order, each by number
+    (a bank 1, as a profile file of one's own may have, lies between 0 and 3)."""
+    prof = load_profile("TMCM-6212")
+    extra = dataclasses.replace(prof.global_parameters[(0, 255)], bank=1, number=0, name="bank_one_zero")
+    mine = dataclasses.replace(prof, global_parameters={**prof.global_parameters, (1, 0): extra})
+    text = gen_includes.param_file(mine)
+    rows = text.split("// Global parameters", 1)[1].split("\n\n", 1)[0].splitlines()[1:]
+    keys = [(int(r.split("// bank ")[1].split(":")[0]), int(r.split("=")[1].split("//")[0])) for r in rows]
+    assert keys == sorted(keys)
+    assert (1, 0) in keys and keys[0][0] == 0
