@@ -180,3 +180,25 @@ def test_reading_does_not_change_later_behaviour(cls, data, reads):
     assert events(read) == events(quiet)
     assert (read.now, read.position, read.velocity_exact, read.position_reached) == \
         (quiet.now, quiet.position, quiet.velocity_exact, quiet.position_reached)
+
+
+@pytest.mark.parametrize("cls", ENGINES)
+def test_position_reached_of_a_moving_engine_evaluates_no_position(cls, monkeypatch):
+    """AP8 "position reached" (manual 4.1) is polled after every event by the time loop: while
+    the motor moves it is false from the velocity alone, so the position's closed form is not
+    evaluated; at rest and once read at the tick it comes from the stored values. The answers
+    equal the trapezoid's (false while moving, true at the target)."""
+    e = trapezoid(cls)
+    e.move_to(51200 * 3)
+    reads = []
+    real = e._read
+    monkeypatch.setattr(e, "_read", lambda: reads.append(e.now) or real())
+    for t in (F // 4, F // 2, 2 * F):
+        e.advance(t)
+        assert e.position_reached is False
+    assert reads == []
+    e.advance(2 * F)
+    position = e.position
+    assert reads == [2 * F] and e.position_reached is False and position == e.position
+    e.advance(5 * F)  # 1 s up, 2 s at 51200 pps, 1 s down: at rest on the target
+    assert e.position_reached is True and e.position == 51200 * 3

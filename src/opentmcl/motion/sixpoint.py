@@ -656,10 +656,19 @@ class SixPointRampEngine(RampEngine):
 
     @property
     def position_reached(self) -> bool:
-        """AP8: actual position equals target position and the motor stands."""
-        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
-            self._read()
-        return self._read_v == 0 and self._read_pos == self._target
+        """AP8: actual position equals target position and the motor stands. Polled after
+        every event: a moving piece answers from its velocity alone, without the position."""
+        now = self.now
+        if self._read_at == now and self._read_pieces is self._queue.pieces:
+            return self._read_v == 0 and self._read_pos == self._target
+        seg = self._queue.pieces[0]
+        k1 = seg.k1
+        if k1 is not None and k1 <= now:
+            seg = self._queue.at(now)
+        if seg.v0 == 0 and seg.a == 0:
+            p0 = seg.p0
+            return p0 == self._target_abs * PSCALE or wrap32(p0 // PSCALE) == self._target
+        return seg.v_at(now) == 0 and self.position == self._target
 
     @property
     def segments(self) -> tuple[Segment, ...]:
