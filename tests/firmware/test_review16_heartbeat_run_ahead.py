@@ -1,7 +1,7 @@
 """Review of issue 16: a heartbeat that is already up when a program sets it stops the motors at the
 next event, also when pure instructions follow (the run-ahead must not skip that event).
 
-TMCM-6212 manual, global parameter 68: "Serial heartbeat for RS485 interface and USB interface. If
+TMCM-6212 manual 5.1 (Bank 0), global parameter 68: "Serial heartbeat for RS485 interface and USB interface. If
 this time limit is up and no further command is received by the module the motor will be stopped."
 The module checks its heartbeats at every event tick (docs/architecture.md "Time"); a program's
 instruction is one event per slot of INSTRUCTION_TICKS (manual 3.6: about 10000 instructions per
