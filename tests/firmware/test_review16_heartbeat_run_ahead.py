@@ -69,3 +69,32 @@ def test_heartbeat_set_in_time_still_runs_ahead() -> None:
     vm.handle(Request(1, 129, 1, 0, 0).encode(), interface="serial")  # restarts the serial heartbeat
     vm.advance(0.01)
     assert vm.request(GAP, 3, 0).value > 0  # still turning
+
+
+def test_can_heartbeat_gp82_up_at_sgp_stops_at_next_instruction() -> None:
+    """The same for the CAN heartbeat GP82 (manual 5.1: "Heartbeat for CAN interface. If this time
+    limit is up and no further command is received the motor will be stopped") with a host on the
+    serial link only."""
+    def serial(vm: VirtualModule, *fields: int) -> bytes:
+        return vm.handle(Request(1, *fields).encode(), interface="serial")
+
+    def rotating() -> VirtualModule:
+        vm = VirtualModule("TMCM-6212")
+        serial(vm, ROR, 0, 0, 51200)
+        vm.advance(0.5)
+        return vm
+
+    vm = rotating()
+    serial(vm, 132, 0, 0, 0)
+    serial(vm, SGP, 82, 0, 5)
+    for _ in range(10):
+        serial(vm, GGP, 66, 0, 0)
+    serial(vm, STOP, 0, 0, 0)
+    serial(vm, 133, 0, 0, 0)
+    serial(vm, 129, 1, 0, 0)
+    start = vm.now
+    vm.advance(0.1)
+    ref = rotating()
+    ref.advance_to(start + 2 * INSTRUCTION_TICKS)
+    assert vm.request(GAP, 3, 0).value == 0
+    assert vm.request(GAP, 1, 0).value == ref.request(GAP, 1, 0).value
