@@ -59,8 +59,9 @@ class AsciiInterface:
         if self.addressed is None:
             if byte == 0x20:
                 return b""
-            self.addressed = chr(byte).upper() == codec.address_letter(self.vm.address) if 0x40 < byte < 0x7F \
-                else False
+            address = self.vm.address  # A = 1 ... Z = 26 (3.4.1); other addresses have no character
+            self.addressed = 0x40 < byte < 0x7F and 1 <= address <= 26 and \
+                chr(byte).upper() == codec.address_letter(address)
         if len(self.line) < MAX_LINE:
             self.line.append(byte)
         return bytes([byte]) if self._echo_chars() else b""

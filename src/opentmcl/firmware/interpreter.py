@@ -182,6 +182,9 @@ class Interpreter:
                 if limit == -1:
                     nxt = vm._limit_event()
                     limit = horizon if nxt is None else nxt
+                    hb = vm._heartbeat_deadline()
+                    if hb is not None and hb <= vm.now:  # up, not yet fired: stops the motors at the next event
+                        limit = vm.now
                 if t is None or t >= limit:
                     break
                 if kind != PURE_KIND and not (kind == GIO_KIND and not sources):  # GIO of undriven inputs: pure

@@ -20,6 +20,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from ..host import Module, TmclError, TmclStatusError, VersionReply
+from ..host.client import MAX_BATCH
 from ..protocol.frame import Reply
 from ..protocol.status import message
 
@@ -130,20 +131,23 @@ class Dashboard:
             return default
 
     def read_many(self, requests: list[tuple[int, int, int, int]]) -> list[int | None]:
-        """The values of several reads (GAP/GGP/GIO) in one `request_many`, in order: None for a
-        read the module refused (its status) and for all of them when the link failed."""
-        if not requests:
-            return []
+        """The values of several reads (GAP/GGP/GIO) in `request_many` batches of at most
+        `MAX_BATCH`, in order: None for a read the module refused (its status) and for all of a
+        batch when the link failed."""
+        out: list[int | None] = []
+        for start in range(0, len(requests), MAX_BATCH):
+            batch = requests[start:start + MAX_BATCH]
 
-        def run() -> list[int | None]:
-            answers: list[object]
-            try:
-                answers = list(self.module.request_many(requests))
-            except TmclStatusError as exc:  # the others were read: keep their values
-                answers = list(exc.answers or [None] * len(requests))
-            return [a.value if isinstance(a, Reply) else None for a in answers]
+            def run(batch: list[tuple[int, int, int, int]] = batch) -> list[int | None]:
+                answers: list[object]
+                try:
+                    answers = list(self.module.request_many(batch))
+                except TmclStatusError as exc:  # the others were read: keep their values
+                    answers = list(exc.answers or [None] * len(batch))
+                return [a.value if isinstance(a, Reply) else None for a in answers]
 
-        return self._try(run, [None] * len(requests))
+            out += self._try(run, [None] * len(batch))
+        return out
 
     @contextlib.contextmanager
     def _user_action(self):
