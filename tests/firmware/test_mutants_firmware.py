@@ -1,0 +1,88 @@
+"""Edges found unpinned by the seeded mutation sample of the firmware layer after the request-path
+and run-ahead changes of issue 16 (docs/mutation.md, `python bench/mutation.py --layer firmware
+--sample 150 --seed 12`, round 21)."""
+from __future__ import annotations
+
+import pytest
+
+from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
+from opentmcl.firmware.wait import TICK
+
+from .test_program_support import T, module
+
+
+def test_a_calculation_at_the_last_address_runs_and_then_the_program_stops():
+    """TMCM-6212 1 Features: "program memory (non volatile) for up to 6144 TMCL commands", so the
+    last address is 6143; docs/assumptions.md "Program memory end": the instruction at the last
+    address runs and the program then stops. A pure one (CALC ADD, 3.6.14) there is run ahead of the motors' clock
+    (docs/architecture.md "Time"), and the look-ahead must stop at the end of the memory too.
+    3.6.36: 135 type 2 "return accumulator"; 128 (GGP 128) application status 0 = stopped."""
+    w = module()
+    last = w.vm.program.size - 1
+    assert last == 6143
+    w.download([(19, 0, 0, 5)], start=last)
+    w.run(last)
+    w.vm.advance(10 * T)
+    assert w.a == 5
+    assert w.state == 0
+    assert w.vm.interpreter.executed == 1
+
+
+def test_rst_restarts_at_address_0_and_refuses_the_end_of_memory():
+    """PD28-1021 manual Table 5: "RST 48 <jump address> Restart the program from the given
+    address". Address 0, the first of the program memory, is a valid target: the loop ADD 1 /
+    COMP 3 / JC EQ / RST 0 runs three times. The first address beyond the memory (2048, 1 Features
+    "2048 TMCL commands") is an invalid value (3.2.1 Table 4 "4 Invalid value"; the program goes on
+    after it) and the last one (2047) is taken (it runs into the empty memory cell: status 2)."""
+    w = module("PD28-1021")
+    size = w.vm.program.size
+    assert size == 2048
+    w.download([(19, 0, 0, 1), (20, 0, 0, 3), (21, 2, 0, 4), (48, 0, 0, 0), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(40 * T)
+    assert (w.a, w.state, w.vm.interpreter.last_error) == (3, 0, None)
+    w = module("PD28-1021")
+    w.download([(48, 0, 0, size), (19, 0, 0, 7), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert (w.a, w.vm.interpreter.last_error) == (7, (0, 48, 4))
+    w = module("PD28-1021")
+    w.download([(48, 0, 0, size - 1)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.vm.interpreter.last_error == (size - 1, 0, 2)
+
+
+def test_wait_refsw_on_a_module_without_a_home_switch_parameter_times_out(tmp_path):
+    """TMCM-6212 3.6.20 "REFSW: Wait until a reference switch has been triggered ... The timeout flag
+    (ETO) will be set after a timeout limit has been reached". A profile that removes AP9 (home
+    switch state, 4.1; docs/profiles.md `[remove]`) has no switch to wait for: the WAIT ends by
+    its timeout of 5 ticks and sets ETO (docs/assumptions.md "WAIT on a missing switch"), the same
+    as on a module whose home switch stays open."""
+    path = tmp_path / "nohome.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOHOME-6212"\n'
+                    "[remove]\naxis_parameter = [9]\n")
+    for name in ("TMCM-6212", str(path)):
+        w = module(name)
+        w.download([(27, 2, 0, 5), (21, 8, 0, 3), (28, 0, 0, 0), (19, 9, 0, 9), (28, 0, 0, 0)])
+        w.run()
+        w.vm.advance(3 * T)
+        assert w.pc == 0, name  # still waiting
+        w.vm.advance(0.1)
+        assert (w.a, w.state) == (9, 0), name
+
+
+@pytest.mark.parametrize(("ticks", "wait"), [(-1, 0), (0, 0), (1, TICK)])
+def test_wait_ticks_0_goes_on_at_once_and_1_waits_one_tick(ticks, wait):
+    """TMCM-6212 3.6.20 WAIT TICKS: "one tick is 10 milliseconds"; docs/assumptions.md "WAIT":
+    `WAIT TICKS, 0, n` with n <= 0 does not wait, and the next instruction follows one slot
+    after the wait ends: SIO at 1 slot, WAIT at 2, the next SIO exactly at 3 slots + n ticks
+    (n = 1, the first that waits: 10 ms), to the clock tick."""
+    w = module()
+    w.download([(14, 0, 2, 1), (27, 0, 0, ticks), (14, 0, 2, 0), (28, 0, 0, 0)])
+    w.run()
+    due = w.vm.now + 3 * INSTRUCTION_TICKS + wait
+    w.vm.advance_to(due - 1)
+    assert w.out(0) == 1
+    w.vm.advance_to(due)
+    assert w.out(0) == 0
