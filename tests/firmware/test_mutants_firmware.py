@@ -5,10 +5,11 @@ from __future__ import annotations
 
 import pytest
 
+from opentmcl import VirtualModule
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 from opentmcl.firmware.wait import TICK
 
-from .test_program_support import T, module
+from .test_program_support import T, Wire, module
 
 
 def test_a_calculation_at_the_last_address_runs_and_then_the_program_stops():
@@ -86,3 +87,44 @@ def test_wait_ticks_0_goes_on_at_once_and_1_waits_one_tick(ticks, wait):
     assert w.out(0) == 1
     w.vm.advance_to(due)
     assert w.out(0) == 0
+
+
+def test_the_eeprom_lock_holds_after_a_power_cycle(tmp_path):
+    """PD86-1180 6.1 GP73 "Configuration EEPROM lock flag ... Write: 1234 to lock the EEPROM,
+    4321 to unlock it. Read: 1=EEPROM locked", access RWE: the lock is kept in the EEPROM, so a
+    module powered up again on the same EEPROM is still locked - 4.6.7 STAP "will not have any
+    effect when the configuration EEPROM is locked ... the error code 5" - until 4321 unlocks it."""
+    path = tmp_path / "ee.json"
+    Wire(VirtualModule("PD86-1180", address=1, eeprom=path)).ok(9, 73, 0, 1234)
+    again = Wire(VirtualModule("PD86-1180", address=1, eeprom=path))
+    assert again.ok(10, 73, 0) == 1
+    assert again(7, 4, 0).status == 5
+    again.ok(9, 73, 0, 4321)
+    third = Wire(VirtualModule("PD86-1180", address=1, eeprom=path))
+    assert third.ok(10, 73, 0) == 0
+    assert third(7, 4, 0).status == 100
+
+
+def test_reti_right_after_power_up_is_ignored():
+    """TMCM-6212 3.6.33 RETI ends an interrupt handling routine; docs/assumptions.md "Interrupts":
+    "RETI outside a handler is ignored". A program started with 129 type 0 ("from current
+    address", 3.6.36) just after power-up, whose first instruction is RETI, goes on to the next."""
+    w = module()
+    w.download([(38, 0, 0, 0), (19, 9, 0, 4), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert (w.a, w.state, w.vm.interpreter.last_error) == (4, 0, None)
+
+
+def test_vect_takes_the_last_address_and_refuses_the_first_beyond():
+    """TMCM-6212 3.6.32 "VECT <interrupt number>, <label>": the label is an address of the program
+    memory (1 Features: 6144 commands, 0...6143). 6143 is set; 6144 is an invalid value (3.2.1
+    Table 4 "4 Invalid value"), and the program goes on after it."""
+    w = module()
+    size = w.vm.program.size
+    w.download([(37, 0, 0, size - 1), (37, 1, 0, size), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.vm.interrupts.vectors[0] == size - 1
+    assert w.vm.interpreter.last_error == (1, 37, 4)
+    assert (w.pc, w.state) == (2, 0)
