@@ -8,6 +8,7 @@ import pytest
 from opentmcl import VirtualModule
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 from opentmcl.firmware.wait import TICK
+from opentmcl.protocol.frame import Reply, Request
 
 from .test_program_support import T, Wire, module
 
@@ -128,3 +129,18 @@ def test_vect_takes_the_last_address_and_refuses_the_first_beyond():
     assert w.vm.interrupts.vectors[0] == size - 1
     assert w.vm.interpreter.last_error == (1, 37, 4)
     assert (w.pc, w.state) == (2, 0)
+
+
+def test_a_module_without_gp66_answers_at_the_address_it_reports(tmp_path):
+    """TMCM-6212 5.1 GP66 "Serial address" is the address the module answers (3.1: the first byte of
+    a request addresses the module). A profile that removes GP66 (docs/profiles.md `[remove]`) has
+    no address setting: it reports address 0 and answers frames to 0 only, from 0 - not from
+    GP66's default of 1."""
+    path = tmp_path / "no66.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NO66-6212"\n'
+                    "[remove]\nglobal_parameter = [[0, 66]]\n")
+    vm = VirtualModule(str(path))
+    assert vm.address == 0
+    assert vm.handle(Request(1, 6, 1, 0, 0).encode()) == b""
+    reply = Reply.decode(vm.handle(Request(0, 6, 1, 0, 0).encode()))
+    assert (reply.module_address, reply.status) == (0, 100)

@@ -1,0 +1,21 @@
+"""Edges of the axis world left unpinned by the seeded firmware mutation sample of round 21
+(docs/mutation.md, `python bench/mutation.py --layer firmware --sample 150 --seed 12`)."""
+from __future__ import annotations
+
+
+def test_6212_encoder_without_ap202_converts_with_200_full_steps(rig, tmp_path):
+    """TMCM-6212 manual 6.2: "Set the motor full step resolution using parameter #202 (for 1.8°
+    motors this is 200 which is also the default value ...)". A profile that removes AP202
+    (docs/profiles.md `[remove]`; GAP 202 is then status 3, "wrong type") keeps the encoder
+    conversion of the default: one round of 200 * 256 = 51200 microsteps with AP210 = 51200 reads
+    51200, the same as the built-in TMCM-6212."""
+    path = tmp_path / "no202.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NO202-6212"\n'
+                    "[remove]\naxis_parameter = [202]\n")
+    for name in ("TMCM-6212", str(path)):
+        r = rig(name, {})
+        r.sap(4, 100000)
+        r.cmd(4, 0, 0, 51200)
+        r.vm.advance(4)
+        assert (r.gap(1), r.gap(210), r.gap(209)) == (51200, 51200, 51200), name
+    assert r.vm.request(6, 202, 0).status == 3
