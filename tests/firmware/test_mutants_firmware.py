@@ -144,3 +144,33 @@ def test_a_module_without_gp66_answers_at_the_address_it_reports(tmp_path):
     assert vm.handle(Request(1, 6, 1, 0, 0).encode()) == b""
     reply = Reply.decode(vm.handle(Request(0, 6, 1, 0, 0).encode()))
     assert (reply.module_address, reply.status) == (0, 100)
+
+
+def test_error_replies_carry_value_0_on_both_paths():
+    """TMCM-6212 3.2 Table 3: a reply is reply address, module address, status, command, value;
+    docs/assumptions.md "Firmware mutation sample": an error reply's value is 0. A frame with a
+    wrong checksum (3.2.1 Table 4 "1 Wrong checksum") to a module at address 5 gets status 1 from
+    module 5 with value 0; a SAP that the pre-bound path refuses (4.1 AP4 0...7999774: 7999775 is
+    status 4) answers byte for byte what the general path answers to the same frame."""
+    vm = VirtualModule("TMCM-6212", address=5)
+    good = Request(5, 6, 1, 0, 0).encode()
+    bad = Reply.decode(vm.handle(good[:8] + bytes(((good[8] + 1) & 0xFF,))))
+    assert (bad.module_address, bad.status, bad.command, bad.value) == (5, 1, 6, 0)
+    refused = Request(5, 5, 4, 0, 7999775).encode()
+    general = VirtualModule("TMCM-6212", address=5).handle(refused)
+    assert vm.handle(Request(5, 5, 4, 0, 7999774).encode())[2] == 100
+    assert vm.is_prebound(refused)
+    assert vm.handle(refused) == general
+    assert Reply.decode(general).status == 4 and Reply.decode(general).value == 0
+
+
+def test_the_secondary_address_is_accepted_and_no_other():
+    """TMCM-6212 5.1 GP87 "Serial secondary address: Second module (target) address for RS485.
+    Setting this parameter to 0 switches off the secondary address", 0...255: with GP87 = 3 the
+    module at address 1 takes frames to 1 and to 3, not to 4 or 2; with GP87 = 0 only 1."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    assert [vm.accepts_address(a) for a in (0, 1, 2, 3, 4)] == [False, True, False, False, False]
+    assert vm.request(9, 87, 0, 3).status == 100
+    assert [vm.accepts_address(a) for a in (0, 1, 2, 3, 4, 255)] == [False, True, False, True, False, False]
+    got = {a: len(vm.handle(Request(a, 6, 1, 0, 0).encode())) for a in (1, 2, 3, 4)}
+    assert got == {1: 9, 2: 0, 3: 9, 4: 0}
