@@ -174,3 +174,34 @@ def test_the_secondary_address_is_accepted_and_no_other():
     assert [vm.accepts_address(a) for a in (0, 1, 2, 3, 4, 255)] == [False, True, False, True, False, False]
     got = {a: len(vm.handle(Request(a, 6, 1, 0, 0).encode())) for a in (1, 2, 3, 4)}
     assert got == {1: 9, 2: 0, 3: 9, 4: 0}
+
+
+@pytest.mark.parametrize("bank", [0, 1])
+def test_sio_255_on_a_bank_without_outputs_is_wrong_type(bank):
+    """TMCM-6212 3.6.12 SIO "<bank number> (2)": the outputs are bank 2 only, so `SIO 255, <bank>`
+    (all outputs at once) on the input banks 0 and 1 has no output to set - 3.2.1 Table 4 "3 Wrong
+    type", as GIO 255 on the analog bank (docs/assumptions.md) - while `SIO 255, 2, 0` is taken."""
+    w = module()
+    assert w(14, 255, bank, 0).status == 3
+    assert w(14, 255, 2, 0).status == 100
+
+
+def test_1180_pullups_take_0_to_7():
+    """PD86-1180 4.6.14 "COMMAND FOR SWITCHING THE PULL-UP RESISTORS": "SIO 0, 0,<bitmask> 0… 7":
+    0 (all off) and 7 (all on) are taken, -1 and 8 are status 4 (3.2.1 "4 Invalid value")."""
+    w = module("PD86-1180")
+    w.ok(14, 0, 0, 7)
+    w.ok(14, 0, 0, 0)
+    assert w.vm.io.pullups == 0
+    assert (w(14, 0, 0, -1).status, w(14, 0, 0, 8).status) == (4, 4)
+    assert w.vm.io.pullups == 0
+
+
+def test_request_defaults_the_value_to_0():
+    """`VirtualModule.request(command, type=0, motor=0, value=0)`: SIO 0, 2 with the value left out
+    sets OUT_0 (TMCM-6212 3.6.12 SIO "<port number> (0...4), <bank number> (2), 0/1") to 0."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    assert vm.request(14, 0, 2, 1).status == 100
+    assert vm.request(15, 0, 2).value == 1
+    assert vm.request(14, 0, 2).status == 100
+    assert vm.request(15, 0, 2).value == 0
