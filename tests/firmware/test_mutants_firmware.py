@@ -205,3 +205,13 @@ def test_request_defaults_the_value_to_0():
     assert vm.request(15, 0, 2).value == 1
     assert vm.request(14, 0, 2).status == 100
     assert vm.request(15, 0, 2).value == 0
+
+
+def test_sio_replies_the_value_the_manual_prints():
+    """TMCM-6212 3.6.12 SIO "Reply in Direct Mode: Status 100 - OK, Value 0 (don't care)": the
+    manual prints 0 as the reply value of SIO, so SIO 0, 2, 1 answers 0 (and GIO 0, 2
+    reads the output back as 1)."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    reply = vm.request(14, 0, 2, 1)
+    assert (reply.status, reply.command, reply.value) == (100, 14, 0)
+    assert vm.request(15, 0, 2).value == 1
