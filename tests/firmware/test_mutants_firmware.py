@@ -215,3 +215,44 @@ def test_sio_replies_the_value_the_manual_prints():
     reply = vm.request(14, 0, 2, 1)
     assert (reply.status, reply.command, reply.value) == (100, 14, 0)
     assert vm.request(15, 0, 2).value == 1
+
+
+def test_an_ascii_line_leaves_no_binary_bytes_over():
+    """PD28-1021 manual 3.4.1: only the bytes after a BIN line are binary frames again
+    (`AsciiInterface.leftover`, which the bus hands to the binary framer). A feed that stays in
+    ASCII mode leaves nothing over, also after an earlier feed with BIN left a frame over."""
+    vm = VirtualModule("PD28-1021", address=1)
+    assert vm.request(139).status == 100
+    assert vm.feed_ascii(b"AGAP 1, 0\r").endswith(b"BA 100 0\r")
+    assert vm.ascii.leftover == b""
+    frame = Request(1, 6, 1, 0, 0).encode()
+    vm.feed_ascii(b"ABIN\r" + frame)
+    assert vm.ascii.leftover == frame
+    assert vm.request(139).status == 100
+    vm.feed_ascii(b"AGAP 1, 0\r")
+    assert vm.ascii.leftover == b""
+
+
+def test_an_unknown_command_is_status_2_with_value_0():
+    """TMCM-6212 3.2.1 Table 4 "2 Invalid command": a command number the module does not have (99)
+    is answered with status 2 and, as every error reply (docs/assumptions.md), value 0."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    reply = vm.request(99, 0, 0, 1234)
+    assert (reply.status, reply.command, reply.value) == (2, 99, 0)
+
+
+def test_ja_beyond_program_memory_is_ignored_with_status_4():
+    """TMCM-6212 3.6.17 "JA <jump address>", 1 Features: 6144 commands, so 6144 is beyond the memory:
+    docs/assumptions.md "Program memory end": a JA one beyond the end is ignored (3.2.1 Table 4
+    "4 Invalid value" in the program's last error) and the program goes on; JA 6143 is taken."""
+    w = module()
+    size = w.vm.program.size
+    w.download([(22, 0, 0, size), (19, 9, 0, 3), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert (w.a, w.vm.interpreter.last_error) == (3, (0, 22, 4))
+    w = module()
+    w.download([(22, 0, 0, size - 1)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.vm.interpreter.last_error == (size - 1, 0, 2)
