@@ -6,8 +6,10 @@ from __future__ import annotations
 import pytest
 
 from opentmcl import VirtualModule
+from opentmcl.firmware.eeprom import EepromError
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 from opentmcl.firmware.wait import TICK
+from opentmcl.motion import CLOCK_HZ
 from opentmcl.protocol.frame import Reply, Request
 
 from .test_program_support import T, Wire, module
@@ -256,3 +258,50 @@ def test_ja_beyond_program_memory_is_ignored_with_status_4():
     w.run()
     w.vm.advance(10 * T)
     assert w.vm.interpreter.last_error == (size - 1, 0, 2)
+
+
+_HEAD = '{"format":"opentmcl-eeprom","version":1,"module":"TMCM-6212"'
+
+
+@pytest.mark.parametrize("content", [
+    _HEAD + ',"coord":{"1":{"2":"x"}}}',
+    _HEAD + ',"coord":[1]}',
+    '{"format":"other","version":1,"module":"TMCM-6212"}',
+    '{"version":1,"module":"TMCM-6212"}',
+    '[1, 2]',
+])
+def test_a_damaged_coordinate_section_or_a_foreign_file_is_refused(tmp_path, content):
+    """docs/architecture.md "Errors" (never a corrupted EEPROM file): coordinates are stored as
+    32-bit integers per motor (TMCM-6212 3.6.22 SCO "-2^31 ... 2^31 - 1"), so a coordinate section
+    with a text value or of the wrong shape is damaged; a JSON file that is not an OpenTMCL EEPROM
+    image (another format, none, not an object) is refused too - both as EepromError, the file
+    keeping its bytes."""
+    path = tmp_path / "ee.json"
+    path.write_text(content)
+    with pytest.raises(EepromError, match="EEPROM file"):
+        VirtualModule("TMCM-6212", eeprom=path)
+    assert path.read_text() == content
+
+
+def test_a_stored_program_keeps_32_bit_values(tmp_path):
+    """TMCM-6212 3.1 Table 2: an instruction is command, type, motor/bank (a byte each) and a
+    32-bit value; an EEPROM image whose program holds MVP ABS values beyond a byte (256, 51200)
+    and the lowest 32-bit value loads with the values as stored (only the three byte fields are
+    limited to 0...255)."""
+    path = tmp_path / "ee.json"
+    path.write_text(_HEAD + ',"program":[[4,0,0,51200],[4,0,0,-2147483648],[4,0,0,256]]}')
+    vm = VirtualModule("TMCM-6212", address=1, eeprom=path)
+    assert vm.program.code[:3] == [(4, 0, 0, 51200), (4, 0, 0, -2147483648), (4, 0, 0, 256)]
+
+
+def test_next_event_in_counts_seconds():
+    """`VirtualModule.next_event_in()`: seconds to the next internal event. A program started with
+    129 has its first instruction one slot later (docs/assumptions.md "Instruction rate": 1600
+    ticks of the 16 MHz clock, 100 µs); a stopped program and standing motors have none."""
+    w = module()
+    assert w.vm.next_event_in() is None
+    w.download([(27, 0, 0, 50), (28, 0, 0, 0)])
+    w.run()
+    assert w.vm.next_event_in() == INSTRUCTION_TICKS / CLOCK_HZ == 1e-4
+    w.vm.advance(T)
+    assert w.vm.next_event_in() == pytest.approx(0.5)
