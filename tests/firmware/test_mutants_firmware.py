@@ -61,7 +61,7 @@ def test_wait_refsw_on_a_module_without_a_home_switch_parameter_times_out(tmp_pa
     """TMCM-6212 3.6.20 "REFSW: Wait until a reference switch has been triggered ... The timeout flag
     (ETO) will be set after a timeout limit has been reached". A profile that removes AP9 (home
     switch state, 4.1; docs/profiles.md `[remove]`) has no switch to wait for: the WAIT ends by
-    its timeout of 5 ticks and sets ETO (docs/assumptions.md "WAIT on a missing switch"), the same
+    its timeout of 5 ticks and sets ETO (docs/assumptions.md "Firmware mutation sample"), the same
     as on a module whose home switch stays open."""
     path = tmp_path / "nohome.toml"
     path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOHOME-6212"\n'
