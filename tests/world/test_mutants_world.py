@@ -19,3 +19,21 @@ def test_6212_encoder_without_ap202_converts_with_200_full_steps(rig, tmp_path):
         r.vm.advance(4)
         assert (r.gap(1), r.gap(210), r.gap(209)) == (51200, 51200, 51200), name
     assert r.vm.request(6, 202, 0).status == 3
+
+
+def test_stop_on_stall_speed_in_internal_units(rig):
+    """TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load value
+    reaches zero" and AP255 "0 - the internal units of the TMC5130 are used directly": with
+    AP255 = 0 the stall speed is an internal velocity like the ROR speed (v * 16 MHz / 2^24 pps). ROR
+    20000 (19073 pps) into a load step at 10000 stops there with AP181 = 19500 (18597 pps, below the
+    speed; AP207 bit 0 "stallGuard error"), and runs on with AP181 = 21000 (above it)."""
+    got = {}
+    for limit in (19500, 21000):
+        r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[10000, 0.6]], "before": 0.1}}}})
+        r.sap(255, 0)
+        r.sap(181, limit)
+        r.sap(174, 0)
+        r.cmd(1, 0, 0, 20000)
+        r.vm.advance(2)
+        got[limit] = (r.gap(3) == 0, r.gap(1) == 10000, r.gap(207))
+    assert got == {19500: (True, True, 1), 21000: (False, False, 0)}
