@@ -37,3 +37,18 @@ def test_stop_on_stall_speed_in_internal_units(rig):
         r.vm.advance(2)
         got[limit] = (r.gap(3) == 0, r.gap(1) == 10000, r.gap(207))
     assert got == {19500: (True, True, 1), 21000: (False, False, 0)}
+
+
+def test_a_stall_moving_left_stops_at_the_first_position_of_the_heavier_load(rig):
+    """TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load value
+    reaches zero"; docs/world.md "Time: events, never steps": the positions where a load over
+    position steps are events, in both directions. The stage starts at 20000 above a step at 10000
+    whose load below (0.6) the motor cannot hold (C = 17/32): ROL stops it exactly at 9999, the
+    first position of the heavier load, with AP207 bit 0 "stallGuard error" - as moving right over
+    a step up stops at 10000 (tests/world/test_load.py)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"start": 20000, "load": {"steps": [[10000, 0.1]], "before": 0.6}}}})
+    r.sap(181, 1000)
+    r.sap(174, 0)
+    r.cmd(2, 0, 0, 20000)
+    r.vm.advance(2)
+    assert (r.gap(3), r.phys(), r.gap(1), r.gap(207)) == (0, 9999, 9999 - 20000, 1)
