@@ -52,3 +52,18 @@ def test_a_stall_moving_left_stops_at_the_first_position_of_the_heavier_load(rig
     r.cmd(2, 0, 0, 20000)
     r.vm.advance(2)
     assert (r.gap(3), r.phys(), r.gap(1), r.gap(207)) == (0, 9999, 9999 - 20000, 1)
+
+
+def test_1180_an_odd_encoder_prescaler_counts_with_its_own_value(rig):
+    """PD86-1180 manual 7.2: "Other values between those given in the table can be used" for the
+    encoder prescaler `<p>` (AP210), prescaler = p / 512, 6400 the default. p = 6401 (odd: bit 0
+    is part of the value, only the special-function bits are flags) reads 100000 microsteps as
+    floor(100000 * 6401 / 6400) = 100015, p = 6400 as 100000."""
+    got = {}
+    for p in (6400, 6401):
+        r = rig("PD86-1180", {})
+        r.sap(210, p)
+        r.cmd(4, 0, 0, 100000)
+        r.vm.advance(5)
+        got[p] = (r.gap(1), r.gap(209))
+    assert got == {6400: (100000, 100000), 6401: (100000, 100015)}
