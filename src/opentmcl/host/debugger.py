@@ -203,11 +203,15 @@ class Debugger:
         st = self.status()
         for _ in range(max(1, count)):
             self.loader.step()
-            self.loader.client.sleep(INSTRUCTION_SECONDS)
-            st = self._settle(self.status())
+            st = self.after_step()
             if st.mode in (0, 3):
                 break
         return st
+
+    def after_step(self) -> AppStatus:
+        """The state once the step (130) just sent has run; a WAIT is waited out."""
+        self.loader.client.sleep(INSTRUCTION_SECONDS)
+        return self._settle(self.status())
 
     def run_to(self, stops: set[int], *, max_steps: int | None = None) -> AppStatus:
         """Single-step until the PC is in `stops` (before that instruction runs) or the program

@@ -32,6 +32,7 @@ import contextlib
 import json
 import logging
 from collections.abc import Awaitable, Callable, Sequence
+from functools import partial
 from importlib import resources
 
 from starlette.applications import Starlette
@@ -418,13 +419,13 @@ class ModuleApi:
         return {"addresses": await run_in_threadpool(self.d.set_breakpoints, lines)}
 
     async def run(self, _request: Request) -> object:
-        return await self._program_action(self.d.run)
+        return await self._program_action(partial(self.d.run, self.d.stops))  # stops at arrival
 
     async def stop(self, _request: Request) -> object:
         return await self._program_action(self.d.stop)
 
     async def step(self, _request: Request) -> object:
-        return await self._program_action(self.d.step)
+        return await self._program_action(partial(self.d.step, self.d.stops))
 
     async def reset(self, _request: Request) -> object:
         return await self._program_action(self.d.reset)

@@ -110,6 +110,7 @@ class Dashboard:
         self._runner: threading.Thread | None = None
         self._cancel = threading.Event()
         self.abort_download = threading.Event()  # set by stop-all: a download ends at its next instruction
+        self.stops = 0  # STOP ALLs so far: a Run or Step that arrived before the last one is refused
         self.closed = threading.Event()  # set by stop(): live connections end
         with self.lock:
             self.profile = module.profile
@@ -169,6 +170,17 @@ class Dashboard:
         """Call fn() for a user action under the module lock (errors: `_user_action`)."""
         with self._user_action():
             with self.lock:
+                out = fn()
+            self.connected = True
+            return out
+
+    def _unless_stopped(self, since: int | None, fn):
+        """fn() under the module lock, unless a STOP ALL came after the request arrived (`since`:
+        `stops` at its arrival). Under the lock, so STOP ALL's 128 cannot come between check and send."""
+        with self._user_action():
+            with self.lock:
+                if since is not None and since != self.stops:
+                    raise DashboardError("cancelled by STOP ALL")
                 out = fn()
             self.connected = True
             return out
@@ -419,13 +431,18 @@ class Dashboard:
         self.breakpoints = addrs
         return sorted(addrs)
 
-    def run(self) -> None:
+    def run(self, since: int | None = None) -> None:
         """129 from the current address; with breakpoints, single-step (130) in a thread until the
-        program counter reaches one (host-side breakpoints, as `opentmcl debug` does)."""
+        program counter reaches one (host-side breakpoints, as `opentmcl debug` does). `since`:
+        `stops` when the request arrived (a STOP ALL after it refuses the Run)."""
         self.cancel_run()
         if not self.breakpoints:
-            self._do(lambda: self._loader().run())
+            self._unless_stopped(since, lambda: self._loader().run())
             return
+        self._unless_stopped(since, self._start_runner)
+
+    def _start_runner(self) -> None:
+        """The host-side stepping thread (called under the lock: a STOP ALL's cancel comes after)."""
         self._cancel.clear()
         self._runner = threading.Thread(target=self._run_to_breakpoint, name="dashboard-run", daemon=True)
         self._runner.start()
@@ -456,12 +473,15 @@ class Dashboard:
         self.cancel_run()
         self._do(lambda: self._loader().stop())
 
-    def step(self) -> dict:
+    def step(self, since: int | None = None) -> dict:
+        """130 and the instruction waited out; `since` as for `run`."""
         from ..host.debugger import Debugger
 
         self.cancel_run()
+        loader = self._loader()
+        self._unless_stopped(since, loader.step)
         with self._user_action():
-            Debugger(self._loader()).step()  # not under self.lock, see _run_to_breakpoint
+            Debugger(loader).after_step()  # not under self.lock, see _run_to_breakpoint
         return self.program_state()
 
     def reset(self) -> None:
