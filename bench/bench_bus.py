@@ -9,10 +9,8 @@ same modules polled directly (`vm.advance` + `vm.handle` per module, no bus) in 
 """
 from __future__ import annotations
 
-import argparse
-
 from bench_polling import CHUNK, check_moving, start_moves
-from figures import Figure, best_of, timed
+from figures import Figure, best_of, print_figures, timed
 from opentmcl import VirtualModule
 from opentmcl.protocol.frame import Request
 from opentmcl.server.bus import ModuleBus
@@ -77,11 +75,7 @@ def measure(quick: bool = False) -> list[Figure]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args()
-    for f in measure(args.quick):
-        print(f)
+    print_figures(measure, __doc__ or "")
 
 
 if __name__ == "__main__":

@@ -18,11 +18,9 @@ Reference: the minimal-handler floor (bench_polling.py) in the same run.
 """
 from __future__ import annotations
 
-import argparse
-
 import figures
 from bench_polling import FAR, floor_rate
-from figures import Figure, best_of
+from figures import Figure, best_of, print_figures
 from opentmcl import VirtualModule
 from opentmcl.lang import assemble
 from opentmcl.protocol.frame import Reply, Request
@@ -146,11 +144,7 @@ def measure(quick: bool = False) -> list[Figure]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args()
-    for f in measure(args.quick):
-        print(f)
+    print_figures(measure, __doc__ or "")
 
 
 if __name__ == "__main__":

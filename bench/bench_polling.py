@@ -15,11 +15,10 @@
 """
 from __future__ import annotations
 
-import argparse
 import struct
 from collections.abc import Callable
 
-from figures import Figure, best_of, timed
+from figures import Figure, best_of, print_figures, timed
 from opentmcl import VirtualModule, connect
 from opentmcl.protocol.frame import Request
 
@@ -198,11 +197,7 @@ def measure(quick: bool = False) -> list[Figure]:
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true")
-    args = ap.parse_args()
-    for f in measure(args.quick):
-        print(f)
+    print_figures(measure, __doc__ or "")
 
 
 if __name__ == "__main__":

@@ -71,3 +71,13 @@ def best_of(rounds: int, measures: list[Callable[[], float | None]]) -> list[flo
                 prev = best[i]
                 best[i] = got if prev is None else max(prev, got)
     return best
+
+
+def print_figures(measure: Callable[[bool], list[Figure]], description: str) -> None:
+    """The command line of a bench_*.py of its own: `[--quick]`, one figure per line."""
+    import argparse
+
+    ap = argparse.ArgumentParser(description=description.splitlines()[0])
+    ap.add_argument("--quick", action="store_true")
+    for f in measure(ap.parse_args().quick):
+        print(f)

@@ -159,13 +159,7 @@ class Client:
         req, timeout = self._prepare(command, type, motor, value, address, timeout)
         with self._lock:
             self._send(req)
-            if req.command in NO_REPLY:
-                return None
-            if is_version_request(req.command, req.type):
-                return self._read_version(req, timeout)
-            if req.command == READ_PROGRAM_MEMORY:
-                return self._read_memory(req, timeout)
-            return self._read_reply(req, timeout)
+            return self._read_answer(req, timeout)
 
     def reply(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
               address: int | None = None, timeout: float | None = None) -> Reply:
