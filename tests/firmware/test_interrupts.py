@@ -188,3 +188,15 @@ def test_vector_table_of_each_module():
     assert w6212(25, 8).status == 100 and w1180(25, 8).status == 3
     assert w6212(25, 42).status == 100 and w1180(25, 41).status == 3
     assert w1180(25, 40).status == 100 and w1180(25, 255).status == 100
+
+
+def test_vect_255_is_a_wrong_type_vect_0_is_taken():
+    """Manual 3.5.6.4 / Table 12: 255 "Global interrupts" is the switch of EI 255 / DI 255, not a
+    vector: VECT 255 is refused with status 3 (wrong type, docs/assumptions.md "Interrupts
+    (Table 12)"), before its address is looked at; VECT 0 (timer 0) with the same address is taken."""
+    from opentmcl import VirtualModule
+
+    vm = VirtualModule("TMCM-6212")
+    assert vm.request(37, 255, 0, 0).status == 3
+    assert vm.request(37, 255, 0, 10**6).status == 3
+    assert vm.request(37, 0, 0, 0).status == 100

@@ -78,7 +78,9 @@ class Interrupts:
     def set_vector(self, number: int, address: int) -> None:
         """VECT: the handler's address; vectors can be redefined (manual 3.6.32)."""
         self._check(number)
-        if number == GLOBAL or not 0 <= address < self.vm.profile.program_memory:
+        if number == GLOBAL:  # the EI 255 / DI 255 switch, not a vector (docs/assumptions.md)
+            raise TmclStatus(3)
+        if not 0 <= address < self.vm.profile.program_memory:
             raise TmclStatus(4)
         self.vectors[number] = address
 
