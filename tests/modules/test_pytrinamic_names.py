@@ -197,4 +197,4 @@ def test_the_readme_from_pytrinamic_example_runs_and_prints_what_it_says(tmp_pat
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == stated
-    assert len(stated) == 3 and '"MaxVelocity"' in code and "motor.AP.MaxVelocity" in section
+    assert len(stated) == 4 and '"MaxVelocity"' in code and "motor.AP.MaxVelocity" in section

@@ -111,6 +111,7 @@ def test_stop_all_ends_a_download_under_way():
     sends MST: motor 0 turned by ROR (3.6.1) gets target speed 0, the module is out of download
     mode, and the download is answered with a one-line error naming STOP ALL."""
     import threading
+    import time
 
     from .shellkit import bench, wait_until
 
@@ -118,6 +119,13 @@ def test_stop_all_ends_a_download_under_way():
     with bench(("TMCM-6212", 1)) as b:
         h = b.handle
         vm = b.server.bus.modules[0]
+        store = vm.store_instruction
+
+        def slow_store(*args):  # a real module writes each instruction to its EEPROM: the download
+            time.sleep(0.0005)  # lasts at least 2 s, however fast the request path is
+            return store(*args)
+
+        vm.store_instruction = slow_store
         six = b.client(1)
         six.request(ROR, 0, 0, 30000)
         answer: list = []

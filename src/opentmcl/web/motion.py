@@ -26,9 +26,8 @@ def stop_module(d: Dashboard) -> dict[str, object]:
     Every axis is tried even after an error; `ok` is False with the first error's text when any
     command failed."""
     errors: list[str] = []
-    with d.lock:
-        d.stops += 1  # a Run or Step that arrived before this and has not been sent is refused
     d.abort_download.set()  # a download holds the module from 132 to 133: it ends at the next instruction
+    d.stops += 1  # a Run or Step that arrived before this and is not sent yet is refused (before our 128)
     runner = d._runner
     stepping = runner is not None and runner.is_alive()
     d._cancel.set()  # the host-side stepping ends after its current step; 128 first, not its WAIT
