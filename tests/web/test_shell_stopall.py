@@ -12,10 +12,8 @@ PROGRAM = "Loop:\n    ROR 2, 30000\n    WAIT TICKS, 0, 5\n    JA Loop\n"
 
 
 def _program_running(module) -> None:
-    from opentmcl.host.loader import Loader
+    from opentmcl.host.loader import Loader, VerifyError
     from opentmcl.lang import assemble
-
-    from opentmcl.host.loader import VerifyError
 
     loader = Loader(module)
     for attempt in range(3):  # the dashboard polls the same module meanwhile: in download mode
