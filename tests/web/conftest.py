@@ -19,6 +19,20 @@ CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic"
 
 
 @pytest.fixture
+def dash():
+    """A `Dashboard` of one virtual TMCM-6212 (sim://, virtual clock); its sampling ends afterwards."""
+    import opentmcl
+    from opentmcl.web.service import Dashboard
+
+    module = opentmcl.connect("sim://TMCM-6212")
+    transport = module.client.transport
+    d = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
+    yield d
+    d.closed.set()  # ends a sampling thread
+    module.close()
+
+
+@pytest.fixture
 def client():
     """A `TestClient` of one virtual TMCM-6212's dashboard app, sending what the page itself sends:
     a loopback Host and the X-OpenTMCL header (web/guard.py). `client.dash`, `client.module`."""

@@ -6,10 +6,8 @@ from __future__ import annotations
 import pytest
 from starlette.testclient import TestClient
 
-import opentmcl
 from opentmcl.web import sampler as S
 from opentmcl.web.app import create_app
-from opentmcl.web.service import Dashboard
 
 
 class Clock:
@@ -18,16 +16,6 @@ class Clock:
 
     def __call__(self) -> float:
         return self.now
-
-
-@pytest.fixture
-def dash():
-    module = opentmcl.connect("sim://TMCM-6212")
-    transport = module.client.transport
-    d = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    yield d
-    d.closed.set()  # ends a sampling thread
-    module.close()
 
 
 @pytest.fixture

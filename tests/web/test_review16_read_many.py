@@ -10,21 +10,9 @@ from __future__ import annotations
 
 import pytest
 
-import opentmcl
 from opentmcl.host.client import MAX_BATCH
-from opentmcl.web.service import Dashboard
 
 GAP = 6
-
-
-@pytest.fixture
-def dash():
-    module = opentmcl.connect("sim://TMCM-6212")
-    transport = module.client.transport
-    d = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    yield d
-    d.closed.set()
-    module.close()
 
 
 @pytest.mark.parametrize("count", [MAX_BATCH, MAX_BATCH + 1, 3 * MAX_BATCH + 5])

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-import opentmcl
 from opentmcl.host.errors import TmclTimeout
 from opentmcl.web import sampler as S
-from opentmcl.web.service import Dashboard
 
 
 class Clock:
@@ -47,14 +45,10 @@ class Counting:
 
 
 @pytest.fixture
-def dash():
-    module = opentmcl.connect("sim://TMCM-6212")
-    transport = module.client.transport
-    d = Dashboard(module, vm=transport.module, vm_lock=transport.lock)
-    d.module = Counting(module)
-    yield d
-    d.closed.set()
-    module.close()
+def dash(dash):
+    """The shared dashboard (conftest.py), its module's requests counted."""
+    dash.module = Counting(dash.module)
+    return dash
 
 
 def test_one_batch_per_chart_tick_with_the_values_of_single_reads(dash):

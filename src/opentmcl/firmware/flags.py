@@ -16,12 +16,6 @@ ARITHMETIC_MASK = 0xF00
 CONDITION_ERROR = {8: ETO, 9: EAL, 10: EDV, 11: EPO, 12: ESD}
 
 
-def after_load(flags: int, accumulator: int) -> int:
-    """A value was written to the accumulator: the zero flag follows it (`GIO 0, 2` then
-    `JC NZ, ...` in the manual's timer interrupt example, 3.5.6.4)."""
-    return (flags & ~ZERO) | (ZERO if accumulator == 0 else 0)
-
-
 def after_compare(flags: int, accumulator: int, operand: int) -> int:
     """COMP: signed comparison of the accumulator with the operand; the zero flag says equal."""
     out = flags & ~ARITHMETIC_MASK

@@ -99,18 +99,6 @@ class Interpreter:
         if self.vm.globals.get_raw(0, 77) == 1 and self.vm.program.length:
             self.run(0)
 
-    def next_event(self) -> int | None:
-        """Absolute tick at which the program next needs service, > vm.now, or None
-        (latches what occurred up to now first; `own_event` plus the timers)."""
-        vm = self.vm
-        now = vm.now
-        vm.interrupts.poll(now)
-        t = self.own_event()
-        timer = vm.interrupts.next_timer_event(now, refresh=False)
-        if timer is not None and (t is None or timer < t):
-            t = max(timer, now + 1)
-        return t
-
     def own_event(self) -> int | None:
         """The program's own next tick (instruction, WAIT timeout or check, dispatch from a
         WAIT), > vm.now, or None; timers are the module's (`VirtualModule._limit_event`)."""
@@ -402,7 +390,7 @@ class Interpreter:
     def _load(self, value: int) -> None:
         vm = self.vm
         a = vm.accumulator = value if -0x8000_0000 <= value <= 0x7FFF_FFFF else to_int32(value)
-        vm.flags = (vm.flags & ~flags.ZERO) | (flags.ZERO if a == 0 else 0)  # flags.after_load
+        vm.flags = (vm.flags & ~flags.ZERO) | (flags.ZERO if a == 0 else 0)  # the zero flag follows a load (3.5.6.4)
 
     def _jump(self, address: int) -> bool:
         """Set the PC (a jump outside program memory is ignored: status 4 in `last_error`)."""
