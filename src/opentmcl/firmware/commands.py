@@ -124,7 +124,7 @@ def cmd_rsap(vm: VirtualModule, type: int, motor: int, value: int, program: bool
 
 # --- global parameters (3.6.7-3.6.10) -----------------------------------------------
 def _bank(vm: VirtualModule, bank: int) -> int:
-    if bank not in {b for b, _ in vm.profile.global_parameters} | {2}:
+    if bank not in vm.profile.global_banks:
         raise TmclStatus(4)
     return bank
 

@@ -93,7 +93,7 @@ def _global_param(ins: Instruction, name: str, profile: ModuleProfile, out: list
                                        f"not {number}"))
         return
     if not any(b == bank for b, _ in profile.global_parameters):
-        banks = sorted({b for b, _ in profile.global_parameters} | {USER_BANK})
+        banks = sorted(profile.global_banks)
         out.append(Finding("motor", f"{name}: {profile.name} has no global parameter bank {bank} "
                                     f"(banks {', '.join(map(str, banks))})"))
         return

@@ -195,6 +195,12 @@ class ModuleProfile:
         return {n: p.engine for n, p in self.axis_parameters.items() if p.engine}
 
     @cached_property
+    def global_banks(self) -> frozenset[int]:
+        """The banks SGP/GGP/STGP/RSGP take: those of the global parameters, plus bank 2 (TMCM-6212
+        manual 3.6.7: "bank 2 is used for user variables")."""
+        return frozenset({b for b, _ in self.global_parameters} | {2})
+
+    @cached_property
     def axis_names(self) -> NameIndex:
         """Names, titles and aliases of the axis parameters (modules/names.py)."""
         return NameIndex(self.axis_parameters.values())
