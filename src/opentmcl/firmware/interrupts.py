@@ -38,6 +38,7 @@ GLOBAL = 255
 TIMERS = (0, 1, 2)
 TARGET_REACHED, STALL, DEVIATION, STOP_SWITCH, INPUT_CHANGE = 3, 15, 21, 27, 39
 TICKS_PER_MS = CLOCK_HZ // 1000
+_PERIOD_0, _PERIOD_1, _PERIOD_2 = ((3, n) for n in TIMERS)  # bank 3 parameter n: timer n's period in ms
 LOW_HIGH, HIGH_LOW = 1, 2
 
 
@@ -55,6 +56,8 @@ class Interrupts:
         self.active: int | None = None          # number of the interrupt being handled
         self._periods: list[int | None] = [None] * len(TIMERS)  # period (ms) last seen per timer
         self._due: list[int | None] = [None] * len(TIMERS)      # next expiry tick per timer
+        self._raw_periods: tuple[int, ...] | None = None  # bank 3 parameters 0-2 as last read
+        self._first_due: int | None = None      # min of `_due` (None: no timer runs)
         self._levels: dict[int, int] = {}       # last sampled level of edge sources
 
     # --- EI / DI / VECT ---------------------------------------------------------------
@@ -112,14 +115,22 @@ class Interrupts:
     # --- timers ----------------------------------------------------------------------
     def _refresh_timers(self, now: int) -> None:
         """Re-phase a timer whose period (bank 3, parameter n) was written since the last look."""
-        ram = self.vm.globals.ram
+        get = self.vm.globals.ram.get
+        raw = (get(_PERIOD_0, 0), get(_PERIOD_1, 0), get(_PERIOD_2, 0))  # TIMERS
+        if raw == self._raw_periods:  # the usual case: one comparison
+            return
+        self._raw_periods = raw
         for n in TIMERS:
-            period = ram.get((3, n), 0) & 0xFFFFFFFF
+            period = raw[n] & 0xFFFFFFFF
             if period != self._periods[n]:
                 self._periods[n] = period
                 self._due[n] = now + period * TICKS_PER_MS if period else None
+        self._first_due = min((t for t in self._due if t is not None), default=None)
 
     def _run_timers(self, now: int) -> None:
+        first = self._first_due
+        if first is None or first > now:
+            return
         for n in TIMERS:
             due, period = self._due[n], self._periods[n]
             if due is None or due > now or not period:  # a timer is due only with a period
@@ -127,6 +138,7 @@ class Interrupts:
             step = period * TICKS_PER_MS
             self._due[n] = due + ((now - due) // step + 1) * step
             self.trigger(n)
+        self._first_due = min((t for t in self._due if t is not None), default=None)
 
     def next_timer_event(self, now: int, refresh: bool = True) -> int | None:
         """Earliest expiry of a timer whose interrupt would be latched."""

@@ -36,7 +36,8 @@ _REQUEST = struct.Struct(">BBBBiB")
 _REPLY = struct.Struct(">BBBBi")
 _ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
 EEPROM_MAGIC, MAGIC_VALUE = (0, 64), 0xE4
-_HEARTBEATS = (("serial", (0, 68)), ("can", (0, 82)))
+_SERIAL_HB, _CAN_HB = (0, 68), (0, 82)
+_HEARTBEATS = (("serial", _SERIAL_HB), ("can", _CAN_HB))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
 _HEARTBEAT_OF = {"serial": "serial", "rs485": "serial", "rs232": "serial", "usb": "serial",
@@ -438,6 +439,8 @@ class VirtualModule:
         if self._heartbeat_fired:
             return None
         ram = self.globals.ram
+        if not (ram.get(_SERIAL_HB) or ram.get(_CAN_HB)):  # both off: the usual case
+            return None
         best = None
         for iface, key in _HEARTBEATS:
             ms = ram.get(key, 0)
