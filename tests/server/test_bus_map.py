@@ -191,3 +191,60 @@ def test_serial_frames_fast_path_uses_the_map():
         out = bus.serial_frames(request(3, 10, 66))
     assert [(vm, data) for vm, data, _ in out] == [(mods[2], reply(2, 3, 100, 10, 3))]
     assert [m.handled for m in mods] == [0, 0, 1]
+
+
+def test_the_map_is_kept_while_time_passes_without_a_program():
+    """Only a running TMCL program can change GP66/GP87 while time passes (TMCM-6212 manual 3.6.7
+    SGP, 3.6.36 command 129): with no program running, the bus does not rebuild its map after an
+    advance; with one running, it does (so the program's SGP 66 is seen, as the test above shows)."""
+    clock = Clock()
+    mods = [VirtualModule("TMCM-6212", address=i) for i in (1, 2)]
+    bus = ModuleBus(mods, clock=clock, min_step=0.0)
+    builds = []
+    build = bus._build_map
+    bus._build_map = lambda: builds.append(1) or build()
+    bus.request(request(1, 6, 1, 0))
+    for _ in range(3):
+        clock.t += 0.01
+        assert [r for _, r in bus.request(request(2, 6, 1, 0))] == [reply(2, 2, 100, 6, 0)]
+    assert len(builds) == 1
+    mods[1].handle(request(2, 132))                       # download: WAIT TICKS 1000, STOP
+    mods[1].handle(request(2, 27, 0, 0, 1000))
+    mods[1].handle(request(2, 28))
+    mods[1].handle(request(2, 133))
+    bus.request(request(2, 129))                          # run: not a map-keeping command
+    bus.request(request(1, 6, 1, 0))
+    n = len(builds)
+    clock.t += 0.01
+    bus.request(request(1, 6, 1, 0))
+    assert len(builds) == n + 1
+
+
+def test_differential_with_time_and_a_program_moving_an_address():
+    """Requests between advances while module 2's program toggles its GP66 between 2 and 5
+    (SGP 66, 0, 5 / WAIT TICKS 1 (10 ms, manual 3.6.25) / SGP 66, 0, 2 / WAIT TICKS 1 / JA 0): the
+    bus answers exactly as twin modules that each see every frame and the same time steps."""
+    program = [(9, 66, 0, 5), (27, 0, 0, 1), (9, 66, 0, 2), (27, 0, 0, 1), (22, 0, 0, 0)]
+
+    def pair():
+        mods = [VirtualModule("TMCM-6212", address=1), VirtualModule("TMCM-6212", address=2)]
+        mods[1].handle(request(2, 132))
+        for ins in program:
+            mods[1].handle(request(2, *ins))
+        mods[1].handle(request(2, 133))
+        mods[1].handle(request(2, 129))
+        return mods
+    mods, twins = pair(), pair()
+    clock = Clock()
+    bus = ModuleBus(mods, clock=clock, min_step=0.0)
+    frames = [request(a, 6, 1, 0) for a in (1, 2, 5)] + [request(a, 10, 66) for a in (1, 2, 5)]
+    seen = set()
+    for step in range(40):
+        clock.t += 0.003
+        for vm in twins:
+            vm.advance(0.003)
+        for frame in frames:
+            answers = [r for _, r in bus.request(frame)]
+            assert answers == offered_to_all(twins, frame), (step, frame.hex(" "))
+            seen.update(r[1] for r in answers)
+    assert seen == {1, 2, 5}  # the program did move module 2 to 5 and back

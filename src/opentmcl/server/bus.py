@@ -85,6 +85,10 @@ costs the same however short the step, so a burst of requests shares one advance
 lag the wall clock by at most this much (docs/assumptions.md)."""
 
 
+RUNNING = 1
+"""`application_status` of a module whose TMCL program runs (firmware/program.py; TMCM-6212
+manual 3.6.36, command 135): only a running program can change an address while time passes."""
+
 KEEPS_MAP = frozenset({1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 13, 14, 15, 30, 31, 32, 135, 136, 138})
 """Commands that cannot change a module's addresses or mode (motion, axis parameters, GGP, STGP,
 I/O, coordinates, status and version, command 138); SGP (9) only to banks other than 0."""
@@ -175,16 +179,28 @@ class ModuleBus:
             entries = sorted([*entries, *self._always], key=lambda e: order[id(e[0])])
         return entries
 
-    def _binary_frame(self, frame: bytes, channel: Channel | None,
-                      catch: bool = True) -> list[tuple[object, bytes, str]]:
+    def _binary_frame(self, frame: bytes, channel: Channel | None, catch: bool = True,
+                      silent: tuple | None = None) -> list[tuple[object, bytes, str]]:
         """A 9-byte frame to the modules of its address (the map): [(module, reply, "binary")].
-        A module that raises is logged and skipped when `catch`, else the error propagates."""
-        out = []
-        table = self._map
-        entries = table.get(frame[0]) if table is not None else None
-        if entries is None or self._always:
-            entries = self._targets(frame[0])
+        A module that raises is logged and skipped when `catch`, else the error propagates.
+        `silent`: the one mapped (vm, key, handle) the caller already offered the frame to,
+        which did not answer (`request`'s fast path)."""
+        out: list[tuple[object, bytes, str]] = []
         tried: list | None = None
+        if silent is not None:
+            vm = silent[0]
+            if self._addressed(vm, frame[0]):
+                if channel is not None:  # addressed but silent (GP255): reachable for its events
+                    self._route[silent[1]] = channel
+                entries = []
+            else:  # the map was stale: look again below
+                tried = [silent]
+                entries = [e for e in self._build_map().get(frame[0], []) if e[0] is not vm]
+        else:
+            table = self._map
+            entries = table.get(frame[0]) if table is not None else None
+            if entries is None or self._always:
+                entries = self._targets(frame[0])
         while entries:
             for vm, key, handle in entries:
                 try:
@@ -225,10 +241,13 @@ class ModuleBus:
             now = self._clock()
             dt = now - self._last
             if dt > 0 and dt >= self.min_step:
+                running = False
                 for vm in self.modules:
+                    running = running or getattr(vm, "application_status", RUNNING) == RUNNING
                     vm.advance(dt)
                 self._last = now
-                self._map = None  # a TMCL program may have changed an address (SGP 66)
+                if running:
+                    self._map = None  # a TMCL program may have changed an address (SGP 66)
 
     # -- requests -------------------------------------------------------
     def _handle(self, vm, frame: bytes, interface: str) -> bytes:
@@ -240,8 +259,27 @@ class ModuleBus:
         """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
         replies = []
         with self.lock:
-            self.sync()
+            dt = self._clock() - self._last
+            if dt > 0 and dt >= self.min_step:
+                self.sync()
             if len(frame) == 9 and getattr(channel, "interface", None) != USB:
+                table = self._map
+                entries = None if table is None or self._always else table.get(frame[0])
+                if entries is not None and len(entries) == 1:  # one module has the address: the usual bus
+                    vm, key, handle = entry = entries[0]
+                    try:
+                        reply = handle(frame)
+                    except Exception:
+                        self._map = None
+                        raise
+                    if not reply:
+                        return [(vm, reply) for vm, reply, _kind in
+                                self._binary_frame(frame, channel, catch=False, silent=entry)]
+                    if channel is not None:
+                        self._route[key] = channel
+                    if _changes_map(frame):
+                        self._map = None
+                    return [(vm, reply)]
                 return [(vm, reply) for vm, reply, _kind in self._binary_frame(frame, channel, catch=False)]
             for vm in self.modules:
                 if getattr(vm, "ascii_mode", False) is True:
