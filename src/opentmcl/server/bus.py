@@ -187,6 +187,7 @@ class ModuleBus:
         which did not answer (`request`'s fast path)."""
         out: list[tuple[object, bytes, str]] = []
         tried: list | None = None
+        entries: list | None
         if silent is not None:
             vm = silent[0]
             if self._addressed(vm, frame[0]):
