@@ -106,3 +106,18 @@ def test_can_heartbeat_gp82_watches_can_traffic_only(m6212):
     vm.handle(bytes.fromhex("01 06 01 00 00 00 00 00 08"), interface="can")
     vm.advance(0.2)
     assert vm.axes[0].engine.velocity != 0
+
+
+@pytest.mark.parametrize("host", [26, 27, 0, 255])
+def test_a_host_address_without_a_character(ascii_host, host):
+    """3.4.3: a reply starts with "the address character of the host"; A is 1 ... Z is 26 (3.4.2),
+    so GP76 = 26 gives Z, while 27 (the first beyond), 0 or 255 have no character: the line is
+    executed (and echoed) and no reply line follows (docs/assumptions.md)."""
+    vm = ascii_host.vm
+    vm.globals.set(0, 76, host)
+    out = vm.feed_ascii(b"ASAP 4, 0, 321\r")
+    assert vm.axes[0].get(4) == 321                       # executed either way
+    if host == 26:
+        assert out == b"ASAP 4, 0, 321\r" + b"ZA 100 0\r"
+    else:
+        assert out == b"ASAP 4, 0, 321\r"

@@ -100,4 +100,7 @@ class AsciiInterface:
         return self._reply(*out)
 
     def _reply(self, status: int, value: int) -> bytes:
-        return codec.encode_reply(self.vm.host_address, self.vm.address, status, value)
+        host = self.vm.host_address
+        if not 1 <= host <= 26:  # no address character for the reply (3.4.3): executed, no reply
+            return b""
+        return codec.encode_reply(host, self.vm.address, status, value)
