@@ -78,3 +78,16 @@ def test_a_non_ascii_byte_in_an_ascii_line_is_a_status_not_a_crash(name):
     vm.request(139)
     vm.globals.set(0, 67, 0x20)  # 3.4.4 "When bit 5 is set ... there will be no echo"
     assert vm.feed_ascii(b"AGAP 1, \xff0\r") == b"BA 4 0\r"
+
+
+def test_an_address_for_a_profile_without_gp66_is_a_clear_error(tmp_path):
+    """A profile file may `[remove]` GP66 (docs/profiles.md); then no module address can be set
+    (TMCM-6212 5.1: the address lives in GP66): a ValueError naming GP66, not a KeyError."""
+    path = tmp_path / "no66.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NO-66"\n'
+                    '[remove]\nglobal_parameter = [[0, 66]]\n')
+    VirtualModule(str(path))                                  # without an address: fine
+    with pytest.raises(ValueError, match="no serial address parameter GP66"):
+        VirtualModule(str(path), address=3)
+    with pytest.raises(ValueError, match="no serial address parameter GP66"):
+        VirtualModule(str(path)).assign_address(3)

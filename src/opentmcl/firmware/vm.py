@@ -47,14 +47,23 @@ _WRITE_COMMANDS = frozenset({5, 9})  # SAP, SGP: pre-bound setters (dispatch.py)
 _MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
 
 
+def _check_address(profile: ModuleProfile, address: int) -> None:
+    """A module address given to the constructor or `assign_address`: a value GP66 accepts."""
+    gp66 = profile.global_parameters.get(_ADDRESS)
+    if gp66 is None:
+        raise ValueError(f"{profile.name} has no serial address parameter GP66 to set")
+    if not (type(address) is int and gp66.accepts(address)):
+        raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
+
+
 class VirtualModule:
     """A TMCL module in software: TMCM-6212, PD28-1021 (TMCM-1021) or PD86-1180 (TMCM-1180)."""
 
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
                  eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None) -> None:
         self.profile: ModuleProfile = load_profile(name)
-        if address is not None and not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
-            raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
+        if address is not None:
+            _check_address(self.profile, address)
         self.opcodes = self.profile.opcodes
         self.eeprom = Eeprom(eeprom, module=self.profile.name)
         self._address_override = address
@@ -139,8 +148,7 @@ class VirtualModule:
     def assign_address(self, address: int) -> None:
         """Serve at `address` from now on, as the constructor's `address` argument does (GP66 in RAM,
         kept across resets; the EEPROM is not written)."""
-        if not (type(address) is int and self.profile.global_parameters[_ADDRESS].accepts(address)):
-            raise ValueError(f"module address must be an integer in the range of GP66, got {address!r}")
+        _check_address(self.profile, address)
         self._address_override = address
         self.globals.ram[_ADDRESS] = address
         self.forget_requests()
