@@ -179,6 +179,16 @@ class ModuleBus:
             entries = sorted([*entries, *self._always], key=lambda e: order[id(e[0])])
         return entries
 
+    def _after_silent(self, silent: tuple, frame: bytes, channel: Channel | None) -> tuple[list, list | None]:
+        """(entries still to offer `frame` to, tried) after the mapped module `silent` stayed silent."""
+        vm = silent[0]
+        if self._addressed(vm, frame[0]):
+            if channel is not None:  # addressed but silent (GP255): reachable for its events
+                self._route[silent[1]] = channel
+            return [], None
+        # the map was stale: look again
+        return [e for e in self._build_map().get(frame[0], []) if e[0] is not vm], [silent]
+
     def _binary_frame(self, frame: bytes, channel: Channel | None, catch: bool = True,
                       silent: tuple | None = None) -> list[tuple[object, bytes, str]]:
         """A 9-byte frame to the modules of its address (the map): [(module, reply, "binary")].
@@ -189,19 +199,9 @@ class ModuleBus:
         tried: list | None = None
         entries: list | None
         if silent is not None:
-            vm = silent[0]
-            if self._addressed(vm, frame[0]):
-                if channel is not None:  # addressed but silent (GP255): reachable for its events
-                    self._route[silent[1]] = channel
-                entries = []
-            else:  # the map was stale: look again below
-                tried = [silent]
-                entries = [e for e in self._build_map().get(frame[0], []) if e[0] is not vm]
+            entries, tried = self._after_silent(silent, frame, channel)
         else:
-            table = self._map
-            entries = table.get(frame[0]) if table is not None else None
-            if entries is None or self._always:
-                entries = self._targets(frame[0])
+            entries = self._targets(frame[0])
         while entries:
             for vm, key, handle in entries:
                 try:
@@ -226,8 +226,7 @@ class ModuleBus:
             tried.extend(entries)
             seen = {id(e[0]) for e in tried}
             entries = [e for e in self._build_map().get(frame[0], []) if id(e[0]) not in seen]
-        command = frame[1]
-        if command not in KEEPS_MAP and (command != SGP or frame[3] == 0):
+        if _changes_map(frame):
             self._map = None
         return out
 
