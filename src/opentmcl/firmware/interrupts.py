@@ -42,6 +42,10 @@ _PERIOD_0, _PERIOD_1, _PERIOD_2 = ((3, n) for n in TIMERS)  # bank 3 parameter n
 LOW_HIGH, HIGH_LOW = 1, 2
 
 
+def _earliest(ticks: list[int | None]) -> int | None:
+    return min((t for t in ticks if t is not None), default=None)
+
+
 class Interrupts:
     def __init__(self, vm: VirtualModule) -> None:
         self.vm = vm
@@ -125,7 +129,7 @@ class Interrupts:
             if period != self._periods[n]:
                 self._periods[n] = period
                 self._due[n] = now + period * TICKS_PER_MS if period else None
-        self._first_due = min((t for t in self._due if t is not None), default=None)
+        self._first_due = _earliest(self._due)
 
     def _run_timers(self, now: int) -> None:
         first = self._first_due
@@ -138,7 +142,7 @@ class Interrupts:
             step = period * TICKS_PER_MS
             self._due[n] = due + ((now - due) // step + 1) * step
             self.trigger(n)
-        self._first_due = min((t for t in self._due if t is not None), default=None)
+        self._first_due = _earliest(self._due)
 
     def next_timer_event(self, now: int, refresh: bool = True) -> int | None:
         """Earliest expiry of a timer whose interrupt would be latched."""

@@ -92,7 +92,7 @@ def _global_param(ins: Instruction, name: str, profile: ModuleProfile, out: list
             out.append(Finding("type", f"{name}: {profile.name} has {size} {what} (0..{size - 1}), "
                                        f"not {number}"))
         return
-    if not any(b == bank for b, _ in profile.global_parameters):
+    if bank not in profile.global_banks:  # bank 2 returned above
         banks = sorted(profile.global_banks)
         out.append(Finding("motor", f"{name}: {profile.name} has no global parameter bank {bank} "
                                     f"(banks {', '.join(map(str, banks))})"))

@@ -259,9 +259,7 @@ class ModuleBus:
         """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
         replies = []
         with self.lock:
-            dt = self._clock() - self._last
-            if dt > 0 and dt >= self.min_step:
-                self.sync()
+            self.sync()
             if len(frame) == 9 and getattr(channel, "interface", None) != USB:
                 table = self._map
                 entries = None if table is None or self._always else table.get(frame[0])
