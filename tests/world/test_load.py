@@ -121,6 +121,29 @@ def test_step_loss_and_deviation_stop(rig):
     assert r.vm.flags & flags.EDV
 
 
+@pytest.mark.parametrize("command", [(1, 0, 20000), (4, 0, 100_000)])  # ROR, MVP ABS
+@pytest.mark.parametrize("offset", [2000, 2001])
+def test_deviation_present_when_the_motion_starts(rig, command, offset):
+    """TMCM-6212 manual 4.1 AP212: "When the actual position (parameter 1) and the encoder
+    position (parameter 209) differ more than set here the motor will be stopped". A deviation
+    that exists before the command (AP209 rewritten, manual 6.2 "writable, e.g. for setting a new
+    origin") stops the motion at once; a deviation equal to the limit (the last one allowed) does
+    not. Before round 23 the twin looked at the deviation only while the motor moved, so a motion
+    starting from rest ran on until an unrelated event."""
+    r = rig("TMCM-6212", {})
+    r.sap(212, 2000)
+    r.sap(209, offset)
+    number, type_, value = command
+    r.cmd(number, type_, 0, value)
+    r.vm.advance(0.5)
+    if offset > 2000:
+        assert (r.gap(1), r.gap(3), r.gap(209)) == (0, 0, offset)
+        assert r.gap(207) == 2 and r.vm.flags & flags.EDV
+    else:
+        assert r.gap(3) != 0 and r.gap(1) > 0
+        assert r.gap(207) == 0
+
+
 def test_encoder_follows_the_stage_and_is_writable(rig):
     """TMCM-6212 manual 6.2: with AP202 and AP210 set "the encoder position is the same as the
     motor position"; AP209 "is also writable, e.g. for setting a new origin"."""

@@ -385,7 +385,7 @@ class AxisWorld:
         if not limit:
             return
         if abs(self.engine.position - self.encoder()) > limit:
-            if self.engine.moving:
+            if self.engine.moving or self.heading():  # also a motion commanded at this tick
                 self.engine.hard_stop()
             if not self._axis.error_flags & DEV_EXTENDED:
                 self._axis.error_flags |= DEV_EXTENDED
@@ -418,11 +418,11 @@ class AxisWorld:
         e = self.engine
         if not self.slipping and not self.driver_off() and (self._blocked(self.heading()) or self._overloaded()):
             return True
+        dev = self.p(212)
+        if dev and abs(e.position - self.encoder()) > dev:  # a deviation the motion starts with
+            return True
         if not e.moving:
             return False
-        dev = self.p(212)
-        if dev and abs(e.position - self.encoder()) > dev:
-            return True
         limit = self.p(181)
         return bool(limit and not self.driver_off() and abs(e.velocity) >= self._axis.engine_speed(181, limit)
                     and self.load_value() == 0)
