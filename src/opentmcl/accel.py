@@ -10,8 +10,9 @@ compiled twins of three pieces of the pure-Python request path, which stays the 
   and GAP 8: `sixpoint_read(engine, attribute, fallback)`.
 
 `active()` is False without the compiled module or with the environment variable
-`OPENTMCL_PURE=1`; inside `with pure():` (tests) too. The firmware asks it when it builds a module
-or binds a read, so a module keeps the path it was built with.
+`OPENTMCL_PURE=1`, and inside `with pure():` (tests, benchmarks). The firmware asks it once per
+module, when it builds one (`install`); the module keeps that path (`enabled(vm)`), also for the
+reads it binds later.
 
 This module is in the lowest layer: it imports nothing of the package.
 """
@@ -58,11 +59,19 @@ def pure() -> Iterator[None]:
 
 
 def install(vm: Any, base: type) -> None:
-    """`vm.handle` becomes the compiled handle (an instance attribute) when the path is active
-    and `vm`'s class does not override `base.handle` (a subclass keeps its own)."""
-    if active() and getattr(type(vm), "handle", None) is base.handle:
+    """Choose the path of a new module: when `active()`, its pre-bound reads will be compiled
+    (`enabled(vm)`) and `vm.handle` becomes the compiled handle (an instance attribute) unless
+    `vm`'s class overrides `base.handle` (a subclass keeps its own)."""
+    on = active()
+    vm._accel = on
+    if on and getattr(type(vm), "handle", None) is base.handle:
         assert compiled is not None
         vm.handle = compiled.Handle(vm)
+
+
+def enabled(vm: Any) -> bool:
+    """Whether `vm` was built on the compiled path (`install`): a module keeps its path."""
+    return getattr(vm, "_accel", False) is True
 
 
 _TAIL = struct.Struct(">4siB")
@@ -96,4 +105,4 @@ def sixpoint_read(engine: object, attribute: str, fallback: Callable[[], Any]) -
     return compiled.sixpoint_read(engine, which, fallback)
 
 
-__all__ = ["ENV", "active", "compiled", "install", "packed", "pure", "sixpoint_read"]
+__all__ = ["ENV", "active", "compiled", "enabled", "install", "packed", "pure", "sixpoint_read"]

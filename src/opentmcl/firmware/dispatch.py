@@ -74,7 +74,7 @@ def _axis_read(vm: VirtualModule, number: int, motor: int) -> Read | None:
     attribute = _ENGINE_READS.get(number)
     if attribute is not None and (number < 135 or hasattr(e, attribute)):
         read = partial(attrgetter(attribute), e)
-        if type(e) is SixPointRampEngine and accel.active():  # GAP 1 and GAP 8 evaluated in C
+        if type(e) is SixPointRampEngine and accel.enabled(vm):  # GAP 1 and GAP 8 evaluated in C
             return accel.sixpoint_read(e, attribute, read)
         return read
     return cast("Read", partial(ax.ram.get, number, ax.params[number].default))
@@ -111,7 +111,7 @@ def entry(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | No
     if read is None:
         return None
     head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
-    return accel.packed(head, read) if accel.active() else _packed(head, read)
+    return accel.packed(head, read) if accel.enabled(vm) else _packed(head, read)
 
 
 def setter(vm: VirtualModule, command: int, type_: int, motor: int) -> Setter | None:
