@@ -708,25 +708,48 @@ handle_fast(PyObject *vm, PyObject *fast, PyObject *heartbeat)
     return PyObject_CallNoArgs(fast);
 }
 
+/* the arguments of handle(frame, *, interface="serial"): 0, or -1 with a TypeError set */
+static int
+handle_args(PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, PyObject **frame,
+            PyObject **interface)
+{
+    Py_ssize_t i, nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
+    if (nargs > 1) {
+        PyErr_Format(PyExc_TypeError, "handle() takes 1 positional argument but %zd were given", nargs);
+        return -1;
+    }
+    *frame = nargs ? args[0] : NULL;
+    *interface = s_serial;
+    for (i = 0; i < nkw; i++) {
+        PyObject *name = PyTuple_GET_ITEM(kwnames, i);
+        if (PyUnicode_Check(name) && PyUnicode_Compare(name, s_interface) == 0) {
+            *interface = args[nargs + i];
+        }
+        else if (PyUnicode_Check(name) && PyUnicode_CompareWithASCIIString(name, "frame") == 0
+                 && !*frame) {
+            *frame = args[nargs + i];
+        }
+        else {
+            PyErr_Format(PyExc_TypeError, "handle() got an unexpected or repeated keyword argument %R",
+                         name);
+            return -1;
+        }
+    }
+    if (!*frame) {
+        PyErr_SetString(PyExc_TypeError, "handle() missing 1 required positional argument: 'frame'");
+        return -1;
+    }
+    return 0;
+}
+
 static PyObject *
 handle_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
     PyObject *vm = ((HandleObject *)callable)->vm;
-    Py_ssize_t nargs = PyVectorcall_NARGS(nargsf), nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
-    PyObject *frame, *interface = s_serial, *fast, *heartbeat, *out;
+    PyObject *frame, *interface, *fast, *heartbeat, *out;
 
-    if (nargs != 1) {
-        PyErr_Format(PyExc_TypeError, "handle() takes 1 positional argument but %zd were given", nargs);
+    if (handle_args(args, PyVectorcall_NARGS(nargsf), kwnames, &frame, &interface) < 0)
         return NULL;
-    }
-    if (nkw > 1 || (nkw == 1 && PyObject_RichCompareBool(PyTuple_GET_ITEM(kwnames, 0), s_interface,
-                                                         Py_EQ) != 1)) {
-        PyErr_SetString(PyExc_TypeError, "handle() takes only the keyword argument 'interface'");
-        return NULL;
-    }
-    frame = args[0];
-    if (nkw == 1)
-        interface = args[1];
     fast = lookup_request(vm, frame);
     if (!fast)
         return NULL;
