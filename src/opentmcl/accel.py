@@ -58,7 +58,7 @@ def pure() -> Iterator[None]:
         _forced_pure -= 1
 
 
-def install(vm: Any, base: type) -> None:
+def install(vm: Any, base: Any) -> None:
     """Choose the path of a new module: when `active()`, its pre-bound reads will be compiled
     (`enabled(vm)`) and `vm.handle` becomes the compiled handle (an instance attribute) unless
     `vm`'s class overrides `base.handle` (a subclass keeps its own)."""

@@ -263,7 +263,7 @@ def test_the_c_reads_follow_moves_both_ways_and_the_32_bit_wrap():
         if position is not None:
             e.set_position(position)
         e.move_to(target)
-        for k in range(0, 16_000_000 * 3, 49_999):
+        for _ in range(0, 16_000_000 * 3, 49_999):
             e.advance(e.now + 49_999)
             check(e, r)
     e.rotate(-30_000)
