@@ -64,9 +64,17 @@ def install(vm: Any, base: Any) -> None:
     `vm`'s class overrides `base.handle` (a subclass keeps its own)."""
     on = active()
     vm._accel = on
-    if on and getattr(type(vm), "handle", None) is base.handle:
+    if on and _own_handle(type(vm), base):
         assert compiled is not None
         vm.handle = compiled.Handle(vm)
+
+
+def _own_handle(cls: type, base: Any) -> bool:
+    """`cls.handle` is `base`'s own method: not overridden, nor patched onto the class (a test's
+    wrapper), which the compiled handle would bypass."""
+    method = getattr(cls, "handle", None)
+    return (method is base.handle and getattr(method, "__qualname__", "") == f"{base.__qualname__}.handle"
+            and not hasattr(method, "__wrapped__"))
 
 
 def enabled(vm: Any) -> bool:

@@ -9,11 +9,11 @@ keyword; a subclass that overrides `handle`; the signature check of server/bus.p
 """
 from __future__ import annotations
 
+import functools
 import gc
 import inspect
 import weakref
 from fractions import Fraction
-from functools import partial
 
 import pytest
 
@@ -182,6 +182,24 @@ def test_a_subclass_that_keeps_handle_gets_the_compiled_one():
     assert type(Plain("TMCM-6212").handle) is accel.compiled.Handle  # type: ignore[union-attr]
 
 
+def test_a_wrapper_patched_onto_the_class_is_not_bypassed(monkeypatch):
+    """A test that wraps `VirtualModule.handle` on the class sees every request of modules built
+    afterwards: they keep the Python attribute look-up."""
+    seen = []
+    original = VirtualModule.handle
+
+    @functools.wraps(original)
+    def wrapper(self, frame, *, interface="serial"):
+        seen.append(frame)
+        return original(self, frame, interface=interface)
+
+    monkeypatch.setattr(VirtualModule, "handle", wrapper)
+    vm = VirtualModule("TMCM-6212")
+    assert "handle" not in vm.__dict__
+    vm.handle(Request(1, 6, 1, 0, 0).encode())
+    assert len(seen) == 1
+
+
 def test_pure_builds_python_modules_that_stay_python():
     with accel.pure():
         assert not accel.active()
@@ -204,7 +222,7 @@ def test_the_signature_is_that_of_the_python_method():
     assert bus._takes_interface(vm)
     assert bus._bound_handle(vm, True, "serial") is vm.handle
     can = bus._bound_handle(vm, True, "can")
-    assert isinstance(can, partial) and can.keywords == {"interface": "can"}
+    assert isinstance(can, functools.partial) and can.keywords == {"interface": "can"}
     f = Request(1, 6, 1, 0, 0).encode()
     assert can(f) == can(f) == vm.handle(f)
 
