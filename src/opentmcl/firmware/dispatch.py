@@ -19,6 +19,8 @@ from functools import partial
 from operator import attrgetter
 from typing import TYPE_CHECKING, cast
 
+from .. import accel
+from ..motion.sixpoint import SixPointRampEngine
 from ..protocol.frame import to_int32
 
 if TYPE_CHECKING:
@@ -71,7 +73,10 @@ def _axis_read(vm: VirtualModule, number: int, motor: int) -> Read | None:
         return lambda: ax.from_engine(number, read_velocity(e))
     attribute = _ENGINE_READS.get(number)
     if attribute is not None and (number < 135 or hasattr(e, attribute)):
-        return partial(attrgetter(attribute), e)
+        read = partial(attrgetter(attribute), e)
+        if type(e) is SixPointRampEngine and accel.enabled(vm):  # GAP 1 and GAP 8 evaluated in C
+            return accel.sixpoint_read(e, attribute, read)
+        return read
     return cast("Read", partial(ax.ram.get, number, ax.params[number].default))
 
 
@@ -106,7 +111,7 @@ def entry(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | No
     if read is None:
         return None
     head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
-    return _packed(head, read)
+    return accel.packed(head, read) if accel.enabled(vm) else _packed(head, read)
 
 
 def setter(vm: VirtualModule, command: int, type_: int, motor: int) -> Setter | None:

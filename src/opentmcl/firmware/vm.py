@@ -13,6 +13,7 @@ from __future__ import annotations
 import os
 import struct
 
+from .. import accel
 from ..modules.profile import ModuleProfile, load_profile
 from ..motion import CLOCK_HZ
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
@@ -76,6 +77,7 @@ class VirtualModule:
         self._download_mode = False
         self.world = World(self, scenario)
         self.power_up()
+        accel.install(self, VirtualModule)  # the compiled `handle` when built and not OPENTMCL_PURE=1
 
     # --- power-up / reset ---------------------------------------------------
     def power_up(self) -> None:
