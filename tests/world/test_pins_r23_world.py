@@ -119,11 +119,10 @@ def test_ror_into_an_active_right_switch_stops_each_time(rig, times):
     assert _commands_into_an_active_right_switch(rig, times) == (0, 0)
 
 
-@pytest.mark.xfail(strict=True, reason="real bug: AxisWorld._due_again stops scheduling the check at the "
-                   "next tick after 4 due ticks in a row, so a 5th ROR one tick after the last runs into "
-                   "the active limit switch (AP3 = 51200 after 0.5 s)")
 def test_ror_into_an_active_right_switch_five_ticks_in_a_row_is_stopped_too(rig):
-    """As above (TMCM-6212 4.1 AP10/AP12): the fifth command at the next tick is stopped as well."""
+    """As above (TMCM-6212 4.1 AP10/AP12): the fifth command at the next tick is stopped as well.
+    (Before round 23 the check at the next tick gave up after 4 due ticks in a row even when each
+    was a new command, so the fifth ROR ran into the switch.)"""
     assert _commands_into_an_active_right_switch(rig, 5) == (0, 0)
 
 

@@ -56,6 +56,7 @@ class AxisWorld:
         self.axis: Axis | None = None
         self._due_at = -2
         self._due_streak = 0
+        self._due_plan: object = None
         self._cache: tuple | None = None
         self._static = False
         self.caps: Capabilities = world.vm.profile.capabilities
@@ -504,8 +505,10 @@ class AxisWorld:
         cannot resolve it must not stall time."""
         if not self.due_now():
             return False
-        self._due_streak = self._due_streak + 1 if self._due_at == now - 1 else 0
-        self._due_at = now
+        plan = self.engine.plan_token  # a command since the last due tick re-creates the condition
+        again = self._due_at == now - 1 and plan == self._due_plan
+        self._due_streak = self._due_streak + 1 if again else 0
+        self._due_at, self._due_plan = now, plan
         return self._due_streak < 4
 
     def _stage_counters(self) -> list[int]:
