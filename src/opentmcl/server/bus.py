@@ -259,8 +259,10 @@ class ModuleBus:
         """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
         replies = []
         with self.lock:
-            self.sync()
-            if len(frame) == 9 and getattr(channel, "interface", None) != USB:
+            dt = self._clock() - self._last
+            if dt > 0 and dt >= self.min_step:  # else `sync` would return at once
+                self.sync()
+            if len(frame) == 9 and (channel is None or getattr(channel, "interface", None) != USB):
                 table = self._map
                 entries = None if table is None or self._always else table.get(frame[0])
                 if entries is not None and len(entries) == 1:  # one module has the address: the usual bus
@@ -275,7 +277,8 @@ class ModuleBus:
                                 self._binary_frame(frame, channel, catch=False, silent=entry)]
                     if channel is not None:
                         self._route[key] = channel
-                    if _changes_map(frame):
+                    command = frame[1]  # _changes_map, inlined
+                    if command not in KEEPS_MAP and (command != SGP or frame[3] == 0):
                         self._map = None
                     return [(vm, reply)]
                 return [(vm, reply) for vm, reply, _kind in self._binary_frame(frame, channel, catch=False)]
