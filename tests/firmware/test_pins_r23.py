@@ -81,7 +81,7 @@ def test_entry_of_a_command_without_a_handler_is_none(tmp_path):
 @pytest.mark.parametrize(("period", "wire"), [
     (0x7FFF_FFFF, 0x7FFF_FFFF), (0x8000_0000, -0x8000_0000), (0xFFFF_FFFF, -1)])
 def test_a_prebound_ggp_of_an_unsigned_timer_period_answers_its_32_bits(period, wire):
-    """TMCM-6212 5.3 bank 3 "Timer 0 period ... 0 .. 4294967295 [ms]"; 3.2 the reply value is
+    """TMCM-6212 5.4 bank 3 "Timer 0 period ... 0 .. 4294967295 [ms]"; 3.2 the reply value is
     four bytes, MSB first, with the checksum over the first eight bytes. The second GGP of the
     same frame is answered by its pre-bound handler (dispatch.py); both replies carry the same
     32 bits: 2^31 - 1 as it is, 2^31 and 2^32 - 1 as -2^31 and -1 in signed form."""
@@ -125,7 +125,7 @@ def test_the_last_32_bit_value_of_a_global_section_is_read(tmp_path):
 def test_an_image_without_a_program_section_loads(tmp_path):
     """eeprom.py `_whole`: "Every section has the shape `flush` writes" - a section that is not
     there has none to break (docs/assumptions.md). An image holding only a stored user variable
-    (TMCM-6212 3.6.9 STGP, restored at power-up with GP85 = 0) opens: the variable is back and
+    (TMCM-6212 3.6.9 STGP, restored at power-up with 5.1 GP85 = 0, "user variables are restored (default)") opens: the variable is back and
     there is no program."""
     path = tmp_path / "ee.json"
     path.write_text(_HEAD + ',"user":{"3":7}}')
