@@ -125,8 +125,8 @@ def test_the_last_32_bit_value_of_a_global_section_is_read(tmp_path):
 def test_an_image_without_a_program_section_loads(tmp_path):
     """eeprom.py `_whole`: "Every section has the shape `flush` writes" - a section that is not
     there has none to break (docs/assumptions.md). An image holding only a stored user variable
-    (TMCM-6212 3.6.9 STGP, restored at power-up with 5.1 GP85 = 0, "user variables are restored (default)") opens: the variable is back and
-    there is no program."""
+    (TMCM-6212 3.6.9 STGP; 5.1 GP85 "0 - user variables are restored (default)") opens: the
+    variable is back and there is no program."""
     path = tmp_path / "ee.json"
     path.write_text(_HEAD + ',"user":{"3":7}}')
     vm = VirtualModule("TMCM-6212", address=1, eeprom=path)
