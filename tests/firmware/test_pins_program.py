@@ -56,7 +56,7 @@ def test_an_enabled_interrupt_without_vector_does_not_hide_an_input_change():
 @pytest.mark.parametrize(("period", "a"), [(0x7FFF_FFFF, 0x7FFF_FFFF), (0x8000_0000, -0x8000_0000),
                                            (0xFFFF_FFFF, -1)])
 def test_ggp_of_an_unsigned_timer_period_loads_it_as_32_bits(period, a):
-    """TMCM-6212 5.3 bank 3: "Timer 0 period ... 0 .. 4294967295 [ms]"; 3.6.10 GGP in a program
+    """TMCM-6212 5.4 bank 3: "Timer 0 period ... 0 .. 4294967295 [ms]"; 3.6.10 GGP in a program
     loads the accumulator, a 32-bit register (3.5.5; 135 type 2 returns it on the wire as the
     same 32 bits). The last signed value stays, 2^31 and 2^32 - 1 read back as -2^31 and -1."""
     w = module()

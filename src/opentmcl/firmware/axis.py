@@ -42,7 +42,6 @@ class Axis:
 
     def __init__(self, index: int, profile: ModuleProfile, ram: dict[int, int]) -> None:
         self.index = index
-        self.profile = profile
         self.params = profile.axis_parameters
         self.ram = ram
         self.engine: RampEngine = make_engine(profile.engine)
