@@ -5,15 +5,19 @@ against the pure-Python reference: what the pure module does, the compiled one d
   compiled one holds an `_accel.Handle`, which must be rebuilt on the copy (`Handle.__reduce__`).
 - a `handle` patched onto the class (or `vm.__class__` reassigned) after the module was built:
   the pure module calls the class's method; the compiled handle checks it on every call.
+- an object the cyclic GC has cleared (tp_clear: NULL fields) raises ReferenceError when called
+  instead of dereferencing NULL.
 - the C source compiles without warnings under `-Wall -Wextra`.
 """
 from __future__ import annotations
 
 import copy
+import os
 import pickle
 import shlex
 import shutil
 import subprocess
+import sys
 import sysconfig
 from pathlib import Path
 
@@ -107,3 +111,38 @@ def test_the_extension_compiles_without_warnings_under_wall_wextra(tmp_path):
     out = subprocess.run([*cc, "-fsyntax-only", "-Wall", "-Wextra", "-Werror", f"-I{include}", str(SOURCE)],
                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert out.returncode == 0, out.stderr
+
+
+_CLEARED = """
+import ctypes
+from opentmcl import VirtualModule, accel
+C = accel.compiled
+get_slot = ctypes.pythonapi.PyType_GetSlot
+get_slot.restype, get_slot.argtypes = ctypes.c_void_p, [ctypes.py_object, ctypes.c_int]
+def clear(obj):  # what the cyclic GC does to an object of a garbage cycle: tp_clear (slot 51)
+    assert ctypes.PYFUNCTYPE(ctypes.c_int, ctypes.py_object)(get_slot(type(obj), 51))(obj) == 0
+vm = VirtualModule("TMCM-6212", address=1)
+inner = C.sixpoint_read(vm.axes[0].engine, 1, lambda: 0)
+objs = [C.Handle(vm), C.packed(b"abcd", lambda: 1, lambda v: b""),
+        C.sixpoint_read(vm.axes[0].engine, 0, lambda: 0), inner]
+outer = C.packed(b"abcd", inner, lambda v: b"")
+for o in objs:
+    clear(o)
+out = []
+for o in objs + [outer]:
+    try:
+        o(bytes(9)) if type(o) is C.Handle else o()
+    except ReferenceError:
+        out.append("ReferenceError")
+print(*out, repr(objs[0]).startswith("<compiled handle of"))
+"""
+
+
+@needs_compiled
+def test_an_object_the_gc_has_cleared_raises_instead_of_crashing():
+    """tp_clear leaves NULL fields; a call reaching such an object (a finalizer of its cycle)
+    raised nothing before: it dereferenced NULL (segmentation fault)."""
+    out = subprocess.run([sys.executable, "-c", _CLEARED], capture_output=True, text=True, timeout=60,
+                         env={**os.environ, "PYTHONPATH": os.pathsep.join(sys.path)})
+    assert out.returncode == 0, (out.returncode, out.stderr[-2000:])
+    assert out.stdout.split() == ["ReferenceError"] * 5 + ["True"]
