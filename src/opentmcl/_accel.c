@@ -8,6 +8,8 @@
      looks the frame up in `vm._requests`, restarts the heartbeat and syncs the engines when
      virtual time moved; everything else goes to `vm._handle_general(frame, interface)`.
      Every attribute of the vm is read on every call (the vm rebinds them); only the vm is held.
+     When type(vm).handle is no longer the method it was built under (patched onto the class,
+     vm.__class__ reassigned), that method answers instead; __reduce__ rebuilds it on a copy.
    - packed(head, read, slow): `dispatch._packed(head, read)`: the 9-byte reply (TMCM-6212
      manual 3.2) of `read()` behind four fixed bytes, the value wrapped to 32 bits, the
      checksum. `slow(value)` answers values that are not Python ints (the Python code path).
