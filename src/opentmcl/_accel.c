@@ -8,6 +8,8 @@
      looks the frame up in `vm._requests`, restarts the heartbeat and syncs the engines when
      virtual time moved; everything else goes to `vm._handle_general(frame, interface)`.
      Every attribute of the vm is read on every call (the vm rebinds them); only the vm is held.
+     When type(vm).handle is no longer the method it was built under (patched onto the class,
+     vm.__class__ reassigned), that method answers instead; __reduce__ rebuilds it on a copy.
    - packed(head, read, slow): `dispatch._packed(head, read)`: the 9-byte reply (TMCM-6212
      manual 3.2) of `read()` behind four fixed bytes, the value wrapped to 32 bits, the
      checksum. `slow(value)` answers values that are not Python ints (the Python code path).
@@ -403,8 +405,13 @@ sixpoint_call_value(SixPointReadObject *self)
 static PyObject *
 sixpoint_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
+    (void)args;
     if (PyVectorcall_NARGS(nargsf) != 0 || (kwnames && PyTuple_GET_SIZE(kwnames))) {
         PyErr_SetString(PyExc_TypeError, "a six-point read takes no arguments");
+        return NULL;
+    }
+    if (!((SixPointReadObject *)callable)->engine || !((SixPointReadObject *)callable)->fallback) {
+        PyErr_SetString(PyExc_ReferenceError, "the six-point read was cleared");  /* by the GC */
         return NULL;
     }
     return sixpoint_call_value((SixPointReadObject *)callable);
@@ -534,8 +541,13 @@ packed_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyOb
         PyErr_SetString(PyExc_TypeError, "a pre-bound handler takes no arguments");
         return NULL;
     }
+    if (!self->read || !self->slow) {
+        PyErr_SetString(PyExc_ReferenceError, "the pre-bound handler was cleared");  /* by the GC */
+        return NULL;
+    }
 #if HAVE_INT128
-    if (Py_TYPE(self->read) == &SixPointReadType) {
+    if (Py_TYPE(self->read) == &SixPointReadType && ((SixPointReadObject *)self->read)->engine
+        && ((SixPointReadObject *)self->read)->fallback) {
         SixPointReadObject *r = (SixPointReadObject *)self->read;
         long long v;
         if (sixpoint_value(r->engine, r->which, &v) == R_VALUE)
@@ -639,6 +651,7 @@ static PyTypeObject PackedType = {
 typedef struct {
     PyObject_HEAD
     PyObject *vm;
+    PyObject *method;  /* type(vm)'s `handle` when this object was made (NULL: none) */
     vectorcallfunc vectorcall;
 } HandleObject;
 
@@ -742,12 +755,44 @@ handle_args(PyObject *const *args, Py_ssize_t nargs, PyObject *kwnames, PyObject
     return 0;
 }
 
+/* type(vm).handle is no longer the method this object stands for (patched onto the class, or
+   vm.__class__ reassigned after the module was built): call that one, as the pure path does */
+static PyObject *
+handle_rebound(PyObject *vm, PyObject *method, PyObject *const *args, size_t nargsf, PyObject *kwnames)
+{
+    PyObject *bound, *out;
+    descrgetfunc get;
+    if (!method) {
+        PyErr_Format(PyExc_AttributeError, "'%.100s' object has no attribute 'handle'", Py_TYPE(vm)->tp_name);
+        return NULL;
+    }
+    get = Py_TYPE(method)->tp_descr_get;
+    if (!get)
+        return PyObject_Vectorcall(method, args, nargsf, kwnames);
+    Py_INCREF(method);  /* the descriptor's __get__ may run code that drops it from the class */
+    bound = get(method, vm, (PyObject *)Py_TYPE(vm));
+    Py_DECREF(method);
+    if (!bound)
+        return NULL;
+    out = PyObject_Vectorcall(bound, args, nargsf, kwnames);
+    Py_DECREF(bound);
+    return out;
+}
+
 static PyObject *
 handle_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyObject *kwnames)
 {
-    PyObject *vm = ((HandleObject *)callable)->vm;
-    PyObject *frame, *interface, *fast, *heartbeat, *out;
+    HandleObject *self = (HandleObject *)callable;
+    PyObject *vm = self->vm;
+    PyObject *frame, *interface, *fast, *heartbeat, *out, *method;
 
+    if (!vm) {
+        PyErr_SetString(PyExc_ReferenceError, "the compiled handle was cleared (its module is gone)");
+        return NULL;
+    }
+    method = _PyType_Lookup(Py_TYPE(vm), s_handle);  /* borrowed; the type's method cache */
+    if (method != self->method)
+        return handle_rebound(vm, method, args, nargsf, kwnames);
     if (handle_args(args, PyVectorcall_NARGS(nargsf), kwnames, &frame, &interface) < 0)
         return NULL;
     fast = lookup_request(vm, frame);
@@ -782,6 +827,8 @@ handle_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
         return NULL;
     Py_INCREF(vm);
     self->vm = vm;
+    self->method = _PyType_Lookup(Py_TYPE(vm), s_handle);
+    Py_XINCREF(self->method);
     self->vectorcall = handle_vectorcall;
     return (PyObject *)self;
 }
@@ -790,6 +837,7 @@ static int
 handle_traverse(HandleObject *self, visitproc visit, void *arg)
 {
     Py_VISIT(self->vm);
+    Py_VISIT(self->method);
     return 0;
 }
 
@@ -797,6 +845,7 @@ static int
 handle_clear(HandleObject *self)
 {
     Py_CLEAR(self->vm);
+    Py_CLEAR(self->method);
     return 0;
 }
 
@@ -828,6 +877,23 @@ handle_wrapped(HandleObject *self, void *closure)
     return out;
 }
 
+/* copy.deepcopy and pickle: Handle(vm) again, on the copy of the module (the pure module has no
+   instance attribute `handle`, its copies just work) */
+static PyObject *
+handle_reduce(HandleObject *self, PyObject *Py_UNUSED(ignored))
+{
+    if (!self->vm) {
+        PyErr_SetString(PyExc_TypeError, "cannot pickle a cleared compiled handle");
+        return NULL;
+    }
+    return Py_BuildValue("O(O)", (PyObject *)Py_TYPE(self), self->vm);
+}
+
+static PyMethodDef handle_methods[] = {
+    {"__reduce__", (PyCFunction)handle_reduce, METH_NOARGS, "Handle(vm): pickle and copy.deepcopy"},
+    {NULL, NULL, 0, NULL}
+};
+
 static PyObject *
 handle_repr(HandleObject *self)
 {
@@ -857,6 +923,7 @@ static PyTypeObject HandleType = {
     .tp_traverse = (traverseproc)handle_traverse,
     .tp_clear = (inquiry)handle_clear,
     .tp_members = handle_members,
+    .tp_methods = handle_methods,
     .tp_getset = handle_getset,
     .tp_new = handle_new,
 };
@@ -875,8 +942,11 @@ static PyMethodDef accel_methods[] = {
 };
 
 static struct PyModuleDef accel_module = {
-    PyModuleDef_HEAD_INIT, "opentmcl._accel",
-    "Compiled twin of the virtual module's request path (opentmcl.accel).", -1, accel_methods,
+    .m_base = PyModuleDef_HEAD_INIT,
+    .m_name = "opentmcl._accel",
+    .m_doc = "Compiled twin of the virtual module's request path (opentmcl.accel).",
+    .m_size = -1,
+    .m_methods = accel_methods,
 };
 
 static int

@@ -61,7 +61,9 @@ def pure() -> Iterator[None]:
 def install(vm: Any, base: Any) -> None:
     """Choose the path of a new module: when `active()`, its pre-bound reads will be compiled
     (`enabled(vm)`) and `vm.handle` becomes the compiled handle (an instance attribute) unless
-    `vm`'s class overrides `base.handle` (a subclass keeps its own)."""
+    `vm`'s class overrides `base.handle` (a subclass keeps its own). The compiled handle looks up
+    `type(vm).handle` on every call, so a method patched onto the class later, or a new
+    `vm.__class__`, is called as on the pure path; `copy.deepcopy` and pickle rebuild it on the copy."""
     on = active()
     vm._accel = on
     if on and _own_handle(type(vm), base):
