@@ -29,11 +29,13 @@ import threading
 import time
 import urllib.parse
 from abc import ABC, abstractmethod
-from typing import TYPE_CHECKING, Self
+from typing import TYPE_CHECKING
 
 from .errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError
 
 if TYPE_CHECKING:
+    from typing import Self  # Python 3.11; annotations only, so 3.10 imports the module
+
     from ..registry import Registry
 
 log = logging.getLogger("opentmcl.host.transport")
