@@ -23,7 +23,12 @@ import struct
 from collections.abc import Callable
 
 from figures import Figure, best_of, print_figures, timed
-from opentmcl import VirtualModule, accel, connect
+from opentmcl import VirtualModule, connect
+
+try:
+    from opentmcl import accel
+except ImportError:  # a tree from before the accelerator (PYTHONPATH=<old tree>/src, docs/performance.md)
+    accel = None  # type: ignore[assignment]
 from opentmcl.protocol.frame import Request
 
 FAR = 2_000_000_000  # MVP ABS target no axis reaches within a run
@@ -66,7 +71,7 @@ def floor_rate(budget: float) -> float:
 
 def module(pure: bool = False) -> VirtualModule:
     """A TMCM-6212 on the active path, or on the pure-Python one."""
-    if not pure:
+    if not pure or accel is None:
         return VirtualModule("TMCM-6212")
     with accel.pure():
         return VirtualModule("TMCM-6212")
@@ -207,7 +212,7 @@ def handlers(quick: bool = False) -> list[Figure]:
 def accelerated(quick: bool = False) -> list[Figure]:
     """Compiled against pure-Python request path, measured side by side (none when the compiled
     path is not active)."""
-    if not accel.active():
+    if accel is None or not accel.active():
         return []
     rounds, budget = (1, 0.05) if quick else (5, 0.3)
     floor, pure, fast, pure_poll, fast_poll = best_of(rounds, [
