@@ -277,8 +277,7 @@ class ModuleBus:
                                 self._binary_frame(frame, channel, catch=False, silent=entry)]
                     if channel is not None:
                         self._route[key] = channel
-                    command = frame[1]  # _changes_map, inlined
-                    if command not in KEEPS_MAP and (command != SGP or frame[3] == 0):
+                    if _changes_map(frame):
                         self._map = None
                     return [(vm, reply)]
                 return [(vm, reply) for vm, reply, _kind in self._binary_frame(frame, channel, catch=False)]
