@@ -5,7 +5,7 @@
 compiled twins of three pieces of the pure-Python request path, which stays the reference:
 
 - `VirtualModule.handle` (firmware/vm.py): `install(vm)` makes `vm.handle` an `_accel.Handle`;
-- `dispatch._packed` (firmware/dispatch.py): `packed(head, read)`, the reply of a pre-bound read;
+- `dispatch._packed` (firmware/dispatch.py): `packed(head, read, reply)`, the reply of a pre-bound read;
 - `SixPointRampEngine.position` / `.position_reached` (motion/sixpoint.py), the reads of GAP 1
   and GAP 8: `sixpoint_read(engine, attribute, fallback)`.
 
@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import importlib
 import os
-import struct
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from types import ModuleType
@@ -84,22 +83,11 @@ def enabled(vm: Any) -> bool:
     return getattr(vm, "_accel", False) is True
 
 
-_TAIL = struct.Struct(">4siB")
-
-
-def _reply(head: bytes, value: Any) -> bytes:
-    """The Python reply of a read whose value is not an int: what `dispatch._packed` does."""
-    v = value
-    if not -0x8000_0000 <= v <= 0x7FFF_FFFF:
-        v &= 0xFFFFFFFF  # to_int32 (protocol/frame.py)
-        v = v - 0x1_0000_0000 if v & 0x8000_0000 else v
-    return _TAIL.pack(head, v, (sum(head) + v + (v >> 8) + (v >> 16) + (v >> 24)) & 0xFF)
-
-
-def packed(head: bytes, read: Callable[[], Any]) -> Callable[[], bytes]:
-    """The compiled `dispatch._packed(head, read)` (call only when `active()`)."""
+def packed(head: bytes, read: Callable[[], Any], reply: Callable[[Any], bytes]) -> Callable[[], bytes]:
+    """The compiled `dispatch._packed(head, read)` (call only when `active()`); `reply(value)` is
+    the Python reply it hands a value that is not an int (dispatch.reply_bytes behind `head`)."""
     assert compiled is not None
-    return compiled.packed(head, read, lambda value: _reply(head, value))
+    return compiled.packed(head, read, reply)
 
 
 _SIXPOINT_READS = {"position": 0, "position_reached": 1}

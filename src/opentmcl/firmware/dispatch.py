@@ -111,7 +111,12 @@ def entry(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | No
     if read is None:
         return None
     head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
-    return accel.packed(head, read) if accel.enabled(vm) else _packed(head, read)
+    return _compiled_packed(head, read) if accel.enabled(vm) else _packed(head, read)
+
+
+def _compiled_packed(head: bytes, read: Read) -> Entry:
+    """`_packed` on the compiled path; a value that is not an int gets `reply_bytes`' answer."""
+    return accel.packed(head, read, partial(reply_bytes, *head))
 
 
 def setter(vm: VirtualModule, command: int, type_: int, motor: int) -> Setter | None:

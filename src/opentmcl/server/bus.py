@@ -259,10 +259,8 @@ class ModuleBus:
         """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
         replies = []
         with self.lock:
-            dt = self._clock() - self._last
-            if dt > 0 and dt >= self.min_step:  # else `sync` would return at once
-                self.sync()
-            if len(frame) == 9 and (channel is None or getattr(channel, "interface", None) != USB):
+            self.sync()
+            if len(frame) == 9 and getattr(channel, "interface", None) != USB:
                 table = self._map
                 entries = None if table is None or self._always else table.get(frame[0])
                 if entries is not None and len(entries) == 1:  # one module has the address: the usual bus
