@@ -27,7 +27,7 @@ from .globals import GlobalParameters
 from .interpreter import Interpreter
 from .interrupts import Interrupts
 from .io import IOBanks
-from .program import ProgramMemory, program_control, store_instruction
+from .program import RUNNING, STEPPING, ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
 from .status import TmclStatus
 from .world import ScenarioSource, World
@@ -38,6 +38,9 @@ _REPLY = struct.Struct(">BBBBi")
 _ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
 EEPROM_MAGIC, MAGIC_VALUE = (0, 64), 0xE4
 _SERIAL_HB, _CAN_HB = (0, 68), (0, 82)
+_RUNNING = (RUNNING, STEPPING)
+_FAR = 1 << 63  # a tick no advance reaches
+_INF = float("inf")
 _HEARTBEATS = (("serial", _SERIAL_HB), ("can", _CAN_HB))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
@@ -145,6 +148,7 @@ class VirtualModule:
         self._engines = [ax.engine for ax in self.axes]
         self._engines_dirty = True
         self._synced_at = -1
+        self._carry_until = -1
 
     # --- addressing -------------------------------------------------------------
     def assign_address(self, address: int) -> None:
@@ -211,6 +215,7 @@ class VirtualModule:
             return b""
         if sum(frame[:8]) & 0xFF != check:
             return self._reply(_WRONG_CHECKSUM, command, 0, address)
+        self._carry_until = -1  # a command: the next `advance` starts afresh
         if self._writes and interface in _FAST_INTERFACES:
             write = self._writes.get(bytes(frame[:4]))
             if write is not None:
@@ -309,7 +314,7 @@ class VirtualModule:
         return self.now / CLOCK_HZ
 
     def advance(self, seconds: float) -> None:
-        if not seconds >= 0 or seconds == float("inf"):  # also NaN
+        if not seconds >= 0 or seconds == _INF:  # also NaN
             raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
         self.advance_to(self.now + round(seconds * CLOCK_HZ))
 
@@ -322,8 +327,15 @@ class VirtualModule:
 
         The next event of everything but the program (`_limit_event`) is cached during
         the call and looked up again only after a write that can move it (docs/architecture.md
-        "Time"); host commands come between calls, so every call starts afresh."""
+        "Time"). A call starts afresh unless only pre-bound reads came since the last one
+        ended and its limit lies beyond `until` (`_carry_until`)."""
         self.horizon = until  # the interpreter may run pure instructions ahead up to here
+        if self.now <= until < self._carry_until and not self._engines_dirty \
+                and not (self._carry_hb and self._heartbeat_by(until)):
+            self.now = until  # carried: no event up to `until` (`_carry_limit`)
+            self.sync_for_read()
+            return
+        self._carry_until = -1
         try:
             while self.now < until:
                 nxt = self._next_event(until)
@@ -334,9 +346,38 @@ class VirtualModule:
                     self._limit_ok = False
                 self._after_step()
                 self.interpreter.service()
+            self._carry_until = self._carry_limit()
         finally:
             self._limit_ok = False  # host commands come next
         self.sync_for_read()  # every event up to `until` is done: the engines' next events stand
+
+    _carry_until = -1
+    """A later `advance_to` may skip its event loop up to (not including) this tick (`_carry_limit`).
+    What can move the limit ends the carry: every command and the world's Python API through `sync`
+    (`_engines_dirty`), the world's inputs (`World.set_input`), and any frame the general path takes."""
+    _carry_hb = False  # a heartbeat is on: a pre-bound read restarts it, so its deadline is looked up
+
+    def _carry_limit(self) -> int:
+        """Up to which tick the limit found by this `advance_to` holds for the next ones, if only
+        pre-bound reads come in between: the limit itself when no write came since it was looked
+        up (`_limit_ok`; a world that acts at every tick, `World.quiet`, clears it at each), and the
+        loop would do nothing at the ticks before it that are no event. Not so with a program
+        running (it runs at its own ticks) or a timer that rolls over before (`Interrupts._run_timers`)."""
+        if not self._limit_ok or self._engines_dirty or self.application_status in _RUNNING:
+            return -1
+        limit = self._limit
+        first = self.interrupts._first_due
+        carry = _FAR if limit is None else limit
+        if first is not None and first < carry:
+            carry = first
+        ram = self.globals.ram
+        self._carry_hb = bool(ram.get(_SERIAL_HB) or ram.get(_CAN_HB))
+        return carry
+
+    def _heartbeat_by(self, until: int) -> bool:
+        """Does a heartbeat expire by `until` (a carried `advance_to` stops there)?"""
+        hb = self._heartbeat_deadline()
+        return hb is not None and hb <= until
 
     def _engine_step(self, now: int) -> None:
         """Advance the engines whose event is due now; report arrivals (command 138)."""

@@ -72,12 +72,14 @@ class World:
             self.inputs.pop(twin, None)
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
         self._input_cache = None
+        self.vm._carry_until = -1  # a new next input change
         self._drive_input((bank, port))
 
     def set_shutdown(self, level: int) -> None:
         """The SHUTDOWN pin (PD86-1180 GP80) at a constant level."""
         self.shutdown = Profile.constant(level)
         self._input_cache = None
+        self.vm._carry_until = -1
         self.service()
 
     # --- hooks --------------------------------------------------------------------------------------
