@@ -28,8 +28,8 @@
 
 static PyObject *s_requests, *s_last_command, *s_now, *s_heartbeat_fired, *s_synced_at;
 static PyObject *s_sync_engines, *s_handle_general, *s_serial, *s_interface, *s_handle;
-static PyObject *s_queue, *s_pieces, *s_read_at, *s_read_pieces, *s_read_pos, *s_read_v;
-static PyObject *s_target, *s_target_abs;
+static PyObject *s_queue, *s_pieces;
+static PyObject *s_target, *s_target_abs, *s_advance;
 static PyObject *heartbeat_of;  /* the table of vm._HEARTBEAT_OF: link -> heartbeat name */
 
 static int
@@ -48,12 +48,9 @@ intern_names(void)
     NAME(s_handle, "handle");
     NAME(s_queue, "_queue");
     NAME(s_pieces, "pieces");
-    NAME(s_read_at, "_read_at");
-    NAME(s_read_pieces, "_read_pieces");
-    NAME(s_read_pos, "_read_pos");
-    NAME(s_read_v, "_read_v");
     NAME(s_target, "_target");
     NAME(s_target_abs, "_target_abs");
+    NAME(s_advance, "advance");
 #undef NAME
     return 0;
 }
@@ -102,9 +99,7 @@ static int
 to_i128(PyObject *obj, i128 *out)
 {
     int overflow;
-    long long small, hi;
-    unsigned long long lo;
-    PyObject *high;
+    long long small;
 
     if (!PyLong_CheckExact(obj))
         return 1;
@@ -115,19 +110,29 @@ to_i128(PyObject *obj, i128 *out)
         *out = small;
         return 0;
     }
-    lo = PyLong_AsUnsignedLongLongMask(obj);
-    if (lo == (unsigned long long)-1 && PyErr_Occurred())
-        return -1;
-    high = PyNumber_Rshift(obj, sixty_four);  /* floor(obj / 2^64) */
-    if (!high)
-        return -1;
-    hi = PyLong_AsLongLongAndOverflow(high, &overflow);
-    Py_DECREF(high);
-    if (overflow)
-        return 1;
-    if (hi == -1 && PyErr_Occurred())
-        return -1;
-    *out = (i128)(((u128)(unsigned long long)hi << 64) | (u128)lo);
+    {
+        /* 16 bytes of two's complement, little-endian: no intermediate int */
+        unsigned char buf[16];
+        u128 u = 0;
+        int i;
+#if PY_VERSION_HEX >= 0x030D0000
+        Py_ssize_t n = PyLong_AsNativeBytes(obj, buf, 16, Py_ASNATIVEBYTES_LITTLE_ENDIAN);
+        if (n < 0)
+            return -1;
+        if (n > 16)
+            return 1;  /* does not fit */
+#else
+        if (_PyLong_AsByteArray((PyLongObject *)obj, buf, 16, 1, 1) < 0) {
+            if (!PyErr_ExceptionMatches(PyExc_OverflowError))
+                return -1;
+            PyErr_Clear();
+            return 1;  /* does not fit */
+        }
+#endif
+        for (i = 15; i >= 0; i--)
+            u = (u << 8) | buf[i];
+        *out = (i128)u;
+    }
     return 0;
 }
 
@@ -177,11 +182,42 @@ typedef struct {
     PyObject *pieces;  /* borrowed through the queue, kept by `queue_ref` */
 } piece_state;
 
+/* A read's copy of the segment it last converted: a segment is a tuple (immutable), so while
+   the queue's first piece is that very object, its values are these. */
+typedef struct {
+    PyObject *seg;  /* a strong reference, or NULL */
+    i128 k0, k1, p0, v0, a;
+    int has_k1;
+} segment_cache;
+
+/* convert `seg` into `c`: 0 ok; 1 fall back or -1 error, `c` unchanged */
 static int
-engine_piece(PyObject *engine, piece_state *st, PyObject **queue_ref)
+convert_segment(PyObject *seg, segment_cache *c)
+{
+    int rc;
+    segment_cache t;
+    PyObject *k1 = PyTuple_GET_ITEM(seg, 1);
+    t.has_k1 = k1 != Py_None;
+    t.k1 = 0;
+    if (t.has_k1 && (rc = to_i128(k1, &t.k1)) != 0)
+        return rc;
+    if ((rc = to_i128(PyTuple_GET_ITEM(seg, 0), &t.k0)) != 0
+        || (rc = to_i128(PyTuple_GET_ITEM(seg, 2), &t.p0)) != 0
+        || (rc = to_i128(PyTuple_GET_ITEM(seg, 3), &t.v0)) != 0
+        || (rc = to_i128(PyTuple_GET_ITEM(seg, 4), &t.a)) != 0)
+        return rc;
+    Py_INCREF(seg);
+    t.seg = c->seg;
+    *c = t;
+    c->seg = seg;
+    Py_XDECREF(t.seg);  /* the segment converted before */
+    return 0;
+}
+
+static int
+engine_piece(PyObject *engine, piece_state *st, PyObject **queue_ref, segment_cache *c)
 {
     PyObject *queue, *pieces, *seg;
-    i128 k1;
     int rc;
 
     *queue_ref = NULL;
@@ -205,19 +241,15 @@ engine_piece(PyObject *engine, piece_state *st, PyObject **queue_ref)
     seg = PyList_GET_ITEM(pieces, 0);
     if (!PyTuple_Check(seg) || PyTuple_GET_SIZE(seg) != 6)
         return 1;
-    if (PyTuple_GET_ITEM(seg, 1) != Py_None) {
-        if ((rc = to_i128(PyTuple_GET_ITEM(seg, 1), &k1)) != 0)
-            return rc;
-        if (k1 <= st->now)
-            return 1;  /* a piece that has ended: SegmentQueue.at finds the one holding now */
-    }
-    if ((rc = to_i128(PyTuple_GET_ITEM(seg, 0), &st->k0)) != 0)
+    if (seg != c->seg && (rc = convert_segment(seg, c)) != 0)
         return rc;
-    if ((rc = to_i128(PyTuple_GET_ITEM(seg, 2), &st->p0)) != 0)
-        return rc;
-    if ((rc = to_i128(PyTuple_GET_ITEM(seg, 3), &st->v0)) != 0)
-        return rc;
-    return to_i128(PyTuple_GET_ITEM(seg, 4), &st->a);
+    if (c->has_k1 && c->k1 <= st->now)
+        return 1;  /* a piece that has ended: SegmentQueue.at finds the one holding now */
+    st->k0 = c->k0;
+    st->p0 = c->p0;
+    st->v0 = c->v0;
+    st->a = c->a;
+    return 0;
 }
 
 /* the wrapped step counter at now (sixpoint._read): 0 ok, 1 fall back */
@@ -242,34 +274,6 @@ position_at(const piece_state *st, long long *pos)
     return 0;
 }
 
-/* Is the engine's lazy read (`_read_at`, `_read_pieces`) current? 1 yes, 0 no, -1 error */
-static int
-cache_current(PyObject *engine, const piece_state *st)
-{
-    PyObject *at, *cached;
-    i128 t;
-    int rc;
-    at = PyObject_GetAttr(engine, s_read_at);
-    if (!at) {
-        PyErr_Clear();
-        return 0;
-    }
-    rc = to_i128(at, &t);
-    Py_DECREF(at);
-    if (rc != 0 || t != st->now) {
-        if (rc < 0)
-            PyErr_Clear();
-        return 0;
-    }
-    cached = PyObject_GetAttr(engine, s_read_pieces);
-    if (!cached) {
-        PyErr_Clear();
-        return 0;
-    }
-    Py_DECREF(cached);  /* only its identity matters; the engine keeps it */
-    return cached == st->pieces;
-}
-
 /* attribute as a long long: 0 ok, 1 fall back */
 static int
 attr_ll(PyObject *obj, PyObject *name, long long *out)
@@ -291,9 +295,9 @@ reached_at(PyObject *engine, const piece_state *st, long long *out)
 {
     long long target, pos;
     i128 v, target_abs, scaled;
-    if (attr_ll(engine, s_target, &target))
-        return 1;
     if (st->v0 == 0 && st->a == 0) {
+        if (attr_ll(engine, s_target, &target))
+            return 1;
         if (attr_i128(engine, s_target_abs, &target_abs) != 0) {
             PyErr_Clear();
             return 1;
@@ -306,64 +310,30 @@ reached_at(PyObject *engine, const piece_state *st, long long *out)
     if (__builtin_sub_overflow(st->now, st->k0, &v) || __builtin_mul_overflow(v, st->a, &v)
         || __builtin_add_overflow(v, st->v0, &v))
         return 1;
-    if (v != 0) {
+    if (v != 0) {  /* moving: no target read, as the property's `and` */
         *out = 0;
         return 0;
     }
-    if (position_at(st, &pos))
+    if (attr_ll(engine, s_target, &target) || position_at(st, &pos))
         return 1;
     *out = pos == target;
     return 0;
 }
 
-/* position / position_reached from the engine's lazy read of this tick and plan */
-static int
-from_cache(PyObject *engine, int which, long long *out)
-{
-    long long pos, v, target;
-    if (attr_ll(engine, s_read_pos, &pos))
-        return 1;
-    if (which == READ_POSITION) {
-        *out = pos;
-        return 0;
-    }
-    if (attr_ll(engine, s_target, &target))
-        return 1;
-    if (pos != target) {
-        *out = 0;
-        return 0;
-    }
-    {
-        i128 big;
-        int rc = attr_i128(engine, s_read_v, &big);
-        if (rc) {
-            if (rc < 0)
-                PyErr_Clear();
-            return 1;
-        }
-        v = big != 0;
-    }
-    *out = !v;
-    return 0;
-}
-
 /* the read `which` of the engine as a C value: R_VALUE, R_FALLBACK or R_ERROR */
 static int
-sixpoint_value(PyObject *engine, int which, long long *out)
+sixpoint_value(PyObject *engine, int which, long long *out, segment_cache *c)
 {
     piece_state st;
     PyObject *pieces = NULL;
-    int rc = engine_piece(engine, &st, &pieces);
+    int rc = engine_piece(engine, &st, &pieces, c);
     if (rc == 0) {
-        if (cache_current(engine, &st)) {  /* what the Python property answers from its cache */
-            rc = from_cache(engine, which, out);
-        }
-        else if (which == READ_POSITION) {
+        /* the closed form of the piece holding now, as the property's lazy read (`_read`)
+           evaluates it: its cache, when current, holds these same values */
+        if (which == READ_POSITION)
             rc = position_at(&st, out);
-        }
-        else {
+        else
             rc = reached_at(engine, &st, out);
-        }
     }
     Py_XDECREF(pieces);
     if (rc < 0) {
@@ -383,6 +353,9 @@ typedef struct {
     PyObject *fallback;
     int which;
     vectorcallfunc vectorcall;
+#if HAVE_INT128
+    segment_cache cache;
+#endif
 } SixPointReadObject;
 
 static PyTypeObject SixPointReadType;
@@ -393,7 +366,7 @@ sixpoint_call_value(SixPointReadObject *self)
 {
 #if HAVE_INT128
     long long v;
-    if (sixpoint_value(self->engine, self->which, &v) == R_VALUE) {
+    if (sixpoint_value(self->engine, self->which, &v, &self->cache) == R_VALUE) {
         if (self->which == READ_REACHED)
             return PyBool_FromLong((long)v);
         return PyLong_FromLongLong(v);
@@ -422,6 +395,9 @@ sixpoint_traverse(SixPointReadObject *self, visitproc visit, void *arg)
 {
     Py_VISIT(self->engine);
     Py_VISIT(self->fallback);
+#if HAVE_INT128
+    Py_VISIT(self->cache.seg);
+#endif
     return 0;
 }
 
@@ -430,6 +406,9 @@ sixpoint_clear(SixPointReadObject *self)
 {
     Py_CLEAR(self->engine);
     Py_CLEAR(self->fallback);
+#if HAVE_INT128
+    Py_CLEAR(self->cache.seg);
+#endif
     return 0;
 }
 
@@ -467,6 +446,9 @@ sixpoint_read(PyObject *module, PyObject *args)
     self->fallback = fallback;
     self->which = which;
     self->vectorcall = sixpoint_vectorcall;
+#if HAVE_INT128
+    self->cache.seg = NULL;
+#endif
     PyObject_GC_Track(self);
     return (PyObject *)self;
 }
@@ -550,7 +532,7 @@ packed_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyOb
         && ((SixPointReadObject *)self->read)->fallback) {
         SixPointReadObject *r = (SixPointReadObject *)self->read;
         long long v;
-        if (sixpoint_value(r->engine, r->which, &v) == R_VALUE)
+        if (sixpoint_value(r->engine, r->which, &v, &r->cache) == R_VALUE)
             return reply9((const unsigned char *)PyBytes_AS_STRING(self->head), self->head_sum,
                           (uint32_t)(unsigned long long)v);
         value = PyObject_CallNoArgs(r->fallback);
@@ -929,6 +911,182 @@ static PyTypeObject HandleType = {
 };
 
 /* ---------------------------------------------------------------------------------------- */
+/* EngineSync                                                                               */
+
+/* EngineSync(cls)(engines, now): the loop of `VirtualModule._sync_engines` (firmware/vm.py),
+   `for e in engines: if e.now < now: e.advance(now)`. For an engine of exactly `cls` (the
+   six-point engine) whose class still has the `advance` this object was made with, and whose
+   first queued piece holds at `now` (no end k1 <= now: SixPointRampEngine.advance would drop
+   nothing), the call is its effect: `e.now = now`. Every other engine is called. */
+typedef struct {
+    PyObject_HEAD
+    PyObject *cls;
+    PyObject *advance;  /* cls's `advance` when this object was made */
+    vectorcallfunc vectorcall;
+} EngineSyncObject;
+
+static PyTypeObject EngineSyncType;
+
+/* does the first queued piece of `engine` hold at `now`? 1 yes, 0 no or unknown (call advance) */
+static int
+first_piece_holds(PyObject *engine, PyObject *now)
+{
+    PyObject *queue, *pieces, *seg, *k1;
+    int rc = 0;
+    queue = PyObject_GetAttr(engine, s_queue);
+    if (!queue) {
+        PyErr_Clear();  /* advance() raises it again, or knows better */
+        return 0;
+    }
+    pieces = PyObject_GetAttr(queue, s_pieces);
+    Py_DECREF(queue);
+    if (!pieces) {
+        PyErr_Clear();
+        return 0;
+    }
+    if (PyList_CheckExact(pieces) && PyList_GET_SIZE(pieces) >= 1) {
+        seg = PyList_GET_ITEM(pieces, 0);
+        if (PyTuple_Check(seg) && PyTuple_GET_SIZE(seg) == 6) {
+            k1 = PyTuple_GET_ITEM(seg, 1);
+            if (k1 == Py_None)
+                rc = 1;
+            else if (PyLong_CheckExact(k1))
+                rc = PyObject_RichCompareBool(k1, now, Py_GT);  /* two ints: no error */
+        }
+    }
+    Py_DECREF(pieces);
+    return rc < 0 ? 0 : rc;
+}
+
+static int
+sync_one(EngineSyncObject *self, PyObject *engine, PyObject *now, int inline_ok)
+{
+    PyObject *at, *r;
+    int behind;
+    at = PyObject_GetAttr(engine, s_now);
+    if (!at)
+        return -1;
+    behind = PyObject_RichCompareBool(at, now, Py_LT);
+    Py_DECREF(at);
+    if (behind <= 0)
+        return behind;
+    if (inline_ok && Py_TYPE(engine) == (PyTypeObject *)self->cls && first_piece_holds(engine, now))
+        return PyObject_SetAttr(engine, s_now, now);
+    r = PyObject_CallMethodOneArg(engine, s_advance, now);
+    if (!r)
+        return -1;
+    Py_DECREF(r);
+    return 0;
+}
+
+static PyObject *
+engine_sync_vectorcall(PyObject *callable, PyObject *const *args, size_t nargsf, PyObject *kwnames)
+{
+    EngineSyncObject *self = (EngineSyncObject *)callable;
+    PyObject *engines, *now;
+    Py_ssize_t i;
+    int inline_ok;
+    if (PyVectorcall_NARGS(nargsf) != 2 || (kwnames && PyTuple_GET_SIZE(kwnames))) {
+        PyErr_SetString(PyExc_TypeError, "EngineSync takes two positional arguments: engines, now");
+        return NULL;
+    }
+    if (!self->cls) {
+        PyErr_SetString(PyExc_ReferenceError, "the engine sync was cleared");  /* by the GC */
+        return NULL;
+    }
+    engines = args[0];
+    now = args[1];
+    if (!PyList_CheckExact(engines)) {
+        PyErr_SetString(PyExc_TypeError, "engines must be a list");
+        return NULL;
+    }
+    /* SixPointRampEngine.advance takes an int as it is; a class patched since goes through the call */
+    inline_ok = PyLong_CheckExact(now) && _PyType_Lookup((PyTypeObject *)self->cls, s_advance) == self->advance;
+    Py_INCREF(engines);
+    for (i = 0; i < PyList_GET_SIZE(engines); i++) {  /* the size again: a call may change the list */
+        PyObject *engine = PyList_GET_ITEM(engines, i);
+        int rc;
+        Py_INCREF(engine);
+        rc = sync_one(self, engine, now, inline_ok);
+        Py_DECREF(engine);
+        if (rc < 0) {
+            Py_DECREF(engines);
+            return NULL;
+        }
+    }
+    Py_DECREF(engines);
+    Py_RETURN_NONE;
+}
+
+static PyObject *
+engine_sync_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    PyObject *cls, *advance;
+    EngineSyncObject *self;
+    static char *kwlist[] = {"cls", NULL};
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O!:EngineSync", kwlist, &PyType_Type, &cls))
+        return NULL;
+    advance = _PyType_Lookup((PyTypeObject *)cls, s_advance);
+    if (!advance || !PyFunction_Check(advance)) {
+        PyErr_SetString(PyExc_TypeError, "cls must have a Python method advance");
+        return NULL;
+    }
+    self = (EngineSyncObject *)type->tp_alloc(type, 0);
+    if (!self)
+        return NULL;
+    Py_INCREF(cls);
+    Py_INCREF(advance);
+    self->cls = cls;
+    self->advance = advance;
+    self->vectorcall = engine_sync_vectorcall;
+    return (PyObject *)self;
+}
+
+static int
+engine_sync_traverse(EngineSyncObject *self, visitproc visit, void *arg)
+{
+    Py_VISIT(self->cls);
+    Py_VISIT(self->advance);
+    return 0;
+}
+
+static int
+engine_sync_clear(EngineSyncObject *self)
+{
+    Py_CLEAR(self->cls);
+    Py_CLEAR(self->advance);
+    return 0;
+}
+
+static void
+engine_sync_dealloc(EngineSyncObject *self)
+{
+    PyObject_GC_UnTrack(self);
+    engine_sync_clear(self);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyMemberDef engine_sync_members[] = {
+    {"cls", T_OBJECT, offsetof(EngineSyncObject, cls), READONLY, "the engine class synced in C"},
+    {NULL}
+};
+
+static PyTypeObject EngineSyncType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "opentmcl._accel.EngineSync",
+    .tp_basicsize = sizeof(EngineSyncObject),
+    .tp_dealloc = (destructor)engine_sync_dealloc,
+    .tp_vectorcall_offset = offsetof(EngineSyncObject, vectorcall),
+    .tp_call = PyVectorcall_Call,
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_doc = "EngineSync(cls)(engines, now): VirtualModule._sync_engines' loop in C.",
+    .tp_traverse = (traverseproc)engine_sync_traverse,
+    .tp_clear = (inquiry)engine_sync_clear,
+    .tp_members = engine_sync_members,
+    .tp_new = engine_sync_new,
+};
+
+/* ---------------------------------------------------------------------------------------- */
 /* module                                                                                   */
 
 static PyMethodDef accel_methods[] = {
@@ -984,7 +1142,7 @@ PyInit__accel(void)
         return NULL;
 #endif
     if (PyType_Ready(&HandleType) < 0 || PyType_Ready(&PackedType) < 0
-        || PyType_Ready(&SixPointReadType) < 0)
+        || PyType_Ready(&SixPointReadType) < 0 || PyType_Ready(&EngineSyncType) < 0)
         return NULL;
     m = PyModule_Create(&accel_module);
     if (!m)
@@ -992,10 +1150,12 @@ PyInit__accel(void)
     Py_INCREF(&HandleType);
     Py_INCREF(&PackedType);
     Py_INCREF(&SixPointReadType);
+    Py_INCREF(&EngineSyncType);
     Py_INCREF(heartbeat_of);
     if (PyModule_AddObject(m, "Handle", (PyObject *)&HandleType) < 0
         || PyModule_AddObject(m, "Packed", (PyObject *)&PackedType) < 0
         || PyModule_AddObject(m, "SixPointRead", (PyObject *)&SixPointReadType) < 0
+        || PyModule_AddObject(m, "EngineSync", (PyObject *)&EngineSyncType) < 0
         || PyModule_AddObject(m, "HEARTBEAT_OF", heartbeat_of) < 0
         || PyModule_AddIntConstant(m, "HAVE_INT128", HAVE_INT128) < 0) {
         Py_DECREF(m);

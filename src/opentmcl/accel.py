@@ -2,12 +2,13 @@
 "Compiled accelerator").
 
 `opentmcl._accel` (src/opentmcl/_accel.c, built by setup.py when a C compiler is there) holds
-compiled twins of three pieces of the pure-Python request path, which stays the reference:
+compiled twins of four pieces of the pure-Python request path, which stays the reference:
 
 - `VirtualModule.handle` (firmware/vm.py): `install(vm)` makes `vm.handle` an `_accel.Handle`;
 - `dispatch._packed` (firmware/dispatch.py): `packed(head, read, reply)`, the reply of a pre-bound read;
 - `SixPointRampEngine.position` / `.position_reached` (motion/sixpoint.py), the reads of GAP 1
-  and GAP 8: `sixpoint_read(engine, attribute, fallback)`.
+  and GAP 8: `sixpoint_read(engine, attribute, fallback)`;
+- the loop of `VirtualModule._sync_engines` (firmware/vm.py): `engine_sync(SixPointRampEngine)`.
 
 `active()` is False without the compiled module or with the environment variable
 `OPENTMCL_PURE=1`, and inside `with pure():` (tests, benchmarks). The firmware asks it once per
@@ -90,6 +91,14 @@ def packed(head: bytes, read: Callable[[], Any], reply: Callable[[Any], bytes]) 
     return compiled.packed(head, read, reply)
 
 
+def engine_sync(cls: type) -> Callable[[list[Any], int], None] | None:
+    """The compiled loop of `VirtualModule._sync_engines` (`for e in engines: if e.now < now:
+    e.advance(now)`), which advances engines of exactly `cls` (the six-point engine) without calling
+    `advance` where that would only set `now`; None without the compiled module. Use it only for a
+    module that is `enabled`."""
+    return None if compiled is None else compiled.EngineSync(cls)
+
+
 _SIXPOINT_READS = {"position": 0, "position_reached": 1}
 
 
@@ -103,4 +112,4 @@ def sixpoint_read(engine: object, attribute: str, fallback: Callable[[], Any]) -
     return compiled.sixpoint_read(engine, which, fallback)
 
 
-__all__ = ["ENV", "active", "compiled", "enabled", "install", "packed", "pure", "sixpoint_read"]
+__all__ = ["ENV", "active", "compiled", "enabled", "engine_sync", "install", "packed", "pure", "sixpoint_read"]

@@ -16,6 +16,7 @@ import struct
 from .. import accel
 from ..modules.profile import ModuleProfile, load_profile
 from ..motion import CLOCK_HZ
+from ..motion.sixpoint import SixPointRampEngine
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
 from ..protocol.status import Status
 from .ascii import AsciiInterface
@@ -41,6 +42,7 @@ _SERIAL_HB, _CAN_HB = (0, 68), (0, 82)
 _RUNNING = (RUNNING, STEPPING)
 _FAR = 1 << 63  # a tick no advance reaches
 _INF = float("inf")
+_ENGINE_SYNC = accel.engine_sync(SixPointRampEngine)
 _HEARTBEATS = (("serial", _SERIAL_HB), ("can", _CAN_HB))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
@@ -62,6 +64,8 @@ def _check_address(profile: ModuleProfile, address: int) -> None:
 
 class VirtualModule:
     """A TMCL module in software: TMCM-6212, PD28-1021 (TMCM-1021) or PD86-1180 (TMCM-1180)."""
+
+    _accel = False  # built on the compiled path (accel.install, at the end of __init__)
 
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
                  eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None) -> None:
@@ -412,9 +416,12 @@ class VirtualModule:
 
     def _sync_engines(self) -> None:
         now = self.now
-        for engine in self._engines:
-            if engine.now < now:
-                engine.advance(now)
+        if self._accel and _ENGINE_SYNC is not None:
+            _ENGINE_SYNC(self._engines, now)  # the same loop in C (accel.engine_sync)
+        else:
+            for engine in self._engines:
+                if engine.now < now:
+                    engine.advance(now)
         self._synced_at = now
 
     def _engine_event(self) -> int | None:
