@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 Entry = Callable[[], bytes]
 Setter = Callable[[int], None]
 Read = Callable[[], int]
-SAP, GAP, SGP, GGP, GIO = 5, 6, 9, 10, 15
+SAP, GAP, SGP, GGP, GIO, AGP = 5, 6, 9, 10, 15, 35
 OK = 100
 USER_BANK = 2
 # GGP values that are not plain RAM: 73 lock, 128 status, 129 download mode, 130 PC, 132 tick, 133 random
@@ -112,6 +112,26 @@ def entry(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | No
         return None
     head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
     return _compiled_packed(head, read) if accel.enabled(vm) else _packed(head, read)
+
+
+def program_read(vm: VirtualModule, command: int, type_: int, motor: int) -> Read | None:
+    """A program's GAP, GGP or GIO (TMCM-6212 manual 3.5.5: the value goes to the accumulator)
+    read without `commands.execute`'s look-ups: the same read a host's pre-bound handler makes,
+    None where `execute` must answer. The caller syncs the engines first (`sync_for_read`)."""
+    make = _READERS.get(command)
+    if make is None or command not in vm.opcodes:
+        return None
+    return make(vm, type_, motor)
+
+
+def program_store(vm: VirtualModule, type_: int, bank: int) -> Setter | None:
+    """A program's AGP to a user variable (bank 2, manual 3.6.35: the accumulator is copied there)
+    without `commands.execute`'s look-ups; None where `execute` must answer (another bank, an
+    index the module lacks)."""
+    if AGP not in vm.opcodes or bank != USER_BANK or bank not in vm.profile.global_banks \
+            or not 0 <= type_ < len(vm.user_vars):
+        return None
+    return partial(vm.user_vars.__setitem__, type_)
 
 
 def _compiled_packed(head: bytes, read: Read) -> Entry:

@@ -22,13 +22,15 @@ the debugger.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from ..protocol.frame import to_int32
 from ..protocol.status import Status
 from . import calc, flags, wait
 from .commands import execute
+from .dispatch import program_read, program_store
 from .program import RESET, RUNNING, STEPPING, STOPPED
 from .status import TmclStatus
 
@@ -37,6 +39,7 @@ if TYPE_CHECKING:
 
 INSTRUCTION_TICKS = 1600      # 100 µs at 16 MHz per TMCL instruction
 STACK_DEPTH = 8               # "The number of entries in the internal stack is limited to 8."
+AGP = 35
 READS_VALUE = frozenset({6, 10, 15, 31})  # GAP, GGP, GIO, GCO (and RFS STATUS) load the accumulator
 CALL = 80                     # PD28-1021 3.7.44 (not in its Table 5; number from public TMCL headers)
 # Instructions that neither read nor change anything outside the program's registers, flags,
@@ -375,6 +378,16 @@ class Interpreter:
         """Motion, parameter, I/O and coordinate commands: the direct-mode handler, then the
         value of a reading command goes to the accumulator (manual 3.5.5)."""
         vm = self.vm
+        if command in READS_AHEAD or command == AGP:
+            op = self._bound(command, type, motor)
+            if op is not None:
+                if command == AGP:  # `execute` syncs the engines first; a user variable touches none
+                    op(vm.accumulator)
+                else:
+                    vm.sync_for_read()  # as `execute` does for a read
+                    v = op()
+                    self._load(int(v) if v.__class__ is bool else v)  # AP8: Axis.get answers int()
+                return
         out = execute(vm, command, type, motor, value, program=True)
         if not isinstance(out, tuple):
             return
@@ -386,6 +399,20 @@ class Interpreter:
             reads = False
         if reads:
             self._load(result)
+
+    def _bound(self, command: int, type: int, motor: int) -> Callable[..., Any] | None:
+        """The pre-bound read (GAP, GGP, GIO: dispatch.program_read) or user-variable store (AGP:
+        dispatch.program_store) of an instruction, or None where `execute` must run it; kept
+        until the module drops its tables (`VirtualModule.forget_requests`)."""
+        ops = self.vm._program_ops
+        key = (command, type, motor)
+        try:
+            return ops[key]
+        except KeyError:
+            vm = self.vm
+            op = program_store(vm, type, motor) if command == AGP else program_read(vm, command, type, motor)
+            ops[key] = op
+            return op
 
     def _load(self, value: int) -> None:
         vm = self.vm

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import os
 import struct
+from collections.abc import Callable
+from typing import Any
 
 from .. import accel
 from ..modules.profile import ModuleProfile, load_profile
@@ -149,6 +151,7 @@ class VirtualModule:
         self._requests = {}
         self._entries = {}
         self._writes = {}
+        self._program_ops: dict[tuple[int, int, int], Callable[..., Any] | None] = {}
         self._engines = [ax.engine for ax in self.axes]
         self._engines_dirty = True
         self._synced_at = -1
@@ -273,10 +276,12 @@ class VirtualModule:
 
     def forget_requests(self) -> None:
         """Drop the pre-bound handlers (an address, the host address or the module's state
-        changed); the general path binds them again on the next reads."""
+        changed) and the program's reads and stores (`Interpreter._bound`); they are bound again
+        when next used."""
         self._requests = {}
         self._entries = {}
         self._writes = {}
+        self._program_ops = {}
 
     @property
     def download_mode(self) -> bool:
