@@ -148,10 +148,7 @@ class VirtualModule:
 
     def _reset_request_path(self) -> None:
         """New axes, globals and I/O banks: the pre-bound handlers are stale, the engines unsynced."""
-        self._requests = {}
-        self._entries = {}
-        self._writes = {}
-        self._program_ops: dict[tuple[int, int, int], Callable[..., Any] | None] = {}
+        self.forget_requests()
         self._engines = [ax.engine for ax in self.axes]
         self._engines_dirty = True
         self._synced_at = -1
@@ -281,7 +278,7 @@ class VirtualModule:
         self._requests = {}
         self._entries = {}
         self._writes = {}
-        self._program_ops = {}
+        self._program_ops: dict[tuple[int, int, int], Callable[..., Any] | None] = {}
 
     @property
     def download_mode(self) -> bool:
