@@ -28,19 +28,19 @@ def after_compare(flags: int, accumulator: int, operand: int) -> int:
     return out
 
 
+CONDITIONS = {0: (ZERO, True), 1: (ZERO, False), 2: (EQUAL, True), 3: (EQUAL, False),
+              4: (GREATER, True), 5: (GREATER | EQUAL, True), 6: (LOWER, True), 7: (LOWER | EQUAL, True),
+              **{c: (bit, True) for c, bit in CONDITION_ERROR.items()}}
+"""JC condition -> (flag bits, met when any is set (True) or when none is)."""
+
+
 def condition(flags: int, cond: int) -> bool | None:
     """JC condition 0-12 against `flags`; None for an unknown condition number."""
-    if cond in CONDITION_ERROR:
-        return bool(flags & CONDITION_ERROR[cond])
-    tests = {
-        0: flags & ZERO, 1: not flags & ZERO,
-        2: flags & EQUAL, 3: not flags & EQUAL,
-        4: flags & GREATER, 5: flags & (GREATER | EQUAL),
-        6: flags & LOWER, 7: flags & (LOWER | EQUAL),
-    }
-    if cond not in tests:
+    test = CONDITIONS.get(cond)
+    if test is None:
         return None
-    return bool(tests[cond])
+    bits, when_set = test
+    return bool(flags & bits) == when_set
 
 
 def describe(flags: int) -> str:

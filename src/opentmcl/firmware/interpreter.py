@@ -28,9 +28,10 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 from ..protocol.frame import to_int32
 from ..protocol.status import Status
-from . import calc, flags, wait
+from . import ahead, calc, flags, wait
+from .ahead import OTHER, PURE_KIND, READ_KIND, RETI_KIND
 from .commands import execute
-from .dispatch import program_read, program_store
+from .dispatch import USER_BANK, program_read, program_store
 from .program import RESET, RUNNING, STEPPING, STOPPED
 from .status import TmclStatus
 
@@ -56,10 +57,9 @@ TICK_TIMER = (132, 0)
 # After any other instruction (SAP, SGP, motion, EI/DI/VECT, WAIT, STOP, ...) the module's
 # cached next event (VirtualModule._limit_event) is looked up again: it may have moved.
 RETI = 38
-OTHER, PURE_KIND, READ_KIND, RETI_KIND, GIO_KIND = 0, 1, 2, 3, 4   # Interpreter._kind, _ahead_kind
 
 
-@dataclass
+@dataclass(slots=True)
 class Context:
     """What an interrupt saves and RETI restores (manual 3.5.6.2, 3.6.33)."""
 
@@ -78,6 +78,12 @@ class FlowHandler(Protocol):
     def __call__(self, interpreter: Interpreter, type: int, motor: int, value: int, /) -> bool | None: ...
 
 
+Entry = tuple[int, FlowHandler, int, int, int, int]
+Bound = tuple[Callable[..., Any], list[Any] | None]
+"""Interpreter._bound: a pre-bound read or store and the engines a read looks at."""
+"""Interpreter._entry: (kind, handler, type, motor, value, command) of an instruction."""
+
+
 class Interpreter:
     run_ahead = True  # batch pure instructions (see _run_ahead); False: one event per instruction
 
@@ -90,7 +96,11 @@ class Interpreter:
         self.last_error: tuple[int, int, int] | None = None  # (pc, command, status)
         self.executed = 0                   # instructions executed since power-up
         self._t: int | None = None          # tick of an instruction run ahead of vm.now
-        self._kinds: dict[tuple[int, int, int, int], int] = {}  # instruction -> _kind
+        self._entries: dict[tuple[int, int, int, int], Entry] = {}  # instruction -> _entry
+        self._nested = False                # taking an event inside _run_ahead (_fold)
+        self._quiet: bool | None = None     # World.quiet() while the run-ahead limit holds
+        self._steps: dict[tuple[int, int, int, int], ahead.Step] = {}  # instruction -> ahead.compile_step
+        self._steps_of: object = None       # the vm._program_ops the steps were compiled with
 
     @property
     def waiting(self) -> bool:
@@ -159,59 +169,113 @@ class Interpreter:
         between its events (`World.quiet`): time moves
         to the read's tick and the engines follow it there, exactly as an event would; no
         engine, world, heartbeat or timer event lies before the limit, so such an event would
-        only run the instruction."""
+        only run the instruction.
+
+        What cannot run ahead (the limit is reached, an interrupt is to be entered, any other
+        instruction) is the module's next event: it is taken here, as `advance_to`'s loop would
+        take it (`_fold`), and the run goes on after it."""
         vm = self.vm
-        horizon = getattr(vm, "horizon", None) if self.run_ahead else None
+        horizon = getattr(vm, "horizon", None) if self.run_ahead and not self._nested else None
         if horizon is None:
             return
+        code = vm.program.code
+        steps = self._steps_now()
+        ints = vm.interrupts
         limit = -1          # not looked up yet
-        quiet = None
-        sources = vm.io.sources      # inputs the world drives (they change over time)
+        self._quiet = None
         try:
-            while (kind := self._ahead_kind(horizon)) is not None:
+            while True:
                 t = self.next_time
+                if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
+                    return
                 if limit == -1:
-                    nxt = vm._limit_event()
-                    limit = horizon if nxt is None else nxt
-                    hb = vm._heartbeat_deadline()
-                    if hb is not None and hb <= vm.now:  # up, not yet fired: stops the motors at the next event
-                        limit = vm.now
-                if t is None or t >= limit:
-                    break
-                if kind != PURE_KIND and not (kind == GIO_KIND and not sources):  # GIO of undriven inputs: pure
-                    if quiet is None:
-                        quiet = vm.world.quiet()
-                    if not quiet:
-                        break
-                    if kind != RETI_KIND:
-                        vm.now = t              # the read's own tick: the engines follow there
-                self._t = t
-                self._execute_next()
+                    limit = self._ahead_limit(horizon)
+                pc = vm.program_counter
+                if t < limit and 0 <= pc < len(code) and not (ints.pending and ints.next_dispatch() is not None):
+                    ins = code[pc]
+                    step = steps.get(ins)
+                    if step is None:
+                        step = self._step(ins)
+                    if step(t):
+                        continue
+                tick = t if t < limit else limit
+                if tick >= horizon or tick <= vm.now:
+                    return
+                self._fold(tick)  # (erasing the program, GP81, resets it: the loop ends above)
+                steps = self._steps_now()
+                limit = -1
         finally:
             self._t = None
 
-    def _ahead_kind(self, horizon: int) -> int | None:
-        """The kind of the next instruction (`_kind`; GIO_KIND for GIO) if the program goes on
-        with it before `horizon` without a WAIT, an interrupt to enter or leaving memory, and it
-        is one that may run ahead; else None."""
+    def _steps_now(self) -> dict[tuple[int, int, int, int], ahead.Step]:
+        """The compiled steps (ahead.py), dropped with the program's reads (`_bound`)."""
+        ops = self.vm._program_ops
+        if self._steps_of is not ops:
+            self._steps_of = ops
+            self._steps = {}
+        return self._steps
+
+    def _step(self, ins: tuple[int, int, int, int]) -> ahead.Step:
+        step = self._steps[ins] = ahead.compile_step(self, self._entries.get(ins) or self._entry(ins), INSTRUCTION_TICKS)
+        return step
+
+    def __getstate__(self) -> dict[str, Any]:
+        """A copy (copy.deepcopy, pickle) compiles its own steps: these are bound to this module."""
+        state = self.__dict__.copy()
+        state["_steps"], state["_steps_of"] = {}, None
+        return state
+
+    def _ahead_limit(self, horizon: int) -> int:
+        """The tick before which instructions may run ahead: the module's next event (all but
+        the program's own), `horizon` if none, vm.now while a heartbeat is up but not yet fired
+        (it stops the motors at the next event)."""
         vm = self.vm
-        t = self.next_time
-        if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
-            return None
-        pc = vm.program_counter
-        code = vm.program.code
-        ints = vm.interrupts
-        if not 0 <= pc < len(code) or (ints.pending and ints.next_dispatch() is not None):
-            return None
-        ins = code[pc]
-        kind = self._kinds.get(ins)
-        if kind is None:
-            kind = self._kinds[ins] = self._kind(ins[0], ins[1], ins[2])
-        if kind == READ_KIND and ins[0] == 15:
-            return GIO_KIND
-        if not kind or (kind == RETI_KIND and (self.saved is None or self.saved.wait is not None)):
-            return None
-        return kind
+        if not vm._limit_ok or vm._engines_dirty:  # a write since the last look-up: World.quiet may differ
+            self._quiet = None
+        nxt = vm._limit_event()
+        hb = vm._heartbeat_deadline()
+        if hb is not None and hb <= vm.now:
+            return vm.now
+        return horizon if nxt is None else nxt
+
+    def _ahead_ok(self, entry: Entry, t: int) -> bool:
+        """May the instruction of `entry` (not pure) run ahead at tick t? A read moves time there."""
+        kind = entry[0]
+        if kind == OTHER or (kind == RETI_KIND and (self.saved is None or self.saved.wait is not None)):
+            return False
+        vm = self.vm
+        if kind == READ_KIND and entry[5] == 15 and not vm.io.sources:  # GIO of undriven inputs: pure
+            return True
+        if not self._world_quiet():
+            return False
+        if kind != RETI_KIND:
+            vm.now = t              # the read's own tick: the engines follow there
+        return True
+
+    def _fold(self, tick: int) -> None:
+        """Take the module's event at `tick` here (`VirtualModule._event_at`); the program's part
+        of it does not run ahead again (`_nested`). At a tick before every event but the timers'
+        (`VirtualModule._limit_other`, nothing written since it was looked up) in a quiet world the
+        engines, the world and the heartbeats have nothing to do: only the program is served."""
+        vm = self.vm
+        self._t = None
+        self._nested = True
+        try:
+            other = vm._limit_other
+            if vm._limit_ok and not vm._engines_dirty and (other is None or tick < other) and self._world_quiet():
+                vm.now = tick
+                self.service()
+            else:
+                vm._event_at(tick)
+        finally:
+            self._nested = False
+
+    def _world_quiet(self) -> bool:
+        """World.quiet(), kept while the run-ahead limit holds (`_ahead_limit`)."""
+        quiet = self._quiet
+        if quiet is None:
+            quiet = self._quiet = self.vm.world.quiet()
+        return quiet
 
     # --- control commands 128-131 (manual 3.6.36) ------------------------------------------
     def run(self, address: int | None) -> None:
@@ -333,24 +397,18 @@ class Interpreter:
             self.next_time = None
             return
         ins = vm.program.code[pc]
-        command, type, motor, value = ins
+        t = self._t
+        self._run(self._entries.get(ins) or self._entry(ins), pc, vm.now if t is None else t)
+
+    def _run(self, entry: Entry, pc: int, t: int) -> None:
+        """Execute the instruction at `pc` (its `_entry`) taking effect at tick t."""
+        vm = self.vm
+        kind, handler, type, motor, value, command = entry
         self.executed += 1
-        handler = FLOW.get(command)
-        available = command in vm.opcodes
-        kind = self._kinds.get(ins)
-        if kind is None:
-            kind = self._kinds[ins] = self._kind(command, type, motor)
         dirty = vm._engines_dirty
         try:
-            if handler is not None and available:
-                if handler(self, type, motor, value):  # True: the handler set the PC itself
-                    return
-            elif not available:  # not in this module's command set (commands.py)
-                self._fail(command, int(Status.INVALID_COMMAND))
-            elif command >= 128:  # a control command of this module, direct mode only (3.6.36)
-                self._fail(command, int(Status.NOT_AVAILABLE))
-            else:
-                self._generic(command, type, motor, value)
+            if handler(self, type, motor, value):  # True: the handler set the PC itself
+                return
         except TmclStatus as exc:
             self._fail(command, exc.status)
         finally:
@@ -359,11 +417,25 @@ class Interpreter:
             else:
                 vm._limit_ok = False
         vm.program_counter = pc + 1
-        if vm.application_status == RUNNING:  # _pause_or_continue
-            t = self._t
-            self.next_time = (vm.now if t is None else t) + INSTRUCTION_TICKS
+        self.next_time = t + INSTRUCTION_TICKS if vm.application_status == RUNNING else None  # _pause_or_continue
+
+    def _entry(self, ins: tuple[int, int, int, int]) -> Entry:
+        """(kind, handler, type, motor, value, command) of an instruction, kept per instruction
+        (it depends on the module's command set and axes only)."""
+        command, type, motor, value = ins
+        vm = self.vm
+        if command not in vm.opcodes:  # not in this module's command set (commands.py)
+            handler = _refused(int(Status.INVALID_COMMAND))
+        elif command in FLOW:
+            handler = FLOW[command]
+        elif command >= 128:  # a control command of this module, direct mode only (3.6.36)
+            handler = _refused(int(Status.NOT_AVAILABLE))
+        elif command in READS_AHEAD or command == AGP:
+            handler = _bound_or_direct(command)
         else:
-            self.next_time = None
+            handler = _direct(command)
+        entry = self._entries[ins] = (self._kind(command, type, motor), handler, type, motor, value, command)
+        return entry
 
     def _kind(self, command: int, type: int, bank: int) -> int:
         """OTHER, or what keeps every event but the program's own where it was: PURE, READ (the
@@ -378,16 +450,6 @@ class Interpreter:
         """Motion, parameter, I/O and coordinate commands: the direct-mode handler, then the
         value of a reading command goes to the accumulator (manual 3.5.5)."""
         vm = self.vm
-        if command in READS_AHEAD or command == AGP:
-            op = self._bound(command, type, motor)
-            if op is not None:
-                if command == AGP:  # `execute` syncs the engines first; a user variable touches none
-                    op(vm.accumulator)
-                else:
-                    vm.sync_for_read()  # as `execute` does for a read
-                    v = op()
-                    self._load(int(v) if v.__class__ is bool else v)  # AP8: Axis.get answers int()
-                return
         out = execute(vm, command, type, motor, value, program=True)
         if not isinstance(out, tuple):
             return
@@ -400,19 +462,29 @@ class Interpreter:
         if reads:
             self._load(result)
 
-    def _bound(self, command: int, type: int, motor: int) -> Callable[..., Any] | None:
+    def _bound(self, command: int, type: int, motor: int) -> Bound | None:
         """The pre-bound read (GAP, GGP, GIO: dispatch.program_read) or user-variable store (AGP:
-        dispatch.program_store) of an instruction, or None where `execute` must run it; kept
-        until the module drops its tables (`VirtualModule.forget_requests`)."""
+        dispatch.program_store) of an instruction and the engines the read looks at (a GAP: its
+        axis's), or None where `execute` must run it; kept until the module drops its tables
+        (`VirtualModule.forget_requests`)."""
         ops = self.vm._program_ops
         key = (command, type, motor)
         try:
             return ops[key]
         except KeyError:
             vm = self.vm
-            op = program_store(vm, type, motor) if command == AGP else program_read(vm, command, type, motor)
-            ops[key] = op
-            return op
+            op: Callable[..., Any] | None
+            engines: list[Any] | None = vm._engines
+            if command == AGP:
+                op, engines = program_store(vm, type, motor), None
+            else:
+                op = program_read(vm, command, type, motor)
+                if command == 6 and op is not None:
+                    engines = [vm.axes[motor].engine]
+                elif command == 10 and motor == USER_BANK:
+                    engines = []
+            bound = ops[key] = None if op is None else (op, engines)
+            return bound
 
     def _load(self, value: int) -> None:
         vm = self.vm
@@ -425,7 +497,11 @@ class Interpreter:
         if not 0 <= address < vm.program.size:
             raise TmclStatus(4)
         vm.program_counter = address
-        self._pause_or_continue()
+        if vm.application_status == RUNNING:  # _pause_or_continue
+            t = self._t
+            self.next_time = (vm.now if t is None else t) + INSTRUCTION_TICKS
+        else:
+            self.next_time = None
         return True
 
     # --- flow and calculation commands ---------------------------------------------------------
@@ -613,6 +689,58 @@ class Interpreter:
     def _aiv(self, type: int, motor: int, value: int) -> None:  # 57 AIV: variable[X] = A
         vm = self.vm
         vm.user_vars[self._var(vm.x_register)] = vm.accumulator
+
+
+def _refused(status: int) -> FlowHandler:
+    """The handler of an instruction this module does not execute in a program: `status`."""
+    def refused(interpreter: Interpreter, type: int, motor: int, value: int) -> None:
+        raise TmclStatus(status)
+    return refused
+
+
+_DIRECT: dict[int, FlowHandler] = {}
+
+
+def _direct(command: int) -> FlowHandler:
+    """The handler of a command that runs as in direct mode (`Interpreter._generic`)."""
+    handler = _DIRECT.get(command)
+    if handler is None:
+        def handler(interpreter: Interpreter, type: int, motor: int, value: int) -> None:
+            interpreter._generic(command, type, motor, value)
+        _DIRECT[command] = handler
+    return handler
+
+
+_BOUND: dict[int, FlowHandler] = {}
+
+
+def _bound_or_direct(command: int) -> FlowHandler:
+    """The handler of GAP, GGP, GIO (`read`) or AGP (`store`): the pre-bound read or user-variable
+    store (`Interpreter._bound`) where there is one, else as in direct mode."""
+    handler = _BOUND.get(command)
+    if handler is not None:
+        return handler
+
+    def store(interpreter: Interpreter, type: int, motor: int, value: int) -> None:
+        bound = interpreter._bound(command, type, motor)
+        if bound is None:
+            interpreter._generic(command, type, motor, value)
+        else:  # `execute` syncs the engines first; a user variable touches none
+            bound[0](interpreter.vm.accumulator)
+
+    def read(interpreter: Interpreter, type: int, motor: int, value: int) -> None:
+        bound = interpreter._bound(command, type, motor)
+        if bound is None:
+            interpreter._generic(command, type, motor, value)
+            return
+        op, engines = bound
+        vm = interpreter.vm
+        if vm._synced_at != vm.now:  # as `execute` does for a read, for the engines it reads
+            vm.sync_for_read(engines)
+        v = op()
+        interpreter._load(int(v) if v.__class__ is bool else v)  # AP8: Axis.get answers int()
+    handler = _BOUND[command] = store if command == AGP else read
+    return handler
 
 
 FLOW: dict[int, FlowHandler] = {

@@ -43,7 +43,11 @@ LOW_HIGH, HIGH_LOW = 1, 2
 
 
 def _earliest(ticks: list[int | None]) -> int | None:
-    return min((t for t in ticks if t is not None), default=None)
+    best = None
+    for t in ticks:
+        if t is not None and (best is None or t < best):
+            best = t
+    return best
 
 
 class Interrupts:
@@ -111,10 +115,14 @@ class Interrupts:
 
     def next_dispatch(self) -> int | None:
         """Number of the pending interrupt to handle next (lowest number), or None."""
-        if self.active is not None or not self.global_enable:
+        if self.active is not None or not self.global_enable or not self.pending:
             return None
-        ready = [n for n in self.pending if n in self.enabled and n in self.vectors]
-        return min(ready) if ready else None
+        best = None
+        enabled, vectors = self.enabled, self.vectors
+        for n in self.pending:
+            if (best is None or n < best) and n in enabled and n in vectors:
+                best = n
+        return best
 
     # --- timers ----------------------------------------------------------------------
     def _refresh_timers(self, now: int) -> None:
@@ -176,6 +184,8 @@ class Interrupts:
 
     def _sample_levels(self) -> None:
         for n in self.enabled:
+            if n < TARGET_REACHED:  # a timer: no level
+                continue
             if not self.accepting(n):
                 self._levels.pop(n, None)
                 continue

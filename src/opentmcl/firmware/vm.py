@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import struct
-from collections.abc import Callable
 from typing import Any
 
 from .. import accel
@@ -27,7 +26,7 @@ from .commands import NO_SUPPRESS, StatusReply, execute
 from .dispatch import Entry, Setter, entry, reply_bytes, setter
 from .eeprom import Eeprom
 from .globals import GlobalParameters
-from .interpreter import Interpreter
+from .interpreter import Bound, Interpreter
 from .interrupts import Interrupts
 from .io import IOBanks
 from .program import RUNNING, STEPPING, ProgramMemory, program_control, store_instruction
@@ -278,7 +277,7 @@ class VirtualModule:
         self._requests = {}
         self._entries = {}
         self._writes = {}
-        self._program_ops: dict[tuple[int, int, int], Callable[..., Any] | None] = {}
+        self._program_ops: dict[tuple[int, int, int], Bound | None] = {}
 
     @property
     def download_mode(self) -> bool:
@@ -344,18 +343,21 @@ class VirtualModule:
         self._carry_until = -1
         try:
             while self.now < until:
-                nxt = self._next_event(until)
-                self.now = nxt
-                if nxt == self._engine_next:
-                    self._engine_step(nxt)
-                if self.world.service():
-                    self._limit_ok = False
-                self._after_step()
-                self.interpreter.service()
+                self._event_at(self._next_event(until))
             self._carry_until = self._carry_limit()
         finally:
             self._limit_ok = False  # host commands come next
         self.sync_for_read()  # every event up to `until` is done: the engines' next events stand
+
+    def _event_at(self, tick: int) -> None:
+        """Everything due at the event `tick` (> now): engines, world, heartbeats, the program."""
+        self.now = tick
+        if tick == self._engine_next:
+            self._engine_step(tick)
+        if self.world.service():
+            self._limit_ok = False
+        self._after_step()
+        self.interpreter.service()
 
     _carry_until = -1
     """A later `advance_to` may skip its event loop up to (not including) this tick (`_carry_limit`).
@@ -410,11 +412,22 @@ class VirtualModule:
             self._sync_engines()
         self._engines_dirty = True
 
-    def sync_for_read(self) -> None:
-        """Bring every axis engine to `now` for a pure read (GAP, GGP, GIO, GCO): advancing
-        an engine within its segment leaves its next event, so the engines stay clean."""
-        if self._synced_at != self.now:
+    def sync_for_read(self, engines: list[Any] | None = None) -> None:
+        """Bring every axis engine (or those of `engines`, the ones a program's read looks at) to
+        `now` for a pure read (GAP, GGP, GIO, GCO): advancing an engine within its segment leaves
+        its next event, so the engines stay clean. Engines left behind follow at the next sync."""
+        if self._synced_at == self.now:
+            return
+        if engines is None or engines is self._engines:
             self._sync_engines()
+            return
+        now = self.now
+        if self._accel and _ENGINE_SYNC is not None:
+            _ENGINE_SYNC(engines, now)
+        else:
+            for engine in engines:
+                if engine.now < now:
+                    engine.advance(now)
 
     def _sync_engines(self) -> None:
         now = self.now
@@ -438,6 +451,7 @@ class VirtualModule:
         return self._engine_next
 
     _limit: int | None = None
+    _limit_other: int | None = None  # the part of `_limit` that is not the timers'
     _limit_ok = False   # `_limit` is valid (only inside `advance_to`)
     event_cache = True  # False: look every event up afresh (the reference the tests compare with)
 
@@ -457,12 +471,26 @@ class VirtualModule:
         schedule), > now or None. Cached while `_limit_ok`; a write that can move it clears the
         flag (commands via `_engines_dirty`, world checks, a program instruction that is not pure,
         a read or RETI) and reaching it makes it stale (engine events, timers, heartbeats: the
-        event is the limit itself)."""
+        event is the limit itself); when only a timer's event was reached and nothing was written,
+        only the timers are looked up again (`_limit_other`: the rest, unchanged)."""
         now = self.now
         t = self._limit
         held = self._limit_ok and not self._engines_dirty  # no write since the last look-up
-        if held and (t is None or t > now):
-            return t
+        ints = self.interrupts
+        if held:
+            if t is None or t > now:
+                return t
+            other = self._limit_other
+            if other is None or other > now:  # only a timer's event was reached: the rest stands
+                t = ints.next_timer_event(now, refresh=False)
+                best = other if t is None or now >= t or (other is not None and other <= t) else t
+                self._limit = best
+                return best
+        return self._look_limit_up(now, held)
+
+    def _look_limit_up(self, now: int, held: bool) -> int | None:
+        """`_limit_event` afresh; `held`: nothing was written since the last look-up."""
+        ints = self.interrupts
         best = None
         t = self._engine_event()
         if t is not None and now < t:
@@ -470,15 +498,15 @@ class VirtualModule:
         hb = self._heartbeat_deadline()
         if hb is not None and now < hb and (best is None or hb < best):
             best = hb
-        ints = self.interrupts
         if not held:  # else reached: an event tick, polled by the interpreter with no write since
             ints.poll(now)  # latch what a command just did (levels) and re-phase rewritten timers
-        t = ints.next_timer_event(now, refresh=False)
-        if t is not None and now < t and (best is None or t < best):
-            best = t
         dirty = self._engines_dirty  # the world's look-up syncs lagging engines: no plan changes
         t = self.world.next_event(same_axes=held)
         self._engines_dirty = dirty
+        if t is not None and now < t and (best is None or t < best):
+            best = t
+        self._limit_other = best
+        t = ints.next_timer_event(now, refresh=False)
         if t is not None and now < t and (best is None or t < best):
             best = t
         self._limit = best
