@@ -191,7 +191,8 @@ def _gap(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
     quiet = interpreter._world_quiet
 
     def gap(t: int) -> bool:
-        if not quiet():  # Interpreter._ahead_ok
+        q = interpreter._quiet
+        if not (quiet() if q is None else q):  # Interpreter._ahead_ok
             return False
         vm.now = t  # the read's own tick: its engines follow there
         if vm._synced_at != t:
@@ -217,7 +218,8 @@ def _reti(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
 
     def reti(t: int) -> bool:
         ctx = interpreter.saved
-        if ctx is None or ctx.wait is not None or not quiet():
+        q = interpreter._quiet
+        if ctx is None or ctx.wait is not None or not (quiet() if q is None else q):
             return False
         interpreter.executed += 1
         interpreter.saved = None

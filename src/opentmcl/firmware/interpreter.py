@@ -179,31 +179,31 @@ class Interpreter:
         if horizon is None:
             return
         code = vm.program.code
-        steps = self._steps_now()
+        size = len(code)
         ints = vm.interrupts
-        limit = -1          # not looked up yet
         self._quiet = None
         try:
-            while True:
+            while True:  # what runs ahead changes neither the WAIT nor the status: only a fold can
                 t = self.next_time
                 if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
                     return
-                if limit == -1:
-                    limit = self._ahead_limit(horizon)
-                pc = vm.program_counter
-                if t < limit and 0 <= pc < len(code) and not (ints.pending and ints.next_dispatch() is not None):
+                limit = self._ahead_limit(horizon)
+                steps = self._steps_now()
+                while t is not None and t < limit:
+                    pc = vm.program_counter
+                    if not 0 <= pc < size or (ints.pending and ints.next_dispatch() is not None):
+                        break
                     ins = code[pc]
-                    step = steps.get(ins)
-                    if step is None:
-                        step = self._step(ins)
-                    if step(t):
-                        continue
+                    step = steps.get(ins) or self._step(ins)
+                    if not step(t):
+                        break
+                    t = self.next_time
+                if t is None:
+                    return
                 tick = t if t < limit else limit
                 if tick >= horizon or tick <= vm.now:
                     return
                 self._fold(tick)  # (erasing the program, GP81, resets it: the loop ends above)
-                steps = self._steps_now()
-                limit = -1
         finally:
             self._t = None
 
@@ -227,7 +227,7 @@ class Interpreter:
 
     def _ahead_limit(self, horizon: int) -> int:
         """The tick before which instructions may run ahead: the module's next event (all but
-        the program's own), `horizon` if none, vm.now while a heartbeat is up but not yet fired
+        the program's own), `horizon` if none or later, vm.now while a heartbeat is up but not yet fired
         (it stops the motors at the next event)."""
         vm = self.vm
         if not vm._limit_ok or vm._engines_dirty:  # a write since the last look-up: World.quiet may differ
@@ -236,7 +236,7 @@ class Interpreter:
         hb = vm._heartbeat_deadline()
         if hb is not None and hb <= vm.now:
             return vm.now
-        return horizon if nxt is None else nxt
+        return horizon if nxt is None or nxt > horizon else nxt
 
     def _ahead_ok(self, entry: Entry, t: int) -> bool:
         """May the instruction of `entry` (not pure) run ahead at tick t? A read moves time there."""
