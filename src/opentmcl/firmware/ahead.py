@@ -71,6 +71,9 @@ def _ja(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
     vm = interpreter.vm
 
     def ja(t: int) -> bool:
+        watch = interpreter.ja_watch
+        if watch is not None:
+            watch(vm.program_counter, address)
         interpreter.executed += 1
         vm.program_counter = address
         interpreter.next_time = t + slot

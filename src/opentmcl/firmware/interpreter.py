@@ -79,13 +79,15 @@ class FlowHandler(Protocol):
 
 
 Entry = tuple[int, FlowHandler, int, int, int, int]
+"""Interpreter._entry: (kind, handler, type, motor, value, command) of an instruction."""
 Bound = tuple[Callable[..., Any], list[Any] | None]
 """Interpreter._bound: a pre-bound read or store and the engines a read looks at."""
-"""Interpreter._entry: (kind, handler, type, motor, value, command) of an instruction."""
 
 
 class Interpreter:
     run_ahead = True  # batch pure instructions (see _run_ahead); False: one event per instruction
+    ja_watch: Callable[[int, int], None] | None = None
+    """Called with (program counter, target) before every JA executes (plot.program.JumpWatch)."""
 
     def __init__(self, vm: VirtualModule) -> None:
         self.vm = vm
@@ -220,9 +222,10 @@ class Interpreter:
         return step
 
     def __getstate__(self) -> dict[str, Any]:
-        """A copy (copy.deepcopy, pickle) compiles its own steps: these are bound to this module."""
+        """A copy (copy.deepcopy, pickle) makes its own entries and steps: the steps are bound to
+        this module, the handlers of the entries are local functions (no pickle)."""
         state = self.__dict__.copy()
-        state["_steps"], state["_steps_of"] = {}, None
+        state.update(_entries={}, _steps={}, _steps_of=None)
         return state
 
     def _ahead_limit(self, horizon: int) -> int:
@@ -527,6 +530,9 @@ class Interpreter:
         return False
 
     def _ja(self, type: int, motor: int, value: int) -> bool:  # 22 JA (3.6.17)
+        watch = self.ja_watch
+        if watch is not None:
+            watch(self.vm.program_counter, value)
         return self._jump(value)
 
     def _csub(self, type: int, motor: int, value: int) -> bool:  # 23 CSUB (3.6.18): ignored when the stack is full

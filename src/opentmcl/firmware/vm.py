@@ -270,6 +270,13 @@ class VirtualModule:
         """Whether `frame` is answered by a pre-bound handler (tests, benchmarks)."""
         return bytes(frame) in self._requests or bytes(frame[:4]) in self._writes
 
+    def __getstate__(self) -> dict[str, Any]:
+        """A copy (copy.deepcopy, pickle) binds its own handlers, reads and stores: these are bound
+        to this module's axes, banks and engines (`forget_requests`)."""
+        state = self.__dict__.copy()
+        state.update(_requests={}, _entries={}, _writes={}, _program_ops={})
+        return state
+
     def forget_requests(self) -> None:
         """Drop the pre-bound handlers (an address, the host address or the module's state
         changed) and the program's reads and stores (`Interpreter._bound`); they are bound again

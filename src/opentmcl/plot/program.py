@@ -65,30 +65,26 @@ def instruction_texts(program) -> dict[int, str]:
 class JumpWatch:
     """Counts the backward JA jumps an in-process virtual module executes, per JA address: each is
     one pass through that loop, however short the loop or wherever it spends its time (a
-    subroutine, an interrupt). Wraps the interpreter's `_jump` and calls it unchanged."""
+    subroutine, an interrupt). Listens through the interpreter's `ja_watch`."""
 
     def __init__(self, vm, loops: Iterable[int] | None = None) -> None:
         self.vm = vm
         wanted = None if loops is None else set(loops)   # the JA addresses that count
         self.interpreter = vm.interpreter
         self.passes: dict[int, int] = {}
-        jump = self.interpreter._jump
 
-        def watched_jump(address: int) -> bool:
-            pc, code = vm.program_counter, vm.program.code
-            if (0 <= pc < len(code) and code[pc][0] == JA and 0 <= address < pc   # JA to itself: a halt
-                    and (wanted is None or pc in wanted)):
+        def seen(pc: int, address: int) -> None:
+            if 0 <= address < pc and (wanted is None or pc in wanted):  # JA to itself: a halt
                 self.passes[pc] = self.passes.get(pc, 0) + 1
-            return jump(address)
 
-        setattr(self.interpreter, "_jump", watched_jump)   # noqa: B010 - instance attribute
+        self.interpreter.ja_watch = seen
 
     def loops(self) -> int:
         """Passes of the loop that ran most often."""
         return max(self.passes.values(), default=0)
 
     def close(self) -> None:
-        self.interpreter.__dict__.pop("_jump", None)
+        self.interpreter.ja_watch = None
 
 
 class ProgramWatch:
