@@ -34,10 +34,10 @@ def _never(t: int) -> bool:
 def compile_step(interpreter: Interpreter, entry: Entry, slot: int) -> Step:
     """The step of the instruction `entry` describes (`Interpreter._entry`); `slot` is the length
     of an instruction in ticks."""
-    kind, _handler, type_, motor, value, command = entry
+    kind, command = entry[0], entry[5]
     if not kind:
         return _never
-    make = _WRITTEN_OUT.get(command)
+    make = _WRITTEN_OUT.get(command) if command in interpreter.vm.opcodes else None
     step = None if make is None else make(interpreter, entry, slot)
     if step is not None:
         return step
@@ -200,11 +200,9 @@ def _gap(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
         vm.now = t  # the read's own tick: its engines follow there
         if vm._synced_at != t:
             vm.sync_for_read(engines)
-        v = read()
+        v = read()  # 32 bits: RAM values lie in their parameter's range, engine positions wrap
         if v.__class__ is bool:  # AP8: Axis.get answers int()
             v = int(v)
-        elif not _LOW <= v <= _HIGH:
-            v = to_int32(v)
         interpreter.executed += 1
         _load(vm, v)
         vm.program_counter += 1
