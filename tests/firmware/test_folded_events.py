@@ -12,9 +12,10 @@ from __future__ import annotations
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from opentmcl import VirtualModule, accel
+from opentmcl import accel
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 
+from .test_carry import loop_lookups
 from .test_next_event_cache import started
 from .test_next_event_cache import state as program_state
 
@@ -26,18 +27,6 @@ def state(w) -> tuple:
     plans = tuple((e.now, tuple(tuple(p) for p in e._queue.pieces)) for e in (ax.engine for ax in vm.axes))
     ints = vm.interrupts
     return program_state(w), plans, tuple(ints._due), tuple(sorted(ints.pending)), vm._heartbeat_fired
-
-
-def passes(vm: VirtualModule) -> list[int]:
-    """Count the passes of `advance_to`'s event loop (each looks the next event up once)."""
-    calls = [0]
-    inner = vm._next_event
-
-    def counted(until: int) -> int:
-        calls[0] += 1
-        return inner(until)
-    vm._next_event = counted  # type: ignore[method-assign]
-    return calls
 
 
 TIMER_LOOP = """
@@ -63,9 +52,9 @@ def test_timer_interrupts_are_taken_inside_the_run():
     `advance`'s loop (a handful of passes, not one or more per millisecond), and agrees with the
     reference, which takes one event per instruction."""
     w = started(TIMER_LOOP)
-    loop = passes(w.vm)
+    loop = loop_lookups(w.vm)
     ref = started(TIMER_LOOP, reference=True)
-    ref_loop = passes(ref.vm)
+    ref_loop = loop_lookups(ref.vm)
     w.vm.advance(0.05)
     ref.vm.advance(0.05)
     assert state(w) == state(ref)

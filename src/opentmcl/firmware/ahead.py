@@ -145,17 +145,10 @@ def _comp(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
     return comp
 
 
-def _user_variable(interpreter: Interpreter, entry: Entry) -> int | None:
-    """The user variable of a GGP/AGP on bank 2 that the pre-bound path serves, else None."""
+def _user_variable(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
+    """GGP (load) or AGP (store) of a user variable (bank 2) that the pre-bound path serves."""
     index, bank = entry[2], entry[3]
     if bank != USER_BANK or interpreter._bound(entry[5], index, bank) is None:
-        return None
-    return index
-
-
-def _ggp(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
-    index = _user_variable(interpreter, entry)
-    if index is None:
         return None
     vm = interpreter.vm
     variables = vm.user_vars
@@ -166,15 +159,6 @@ def _ggp(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
         vm.program_counter += 1
         interpreter.next_time = t + slot
         return True
-    return ggp
-
-
-def _agp(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
-    index = _user_variable(interpreter, entry)
-    if index is None:
-        return None
-    vm = interpreter.vm
-    variables = vm.user_vars
 
     def agp(t: int) -> bool:
         interpreter.executed += 1
@@ -182,7 +166,7 @@ def _agp(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
         vm.program_counter += 1
         interpreter.next_time = t + slot
         return True
-    return agp
+    return ggp if entry[5] == GGP else agp
 
 
 def _gap(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
@@ -233,5 +217,5 @@ def _reti(interpreter: Interpreter, entry: Entry, slot: int) -> Step | None:
 
 
 _WRITTEN_OUT: dict[int, Callable[[Interpreter, Entry, int], Step | None]] = {
-    JA: _ja, JC: _jc, CALC: _calc, COMP: _comp, GGP: _ggp, AGP: _agp, GAP: _gap, RETI: _reti,
+    JA: _ja, JC: _jc, CALC: _calc, COMP: _comp, GGP: _user_variable, AGP: _user_variable, GAP: _gap, RETI: _reti,
 }
