@@ -22,11 +22,15 @@ from .test_next_event_cache import state as program_state
 
 def state(w) -> tuple:
     """The program's state (test_next_event_cache.state), the engines' segment plans (a motor
-    stopped one tick later has another plan), timers and pending interrupts."""
+    stopped one tick later has another plan), timers, pending and active interrupts, the WAIT, the
+    subroutine stack, the saved context, the last error, the next instruction's tick, the I/O."""
     vm = w.vm
-    plans = tuple((e.now, tuple(tuple(p) for p in e._queue.pieces)) for e in (ax.engine for ax in vm.axes))
-    ints = vm.interrupts
-    return program_state(w), plans, tuple(ints._due), tuple(sorted(ints.pending)), vm._heartbeat_fired
+    plans = tuple((e.now, tuple(tuple(p) for p in getattr(e, "_queue", e).pieces)) if hasattr(e, "_queue")
+                  else (e.now, e.position, e.velocity) for e in (ax.engine for ax in vm.axes))
+    ints, it = vm.interrupts, vm.interpreter
+    return (program_state(w), plans, tuple(ints._due), tuple(sorted(ints.pending)), ints.active,
+            vm._heartbeat_fired, it.wait, tuple(it.stack), it.saved, it.last_error, it.next_time,
+            tuple(sorted(vm.io.values.items())))
 
 
 TIMER_LOOP = """
@@ -127,6 +131,44 @@ def test_a_timer_expiring_with_the_heartbeat_stops_the_motor_there():
     assert w.vm._heartbeat_fired and w.vm.axes[0].engine.velocity == 0
 
 
+def test_wait_pos_on_another_axis_waits_while_it_rotates():
+    """TMCM-6212 manual 3.6.20 WAIT POS: "wait for target position reached"; ROR (3.6.1) rotates
+    motor 1, so its target is never reached and the WAIT goes on, also after a GAP of motor 0
+    (which brings only motor 0's engine to its tick) and with the world watching motor 0 (AP181,
+    stop on stall: events of their own)."""
+    for src, at in (("ROR 1, 3000\nGAP 1, 0\nWAIT POS, 1, 0\nAGP 0, 2\nSTOP", 2),
+                    ("SAP 181, 0, 50000\nROR 0, 3000\nCALC ADD, 1\nWAIT POS, 0, 0\nAGP 0, 2\nSTOP", 3)):
+        w, ref = started(src), started(src, reference=True)
+        for vm in (w.vm, ref.vm):
+            vm.advance(0.01)
+        assert state(w) == state(ref)
+        assert w.vm.interpreter.wait is not None and w.vm.program_counter == at
+
+
+def test_an_active_shutdown_pin_sets_esd_again_after_cle():
+    """PD86-1180 GP80 = 1 (SHUTDOWN input high active) with the pin high from the start: the ESD
+    flag is set at every event while the pin is active (TMCM-6212 3.6.29 CLE clears it, 3.6.16 JC
+    condition ESD tests it), so in each pass CLE 0 is followed by a JC ESD that is taken. A pass is
+    6 instructions after the first (SGP): (100 - 1) // 6 = 16 passes in 10 ms, every one counted."""
+    src = "SGP 80, 0, 1\nL: CLE 0\nJC ESD, Hit\nJA L\nHit: GGP 0, 2\nCALC ADD, 1\nAGP 0, 2\nJA L"
+    scenario = {"shutdown": {"steps": [[0.0, 1]]}}
+    w, ref = started(src, scenario, module="PD86-1180"), started(src, scenario, reference=True, module="PD86-1180")
+    for vm in (w.vm, ref.vm):
+        vm.advance(0.01)
+    assert state(w) == state(ref)
+    assert w.vm.user_vars[0] == 16
+
+
+def test_erasing_the_program_from_inside_leaves_the_pc_at_0():
+    """GP81 protection switched off by the program erases it; the running program is reset first
+    (command 131, docs/assumptions.md): status reset and program counter 0 (135 type 1)."""
+    src = "SGP 81, 0, 1\nCALC ADD, 1\nSGP 81, 0, 0\nSTOP"
+    w = started(src)
+    w.vm.advance(0.01)
+    assert w.ok(135, 1) == 3 << 24
+    assert (w.vm.application_status, w.vm.program_counter) == (3, 0)
+
+
 HANDLERS = """
 T0: GGP 0, 2
     CALC ADD, 1
@@ -147,7 +189,7 @@ I0: GIO 0, 0
     AGP 4, 2
     RETI"""
 SOURCES = {0: "T0", 1: "T1", 3: "R0", 27: "S0", 39: "I0"}
-MAIN = ["GAP 1, 0", "CALCX ADD", "GIO 0, 0", "GGP 132, 0", "MVP REL, 0, 700", "MVP REL, 1, -300",
+MAIN = ["GAP 1, 0", "CALCX ADD", "GIO 0, 0", "GGP 132, 0", "MVP REL, 0, 700", "MVP REL, 1, -300", "WAIT POS, 0, 3",
         "SAP 4, 0, 1500", "WAIT TICKS, 0, 1", "SIO 0, 2, 1", "ROL 0, 900", "MST 0", "SGP 0, 3, 2",
         "COMP 0\n    JC EQ, Main", "CSUB Sub", "GAP 8, 0", "CALC ADD, 3"]
 SCENARIOS = [
@@ -202,3 +244,38 @@ def test_the_pure_python_path_agrees():
             w.vm.advance(0.013)
         assert state(pure) == state(fast) == state(ref)
     assert pure.vm.axes[0].engine.position > 0 > pure.vm.axes[1].engine.position
+
+
+SINGLE_MAIN = [ins for ins in MAIN if ", 1," not in ins] + ["SGP 80, 0, 1", "CLE 0", "JC ESD, Main", "SIO 0, 2, 0"]
+EXTENDED = ["CALCVV ADD, 1, 2", "CALCVA SUB, 3", "CALCAV ADD, 3", "CALCV MUL, 4, 3", "DJNZ 5, Main",
+            "CALC LOAD, 2\n    CALCX LOAD\n    GIV", "CALL ZE, Sub"]
+SINGLE_SCENARIOS = [
+    None,
+    {"axis": {"0": {"left": {"position": -1500}, "right": {"position": 2500}}}},
+    {"axis": {"0": {"load": {"by": "position", "steps": [[900, 0.95]]}}},
+     "input": [{"bank": 0, "port": 0, "steps": [[0.013, 1], [0.031, 0]]}]},
+    {"shutdown": {"steps": [[0.004, 1], [0.009, 0], [0.02, 1]]}},
+]
+
+
+@settings(max_examples=40, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(["PD86-1180", "PD28-1021"]), st.sampled_from(range(len(SINGLE_SCENARIOS))),
+       st.tuples(st.integers(0, 3), st.integers(0, 4)),
+       st.lists(st.sampled_from(sorted(SOURCES)), max_size=5, unique=True),
+       st.lists(st.sampled_from(SINGLE_MAIN + EXTENDED), min_size=1, max_size=8),
+       st.lists(st.integers(1, 300), min_size=1, max_size=6))
+def test_single_axis_runs_equal_the_reference(module, scenario, periods, enabled, main, chunks):
+    """The same on the single-axis modules: the PD86-1180 (TMC429 engine; a SHUTDOWN pin that goes
+    active and back, GP80 = 1 set by the program, CLE and JC ESD, PD86-1180 manual 4.6) and the
+    PD28-1021 with its extended set (CALCVV, CALCVA, CALCAV, CALCV, DJNZ, GIV, CALL; PD28-1021
+    manual 3.5 Table 5; on the PD86-1180 they are invalid commands, `last_error`)."""
+    src = program(periods, enabled, main)
+    sc = SINGLE_SCENARIOS[scenario]
+    if sc is not None and "shutdown" in sc and module != "PD86-1180":
+        sc = None
+    fast = started(src, sc, module=module)
+    ref = started(src, sc, reference=True, module=module)
+    for n in chunks:
+        fast.vm.advance(n * INSTRUCTION_TICKS / 16_000_000)
+        ref.vm.advance(n * INSTRUCTION_TICKS / 16_000_000)
+        assert state(fast) == state(ref), src

@@ -16,9 +16,9 @@ SLOT = INSTRUCTION_TICKS
 MS = CLOCK_HZ // 1000
 
 
-def started(source: str, scenario: dict | None = None, reference: bool = False) -> Wire:
-    """A TMCM-6212 with `source` downloaded and started at tick 0 (129 at now = 0)."""
-    vm = VirtualModule("TMCM-6212", address=1, scenario=scenario)
+def started(source: str, scenario: dict | None = None, reference: bool = False, module: str = "TMCM-6212") -> Wire:
+    """A TMCM-6212 (or `module`) with `source` downloaded and started at tick 0 (129 at now = 0)."""
+    vm = VirtualModule(module, address=1, scenario=scenario)
     if reference:
         vm.event_cache = False
         vm.interpreter.run_ahead = False

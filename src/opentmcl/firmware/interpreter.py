@@ -222,16 +222,19 @@ class Interpreter:
         return step
 
     def __getstate__(self) -> dict[str, Any]:
-        """A copy (copy.deepcopy, pickle) makes its own entries and steps: the steps are bound to
-        this module, the handlers of the entries are local functions (no pickle)."""
+        """A copy (copy.deepcopy, pickle) makes its own entries and steps (the steps are bound to
+        this module, the handlers of the entries are local functions: no pickle) and has no
+        `ja_watch`; it starts outside a run."""
         state = self.__dict__.copy()
-        state.update(_entries={}, _steps={}, _steps_of=None)
+        state.update(_entries={}, _steps={}, _steps_of=None, _t=None, _nested=False, _quiet=None)
+        state.pop("ja_watch", None)  # an observer of this module's program
         return state
 
     def _ahead_limit(self, horizon: int) -> int:
         """The tick before which instructions may run ahead: the module's next event (all but
         the program's own), `horizon` if none or later, vm.now while a heartbeat is up but not yet fired
-        (it stops the motors at the next event)."""
+        (it stops the motors at the next event), the next instruction's tick when the world is not
+        quiet (`World.quiet`: it checks something at every event)."""
         vm = self.vm
         if not vm._limit_ok or vm._engines_dirty:  # a write since the last look-up: World.quiet may differ
             self._quiet = None
@@ -239,7 +242,11 @@ class Interpreter:
         hb = vm._heartbeat_deadline()
         if hb is not None and hb <= vm.now:
             return vm.now
-        return horizon if nxt is None or nxt > horizon else nxt
+        limit = horizon if nxt is None or nxt > horizon else nxt
+        t = self.next_time
+        if t is not None and t < limit and not self._world_quiet():
+            return t  # the world acts at every event: each instruction is one, as in the reference
+        return limit
 
     def _ahead_ok(self, entry: Entry, t: int) -> bool:
         """May the instruction of `entry` (not pure) run ahead at tick t? A read moves time there."""
@@ -419,6 +426,9 @@ class Interpreter:
                 vm._engines_dirty = dirty
             else:
                 vm._limit_ok = False
+        if vm.application_status == RESET:  # the instruction erased the program (GP81): PC 0 stays
+            self.next_time = None
+            return
         vm.program_counter = pc + 1
         self.next_time = t + INSTRUCTION_TICKS if vm.application_status == RUNNING else None  # _pause_or_continue
 

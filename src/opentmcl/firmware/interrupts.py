@@ -169,7 +169,7 @@ class Interrupts:
         vm = self.vm
         axes = len(vm.axes)
         if TARGET_REACHED <= n < TARGET_REACHED + axes:
-            return int(vm.axes[n - TARGET_REACHED].engine.position_reached), LOW_HIGH
+            return int(vm.engine_now(n - TARGET_REACHED).position_reached), LOW_HIGH
         if STOP_SWITCH <= n < STOP_SWITCH + 2 * axes:
             axis = vm.axes[(n - STOP_SWITCH) // 2]
             param = 11 if (n - STOP_SWITCH) % 2 == 0 else 10  # left / right limit switch state

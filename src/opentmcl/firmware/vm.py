@@ -436,6 +436,15 @@ class VirtualModule:
                 if engine.now < now:
                     engine.advance(now)
 
+    def engine_now(self, axis: int) -> Any:
+        """The engine of `axis` brought to `now`, for a flag read outside a command (WAIT POS, the
+        target-reached interrupt): a lagging engine's flags hold at its own tick, and a motion
+        started from standstill leaves AP8 set at that very tick."""
+        engine = self.axes[axis].engine
+        if self._synced_at != self.now and engine.now < self.now:
+            self.sync_for_read([engine])
+        return engine
+
     def _sync_engines(self) -> None:
         now = self.now
         if self._accel and _ENGINE_SYNC is not None:

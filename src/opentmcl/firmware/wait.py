@@ -54,7 +54,7 @@ def satisfied(vm: VirtualModule, w: Wait) -> bool:
         return False
     axis = vm.axes[w.motor]
     if w.condition == POS:
-        return bool(axis.engine.position_reached)
+        return bool(vm.engine_now(w.motor).position_reached)
     if w.condition == REFSW:
         return bool(_param(axis, 9))  # home switch state
     if w.condition == LIMSW:
