@@ -20,7 +20,6 @@ from opentmcl.server.session import SerialSession
 
 from .conftest import GAP
 from .helpers import GGP_66, is_ok, recv_exactly, reply, request
-from .test_cli_serve import serve  # noqa: F401  (the `opentmcl serve` process fixture)
 
 ENTER_ASCII = request(1, 139)  # binary command 139 "enter ASCII mode" to module 1
 ENTERED = reply(2, 1, 100, 139, 0)

@@ -298,7 +298,13 @@ def run(args: argparse.Namespace) -> int:
     return _run(args)   # endpoint events reach stderr through main()'s log handler (cli/verbosity.py)
 
 
+SWITCH_INTERVAL = 0.001
+"""Seconds a Python thread may keep the interpreter while another waits for it (CPython's default is
+0.005): an endpoint's thread then waits at most this long behind the clock thread's slice."""
+
+
 def _run(args: argparse.Namespace) -> int:
+    sys.setswitchinterval(SWITCH_INTERVAL)
     try:
         server = build_server(args)
         server.start()
@@ -335,7 +341,7 @@ def _run(args: argparse.Namespace) -> int:
                     print(f"    {d.profile.name} at address {d.module.address}: {web.module_url(d.module.address)}",
                           flush=True)
         print("Press Ctrl-C to stop.", flush=True)
-        while not stop.wait(0.5):
+        while not stop.wait(0.1):
             pass
     finally:
         for signum, handler in previous.items():
@@ -343,6 +349,12 @@ def _run(args: argparse.Namespace) -> int:
         if web is not None:
             web.stop()
         server.stop()
+    from ..server.pacing import REPORT_LAG
+
+    report = server.bus.clock_report()
+    if report.worst >= REPORT_LAG:
+        print(f"the modules' clock lagged the wall clock by up to {report.worst:.2f} s; "
+              f"{report.dropped:.1f} s were dropped (docs/endpoints.md)", flush=True)
     print("stopped; EEPROM flushed", flush=True)
     return 0
 

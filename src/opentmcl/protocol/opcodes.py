@@ -270,6 +270,10 @@ RESTORE_FACTORY_SETTINGS = 137
 REQUEST_TARGET_REACHED_EVENT = 138
 ENTER_ASCII_MODE = 139
 FACTORY_RESET_KEY = 1234  # value that command 137 requires
+MOTOR_STOP = 3  # MST (3.6.3)
+STOP_COMMANDS = frozenset({MOTOR_STOP, STOP_APPLICATION, RESET_APPLICATION})
+"""Requests that stop motion or a program: a served module takes them before other waiting
+requests (docs/architecture.md "Real time")."""
 
 
 class UnknownCommand(KeyError):

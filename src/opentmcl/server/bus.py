@@ -19,10 +19,17 @@ know, and a mapped module that stays silent and no longer has the address.
 A link that stands for USB (the address byte is ignored) and modules
 without `accepts_address` and `globals.get_raw` get every frame, as before.
 
-`RealTimeRunner` is the background thread that keeps time moving while no
-request arrives, and hands unsolicited replies (the command-138 "target
-position reached" reply, manual 3.6.35) to the endpoint through which the
-module was last addressed.
+Time (docs/architecture.md "Real time"): a request brings the modules to the
+wall clock when that costs at most `pacing.REQUEST_BUDGET` (without a runner:
+by at most one slice of that), and `RealTimeRunner`, the background thread,
+simulates the rest in bounded slices
+(`pacing.SLICE_BUDGET`), giving the bus to every waiting request between two
+of them (`buslock`); it also hands unsolicited replies (the command-138
+"target position reached" reply, manual 3.6.35) to the endpoint through which
+the module was last addressed. Requests that stop motion or a program (MST,
+128, 131) take the bus before every other waiting request. When the
+simulation cannot keep up, the modules' clock lags (`ModuleBus.clock_report`),
+never the replies.
 """
 from __future__ import annotations
 
@@ -34,7 +41,10 @@ from collections.abc import Callable, Iterable
 from functools import partial
 from typing import NamedTuple, Protocol
 
+from ..protocol.opcodes import STOP_COMMANDS
 from . import canmap, vmapi
+from .buslock import BACKGROUND, REQUEST, STOP, BusLock
+from .pacing import REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
 
 
 class AsciiOutput(NamedTuple):
@@ -101,6 +111,15 @@ def _changes_map(frame: bytes) -> bool:
     return command not in KEEPS_MAP and not (command == SGP and frame[3] != 0)
 
 
+def urgency(data: bytes) -> int:
+    """`buslock.STOP` when received bytes hold a request that stops motion or a program (a command
+    byte of `STOP_COMMANDS` at a frame position), else `buslock.REQUEST`."""
+    for command in data[1::9]:
+        if command in STOP_COMMANDS:
+            return STOP
+    return REQUEST
+
+
 def _mappable(vm) -> bool:
     return callable(getattr(vm, "accepts_address", None)) and callable(
         getattr(getattr(vm, "globals", None), "get_raw", None))
@@ -129,15 +148,15 @@ class ModuleBus:
     """Virtual modules sharing one bus; thread-safe; time paced to `clock`."""
 
     def __init__(self, modules: Iterable, *, clock: Callable[[], float] = time.monotonic,
-                 min_step: float = MIN_STEP) -> None:
+                 min_step: float = MIN_STEP, pacer: Pacer | None = None) -> None:
         self.modules = list(modules)
         if not self.modules:
             raise ValueError("a bus needs at least one module")
         if min_step < 0:
             raise ValueError("min_step must not be negative")
-        self.lock = threading.RLock()
+        self.lock = BusLock()
         self._clock = clock
-        self._last = clock()
+        self.pacer = Pacer(clock) if pacer is None else pacer
         self.min_step = min_step
         self._route: dict[int, Channel] = {}
         self._interface_kw = {id(vm): _takes_interface(vm) for vm in self.modules}
@@ -231,23 +250,45 @@ class ModuleBus:
         return out
 
     # -- time -----------------------------------------------------------
-    def sync(self) -> None:
-        """Advance every module's virtual time to the wall clock, unless less than `min_step`
-        has passed since the last advance (then the modules stay at most that far behind)."""
-        dt = self._clock() - self._last
+    runner_attached = False
+    """A `RealTimeRunner` works the lag off: requests then take only a lag they can take whole."""
+
+    def sync(self, budget: float = REQUEST_BUDGET, whole: bool | None = None) -> None:
+        """Advance every module's virtual time towards the wall clock by at most `budget` CPU seconds
+        of simulation (by the cost estimate), unless less than `min_step` has passed (then the
+        modules stay at most that far behind). With `whole` (the default while a runner is
+        attached: a host request), a lag that costs more is left to the clock thread; else one
+        slice of `budget` is simulated."""
+        dt = self._clock() - self.pacer.at
         if dt <= 0 or dt < self.min_step:
             return  # the common case on a busy link: no lock needed to find it out
+        if whole is None:
+            whole = self.runner_attached
         with self.lock:
             now = self._clock()
-            dt = now - self._last
-            if dt > 0 and dt >= self.min_step:
-                running = False
-                for vm in self.modules:
-                    running = running or getattr(vm, "application_status", RUNNING) == RUNNING
-                    vm.advance(dt)
-                self._last = now
-                if running:
-                    self._map = None  # a TMCL program may have changed an address (SGP 66)
+            if now - self.pacer.at >= self.min_step:
+                self._advance(self.pacer.step(now, budget, whole), now)
+
+    def _advance(self, seconds: float, now: float) -> None:
+        if seconds <= 0:
+            return
+        work = self.pacer.work_clock()
+        running = False
+        for vm in self.modules:
+            running = running or getattr(vm, "application_status", RUNNING) == RUNNING
+            vm.advance(seconds)
+        self.pacer.advanced(seconds, self.pacer.work_clock() - work, now)
+        if running:
+            self._map = None  # a TMCL program may have changed an address (SGP 66)
+
+    @property
+    def lag(self) -> float:
+        """Seconds the modules' clock is behind the wall clock."""
+        return self.pacer.lag()
+
+    def clock_report(self) -> ClockReport:
+        """Lag now, worst lag, seconds dropped, and the cost of simulating (pacing.ClockReport)."""
+        return self.pacer.report()
 
     # -- requests -------------------------------------------------------
     def _handle(self, vm, frame: bytes, interface: str) -> bytes:
@@ -258,7 +299,7 @@ class ModuleBus:
     def request(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes]]:
         """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
         replies = []
-        with self.lock:
+        with self.lock.hold(urgency(frame)):
             self.sync()
             if len(frame) == 9 and getattr(channel, "interface", None) != USB:
                 table = self._map
@@ -354,7 +395,7 @@ class ModuleBus:
         if len(data) not in (7, 8):
             return []
         replies = []
-        with self.lock:
+        with self.lock.hold(STOP if data[0] in STOP_COMMANDS else REQUEST):
             self.sync()
             for vm in self.modules:
                 ids = {vmapi.global_param(vm, vmapi.GP_CAN_ID)}
@@ -374,18 +415,31 @@ class ModuleBus:
         return replies
 
     # -- unsolicited replies ---------------------------------------------
-    def poll(self) -> list[tuple[Channel, object, bytes]]:
-        """Advance time and collect (channel, module, reply) for pending events."""
+    def poll(self, budget: float = SLICE_BUDGET) -> list[tuple[Channel, object, bytes]]:
+        """Advance time by one slice of at most `budget` CPU seconds and collect (channel, module,
+        reply) for pending events."""
+        with self.lock.hold(BACKGROUND):
+            self.sync(budget, whole=False)
+            return self._events()
+
+    def step(self) -> tuple[list[tuple[Channel, object, bytes]], float]:
+        """One slice of the clock thread (`SLICE_BUDGET`), taken only when no request waits:
+        (the pending events, the seconds the modules still lag behind the wall clock)."""
+        with self.lock.hold(BACKGROUND):
+            self.sync(SLICE_BUDGET, whole=False)
+            events = self._events()
+            lag = self._clock() - self.pacer.at
+        return events, lag
+
+    def _events(self) -> list[tuple[Channel, object, bytes]]:
         out = []
-        with self.lock:
-            self.sync()
-            for vm in self.modules:
-                drain = getattr(vm, "drain_events", None)
-                events = drain() if callable(drain) else []
-                channel = self._route.get(id(vm))
-                for event in events:
-                    if channel is not None:
-                        out.append((channel, vm, event))
+        for vm in self.modules:
+            drain = getattr(vm, "drain_events", None)
+            events = drain() if callable(drain) else []
+            channel = self._route.get(id(vm))
+            for event in events:
+                if channel is not None:
+                    out.append((channel, vm, event))
         return out
 
     def forget(self, channel: Channel) -> None:
@@ -407,23 +461,31 @@ class RealTimeRunner:
         self.failures = 0
 
     def start(self) -> None:
+        self.bus.runner_attached = True
         self._thread = threading.Thread(target=self._run, name="opentmcl-clock", daemon=True)
         self._thread.start()
 
     def _run(self) -> None:
-        while not self._stop.wait(self.tick):
+        behind = False
+        while not (self._stop.is_set() if behind else self._stop.wait(self.tick)):
             try:
-                for channel, vm, event in self.bus.poll():
+                events, lag = self.bus.step()
+                behind = lag >= self.tick
+                for channel, vm, event in events:
                     channel.deliver(vm, event)
             except Exception as exc:  # keep time running; record for diagnostics
+                behind = False
                 self.failures += 1
                 if self.failures <= 3:  # do not flood the log at the tick rate
                     logging.getLogger("opentmcl.server").exception("clock thread")
                 self.errors.append(exc)
                 del self.errors[:-10]
+            if behind:
+                time.sleep(0)  # let the threads of the endpoints take the interpreter
 
     def stop(self) -> None:
         self._stop.set()
         if self._thread is not None:
             self._thread.join(timeout=5)
             self._thread = None
+        self.bus.runner_attached = False

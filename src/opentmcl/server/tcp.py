@@ -6,11 +6,15 @@ manual 3.1, 3.2). Each client gets its own `SerialSession` (and framer);
 all clients share the bus and its lock.
 
 Safety (docs/endpoints.md): binds to loopback unless the caller asks for
-another address; at most `max_clients` clients at once (a further client is
-accepted, closed at once and logged); a client that sends nothing for
-`idle_timeout` seconds is dropped, and TCP keepalive finds peers that
-vanished; received bytes are only ever parsed as frames, so what a client
-holds in memory is one partial frame or ASCII line.
+another address; at most `max_clients` clients at once. When every slot is
+taken, a new client takes the slot of the client that has been silent longest,
+once that one has sent nothing for `EVICT_SILENT` seconds; the new client
+waits at most `SLOT_WAIT` seconds for that, else it is closed (and logged): so
+silent sockets can never keep a host out, and clients that talk keep their
+slots. A client that sends nothing for `idle_timeout` seconds is dropped
+anyway, and TCP keepalive finds peers that vanished; received bytes are only
+ever parsed as frames, so what a client holds in memory is one partial frame
+or ASCII line.
 """
 from __future__ import annotations
 
@@ -35,6 +39,10 @@ POLL = 0.2
 SEND_BUFFER = 64 * 1024
 KEEPALIVE = (("TCP_KEEPIDLE", 60), ("TCP_KEEPINTVL", 10), ("TCP_KEEPCNT", 5))
 """Probe after 60 s of silence, every 10 s, give up after 5: a vanished peer is found in ~110 s."""
+EVICT_SILENT = 0.5
+"""Seconds a client must have been silent before a new client may take its slot."""
+SLOT_WAIT = 1.0
+"""Seconds a new client waits for a slot when every client talks; then it is refused."""
 REFUSED_LOG_EVERY = 1.0
 """At most one "refused" log line per this many seconds (a connect storm must not flood the log)."""
 
@@ -113,10 +121,14 @@ class TcpServer:
     def __init__(self, bus, host: str = "127.0.0.1", port: int = 2323, *,
                  max_clients: int = DEFAULT_MAX_CLIENTS, gap: float = DEFAULT_GAP,
                  pace_bytes: bool = False, idle_timeout: float = DEFAULT_IDLE_TIMEOUT,
-                 session=SerialSession) -> None:
+                 session=SerialSession, evict_silent: float = EVICT_SILENT,
+                 slot_wait: float = SLOT_WAIT) -> None:
         if max_clients < 1:
             raise ValueError("max_clients must be at least 1")
         self.idle_timeout = check_idle_timeout(idle_timeout)
+        if not (evict_silent > 0 and slot_wait >= 0):
+            raise ValueError("evict_silent must be > 0 (inf: never evict) and slot_wait >= 0")
+        self.evict_silent, self.slot_wait = evict_silent, slot_wait
         self.bus = bus
         self.host = host
         self.port = port
@@ -129,11 +141,14 @@ class TcpServer:
         self._threads: list[threading.Thread] = []
         self._clients: dict[socket.socket, SerialSession] = {}
         self._peers: dict[socket.socket, str] = {}
+        self._heard: dict[socket.socket, float] = {}  # when each client last sent something
         self._lock = threading.Lock()
         self.rejected = 0
         """Clients refused because `max_clients` were connected."""
         self.dropped_idle = 0
         """Clients dropped because they sent nothing for `idle_timeout` seconds."""
+        self.evicted = 0
+        """Silent clients that gave their slot up to a new client."""
         self._refused_logged = -math.inf
         self._refused_quiet = 0  # refusals not logged since the last line
 
@@ -188,8 +203,7 @@ class TcpServer:
                 log.warning("TCP accept failed: %s", exc)
                 self._stop.wait(POLL)
                 continue
-            with self._lock:
-                full = len(self._clients) >= self.max_clients
+            full = not self._free_slot()
             if full or self._stop.is_set():
                 self.rejected += 1
                 if full:
@@ -212,7 +226,28 @@ class TcpServer:
             with self._lock:
                 self._clients[conn] = session
                 self._peers[conn] = peer_name(conn)
+                self._heard[conn] = time.monotonic()
             self._spawn(self._client_loop, "opentmcl-tcp-client", conn, session)
+
+    def _free_slot(self) -> bool:
+        """Is there a slot for a new client? When all are taken, evict the client silent longest
+        once it has been silent `evict_silent` s, waiting up to `slot_wait` s for that."""
+        deadline = time.monotonic() + self.slot_wait
+        while not self._stop.is_set():
+            with self._lock:
+                if len(self._clients) < self.max_clients:
+                    return True
+                conn, heard = min(self._heard.items(), key=lambda item: item[1])
+            now = time.monotonic()
+            if now - heard >= self.evict_silent:
+                self.evicted += 1
+                self._drop(conn, f"gave its slot to a new client: silent for {now - heard:.1f} s "
+                                 f"with all {self.max_clients} slots taken (--max-clients)")
+                return True
+            if now >= deadline:
+                return False
+            self._stop.wait(min(0.05, deadline - now, heard + self.evict_silent - now))
+        return False
 
     def _log_refused(self, peer: str) -> None:
         now = time.monotonic()
@@ -253,6 +288,9 @@ class TcpServer:
                 if not data:
                     break
                 last = time.monotonic()
+                with self._lock:
+                    if conn in self._heard:  # not if it was evicted meanwhile
+                        self._heard[conn] = last
                 session.receive(data)
         finally:
             self._drop(conn, reason)
@@ -261,10 +299,15 @@ class TcpServer:
         with self._lock:
             session = self._clients.pop(conn, None)
             peer = self._peers.pop(conn, "?")
+            self._heard.pop(conn, None)
         if session is not None and reason:
             log.warning("TCP client %s %s", peer, reason)
         if session is not None:
             session.close()
+        try:
+            conn.shutdown(socket.SHUT_RDWR)  # wakes the recv of its thread, if another thread drops it
+        except OSError:
+            pass
         try:
             conn.close()
         except OSError:
