@@ -192,16 +192,22 @@ def _check_module(m: RawProfile) -> list[str]:
     errors += [f"module.{key}: missing" for key in ("axes", "firmware_binary", "program_memory") if key not in m]
     if _is_int(m.get("axes")) and not 1 <= m["axes"] <= AXES_MAX:
         errors.append(f"module.axes: must be 1..{AXES_MAX}, got {m['axes']}")
-    for key, low in (("program_memory", 1), ("coordinates", 0), ("user_variables", 0), ("storable_user_variables", 0)):
-        if _is_int(m.get(key)) and m[key] < low:
-            errors.append(f"module.{key}: must be at least {low}, got {m[key]}")
+    return errors + _check_module_counts(m) + _check_module_choices(m) + _check_extras(m)
+
+
+def _check_module_counts(m: RawProfile) -> list[str]:
+    """Sizes below their least value, more storable than user variables, a 32-bit binary version
+    (the upper bounds of sizes are modules/bounds.py's)."""
+    errors = [f"module.{key}: must be at least {low}, got {m[key]}"
+              for key, low in (("program_memory", 1), ("coordinates", 0), ("user_variables", 0),
+                               ("storable_user_variables", 0)) if _is_int(m.get(key)) and m[key] < low]
     variables = m.get("user_variables", USER_VARIABLES)
     storable = m.get("storable_user_variables", STORABLE_USER_VARIABLES)
     if _is_int(variables) and _is_int(storable) and storable > variables:
         errors.append(f"module.storable_user_variables: {storable} is more than the {variables} user variables")
     if _is_int(m.get("firmware_binary")) and not 0 <= m["firmware_binary"] <= UINT32:
         errors.append(f"module.firmware_binary: must be a 32-bit value 0..{UINT32}, got {m['firmware_binary']}")
-    return errors + _check_module_choices(m) + _check_extras(m)
+    return errors
 
 
 def _check_extras(m: RawProfile) -> list[str]:
@@ -286,12 +292,7 @@ def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
     """Ranges and letters of well-typed fields."""
     errors = [f"{path}.{f}: must be 0..255, got {entry[f]}" for f in ("number", "bank", "port")
               if f in entry and not 0 <= entry[f] <= 255]
-    errors += [f"{path}.{f}: must be a 32-bit value {INT32_MIN}..{UINT32}, got {entry[f]}" for f in _VALUE_FIELDS
-               if f in entry and not INT32_MIN <= entry[f] <= UINT32]
-    for f in ("values", "excluded"):
-        wide = [v for v in entry.get(f, ()) if not INT32_MIN <= v <= UINT32]
-        if wide:
-            errors.append(f"{path}.{f}: {wide[0]} is not a 32-bit value {INT32_MIN}..{UINT32}")
+    errors += _value_widths(path, entry)
     lo, hi = _range(table, entry) or (0, 0)
     if lo > hi:
         errors.append(f"{path}: min {lo} is greater than max {hi}")
@@ -303,6 +304,17 @@ def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
     if table == "io" and entry["kind"] not in ("digital", "analog", "output"):
         errors.append(f"{path}.kind: must be digital, analog or output, got {entry['kind']!r}")
     return errors + _engine_field(table, path, entry)
+
+
+def _value_widths(path: str, entry: RawProfile) -> list[str]:
+    """Values a 32-bit reply can carry, read as signed or unsigned."""
+    errors = [f"{path}.{f}: must be a 32-bit value {INT32_MIN}..{UINT32}, got {entry[f]}" for f in _VALUE_FIELDS
+              if f in entry and not INT32_MIN <= entry[f] <= UINT32]
+    for f in ("values", "excluded"):
+        wide = [v for v in entry.get(f, ()) if not INT32_MIN <= v <= UINT32]
+        if wide:
+            errors.append(f"{path}.{f}: {wide[0]} is not a 32-bit value {INT32_MIN}..{UINT32}")
+    return errors
 
 
 def _range(table: str, entry: RawProfile) -> tuple[int, int] | None:
