@@ -23,6 +23,9 @@ HOST, MODULE = "host", "module"
 MAX_TEXT = 256
 """Most bytes of ASCII text in one record (a record line stays far below the reader's 4096-byte cap;
 the module itself keeps 128 characters of a line)."""
+MAX_PENDING = 1024
+"""Most requests waiting for their replies (docs/capture.md): a host may pipeline this many; beyond,
+the oldest are forgotten. Over twice the 455 frames a full 4 KiB pty or serial driver buffer holds."""
 _AXIS = {5: "SAP", 6: "GAP", 7: "STAP", 8: "RSAP"}
 _GLOBAL = {9: "SGP", 10: "GGP", 11: "STGP", 12: "RSGP"}
 _IO = {14: "SIO", 15: "GIO"}
@@ -118,7 +121,8 @@ class Decoder:
         if name:
             rec["parameter"] = name
         self._pending.append(rec)
-        del self._pending[:-16]  # requests that never got a reply are forgotten
+        if len(self._pending) > MAX_PENDING:  # requests that never got a reply are forgotten
+            del self._pending[0]
         return rec
 
     def _reply(self, t: float, frame: bytes) -> dict:

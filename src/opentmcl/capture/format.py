@@ -14,6 +14,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any, TextIO
 
+from ..limits import open_regular
+
 FORMAT = "opentmcl-capture"
 VERSION = 1
 MAX_CAPTURE_BYTES = 64 * 1024 * 1024
@@ -41,24 +43,30 @@ class CaptureWriter:
                     "gap": gap})
 
     def write(self, record: dict) -> None:
-        """Append one record; past the size cap, frames are dropped and one `truncated` record says so
-        (the relay goes on; a file is never written larger than `read_capture` reads)."""
+        """Append one record. Every record counts against the size cap (`limit`): past it, records
+        are dropped and one `truncated` record says so; the `end` record always fits, in the room
+        kept for it and the note (the relay goes on; a file is never written larger than
+        `read_capture` reads)."""
         line = json.dumps(record, ensure_ascii=True, separators=(",", ":")) + "\n"
         with self._lock:
             if self._fh is None:
                 return
-            if record.get("record") == "frame":
-                if self.size + len(line) > self.limit:
+            if record.get("record") != "end":
+                if self.truncated or self.size + len(line) > self.limit:
                     if not self.truncated:
                         self.truncated = True
                         note = {"record": "truncated", "t": record.get("t"), "frames": self.frames}
-                        self._fh.write(json.dumps(note, separators=(",", ":")) + "\n")
-                        self._fh.flush()
+                        self._put(json.dumps(note, separators=(",", ":")) + "\n")
                     return
-                self.frames += 1
-            self._fh.write(line)
-            self._fh.flush()
-            self.size += len(line)
+                if record.get("record") == "frame":
+                    self.frames += 1
+            self._put(line)
+
+    def _put(self, line: str) -> None:
+        assert self._fh is not None
+        self._fh.write(line)
+        self._fh.flush()
+        self.size += len(line)
 
     def close(self, t: float) -> None:
         self.write({"record": "end", "t": round(t, 6), "frames": self.frames})
@@ -76,6 +84,8 @@ class Capture:
     header: dict
     frames: list[dict] = field(default_factory=list)
     identities: list[dict] = field(default_factory=list)
+    truncated: float | None = None
+    """When the proxy stopped capturing at the size cap (its `truncated` record), else None."""
 
     def module_name(self) -> str | None:
         """The built-in module the host identified (command 136), if any."""
@@ -86,19 +96,16 @@ class Capture:
 
 
 def _lines(path: str) -> Iterator[tuple[int, bytes]]:
+    """(line number, line) of a capture file: a regular file (limits.open_regular) of at most
+    MAX_CAPTURE_BYTES, lines of at most MAX_LINE_BYTES."""
     try:
-        size = os.path.getsize(path)
-    except OSError as exc:
-        raise CaptureError(f"{path}: cannot read: {exc.strerror or exc}") from None
-    if size > MAX_CAPTURE_BYTES:
-        raise CaptureError(f"{path}: {size} bytes, larger than the {MAX_CAPTURE_BYTES} bytes a capture may have")
-    try:
-        with open(path, "rb") as fh:
+        with open_regular(path) as fh:
+            size = os.fstat(fh.fileno()).st_size
+            if size > MAX_CAPTURE_BYTES:
+                raise CaptureError(f"{path}: {size} bytes, larger than the {MAX_CAPTURE_BYTES} bytes "
+                                   "a capture may have")
             number = 0
-            while True:
-                line = fh.readline(MAX_LINE_BYTES + 1)
-                if not line:
-                    return
+            while line := fh.readline(MAX_LINE_BYTES + 1):
                 number += 1
                 if len(line) > MAX_LINE_BYTES:
                     raise CaptureError(f"{path}:{number}: line longer than {MAX_LINE_BYTES} bytes")
@@ -122,6 +129,8 @@ def _record(line: bytes, path: str, number: int) -> dict[str, Any]:
         rec = json.loads(line)
     except (ValueError, UnicodeDecodeError):
         raise CaptureError(f"{path}:{number}: not a JSON record") from None
+    except RecursionError:   # e.g. 4000 "[": no record of this format nests at all
+        raise CaptureError(f"{path}:{number}: not a capture record (arrays or objects nested too deeply)") from None
     if not isinstance(rec, dict):
         raise CaptureError(f"{path}:{number}: not a JSON object")
     return rec
@@ -156,6 +165,17 @@ def _check_frame(rec: dict[str, Any], path: str, number: int) -> None:
         raise CaptureError(f"{path}:{number}: 'raw' is not hex") from None
 
 
+_IDENTITY_KEYS: dict[str, tuple[type, str]] = {"address": (int, "an address"), "module": (str, "a module name"),
+                                               "firmware_version": (str, "a firmware string")}
+
+
+def _check_identity(rec: dict[str, Any], path: str, number: int) -> None:
+    """An identity record: its address, module and firmware string, where given, of their types."""
+    for key, (kind, what) in _IDENTITY_KEYS.items():
+        if key in rec and type(rec[key]) is not kind:
+            raise CaptureError(f"{path}:{number}: identity record: {key!r} is not {what}")
+
+
 def read_capture(path: str | os.PathLike[str]) -> Capture:
     """Read and check a capture file; CaptureError (one line) if it is not one."""
     path = os.fspath(path)
@@ -171,7 +191,11 @@ def read_capture(path: str | os.PathLike[str]) -> Capture:
             _check_frame(rec, path, number)
             capture.frames.append(rec)
         elif rec.get("record") == "identity":
+            _check_identity(rec, path, number)
             capture.identities.append(rec)
+        elif rec.get("record") == "truncated" and capture.truncated is None:
+            t = rec.get("t")
+            capture.truncated = float(t) if isinstance(t, (int, float)) and not isinstance(t, bool) else 0.0
     if capture is None:
         raise CaptureError(f"{path}: empty, not a capture file")
     return capture

@@ -142,6 +142,8 @@ class _Replayer:
     def __init__(self, cap: Capture, vm, address: int, tol: Tolerance, report: ReplayReport) -> None:
         self.cap, self.vm, self.address, self.tol, self.report = cap, vm, address, tol, report
         self.replies = {r["request"]: r for r in cap.frames if r["kind"] in ("reply", "version", "memory") and "request" in r}
+        # A capture cut at its size cap: requests after the last captured reply lost theirs to the cap
+        self.last_answered = max(self.replies, default=0) if cap.truncated is not None else None
         self.expected_events = [r for r in cap.frames if r["kind"] == "event" and r.get("address") == address]
         self.virtual_events: list[tuple[float, bytes]] = []
         self.windows: dict[int, list] = {}
@@ -208,6 +210,9 @@ class _Replayer:
     def request(self, rec: dict) -> None:
         raw = self.vm.handle(rec["bytes"]) if len(rec["bytes"]) == FRAME_LEN else b""
         captured = self.replies.get(rec["n"])
+        if captured is None and self.last_answered is not None and rec["n"] > self.last_answered:
+            self.report.skipped += 1   # its reply came after the capture stopped
+            return
         self.report.compared += 1
         name = self._name(rec)
         if name in IGNORED:
@@ -276,6 +281,8 @@ class _Replayer:
                 self.report.divergences.append(Divergence(ev["t"], "event (command 138)", None, "event time",
                                                           f"{ev['t']:.6f} s", f"{t:.6f} s"))
         for t, raw in self.virtual_events[len(self.expected_events):]:
+            if self.cap.truncated is not None and t >= self.cap.truncated:
+                continue   # after the capture stopped at its size cap
             self.report.divergences.append(Divergence(t, "event (command 138)", None, "event", "no event",
                                                       f"motor mask {int.from_bytes(raw[4:8], 'big', signed=True)}"))
         self.report.divergences.sort(key=lambda d: d.t)

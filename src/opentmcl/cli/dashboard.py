@@ -82,7 +82,9 @@ def sim_url_real_time(url: str) -> str:
         return url
     query = dict(urllib.parse.parse_qsl(parts.query))
     query.setdefault("clock", "real")
-    return urllib.parse.urlunsplit(parts._replace(query=urllib.parse.urlencode(query)))
+    # not urlunsplit: it drops the empty host of sim:///path/my.toml (a profile file, docs/profiles.md)
+    return f"{parts.scheme}://{parts.netloc}{parts.path}?{urllib.parse.urlencode(query)}" \
+        + (f"#{parts.fragment}" if parts.fragment else "")
 
 
 def parse_web(text: str) -> tuple[str, int]:

@@ -64,8 +64,10 @@ def read_program(path: str, module: str | None, include: list[str] | None = None
 
 def _check_readable(path: str) -> None:
     """A source file that cannot be read is a plain file error (not an assembler position)."""
+    from ..limits import open_regular
+
     try:
-        with open(path, "rb"):
+        with open_regular(path):
             pass
     except OSError as exc:
         raise CliError(f"cannot read {path}: {exc.strerror or exc}") from None

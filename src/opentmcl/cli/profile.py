@@ -40,16 +40,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
 
 
 def run_check(args: argparse.Namespace) -> int:
+    from ..limits import open_regular
     from ..modules.profile import builtin_raw, parse_profile
-    from ..modules.profile_file import ProfileError, resolve, validate
+    from ..modules.profile_file import ProfileError, ProfileLimitError, resolve, validate
 
     try:  # a FILE that cannot be read is bad input (2, docs/cli.md), not a file with errors (1)
-        with open(args.file, "rb"):
+        with open_regular(args.file):
             pass
     except OSError as exc:
         raise CliError(f"cannot read {args.file}: {exc.strerror or exc}") from None
     try:
         data = resolve(args.file, builtin_raw)
+    except ProfileLimitError as exc:   # beyond a size bound: bad input (2), one line
+        raise CliError(str(exc)) from None
     except ProfileError as exc:
         for line in exc.errors:
             print(line, file=sys.stderr)

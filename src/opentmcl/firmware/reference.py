@@ -13,11 +13,17 @@ Switching point calibration: after the switch is hit the motor leaves it at AP19
 is the centre of the two. The motor then drives to the reference point, AP197 takes the
 position counter there and the counter and the encoder (AP209) are set to 0. Details
 and choices: docs/world.md, docs/assumptions.md.
+
+Copies (copy.deepcopy, pickle) of a module during a search: a generator cannot be copied, so
+the search keeps what its program read from the world between its steps (`_readings`) and how
+many steps it took; a copy runs its own program again that many steps on those readings, with
+no effect on its axis (`_replay`), and goes on from there as the original does.
 """
 from __future__ import annotations
 
 from collections.abc import Callable, Generator
 from fractions import Fraction
+from functools import partial
 
 Cond = Callable[[], bool]
 Steps = Generator[Cond, None, int]
@@ -38,6 +44,9 @@ class ReferenceSearch:
         self.mode = 0
         self.log: list[tuple] = []
         """Phases of the last search: (what, switch, direction or position), for tests and traces."""
+        self._readings: list[object] = []    # what the program read that decides its course
+        self._steps = 0                      # next() calls on the program since start()
+        self._replay: list[object] | None = None   # readings given back while a copy catches up
 
     @property
     def active(self) -> bool:
@@ -56,6 +65,8 @@ class ReferenceSearch:
 
     def _command(self, action, *args) -> None:
         """An engine command of the search itself; remembered to tell it from outside commands."""
+        if not self._live:
+            return
         e = self.axis.engine
         action(*args)
         self._drive = (e.mode, e.target_velocity)
@@ -76,6 +87,7 @@ class ReferenceSearch:
         ax.reference_search_active = True
         self._gen = self._program()
         self._cond = None
+        self._readings, self._steps = [], 0
         self._resume()
 
     def stop(self) -> None:
@@ -97,18 +109,22 @@ class ReferenceSearch:
         self.axis.reference_search_active = False
         self._gen = None
         self._cond = None
+        self._readings, self._steps = [], 0
         if getattr(self, "aw", None) is not None:
             self.aw.watch = None
 
     # --- driving the generator --------------------------------------------------------------
     def poll(self) -> None:
         """Called by the world at every event tick while the search is active."""
+        if self._gen is None and self._active and self._steps:
+            self._catch_up()
         if self.active and self._cond is not None and self._cond():
             self._resume()
 
     def _resume(self) -> None:
         while self.active and self._gen is not None:
             try:
+                self._steps += 1
                 cond = next(self._gen)
             except StopIteration:
                 self._finish()
@@ -116,6 +132,41 @@ class ReferenceSearch:
             if not cond():
                 self._cond = cond
                 return
+
+    # --- copies ---------------------------------------------------------------------------------
+    def __getstate__(self) -> dict[str, object]:
+        """The program and its condition stay behind (a copy runs its own: `_catch_up`)."""
+        state = self.__dict__.copy()
+        state.update(_gen=None, _cond=None)
+        return state
+
+    def _catch_up(self) -> None:
+        """A copy's program, run again to where the original's stood: the same steps on the same
+        readings, its effects left out (the copy has them already)."""
+        self._replay = list(reversed(self._readings))
+        self._gen = self._program()
+        try:
+            for _ in range(self._steps):
+                self._cond = next(self._gen)
+        finally:
+            left, self._replay = self._replay, None
+        assert not left, "a copied reference search read less than the original"
+
+    def _read(self, value):
+        """A reading of the world that decides the program's course: kept, or given back."""
+        if self._replay is not None:
+            return self._replay.pop()
+        self._readings.append(value)
+        return value
+
+    @property
+    def _live(self) -> bool:
+        """False while a copy catches up: the program's effects on the axis are left out."""
+        return self._replay is None
+
+    def _note(self, entry: tuple) -> None:
+        if self._live:
+            self.log.append(entry)
 
     # --- inputs and motions ---------------------------------------------------------------------
     def state(self, name: str) -> bool:
@@ -139,8 +190,19 @@ class ReferenceSearch:
     def _rotate(self, direction: int, number: int) -> None:
         self._command(self.axis.engine.rotate, direction * self._speed(number))
 
+    # The conditions the program yields: bound methods, so a copy of a waiting search (and the
+    # world's cache that holds its condition) can be pickled.
     def _stopped(self) -> bool:
         return not self.axis.engine.moving
+
+    def _is(self, name: str, level: bool) -> bool:
+        return self.state(name) == level
+
+    def _either(self, name: str, other: str) -> bool:
+        return self.state(name) or self.state(other)
+
+    def _passed(self, point: int, direction: int) -> bool:
+        return (self.pos - point) * direction >= 0
 
     def _halt_after_hit(self) -> Steps:
         """The switch was found at search speed: stop (soft if enabled) and wait for standstill."""
@@ -152,37 +214,37 @@ class ReferenceSearch:
     def seek(self, name: str, direction: int, turn_at: str | None = None) -> Steps:
         """Drive at AP194 until switch `name` is active; reverse once at switch `turn_at`.
         Returns the direction the switch was found in."""
-        self.log.append(("seek", name, direction))
-        if self.state(name):
-            self.log.append(("found", name, self.pos))
+        self._note(("seek", name, direction))
+        if self._read(self.state(name)):
+            self._note(("found", name, self.pos))
             return direction
         self._rotate(direction, 194)
         if turn_at is None:
-            yield lambda: self.state(name)
+            yield partial(self._is, name, True)
         else:
-            yield lambda: self.state(name) or self.state(turn_at)
-            if not self.state(name):          # end switch first: turn round
-                self.log.append(("turn", turn_at, self.pos))
+            yield partial(self._either, name, turn_at)
+            if not self._read(self.state(name)):   # end switch first: turn round
+                self._note(("turn", turn_at, self.pos))
                 yield from self._halt_after_hit()
                 direction = -direction
                 self._rotate(direction, 194)
-                yield lambda: self.state(name)
-        self.log.append(("found", name, self.pos))
+                yield partial(self._is, name, True)
+        self._note(("found", name, self.pos))
         yield from self._halt_after_hit()
         return direction
 
     def _slow_until(self, name: str, direction: int, level: bool) -> Steps:
         self._rotate(direction, 195)
-        yield lambda: self.state(name) == level
-        self.log.append(("enter" if level else "leave", name, self.pos))
+        yield partial(self._is, name, level)
+        self._note(("enter" if level else "leave", name, self.pos))
         self._command(self.axis.engine.hard_stop)
         yield self._stopped
-        return self.pos
+        return self._read(self.pos)
 
     def edge(self, name: str, direction: int) -> Point:
         """Switching point calibration of the switch edge met while moving in `direction`:
         the centre of leaving it (against `direction`) and re-entering it (along it)."""
-        if not self.state(name):             # stopped beyond a narrow switch: come back into it
+        if not self._read(self.state(name)):   # stopped beyond a narrow switch: come back into it
             yield from self._slow_until(name, -direction, True)
         first = yield from self._slow_until(name, -direction, False)
         second = yield from self._slow_until(name, direction, True)
@@ -199,21 +261,23 @@ class ReferenceSearch:
     def goto(self, target: int | Fraction) -> Steps:
         """Drive at AP195 to the reference point (rounded to a whole microstep)."""
         point = round(target)
-        here = self.pos
+        here = self._read(self.pos)
         if here != point:
             d = 1 if point > here else -1
-            self.aw.watch = point
+            if self._live:
+                self.aw.watch = point
             self._rotate(d, 195)
-            yield lambda: (self.pos - point) * d >= 0
+            yield partial(self._passed, point, d)
             self._command(self.axis.engine.hard_stop)
-            self.aw.watch = None
+            if self._live:
+                self.aw.watch = None
             yield self._stopped
-        return self.pos
+        return self._read(self.pos)
 
     def zero(self, reference: int | Fraction) -> Steps:
         yield from self.goto(reference)
         ax = self.axis
-        self.log.append(("zero", None, self.pos))
+        self.log.append(("zero", None, self.pos))   # after the last yield: never run by `_catch_up`
         if 197 in ax.params:
             ax.ram[197] = self.pos
         self.aw.relabel(0)
@@ -242,7 +306,8 @@ class ReferenceSearch:
             far = yield from self.edge(right, found)
             found = yield from self.seek(left, d)
             ref = yield from self.edge(left, found)
-            ax.ram[196] = round(abs(far - ref))
+            if self._live:
+                ax.ram[196] = round(abs(far - ref))
         elif base == 3:
             # PD86-1180 AP193 row: "search right stop switch, then search left stop switch from both
             # sides"; in three-switch wiring (7.1) the first REFL met moving left is the reference
@@ -251,7 +316,8 @@ class ReferenceSearch:
             far = yield from self.edge(right, found)
             found = yield from self.seek(left, d)
             ref = yield from self.middle(left, found)
-            ax.ram[196] = round(abs(far - ref))
+            if self._live:
+                ax.ram[196] = round(abs(far - ref))
         elif base == 4:
             found = yield from self.seek(left, d)
             ref = yield from self.middle(left, found)

@@ -12,7 +12,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
-from ..modules.profile import load_profile
+from ..modules.profile import STORABLE_USER_VARIABLES, load_profile
 from .client import Client, VersionReply
 from .errors import TmclError, TmclStatusError, TmclTimeout
 
@@ -286,5 +286,8 @@ def skeleton(result: ProbeResult, url: str) -> str:
     user_vars = sum(1 for bank, _ in result.globals if bank == USER_VARIABLE_BANK)
     if base is None or user_vars != base.user_variables:
         lines.insert(lines.index("[module]") + 1, f"user_variables = {user_vars}")
+        storable = STORABLE_USER_VARIABLES if base is None else base.storable_user_variables
+        if user_vars < storable:   # no more storable variables than variables (docs/profiles.md)
+            lines.insert(lines.index("[module]") + 2, f"storable_user_variables = {user_vars}")
     body = out.body + _removed(result, known)
     return "\n".join(lines + body + ["", "# Probed values equal to the base profile:", *out.comments]) + "\n"

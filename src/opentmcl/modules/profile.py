@@ -242,6 +242,10 @@ def _capabilities(d: RawProfile) -> Capabilities:
     return Capabilities(**{f.name: d[f.name] for f in fields(Capabilities)})
 
 
+USER_VARIABLES, STORABLE_USER_VARIABLES = 256, 56
+"""`user_variables` and `storable_user_variables` of a profile that does not give them."""
+
+
 def parse_profile(data: RawProfile) -> ModuleProfile:
     m = data["module"]
     known = {"name", "aliases", "axes", "engine", "firmware_version", "firmware_binary", "program_memory",
@@ -252,8 +256,8 @@ def parse_profile(data: RawProfile) -> ModuleProfile:
         firmware_version=m["firmware_version"], firmware_binary=m["firmware_binary"],
         program_memory=m["program_memory"], opcodes=frozenset(m["opcodes"]),
         ascii_mode=m.get("ascii_mode", False), coordinates=m.get("coordinates", 20),
-        user_variables=m.get("user_variables", 256),
-        storable_user_variables=m.get("storable_user_variables", 56),
+        user_variables=m.get("user_variables", USER_VARIABLES),
+        storable_user_variables=m.get("storable_user_variables", STORABLE_USER_VARIABLES),
         axis_parameters={p["number"]: _param(p) for p in data.get("axis_parameter", [])},
         global_parameters={(p["bank"], p["number"]): _param(p) for p in data.get("global_parameter", [])},
         io={(p["bank"], p["port"]): IOPort(p["bank"], p["port"], p["name"], p["kind"], p["access"],

@@ -20,8 +20,10 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from ..limits import InputTooLarge, read_bytes, size_text
+from .bounds import AXES_MAX, NESTING_MAX, excess, too_deep
 from .names import compact
-from .profile import CAPABILITY_VALUES, RawProfile
+from .profile import CAPABILITY_VALUES, STORABLE_USER_VARIABLES, USER_VARIABLES, RawProfile
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -40,6 +42,8 @@ _REQUIRED = {"axis_parameter": ("number", "name", "min", "max", "access"),
              "global_parameter": ("bank", "number", "name", "min", "max", "access"),
              "io": ("bank", "port", "name", "kind", "access"), "interrupt": ("number", "name")}
 _INT_FIELDS = ("number", "bank", "port", "min", "max", "default")
+_VALUE_FIELDS = ("min", "max", "default")   # a 32-bit value of a reply, signed or unsigned
+INT32_MIN, UINT32 = -(1 << 31), (1 << 32) - 1
 _STR_FIELDS = ("name", "kind", "access", "title", "unit", "description", "engine")
 _TOP = {"extends", "module", "remove", *_TABLES}
 _FILE_INDEX = "_file_index"  # of a keyless entry after merging: its index in the user's file
@@ -53,27 +57,47 @@ class ProfileError(ValueError):
         self.errors = errors
 
 
+class ProfileLimitError(ProfileError):
+    """A profile file beyond a size bound (docs/profiles.md "Bounds"): larger than MAX_FILE_BYTES,
+    nested too deeply, or a value above its bound in modules/bounds.py. One line; refused before
+    the schema is checked (`profile check` exits 2, as for a file it cannot read)."""
+
+    def __init__(self, line: str) -> None:
+        super().__init__([line])
+
+
 def looks_like_path(name: str) -> bool:
     """A module argument names a file when it ends in .toml or contains a path separator."""
     return name.lower().endswith(".toml") or "/" in name or "\\" in name
 
 
 def read_toml(path: Path) -> RawProfile:
+    """The TOML document of a profile file (a regular file, limits.open_regular); ProfileError."""
     try:
-        size = path.stat().st_size
+        text = read_bytes(path, MAX_FILE_BYTES, "profile file").decode("utf-8")
+    except InputTooLarge:
+        raise ProfileLimitError(f"{path}: larger than the {size_text(MAX_FILE_BYTES)} a profile file may have") from None
     except OSError as exc:
         raise ProfileError([f"{path}: cannot read: {exc.strerror or exc}"]) from None
-    if size > MAX_FILE_BYTES:
-        raise ProfileError([f"{path}: {size} bytes, larger than the {MAX_FILE_BYTES} bytes a profile may have"])
-    try:
-        with path.open("rb") as fh:
-            return tomllib.loads(fh.read(MAX_FILE_BYTES + 1).decode("utf-8"))
     except UnicodeDecodeError:
         raise ProfileError([f"{path}: not UTF-8 text"]) from None
-    except tomllib.TOMLDecodeError as exc:
+    too_deep_line = f"{path}: tables and arrays nested more than {NESTING_MAX} levels deep"
+    try:
+        data = tomllib.loads(text)
+    except RecursionError:   # deeper than the parser can go: far beyond NESTING_MAX
+        raise ProfileLimitError(too_deep_line) from None
+    except ValueError as exc:   # TOMLDecodeError, and an integer of more than 4300 digits
         raise ProfileError([f"{path}: not TOML: {exc}"]) from None
-    except OSError as exc:
-        raise ProfileError([f"{path}: cannot read: {exc.strerror or exc}"]) from None
+    if too_deep(data):
+        raise ProfileLimitError(too_deep_line)
+    return data
+
+
+def check_bounds(data: RawProfile, path: str | Path) -> None:
+    """ProfileLimitError naming the first value of `data` above its bound (modules/bounds.py)."""
+    line = excess(data, lambda table, i, entry: _entry_path(table, i, entry, _key(table, entry)))
+    if line is not None:
+        raise ProfileLimitError(f"{path}: {line}")
 
 
 def _key(table: str, entry: RawProfile) -> tuple[int, ...] | None:
@@ -166,9 +190,39 @@ def _check_module(m: RawProfile) -> list[str]:
         errors.append(f"module.firmware_version: must be 8 ASCII characters (command 136 type 0), got {fw!r}")
     errors += [f"module.{key}: expected an integer" for key in _MODULE_INT if key in m and not _is_int(m[key])]
     errors += [f"module.{key}: missing" for key in ("axes", "firmware_binary", "program_memory") if key not in m]
-    if _is_int(m.get("axes")) and not 1 <= m["axes"] <= 255:
-        errors.append(f"module.axes: must be 1..255, got {m['axes']}")
-    return errors + _check_module_choices(m)
+    if _is_int(m.get("axes")) and not 1 <= m["axes"] <= AXES_MAX:
+        errors.append(f"module.axes: must be 1..{AXES_MAX}, got {m['axes']}")
+    return errors + _check_module_counts(m) + _check_module_choices(m) + _check_extras(m)
+
+
+def _check_module_counts(m: RawProfile) -> list[str]:
+    """Sizes below their least value, more storable than user variables, a 32-bit binary version
+    (the upper bounds of sizes are modules/bounds.py's)."""
+    errors = [f"module.{key}: must be at least {low}, got {m[key]}"
+              for key, low in (("program_memory", 1), ("coordinates", 0), ("user_variables", 0),
+                               ("storable_user_variables", 0)) if _is_int(m.get(key)) and m[key] < low]
+    variables = m.get("user_variables", USER_VARIABLES)
+    storable = m.get("storable_user_variables", STORABLE_USER_VARIABLES)
+    if _is_int(variables) and _is_int(storable) and storable > variables:
+        errors.append(f"module.storable_user_variables: {storable} is more than the {variables} user variables")
+    if _is_int(m.get("firmware_binary")) and not 0 <= m["firmware_binary"] <= UINT32:
+        errors.append(f"module.firmware_binary: must be a 32-bit value 0..{UINT32}, got {m['firmware_binary']}")
+    return errors
+
+
+def _check_extras(m: RawProfile) -> list[str]:
+    """The [module] keys the firmware reads besides the schema's: `sio_all_max`, `pullups`."""
+    errors = []
+    top = m.get("sio_all_max")
+    if top is not None and not (_is_int(top) and 0 <= top <= UINT32):
+        errors.append(f"module.sio_all_max: expected an integer 0..{UINT32}, got {top!r}")
+    pullups = m.get("pullups")
+    if pullups is not None and not (isinstance(pullups, dict) and all(
+            _is_int(pullups.get(k)) and 0 <= pullups[k] <= hi for k, hi in (("bank", 255), ("port", 255),
+                                                                            ("max", UINT32)))):
+        errors.append("module.pullups: expected a table {bank = 0..255, port = 0..255, max = 0.."
+                      f"{UINT32}}}, got {pullups!r}"[:200])
+    return errors
 
 
 def _check_module_choices(m: RawProfile) -> list[str]:
@@ -229,6 +283,8 @@ def _field_types(table: str, path: str, entry: RawProfile) -> list[str]:
     aliases = entry.get("aliases", [])
     if not isinstance(aliases, list) or not all(isinstance(a, str) and compact(a) for a in aliases):
         errors.append(f"{path}.aliases: expected a list of names")
+    errors += [f"{path}.{f}: expected a list of integers" for f in ("values", "excluded")
+               if f in entry and not (isinstance(entry[f], list) and all(_is_int(v) for v in entry[f]))]
     return errors
 
 
@@ -236,6 +292,7 @@ def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
     """Ranges and letters of well-typed fields."""
     errors = [f"{path}.{f}: must be 0..255, got {entry[f]}" for f in ("number", "bank", "port")
               if f in entry and not 0 <= entry[f] <= 255]
+    errors += _value_widths(path, entry)
     lo, hi = _range(table, entry) or (0, 0)
     if lo > hi:
         errors.append(f"{path}: min {lo} is greater than max {hi}")
@@ -247,6 +304,17 @@ def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
     if table == "io" and entry["kind"] not in ("digital", "analog", "output"):
         errors.append(f"{path}.kind: must be digital, analog or output, got {entry['kind']!r}")
     return errors + _engine_field(table, path, entry)
+
+
+def _value_widths(path: str, entry: RawProfile) -> list[str]:
+    """Values a 32-bit reply can carry, read as signed or unsigned."""
+    errors = [f"{path}.{f}: must be a 32-bit value {INT32_MIN}..{UINT32}, got {entry[f]}" for f in _VALUE_FIELDS
+              if f in entry and not INT32_MIN <= entry[f] <= UINT32]
+    for f in ("values", "excluded"):
+        wide = [v for v in entry.get(f, ()) if not INT32_MIN <= v <= UINT32]
+        if wide:
+            errors.append(f"{path}.{f}: {wide[0]} is not a 32-bit value {INT32_MIN}..{UINT32}")
+    return errors
 
 
 def _range(table: str, entry: RawProfile) -> tuple[int, int] | None:
@@ -299,6 +367,7 @@ def resolve(path: str | Path, builtin: Callable[[str], RawProfile], _depth: int 
         raise ProfileError([f"{_via}: extends: {line}" for line in exc.errors]) from None
     parent = data.get("extends")
     if parent is None:
+        check_bounds(data, path)
         return data
     if not isinstance(parent, str) or not parent:
         raise ProfileError([f"{path}: extends: expected a module name or a file name"])
@@ -310,6 +379,7 @@ def resolve(path: str | Path, builtin: Callable[[str], RawProfile], _depth: int 
         except KeyError as exc:
             raise ProfileError([f"{path}: extends: {exc.args[0] if exc.args else parent}"]) from None
     merged, errors = merge(base, data, f"{path}: ")
+    check_bounds(merged, path)
     for key in data:
         if key not in _TOP:
             errors.append(f"{path}: {key}: unknown key (a profile has {', '.join(sorted(_TOP))})")

@@ -284,14 +284,14 @@ def load_scenario(source) -> Scenario:
 
         try:
             data = yaml.safe_load(text)
-        except yaml.YAMLError as exc:   # PyYAML's message spans lines: one line here
+        except (yaml.YAMLError, ValueError) as exc:   # PyYAML's message spans lines: one line here
             raise ScenarioError(f"{path}: {' '.join(str(exc).split())}") from None
         except RecursionError:
             raise ScenarioError(f"{path}: nested too deeply") from None
     else:
         try:
             data = tomllib.loads(text.decode("utf-8"))
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        except ValueError as exc:   # TOMLDecodeError, UnicodeDecodeError, an integer of over 4300 digits
             raise ScenarioError(f"{path}: {exc}") from None
         except RecursionError:
             raise ScenarioError(f"{path}: nested too deeply") from None

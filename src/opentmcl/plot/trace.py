@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 from ..atomicfile import open_atomic
 from ..columns import Column
-from ..limits import CSV_MAX, LINE_MAX, size_text
+from ..limits import CSV_MAX, LINE_MAX, open_regular, size_text
 from ..trace import check_interval
 from .events import Event, Mark, meta_lines, parse_event, parse_mark
 
@@ -120,7 +120,7 @@ class Trace:
         if isinstance(source, io.TextIOBase):
             return _parse_csv(_lines(source, "the trace"))
         try:
-            with open(source, encoding="utf-8", newline="") as fh:
+            with io.TextIOWrapper(open_regular(source), encoding="utf-8", newline="") as fh:
                 return _parse_csv(_lines(fh, str(source)))
         except OSError as exc:
             raise TraceError(f"cannot read {source}: {exc.strerror or exc}") from None
