@@ -12,10 +12,6 @@
   `Module.request_many` (one call per poll; "n/a" where the client lacks it). The reference of the
   `vm.handle` host is the same loop with the floor function answering and no time advance: what a
   host would get if every request cost only the floor.
-- the compiled accelerator (docs/performance.md "Compiled accelerator"), when it is built and not
-  switched off (OPENTMCL_PURE=1): `vm.handle` and the 6-axis 10 ms polling host on the compiled path
-  against the same on the pure-Python path (modules built inside `accel.pure()`), in one run; the
-  figures above measure whichever path is active.
 """
 from __future__ import annotations
 
@@ -24,11 +20,6 @@ from collections.abc import Callable
 
 from figures import Figure, best_of, print_figures, timed
 from opentmcl import VirtualModule, connect
-
-try:
-    from opentmcl import accel
-except ImportError:  # a tree from before the accelerator (PYTHONPATH=<old tree>/src, docs/performance.md)
-    accel = None  # type: ignore[assignment]
 from opentmcl.protocol.frame import Request
 
 FAR = 2_000_000_000  # MVP ABS target no axis reaches within a run
@@ -69,16 +60,8 @@ def floor_rate(budget: float) -> float:
     return frame_rate(make_floor({(1, a): 0 for a in range(6)}), budget)
 
 
-def module(pure: bool = False) -> VirtualModule:
-    """A TMCM-6212 on the active path, or on the pure-Python one."""
-    if not pure or accel is None:
-        return VirtualModule("TMCM-6212")
-    with accel.pure():
-        return VirtualModule("TMCM-6212")
-
-
-def handle_rate(budget: float, pure: bool = False) -> float:
-    return frame_rate(module(pure).handle, budget)
+def handle_rate(budget: float) -> float:
+    return frame_rate(VirtualModule("TMCM-6212").handle, budget)
 
 
 def module_request_rate(budget: float) -> float:
@@ -132,8 +115,8 @@ def poll_floor(axes: int, dt: float, budget: float) -> float:
     return timed(step, budget)
 
 
-def poll_handle(axes: int, dt: float, budget: float, pure: bool = False) -> float:
-    vm = module(pure)
+def poll_handle(axes: int, dt: float, budget: float) -> float:
+    vm = VirtualModule("TMCM-6212")
     start_moves(vm.request, axes)
     frames = [Request(1, *r).encode() for r in poll_requests(axes)]
     advance, handle = vm.advance, vm.handle
@@ -209,26 +192,8 @@ def handlers(quick: bool = False) -> list[Figure]:
             Figure("sim:// Module.request GAP round trips/s", module, handle, "", "vm.handle")]
 
 
-def accelerated(quick: bool = False) -> list[Figure]:
-    """Compiled against pure-Python request path, measured side by side (none when the compiled
-    path is not active)."""
-    if accel is None or not accel.active():
-        return []
-    rounds, budget = (1, 0.05) if quick else (5, 0.3)
-    floor, pure, fast, pure_poll, fast_poll = best_of(rounds, [
-        lambda: floor_rate(budget), lambda: handle_rate(budget, pure=True), lambda: handle_rate(budget),
-        lambda: poll_handle(6, 0.01, budget, pure=True), lambda: poll_handle(6, 0.01, budget)])
-    return [
-        Figure("accelerator: vm.handle GAP round trips/s, pure Python", pure, floor, "", "floor"),
-        Figure("accelerator: vm.handle GAP round trips/s, compiled", fast, floor, ">= 0.5 of the floor", "floor"),
-        Figure("accelerator: vm.handle GAP round trips/s, compiled vs pure", fast, pure, "",
-               "pure-Python vm.handle"),
-        Figure("accelerator: polling 6 axes every 10 ms, vm.handle compiled vs pure, virtual s/wall s",
-               fast_poll, pure_poll, "", "the pure-Python host")]
-
-
 def measure(quick: bool = False) -> list[Figure]:
-    return handlers(quick) + polling(quick) + accelerated(quick)
+    return handlers(quick) + polling(quick)
 
 
 def main() -> None:

@@ -12,7 +12,6 @@ from __future__ import annotations
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from opentmcl import accel
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 
 from .test_carry import loop_lookups
@@ -227,23 +226,6 @@ def test_runs_with_interrupts_equal_the_reference(scenario, periods, enabled, ma
         fast.vm.advance(n * INSTRUCTION_TICKS / 16_000_000)
         ref.vm.advance(n * INSTRUCTION_TICKS / 16_000_000)
         assert state(fast) == state(ref), src
-
-
-def test_the_pure_python_path_agrees():
-    """The same moving program on a module built on the pure-Python path (`accel.pure()`: the
-    engines' sync loop in Python, docs/performance.md "Compiled accelerator"): every state equals
-    the compiled path's and the reference's."""
-    src = TIMER_LOOP.replace("L:  GGP 0, 2", "    ROR 0, 1500\n    ROL 1, 700\nL:  GGP 0, 2").replace(
-        "GAP 1, 0\n", "GAP 1, 0\n    GAP 1, 1\n    CALCX ADD\n")
-    with accel.pure():
-        pure = started(src)
-    fast, ref = started(src), started(src, reference=True)
-    assert not accel.enabled(pure.vm)
-    for _ in range(5):
-        for w in (pure, fast, ref):
-            w.vm.advance(0.013)
-        assert state(pure) == state(fast) == state(ref)
-    assert pure.vm.axes[0].engine.position > 0 > pure.vm.axes[1].engine.position
 
 
 SINGLE_MAIN = [ins for ins in MAIN if ", 1," not in ins] + ["SGP 80, 0, 1", "CLE 0", "JC ESD, Main", "SIO 0, 2, 0"]

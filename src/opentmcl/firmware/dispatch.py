@@ -19,8 +19,6 @@ from functools import partial
 from operator import attrgetter
 from typing import TYPE_CHECKING, cast
 
-from .. import accel
-from ..motion.sixpoint import SixPointRampEngine
 from ..protocol.frame import to_int32
 
 if TYPE_CHECKING:
@@ -73,10 +71,7 @@ def _axis_read(vm: VirtualModule, number: int, motor: int) -> Read | None:
         return lambda: ax.from_engine(number, read_velocity(e))
     attribute = _ENGINE_READS.get(number)
     if attribute is not None and (number < 135 or hasattr(e, attribute)):
-        read = partial(attrgetter(attribute), e)
-        if type(e) is SixPointRampEngine and accel.enabled(vm):  # GAP 1 and GAP 8 evaluated in C
-            return accel.sixpoint_read(e, attribute, read)
-        return read
+        return partial(attrgetter(attribute), e)
     return cast("Read", partial(ax.ram.get, number, ax.params[number].default))
 
 
@@ -111,7 +106,7 @@ def entry(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | No
     if read is None:
         return None
     head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
-    return _compiled_packed(head, read) if accel.enabled(vm) else _packed(head, read)
+    return _packed(head, read)
 
 
 def program_read(vm: VirtualModule, command: int, type_: int, motor: int) -> Read | None:
@@ -132,11 +127,6 @@ def program_store(vm: VirtualModule, type_: int, bank: int) -> Setter | None:
             or not 0 <= type_ < len(vm.user_vars):
         return None
     return partial(vm.user_vars.__setitem__, type_)
-
-
-def _compiled_packed(head: bytes, read: Read) -> Entry:
-    """`_packed` on the compiled path; a value that is not an int gets `reply_bytes`' answer."""
-    return accel.packed(head, read, partial(reply_bytes, *head))
 
 
 def setter(vm: VirtualModule, command: int, type_: int, motor: int) -> Setter | None:

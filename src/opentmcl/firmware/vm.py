@@ -14,10 +14,8 @@ import os
 import struct
 from typing import Any
 
-from .. import accel
 from ..modules.profile import ModuleProfile, load_profile
 from ..motion import CLOCK_HZ
-from ..motion.sixpoint import SixPointRampEngine
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
 from ..protocol.status import Status
 from .ascii import AsciiInterface
@@ -43,7 +41,6 @@ _SERIAL_HB, _CAN_HB = (0, 68), (0, 82)
 _RUNNING = (RUNNING, STEPPING)
 _FAR = 1 << 63  # a tick no advance reaches
 _INF = float("inf")
-_ENGINE_SYNC = accel.engine_sync(SixPointRampEngine)
 _HEARTBEATS = (("serial", _SERIAL_HB), ("can", _CAN_HB))
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
 _FAST_COMMANDS = frozenset({6, 10, 15})  # GAP, GGP, GIO: pre-bound handlers (dispatch.py)
@@ -66,8 +63,6 @@ def _check_address(profile: ModuleProfile, address: int) -> None:
 class VirtualModule:
     """A TMCL module in software: TMCM-6212, PD28-1021 (TMCM-1021) or PD86-1180 (TMCM-1180)."""
 
-    _accel = False  # built on the compiled path (accel.install, at the end of __init__)
-
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
                  eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None) -> None:
         self.profile: ModuleProfile = load_profile(name)
@@ -85,7 +80,6 @@ class VirtualModule:
         self._download_mode = False
         self.world = World(self, scenario)
         self.power_up()
-        accel.install(self, VirtualModule)  # the compiled `handle` when built and not OPENTMCL_PURE=1
 
     # --- power-up / reset ---------------------------------------------------
     def power_up(self) -> None:
@@ -429,12 +423,9 @@ class VirtualModule:
             self._sync_engines()
             return
         now = self.now
-        if self._accel and _ENGINE_SYNC is not None:
-            _ENGINE_SYNC(engines, now)
-        else:
-            for engine in engines:
-                if engine.now < now:
-                    engine.advance(now)
+        for engine in engines:
+            if engine.now < now:
+                engine.advance(now)
 
     def engine_now(self, axis: int) -> Any:
         """The engine of `axis` brought to `now`, for a flag read outside a command (WAIT POS, the
@@ -447,12 +438,9 @@ class VirtualModule:
 
     def _sync_engines(self) -> None:
         now = self.now
-        if self._accel and _ENGINE_SYNC is not None:
-            _ENGINE_SYNC(self._engines, now)  # the same loop in C (accel.engine_sync)
-        else:
-            for engine in self._engines:
-                if engine.now < now:
-                    engine.advance(now)
+        for engine in self._engines:
+            if engine.now < now:
+                engine.advance(now)
         self._synced_at = now
 
     def _engine_event(self) -> int | None:
