@@ -2,7 +2,7 @@
 an `advance` whose limit still holds, a host that only sends pre-bound reads (GAP, GGP, GIO answered
 without the general path) lets the next `advance` skip its event loop up to that limit. Everything
 else makes the next `advance` start afresh. The result must be exactly the reference's, which looks
-every event up afresh (`event_cache` False): positions, velocities, the segment plans (their rest
+every event up afresh (the oracle, oracle.py): positions, velocities, the segment plans (their rest
 instants too), heartbeats, timers, the world and every reply.
 
 TMCM-6212 manual 3.6.6 (GAP 1 actual position, 3 actual speed, 8 position reached, 10/11 the switch
@@ -19,6 +19,8 @@ from opentmcl.motion import CLOCK_HZ
 from opentmcl.motion.stage import Profile
 from opentmcl.protocol.frame import Request
 
+from .oracle import ReferenceModule
+
 MS = CLOCK_HZ // 1000
 
 
@@ -28,9 +30,7 @@ def frame(command: int, type_: int = 0, motor: int = 0, value: int = 0) -> bytes
 
 def pair(scenario: dict | None = None) -> tuple[VirtualModule, VirtualModule]:
     fast = VirtualModule("TMCM-6212", address=1, scenario=scenario)
-    ref = VirtualModule("TMCM-6212", address=1, scenario=scenario)
-    ref.event_cache = False
-    ref.interpreter.run_ahead = False
+    ref = ReferenceModule("TMCM-6212", address=1, scenario=scenario)
     return fast, ref
 
 
@@ -40,19 +40,19 @@ def state(vm: VirtualModule) -> tuple:
                     for e in (ax.engine for ax in vm.axes))
     world = tuple((aw.phys, aw.offset, aw.slipping, tuple(aw.raw.values())) for aw in vm.world.axes_world)
     ints = vm.interrupts
-    return (vm.now, vm._heartbeat_fired, dict(vm._last_command), engines, world, tuple(ints._due),
+    return (vm.now, vm.heartbeats.fired, dict(vm.heartbeats.last), engines, world, tuple(ints._due),
             tuple(sorted(ints.pending)), tuple(ax.error_flags for ax in vm.axes), tuple(vm.drain_events()))
 
 
 def loop_lookups(vm: VirtualModule) -> list[int]:
     """Count the event look-ups of `vm` (each pass of `advance_to`'s loop makes one)."""
     calls = [0]
-    inner = vm._next_event
+    inner = vm.scheduler._next_event
 
     def counted(until: int) -> int:
         calls[0] += 1
         return inner(until)
-    vm._next_event = counted  # type: ignore[method-assign]
+    vm.scheduler._next_event = counted  # type: ignore[method-assign]
     return calls
 
 
@@ -157,13 +157,13 @@ def test_a_heartbeat_restarted_by_reads_still_fires():
         for vm in (fast, ref):
             vm.advance(0.01)
         assert state(fast) == state(ref)
-    assert fast._heartbeat_fired and fast.axes[0].engine.velocity == 0
+    assert fast.heartbeats.fired and fast.axes[0].engine.velocity == 0
     run_polls(fast, ref, 3)  # reads restart it: it fires again 50 ms later (a new rest instant)
     for _ in range(8):
         for vm in (fast, ref):
             vm.advance(0.01)
         assert state(fast) == state(ref)
-    assert fast._heartbeat_fired
+    assert fast.heartbeats.fired
 
 
 def test_a_world_input_set_between_polls_ends_the_carry():

@@ -2,7 +2,7 @@
 while a program runs, the interpreter takes the module's next event itself (a timer expiring, an
 interrupt entered, an instruction that cannot run ahead) exactly as `advance_to`'s loop would, and
 goes on running ahead after it. The result must be the reference's: every event looked up afresh
-and one event per instruction (`event_cache`, `run_ahead` False).
+and one event per instruction (the oracle, oracle.py).
 
 TMCM-6212 manual 3.5.6 (interrupt processing: VECT, EI, RETI), 3.5.6.1 (interrupt numbers 0-2
 timers, 3 target position reached 0, 27 left stop switch 0, 39 input change 0), bank 3 (timer
@@ -28,7 +28,7 @@ def state(w) -> tuple:
                   else (e.now, e.position, e.velocity) for e in (ax.engine for ax in vm.axes))
     ints, it = vm.interrupts, vm.interpreter
     return (program_state(w), plans, tuple(ints._due), tuple(sorted(ints.pending)), ints.active,
-            vm._heartbeat_fired, it.wait, tuple(it.stack), it.saved, it.last_error, it.next_time,
+            vm.heartbeats.fired, it.wait, tuple(it.stack), it.saved, it.last_error, it.next_time,
             tuple(sorted(vm.io.values.items())))
 
 
@@ -127,7 +127,7 @@ def test_a_timer_expiring_with_the_heartbeat_stops_the_motor_there():
     w.vm.advance(0.01)
     ref.vm.advance(0.01)
     assert state(w) == state(ref)
-    assert w.vm._heartbeat_fired and w.vm.axes[0].engine.velocity == 0
+    assert w.vm.heartbeats.fired and w.vm.axes[0].engine.velocity == 0
 
 
 def test_wait_pos_on_another_axis_waits_while_it_rotates():

@@ -2,8 +2,8 @@
 Protocol)"), after TMCM-6212 manual 3.1: "Every command consists of a one-byte command field, a
 one-byte type field, a one-byte motor/bank field and a four-byte value field."
 
-HANDLERS (direct mode and programs) is typed by commands.CommandHandler, FLOW (program flow) by
-interpreter.FlowHandler; mypy checks every handler against them (docs/virtual-module.md)."""
+The command table's handlers (direct mode) are typed by commands.CommandHandler, its program
+steps' compilers by steps.Compiler; mypy checks every entry against them (docs/virtual-module.md)."""
 import inspect
 import subprocess
 import sys
@@ -12,7 +12,8 @@ from pathlib import Path
 
 import pytest
 
-from opentmcl.firmware import commands, interpreter, program
+from opentmcl.firmware import program
+from opentmcl.firmware.table import TABLE
 from opentmcl.firmware.vm import VirtualModule
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -20,8 +21,8 @@ EMPTY = inspect.Parameter.empty
 
 
 def _handlers():
-    yield from ((f"HANDLERS[{n}]", h) for n, h in sorted(commands.HANDLERS.items()))
-    yield from ((f"FLOW[{n}]", h) for n, h in sorted(interpreter.FLOW.items()))
+    yield from ((f"TABLE[{n}].handler", spec.handler) for n, spec in sorted(TABLE.items()))
+    yield from ((f"TABLE[{n}].step", spec.step) for n, spec in sorted(TABLE.items()) if spec.step)
     yield "program_control", program.program_control
     yield "store_instruction", program.store_instruction
     yield "VirtualModule.program_control", VirtualModule.program_control
@@ -39,13 +40,16 @@ def test_every_handler_is_annotated(name, handler):
 
 
 def test_tables_refuse_a_handler_of_another_signature(tmp_path):
-    """A handler without the `program` flag, or a flow handler answering an int, is a type error
+    """A handler without the `program` flag, or a step compiler answering an int, is a type error
     at the table (mypy, as `.ci/run` runs it); one with the right signature is accepted."""
     probe = tmp_path / "probe_handlers.py"
     probe.write_text(textwrap.dedent("""\
-        from opentmcl.firmware.commands import HANDLERS, Result
-        from opentmcl.firmware.interpreter import FLOW, Interpreter
+        from opentmcl.firmware.commands import Result
+        from opentmcl.firmware.effects import Effect
+        from opentmcl.firmware.interpreter import Interpreter
+        from opentmcl.firmware.table import Spec
         from opentmcl.firmware.vm import VirtualModule
+        from opentmcl.protocol.opcodes import COMMANDS
 
 
         def cmd_no_flag(vm: VirtualModule, type: int, motor: int, value: int) -> Result:
@@ -56,13 +60,11 @@ def test_tables_refuse_a_handler_of_another_signature(tmp_path):
             return 100, 0
 
 
-        def flow_int(self: Interpreter, type: int, motor: int, value: int) -> int:
+        def step_int(ip: Interpreter, command: int, type: int, motor: int, value: int) -> int:
             return 1
-
-
-        HANDLERS[200] = cmd_no_flag
-        HANDLERS[201] = cmd_fine
-        FLOW[99] = flow_int
+        bad = Spec(COMMANDS[1], cmd_no_flag, Effect.NONE)
+        fine = Spec(COMMANDS[1], cmd_fine, Effect.NONE)
+        worse = Spec(COMMANDS[1], cmd_fine, Effect.NONE, step=step_int)
         """), encoding="utf-8")
     cache = tmp_path / "cache"  # a cache of its own: a shared one may report a stale path
     run = subprocess.run([sys.executable, "-m", "mypy", "--follow-imports=silent", "--no-error-summary",
@@ -70,4 +72,4 @@ def test_tables_refuse_a_handler_of_another_signature(tmp_path):
                          timeout=300, env={"MYPYPATH": str(ROOT / "src"), "PATH": "/usr/bin:/bin"})
     errors = sorted(line.split(":")[1] for line in run.stdout.splitlines()
                     if line.startswith(str(probe)) and ": error:" in line)
-    assert errors == ["18", "20"], run.stdout + run.stderr
+    assert errors == ["19", "21"], run.stdout + run.stderr

@@ -7,7 +7,8 @@ import pytest
 from opentmcl.firmware import flags
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 
-from .test_program_support import T, module, run_program
+from .oracle import ReferenceModule
+from .test_program_support import T, Wire, module, run_program
 
 INT_MIN, INT_MAX = -(2**31), 2**31 - 1
 
@@ -356,8 +357,7 @@ Tick:
     RETI
 """
     def trace(run_ahead):
-        w = module()
-        w.vm.interpreter.run_ahead = run_ahead
+        w = module() if run_ahead else Wire(ReferenceModule("TMCM-6212", address=1))
         w.load(src)
         w.run()
         out = []

@@ -3,13 +3,14 @@
 timers and world is looked up again only after a write that can move it. Each test below lets the
 program itself make such a write in the middle of one long `advance` (host commands come between
 calls, which start afresh), pins the result to the manual, and compares it with the reference run:
-every event looked up afresh and one event per instruction (`event_cache`, `run_ahead` False)."""
+every event looked up afresh and one event per instruction (the oracle, oracle.py)."""
 from __future__ import annotations
 
 from opentmcl import VirtualModule
-from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
+from opentmcl.firmware.interpreter import EVENT, INSTRUCTION_TICKS
 from opentmcl.motion import CLOCK_HZ
 
+from .oracle import ReferenceModule
 from .test_program_support import Wire
 
 SLOT = INSTRUCTION_TICKS
@@ -18,10 +19,7 @@ MS = CLOCK_HZ // 1000
 
 def started(source: str, scenario: dict | None = None, reference: bool = False, module: str = "TMCM-6212") -> Wire:
     """A TMCM-6212 (or `module`) with `source` downloaded and started at tick 0 (129 at now = 0)."""
-    vm = VirtualModule(module, address=1, scenario=scenario)
-    if reference:
-        vm.event_cache = False
-        vm.interpreter.run_ahead = False
+    vm = (ReferenceModule if reference else VirtualModule)(module, address=1, scenario=scenario)
     w = Wire(vm)
     w.load(source)
     w.run()
@@ -205,36 +203,40 @@ def test_the_cache_holds_only_inside_advance():
     and next_event_in (the servers' sleep) answers from the present state."""
     w = started("L: GAP 1, 0\nJA L")
     w.vm.advance(0.001)
-    assert w.vm._limit_ok is False
+    assert not w.vm.scheduler.limit_held()
     w.ok(9, 0, 3, 5)                        # SGP 0, 3, 5: timer 0 at 5 ms (not enabled: no event)
     w.ok(25, 0, 0, 0)
     w.ok(25, 255, 0, 0)
     w.ok(37, 0, 0, 1)                       # VECT 0 to the loop itself
     assert w.vm.next_event_in() is not None
-    assert w.vm._limit_ok is False
+    assert not w.vm.scheduler.limit_held()
 
 
 INVALIDATING = ["SGP 0, 3, 1", "SGP 68, 0, 5", "SGP 39, 3, 1", "EI 0", "DI 0", "EI 255", "VECT 0, 0",
                 "SAP 181, 0, 100", "SAP 212, 0, 5", "SAP 4, 0, 100", "MVP ABS, 0, 100", "ROR 0, 10", "MST 0",
-                "RFS START, 0", "WAIT TICKS, 0, 1", "STOP", "GAP 11, 0", "GAP 207, 0", "CLE 0"]
-KEEPING = ["GAP 1, 0", "GAP 8, 0", "GAP 4, 0", "GGP 132, 0", "GGP 3, 2", "GIO 0, 0", "GIO 0, 1", "SIO 0, 2, 1",
+                "RFS START, 0", "WAIT TICKS, 0, 1", "STOP", "GAP 11, 0"]
+KEEPING = ["GAP 1, 0", "GAP 8, 0", "GAP 4, 0", "GAP 207, 0", "GGP 132, 0", "GGP 3, 2", "GIO 0, 0", "GIO 0, 1", "SIO 0, 2, 1", "CLE 0",
            "CALC ADD, 1", "CALCX ADD", "COMP 5", "JA 0", "AGP 1, 2", "SGP 1, 2, 7"]
 
 
 def test_which_instructions_look_the_events_up_again():
     """docs/architecture.md "Time": after a program instruction that can move an event (SGP of a
     timer period, heartbeat GP68 or input transition, EI/DI/VECT, SAP of the world's or the motion's
-    parameters, motion, RFS, WAIT, STOP, a GAP the world computes, AP207, CLE) the cached limit is
-    dropped; pure instructions, reads of the engines, GGP, GIO and SIO keep it. Each instruction
-    is executed by single step (130, manual 3.6.36) with the cache marked valid before."""
+    parameters, motion, RFS, WAIT, STOP, a GAP the world computes) the cached limit is
+    dropped: it is an event of the scheduler and never runs ahead. Pure instructions (CLE among
+    them: the error flags are no event's), reads of the engines, GGP, GIO and SIO keep it (the
+    command table's effects, firmware/table.py). Each instruction, executed by single step (130,
+    manual 3.6.36) from a limit marked valid, drops it or leaves it as its kind says."""
     for line in INVALIDATING + KEEPING:
         w = started(f"{line}\nJA 0")
+        kind, _effect, _step = w.vm.interpreter.compiled(w.vm.program.code[0])
+        assert (kind == EVENT) is (line in INVALIDATING), line
         w.ok(128)                              # stop, then step from address 0
         w.ok(131)
-        w.vm._limit_ok = True
-        w.ok(130)
+        w.vm.scheduler._limit_ok = True
+        w.vm.interpreter.step()
         assert w.pc != 0 or line.startswith(("WAIT", "STOP", "JA")), line
-        assert w.vm._limit_ok is (line in KEEPING), line
+        assert w.vm.scheduler.limit_held() is (line in KEEPING), line
 
 
 def test_wait_that_timed_out_during_an_interrupt_ends_after_reti():

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from opentmcl import VirtualModule
-from opentmcl.firmware import dispatch
+from opentmcl.firmware import requests as dispatch
 from opentmcl.firmware.eeprom import Eeprom, EepromError
 from opentmcl.lang.assembler import assemble
 from opentmcl.modules import load_profile
@@ -50,10 +50,10 @@ def test_entry_of_a_motor_the_module_lacks_is_none():
     none."""
     vm = VirtualModule("TMCM-6212", address=1)
     assert len(vm.axes) == 6
-    fast = dispatch.entry(vm, 6, 4, 5)
+    fast = dispatch.handler(vm, 6, 4, 5)
     assert fast is not None
     assert fast() == vm.handle(_frame(6, 4, 5))
-    assert dispatch.entry(vm, 6, 4, 6) is None
+    assert dispatch.handler(vm, 6, 4, 6) is None
     assert Reply.decode(vm.handle(_frame(6, 4, 6))).status == 4
 
 
@@ -63,17 +63,17 @@ def test_entry_of_a_command_without_a_handler_is_none(tmp_path):
     module whose command set lacks GIO (docs/profiles.md `opcodes` replaces the list; status 2,
     TMCM-6212 3.2.1) has no GIO handler, while GAP keeps one."""
     vm = VirtualModule("TMCM-6212", address=1)
-    assert dispatch.entry(vm, 4, 0, 0) is None
-    assert dispatch.entry(vm, 5, 4, 0) is None
-    assert dispatch.entry(vm, 15, 0, 0) is not None
+    assert dispatch.handler(vm, 4, 0, 0) is None
+    assert dispatch.handler(vm, 5, 4, 0) is None
+    assert dispatch.handler(vm, 15, 0, 0) is not None
     opcodes = sorted(set(load_profile("TMCM-6212").opcodes) - {15})
     path = tmp_path / "nogio.toml"
     path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOGIO-6212"\n'
                     f"opcodes = {opcodes}\n")
     nogio = VirtualModule(str(path), address=1)
     assert Reply.decode(nogio.handle(_frame(15, 0, 0))).status == 2
-    assert dispatch.entry(nogio, 15, 0, 0) is None
-    assert dispatch.entry(nogio, 6, 4, 0) is not None
+    assert dispatch.handler(nogio, 15, 0, 0) is None
+    assert dispatch.handler(nogio, 6, 4, 0) is not None
 
 
 # --- a pre-bound GGP of an unsigned 32-bit value -------------------------------------------------

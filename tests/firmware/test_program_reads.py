@@ -59,9 +59,10 @@ def test_the_bound_ops_are_dropped_with_the_tables():
     the program's bound reads go with them and are bound again on their next use."""
     w = started("Loop:\nGAP 1, 0\nAGP 3, 2\nJA Loop")
     w.vm.advance(0.005)
-    assert (6, 1, 0) in w.vm._program_ops and (35, 3, 2) in w.vm._program_ops
+    compiled = w.vm.interpreter._compiled
+    assert (6, 1, 0, 0) in compiled and (35, 3, 2, 0) in compiled
     w.vm.forget_requests()
-    assert w.vm._program_ops == {}
+    assert compiled == {}
     w.vm.advance(0.005)
-    assert (6, 1, 0) in w.vm._program_ops
+    assert (6, 1, 0, 0) in compiled
     assert isinstance(w.vm.interpreter, Interpreter)

@@ -86,7 +86,8 @@ def test_manual_ggp_66_vector_and_sgp_66_rebinds():
 @pytest.mark.parametrize("name", MODULES)
 def test_gap_of_every_readable_parameter_equals_the_general_path(name):
     """Manual 4 (TMCM-6212 4.1, PD86-1180 5): each readable axis parameter of each motor, read while
-    the axes move; AP207 (cleared by the read) and the world's readings stay on the general path."""
+    the axes move; the world's readings stay on the general path (they follow the stage: no pure
+    reads, firmware/table.py). AP207 is bound too: the bound read clears it as the general one."""
     vm = busy(name)
     vm.advance(0.01)
     bound = 0
@@ -95,7 +96,7 @@ def test_gap_of_every_readable_parameter_equals_the_general_path(name):
             raw = frame(6, n, m)
             first, second = twice(vm, raw)
             assert first == second and Reply.decode(first).status == 100, (n, m)
-            expect_bound = n != 207 and n not in vm.world.axis_numbers
+            expect_bound = n not in vm.world.axis_numbers
             assert vm.is_prebound(raw) == expect_bound, (n, m)
             bound += expect_bound
     assert bound >= 40 * len(vm.axes)
@@ -103,8 +104,9 @@ def test_gap_of_every_readable_parameter_equals_the_general_path(name):
 
 @pytest.mark.parametrize("name", MODULES)
 def test_ggp_of_every_readable_global_equals_the_general_path(name):
-    """Manual 5 (PD86-1180 6): banks 0 and 3 and the user variables of bank 2; the values that are not
-    RAM (73 lock, 128-133 status, download mode, PC, tick, random) take the general path."""
+    """Manual 5 (PD86-1180 6): banks 0 and 3 and the user variables of bank 2, all bound; the values
+    that are not RAM (73 lock, 128-130 status, download mode, PC, 132 tick) are read live by the
+    bound read as by the general one. The random number GP133 is in test_random_numbers_..."""
     vm = busy(name)
     assert vm.request(9, 7, 2, -123456).status == 100  # a user variable
     keys = sorted(k for k, p in vm.profile.global_parameters.items() if p.readable)
@@ -112,18 +114,16 @@ def test_ggp_of_every_readable_global_equals_the_general_path(name):
     for bank, n in keys:
         raw = frame(10, n, bank)
         first, second = twice(vm, raw)
-        if n in (132, 133) and bank == 0:  # tick (same instant) / random (next number): general path
-            assert not vm.is_prebound(raw)
+        assert vm.is_prebound(raw), (bank, n)
+        if (bank, n) == (0, 133):  # the next random number each time
             continue
         assert first == second and Reply.decode(first).status == 100, (bank, n)
-        assert vm.is_prebound(raw) == (bank != 0 or n not in (73, 128, 129, 130)), (bank, n)
     assert Reply.decode(vm.handle(frame(10, 7, 2))).value == -123456
 
 
 @pytest.mark.parametrize("name", MODULES)
 def test_gio_of_every_port_equals_the_general_path(name):
-    """TMCM-6212 3.6.13 / PD86-1180 4.6.15: every port of every bank; GIO 255 (all ports) stays on
-    the general path."""
+    """TMCM-6212 3.6.13 / PD86-1180 4.6.15: every port of every bank, and GIO 255 (all ports)."""
     vm = VirtualModule(name, address=1)
     for i, (bank, port) in enumerate(sorted(vm.io.ports)):
         if bank != 2:
@@ -133,7 +133,25 @@ def test_gio_of_every_port_equals_the_general_path(name):
         assert first == second and Reply.decode(first).status == 100 and vm.is_prebound(raw)
     raw = frame(15, 255, 0)
     first, second = twice(vm, raw)
-    assert first == second and not vm.is_prebound(raw)
+    assert first == second and vm.is_prebound(raw)
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_random_numbers_are_the_same_sequence_bound_or_not(name):
+    """GP133 "Random number" (TMCM-6212 5.1): each GGP 133 draws the next one; the bound read and the
+    general path draw the same sequence from the same seed (SGP 133)."""
+    bound, general = VirtualModule(name, address=1), VirtualModule(name, address=1)
+    raw = frame(10, 133, 0)
+    out = []
+    for vm in (bound, general):
+        assert vm.request(9, 133, 0, 4711).status == 100
+        seq = []
+        for _ in range(5):
+            if vm is general:
+                vm.forget_requests()
+            seq.append(vm.handle(raw))
+        out.append(seq)
+    assert out[0] == out[1] and len(set(out[0])) == 5 and bound.is_prebound(raw)
 
 
 # --- status codes at the edges ------------------------------------------------------------
@@ -323,17 +341,17 @@ def test_bound_reads_restart_their_heartbeat(interface, gp):
 
 def test_reads_keep_the_engines_clean_writes_mark_them():
     """A pure read does not make the module look up the engines' next events again; a write does
-    (issue 16: `_engines_dirty` means a command may have changed an engine's next event)."""
+    (issue 16: the scheduler's `_dirty` means a command may have changed an engine's next event)."""
     vm = busy("TMCM-6212")
     vm.advance(0.01)
     assert vm.next_event_in() is not None  # looks the next events up: the engines are clean
-    assert not vm._engines_dirty
+    assert not vm.scheduler._dirty
     for raw in (frame(6, 1, 0), frame(6, 1, 0), frame(10, 66, 0), frame(15, 0, 1), frame(6, 207, 0)):
         vm.handle(raw)
-        assert not vm._engines_dirty
+        assert not vm.scheduler._dirty
     assert all(ax.engine.now == vm.now for ax in vm.axes)
     vm.handle(frame(5, 4, 0, 500))
-    assert vm._engines_dirty
+    assert vm.scheduler._dirty
 
 
 @pytest.mark.parametrize("interface", ["usb", "rs485", "rs232"])

@@ -59,7 +59,7 @@ def test_bound_sap_4_changes_the_running_move():
     vm.advance(0.5)
     vm.next_event_in()
     assert send(vm, frame(5, 4, 0, 3000)).status == 100
-    assert vm._engines_dirty
+    assert vm.scheduler._dirty
     vm.advance(2.0)
     assert vm.request(6, 3, 0).value == 3000
 

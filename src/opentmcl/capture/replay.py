@@ -155,7 +155,7 @@ class _Replayer:
             self.virtual_events.append((self.vm.now / CLOCK_HZ, raw))
 
     def run(self) -> None:
-        from ..firmware.commands import execute
+        from ..firmware.table import execute
 
         actions = []  # (time, order, kind, record)
         for rec in self.cap.frames:

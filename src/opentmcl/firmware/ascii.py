@@ -83,7 +83,7 @@ class AsciiInterface:
 
     def execute(self, line: str) -> bytes:
         """One command line -> the reply line (with <CR>)."""
-        from .commands import execute
+        from .table import execute
 
         vm = self.vm
         try:

@@ -9,7 +9,10 @@ internal units on the TMCM-6212), TMC429 internal units on the PD86-1180.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from fractions import Fraction
+from functools import partial
+from operator import attrgetter
 from typing import TYPE_CHECKING
 
 from ..modules.profile import ModuleProfile, Param
@@ -29,6 +32,9 @@ from .status import TmclStatus
 if TYPE_CHECKING:
     from .world import World
 
+ENGINE_READS = {0: "target_position", 1: "position", 8: "position_reached",
+                135: "actual_acceleration", 138: "ramp_mode"}
+"""Axis parameters read from the ramp engine (AP138: "Automatically set when using ROR, ROL, MST and MVP")."""
 VELOCITY_PARAMS = {2, 3, 4, 16, 19, 20, 22, 23, 29, 181, 182, 186, 194, 195}
 ACCEL_PARAMS = {5, 15, 17, 18}
 # Internal-unit ranges of the TMC5130 registers (TMC5130 datasheet; docs/motion.md) used when AP255 = 0.
@@ -48,6 +54,7 @@ class Axis:
         self.engine_keys = profile.engine_params
         self._unit_mode = profile.capabilities.unit_mode
         self.readable = frozenset(n for n, p in self.params.items() if p.readable)
+        self._readers: dict[int, Callable[[], int]] = {}
         self.last_target = 0
         self.error_flags = 0
         self.reference_search_active = False
@@ -120,31 +127,46 @@ class Axis:
             raise TmclStatus(4)
 
     def get(self, number: int) -> int:
-        if number not in self.readable:
-            raise TmclStatus(3)
+        """GAP `number` (TMCM-6212 3.6.6): the value now; TmclStatus(3) if it cannot be read."""
+        return self.reader(number)()
+
+    def reader(self, number: int) -> Callable[[], int]:
+        """The read of axis parameter `number`, bound to this axis: the one rule of GAP, which the
+        request path and programs bind ahead (requests.py). TmclStatus(3) if it cannot be read."""
+        read = self._readers.get(number)
+        if read is None:
+            if number not in self.readable:
+                raise TmclStatus(3)
+            read = self._readers[number] = self._make_reader(number)
+        return read
+
+    def _make_reader(self, number: int) -> Callable[[], int]:
         if number in self.world.axis_numbers:
-            world = self.world.read_axis(self, number)
-            if world is not None:
-                return world
+            return partial(self._world_value, number)
         e = self.engine
-        if number == 0:
-            return e.target_position
-        if number == 1:
-            return e.position
-        if number == 2:
-            return self.from_engine(2, e.target_velocity)
-        if number == 3:
-            return self.from_engine(3, e.velocity)
-        if number == 8:
-            return int(e.position_reached)
-        if number == 135 and hasattr(e, "actual_acceleration"):
-            return e.actual_acceleration
-        if number == 138 and hasattr(e, "ramp_mode"):  # "Automatically set when using ROR, ROL, MST and MVP"
-            return e.ramp_mode
+        if number in (2, 3):  # velocities: the unit follows AP255 at every read
+            velocity = attrgetter("target_velocity" if number == 2 else "velocity")
+            return lambda: self.from_engine(number, velocity(e))
+        attribute = ENGINE_READS.get(number)
+        if attribute is not None and (number < 135 or hasattr(e, attribute)):
+            value = partial(attrgetter(attribute), e)
+            return (lambda: int(value())) if number == 8 else value
         if number == 207:
-            flags, self.error_flags = self.error_flags, 0
-            return flags
-        return self.ram.get(number, self.params[number].default)
+            return self._take_error_flags
+        return partial(self.ram.get, number, self.params[number].default)
+
+    def __getstate__(self) -> dict[str, object]:
+        """A copy (copy.deepcopy, pickle) makes its own readers: these are bound to this axis."""
+        return {**self.__dict__, "_readers": {}}
+
+    def _world_value(self, number: int) -> int:
+        value = self.world.read_axis(self, number)
+        return self.ram.get(number, self.params[number].default) if value is None else value
+
+    def _take_error_flags(self) -> int:
+        """AP207: the extended error flags, cleared by the read."""
+        flags, self.error_flags = self.error_flags, 0
+        return flags
 
     def set(self, number: int, value: int) -> None:
         p = self.param(number)

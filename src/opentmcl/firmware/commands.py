@@ -39,9 +39,7 @@ class CommandHandler(Protocol):
     def __call__(self, vm: VirtualModule, type: int, motor: int, value: int, program: bool, /) -> Result: ...
 
 
-NO_SUPPRESS = frozenset({6, 10, 15})  # GP255 never suppresses GAP, GGP, GIO
 OK = int(Status.OK)
-_INVALID_COMMAND = int(Status.INVALID_COMMAND)
 
 
 def _axis(vm: VirtualModule, motor: int) -> Axis:
@@ -308,31 +306,9 @@ def cmd_139(vm: VirtualModule, type: int, motor: int, value: int, program: bool)
     return OK, 0
 
 
-HANDLERS: dict[int, CommandHandler] = {
-    1: cmd_ror, 2: cmd_rol, 3: cmd_mst, 4: cmd_mvp, 5: cmd_sap, 6: cmd_gap, 7: cmd_stap, 8: cmd_rsap,
-    9: cmd_sgp, 10: cmd_ggp, 11: cmd_stgp, 12: cmd_rsgp, 13: cmd_rfs, 14: cmd_sio, 15: cmd_gio, 19: cmd_calc,
-    30: cmd_sco, 31: cmd_gco, 32: cmd_cco, 34: cmd_aap, 35: cmd_agp, 36: cmd_cle, 37: cmd_vect,
-    25: cmd_ei, 26: cmd_di, 39: cmd_aco, 136: cmd_136, 137: cmd_137, 138: cmd_138, 139: cmd_139,
-}
-PROGRAM_CONTROL = frozenset(range(128, 136))
-PURE_READS = frozenset({6, 10, 13, 15, 31, 136})
-"""GAP, GGP, RFS type 2 (status), GIO, GCO, version: they change no engine's next event."""
-
-
-def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
-    """Run one command. In download mode (132) non-control commands are stored instead (status 101)."""
-    try:
-        # 3.6.36: in download mode "All following commands (except control commands) are ... stored".
-        if vm.download_mode and not program and command < 128:
-            return vm.store_instruction(command, type, motor, value)
-        if command not in vm.opcodes:
-            return _INVALID_COMMAND, 0
-        if command in PURE_READS and (command != 13 or type == 2):
-            vm.sync_for_read()
-        else:
-            vm.sync()  # a write or a motion command: the engines' next events are looked up again
-        if command in PROGRAM_CONTROL:
-            return vm.program_control(command, type, value)
-        return HANDLERS.get(command, cmd_no_effect)(vm, type, motor, value, program)
-    except TmclStatus as exc:
-        return exc.status, 0
+def control_handler(number: int) -> CommandHandler:
+    """The handler of control command `number` (128-135, 3.6.36: program.program_control)."""
+    def handler(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+        return vm.program_control(number, type, value)
+    handler.__name__ = f"cmd_{number}"
+    return handler

@@ -10,6 +10,8 @@ locked, anything that would write the EEPROM answers status 5.
 from __future__ import annotations
 
 import random
+from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
@@ -49,26 +51,47 @@ class GlobalParameters:
 
     # --- SGP / GGP ----------------------------------------------------------------
     def get(self, bank: int, number: int) -> int:
+        """GGP (TMCM-6212 3.6.8): the value now; TmclStatus(3) if it cannot be read."""
+        return self.reader(bank, number)()
+
+    def reader(self, bank: int, number: int) -> Callable[[], int]:
+        """The read of global parameter `number` of `bank`: the one rule of GGP, which the request
+        path and programs bind ahead. TmclStatus(3) if it cannot be read."""
         vm = self.vm
         if bank == USER_BANK:
-            return vm.user_vars[self._user_index(number)]
+            return partial(vm.user_vars.__getitem__, self._user_index(number))
         key = (bank, number)
         p = self.params.get(key)
         if p is None or not p.readable:
             raise TmclStatus(3)
-        if key == (0, 73):
-            return int(self.eeprom_locked)
-        if key == (0, 128):
-            return vm.application_status
-        if key == (0, 129):
-            return int(vm.download_mode)
-        if key == (0, 130):
-            return vm.program_counter
-        if key == (0, 132):
-            return to_int32(vm.now * 1000 // CLOCK_HZ + self._tick_offset)
-        if key == (0, 133):
-            return self._random.randrange(0, 2**31)
-        return self.ram[key]
+        special = self._SPECIAL.get(key) if bank == 0 else None
+        if special is not None:
+            return partial(special, self)
+        return partial(self.ram.__getitem__, key)
+
+    def _locked(self) -> int:
+        return int(self.eeprom_locked)
+
+    def _status(self) -> int:
+        return self.vm.application_status
+
+    def _download(self) -> int:
+        return int(self.vm.download_mode)
+
+    def _pc(self) -> int:
+        return self.vm.program_counter
+
+    def _ticks(self) -> int:
+        return to_int32(self.vm.scheduler.now * 1000 // CLOCK_HZ + self._tick_offset)
+
+    def _next_random(self) -> int:
+        return self._random.randrange(0, 2**31)
+
+    _SPECIAL: dict[tuple[int, int], Callable[[GlobalParameters], int]] = {
+        (0, 73): _locked, (0, 128): _status, (0, 129): _download, (0, 130): _pc, (0, 132): _ticks,
+        (0, 133): _next_random}
+    """GP73 lock, 128 application status, 129 download mode, 130 program counter, 132 tick timer,
+    133 random number: values that do not live in RAM."""
 
     def set(self, bank: int, number: int, value: int) -> None:
         vm = self.vm
@@ -87,7 +110,7 @@ class GlobalParameters:
         if not p.accepts(value):
             raise TmclStatus(4)
         if key == (0, 132):
-            self._tick_offset = value - vm.now * 1000 // CLOCK_HZ
+            self._tick_offset = value - vm.scheduler.now * 1000 // CLOCK_HZ
             return
         if key == (0, 133):
             self._random.seed(value)
@@ -99,7 +122,6 @@ class GlobalParameters:
         if key == (0, 81):
             self._set_protection(self.ram[key], value)
         self.ram[key] = value
-        vm.forget_requests()  # GP66, GP76, GP87 are in the pre-bound replies (dispatch.py)
 
     def _set_lock(self, value: int) -> None:
         if value == LOCK_CODE:
@@ -147,7 +169,6 @@ class GlobalParameters:
             raise TmclStatus(3)
         stored = vm.eeprom.get_global(bank, number)
         self.ram[key] = p.default if stored is None else stored
-        vm.forget_requests()
 
     def _check_unlocked(self) -> None:
         if self.eeprom_locked:

@@ -152,6 +152,10 @@ class Interrupts:
             self.trigger(n)
         self._first_due = _earliest(self._due)
 
+    def first_due(self) -> int | None:
+        """The earliest tick a timer rolls over (whether its interrupt is latched or not)."""
+        return self._first_due
+
     def next_timer_event(self, now: int, refresh: bool = True) -> int | None:
         """Earliest expiry of a timer whose interrupt would be latched."""
         if refresh:
@@ -202,7 +206,7 @@ class Interrupts:
 
     def poll(self, now: int, refresh: bool = True) -> None:
         """Latch what occurred up to tick `now` (timers, level transitions). `refresh` False:
-        no period was written since the last look (VirtualModule._limit_ok)."""
+        no period was written since the last look (Scheduler.limit_held)."""
         if refresh:
             self._refresh_timers(now)
         self._run_timers(now)

@@ -17,6 +17,7 @@ sets the analog reading to 0 or full scale (docs/assumptions.md).
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING
 
 from .status import TmclStatus
@@ -82,13 +83,22 @@ class IOBanks:
         return top if top is not None else (1 << (max(p for _, p in outputs) + 1)) - 1
 
     def get(self, port: int, bank: int) -> int:
+        """GIO (TMCM-6212 3.6.13): the value now; TmclStatus(3/4) if it cannot be read."""
+        return self.reader(port, bank)()
+
+    def reader(self, port: int, bank: int) -> Callable[[], int]:
+        """The read of `port` of `bank`: the one rule of GIO, which the request path and programs
+        bind ahead. Port 255 reads every digital port of the bank at once as a bit mask."""
         if port == ALL_PORTS:
             ports = [k for k in self._bank_ports(bank) if k[1] < 8]  # one byte of port bits
             if not ports or any(self.ports[k].kind == "analog" for k in ports):
                 raise TmclStatus(3)
-            return sum((self.read(k) & 1) << k[1] for k in ports)
+            return partial(self._mask, ports)
         self.port(port, bank)
-        return self.read((bank, port))
+        return partial(self.read, (bank, port))
+
+    def _mask(self, ports: list[tuple[int, int]]) -> int:
+        return sum((self.read(k) & 1) << k[1] for k in ports)
 
     def read(self, key: tuple[int, int]) -> int:
         if key in self.forced:

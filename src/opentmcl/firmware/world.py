@@ -23,6 +23,7 @@ from ..motion import CLOCK_HZ
 from ..motion.scenario import Scenario, ScenarioError, load_scenario
 from ..motion.stage import Profile, ceil_ticks
 from . import flags as fl
+from .effects import Effect
 from .axis_world import AxisWorld
 from .io import threshold
 
@@ -72,14 +73,14 @@ class World:
             self.inputs.pop(twin, None)
         self.inputs[(bank, port)] = value if isinstance(value, Profile) else Profile.constant(float(value))
         self._input_cache = None
-        self.vm._carry_until = -1  # a new next input change
+        self.vm.scheduler.invalidate(Effect.EVENTS)  # a new next input change
         self._drive_input((bank, port))
 
     def set_shutdown(self, level: int) -> None:
         """The SHUTDOWN pin (PD86-1180 GP80) at a constant level."""
         self.shutdown = Profile.constant(level)
         self._input_cache = None
-        self.vm._carry_until = -1
+        self.vm.scheduler.invalidate(Effect.EVENTS)
         self.service()
 
     # --- hooks --------------------------------------------------------------------------------------
@@ -167,8 +168,8 @@ class World:
             acted = True
         now = vm.now
         # the axes that need events, as found by the last look-up while that still holds
-        # (VirtualModule._limit_ok: no write since that can make an axis need them)
-        watched = self._watched if vm._limit_ok else [aw for aw in self.axes_world if aw.interesting()]
+        # (Scheduler.limit_held: no write since that can make an axis need them)
+        watched = self._watched if vm.scheduler.limit_held() else [aw for aw in self.axes_world if aw.interesting()]
         for aw in watched:
             if aw.needs_check(now):
                 if aw.engine.now < now:
@@ -183,7 +184,7 @@ class World:
         events (checked at every tick too)."""
         if self.shutdown is not None:
             return False
-        watched = self._watched if self.vm._limit_ok else [aw for aw in self.axes_world if aw.interesting()]
+        watched = self._watched if self.vm.scheduler.limit_held() else [aw for aw in self.axes_world if aw.interesting()]
         return not any(aw.load.by == "time" for aw in watched)
 
     _watched: list[AxisWorld] = []

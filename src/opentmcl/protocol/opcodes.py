@@ -135,6 +135,12 @@ class Command:
     program: bool = True
     direct: bool = True
     source: str = "TMCM-6212"
+    keeps_address: bool = False
+    """The command cannot change the module's addresses (GP66, GP87, host GP76), its reply
+    suppression (GP255) or its serial mode (ASCII, download): motion, axis parameters, reads,
+    EEPROM stores, I/O, coordinates, status and version. SGP keeps them only outside bank 0."""
+    replies: bool = True
+    """False for the one command the module answers with no reply (137, 3.6.36)."""
     notes: str = field(default="", compare=False)
 
     @property
@@ -172,21 +178,21 @@ T, M, V = TYPE, MOTOR, VALUE
 
 _COMMANDS: tuple[Command, ...] = (
     # Motion, parameter and I/O commands (TMCM-6212 3.6.1-3.6.13, PD86-1180 4.6.1-4.6.15).
-    Command(1, "ROR", "Rotate right", ((M, V),)),
-    Command(2, "ROL", "Rotate left", ((M, V),)),
-    Command(3, "MST", "Motor stop", ((M,), (M, V))),
-    Command(4, "MVP", "Move to position", ((T, M, V),), symbols="mvp"),
-    Command(5, "SAP", "Set axis parameter", ((T, M, V),)),
-    Command(6, "GAP", "Get axis parameter", ((T, M), (T, M, V))),
-    Command(7, "STAP", "Store axis parameter", ((T, M), (T, M, V)), source="PD86-1180"),
-    Command(8, "RSAP", "Restore axis parameter", ((T, M), (T, M, V)), source="PD86-1180"),
-    Command(9, "SGP", "Set global parameter", ((T, M, V),)),
-    Command(10, "GGP", "Get global parameter", ((T, M), (T, M, V))),
-    Command(11, "STGP", "Store global parameter", ((T, M), (T, M, V))),
+    Command(1, "ROR", "Rotate right", ((M, V),), keeps_address=True),
+    Command(2, "ROL", "Rotate left", ((M, V),), keeps_address=True),
+    Command(3, "MST", "Motor stop", ((M,), (M, V)), keeps_address=True),
+    Command(4, "MVP", "Move to position", ((T, M, V),), symbols="mvp", keeps_address=True),
+    Command(5, "SAP", "Set axis parameter", ((T, M, V),), keeps_address=True),
+    Command(6, "GAP", "Get axis parameter", ((T, M), (T, M, V)), keeps_address=True),
+    Command(7, "STAP", "Store axis parameter", ((T, M), (T, M, V)), source="PD86-1180", keeps_address=True),
+    Command(8, "RSAP", "Restore axis parameter", ((T, M), (T, M, V)), source="PD86-1180", keeps_address=True),
+    Command(9, "SGP", "Set global parameter", ((T, M, V),), keeps_address=True),
+    Command(10, "GGP", "Get global parameter", ((T, M), (T, M, V)), keeps_address=True),
+    Command(11, "STGP", "Store global parameter", ((T, M), (T, M, V)), keeps_address=True),
     Command(12, "RSGP", "Restore global parameter", ((T, M), (T, M, V))),
-    Command(13, "RFS", "Reference search", ((T, M), (T,)), symbols="rfs"),
-    Command(14, "SIO", "Set output", ((T, M, V),)),
-    Command(15, "GIO", "Get input", ((T, M), (T, M, V))),
+    Command(13, "RFS", "Reference search", ((T, M), (T,)), symbols="rfs", keeps_address=True),
+    Command(14, "SIO", "Set output", ((T, M, V),), keeps_address=True),
+    Command(15, "GIO", "Get input", ((T, M), (T, M, V)), keeps_address=True),
     # Calculation and branch commands (3.6.14-3.6.21).
     Command(19, "CALC", "Calculate", ((T, V), (T,)), symbols="calc"),
     Command(20, "COMP", "Compare", ((V,),), direct=False),
@@ -199,9 +205,9 @@ _COMMANDS: tuple[Command, ...] = (
     Command(27, "WAIT", "Wait for an event", ((T, M, V),), symbols="wait", direct=False),
     Command(28, "STOP", "Stop TMCL program execution", ((),), direct=False),
     # Coordinates, X register, accumulator transfers, interrupts (3.6.22-3.6.33).
-    Command(30, "SCO", "Set coordinate", ((T, M, V),)),
-    Command(31, "GCO", "Get coordinate", ((T, M), (T, M, V))),
-    Command(32, "CCO", "Capture coordinate", ((T, M), (T, M, V))),
+    Command(30, "SCO", "Set coordinate", ((T, M, V),), keeps_address=True),
+    Command(31, "GCO", "Get coordinate", ((T, M), (T, M, V)), keeps_address=True),
+    Command(32, "CCO", "Capture coordinate", ((T, M), (T, M, V)), keeps_address=True),
     Command(33, "CALCX", "Calculate using the X register", ((T,),), symbols="calcx"),
     Command(34, "AAP", "Accu to axis parameter", ((T, M), (T, M, V))),
     Command(35, "AGP", "Accu to global parameter", ((T, M), (T, M, V))),
@@ -246,10 +252,10 @@ _COMMANDS: tuple[Command, ...] = (
     Command(132, None, "Enter download mode", program=False),
     Command(133, None, "Exit download mode", program=False),
     Command(134, None, "Read program memory", program=False),
-    Command(135, None, "Get application status", program=False),
-    Command(136, None, "Get firmware version", program=False),
-    Command(137, None, "Restore factory settings", program=False),
-    Command(138, None, "Request target position reached event", program=False),
+    Command(135, None, "Get application status", program=False, keeps_address=True),
+    Command(136, None, "Get firmware version", program=False, keeps_address=True),
+    Command(137, None, "Restore factory settings", program=False, replies=False),
+    Command(138, None, "Request target position reached event", program=False, keeps_address=True),
     Command(139, None, "Enter ASCII mode", program=False, source="PD86-1180"),
 )
 
@@ -271,9 +277,19 @@ REQUEST_TARGET_REACHED_EVENT = 138
 ENTER_ASCII_MODE = 139
 FACTORY_RESET_KEY = 1234  # value that command 137 requires
 MOTOR_STOP = 3  # MST (3.6.3)
+SET_GLOBAL_PARAMETER = 9  # SGP (3.6.7)
+CONTROL_FIRST = 128
+"""Numbers from here up are control commands (3.6.36): direct mode only, never stored by 132."""
 STOP_COMMANDS = frozenset({MOTOR_STOP, STOP_APPLICATION, RESET_APPLICATION})
 """Requests that stop motion or a program: a served module takes them before other waiting
 requests (docs/architecture.md "Real time")."""
+
+
+def keeps_addressing(command: int, bank: int) -> bool:
+    """Can a module that executed `command` (with `bank` in the motor/bank field) have changed
+    its addresses, reply suppression or serial mode? False when it can (`Command.keeps_address`)."""
+    c = COMMANDS.get(command)
+    return c is not None and c.keeps_address and not (command == SET_GLOBAL_PARAMETER and bank == 0)
 
 
 class UnknownCommand(KeyError):

@@ -1,0 +1,198 @@
+"""The command table: what the firmware does with each TMCL command (docs/architecture.md
+"Request path"), built on the command set of protocol/opcodes.py.
+
+For every command the table gives:
+
+- `handler`: what the command does in direct mode (commands.py), answering (status, value);
+- `effect`: what it may change, for the scheduler's caches (effects.py), refined by type and
+  motor/bank where that matters (`effect_of`): a GAP of a parameter the world computes reads
+  through the world, an SGP to the user variables (bank 2) touches nothing the time loop reads;
+- `loads`: whether a program's instruction loads the accumulator with the value (manual 3.5.5);
+- `binds`: "read" for the reads the request path and programs bind ahead (GAP, GGP, GIO), "write"
+  for the writes the request path binds (SAP, SGP to user variables), "" otherwise;
+- `step`: its behaviour as a program step (steps.py), or None: it runs as in direct mode;
+- which modules have it: the profile's command set (`available`).
+
+Direct mode (`execute`), programs (Interpreter), ASCII mode (ascii.py) and the run ahead all
+dispatch through this table.
+"""
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+from typing import TYPE_CHECKING
+
+from ..protocol.opcodes import COMMANDS, CONTROL_FIRST, Command
+from ..protocol.status import Status
+from . import commands as c
+from . import steps as s
+from .effects import ALL, WRITE, Effect
+from .status import TmclStatus
+from .world import World
+
+if TYPE_CHECKING:
+    from .commands import CommandHandler, Result
+    from .vm import VirtualModule
+
+USER_BANK, INTERRUPT_BANK = 2, 3
+TICK_TIMER = (0, 132)
+_NONE, _READ = Effect.NONE, Effect.READ
+_CONTROL = Effect.PROGRAM | Effect.EVENTS | Effect.REQUESTS
+_OK, _INVALID = int(Status.OK), int(Status.INVALID_COMMAND)
+
+
+@dataclass(frozen=True, slots=True)
+class Spec:
+    """One command of the table."""
+
+    command: Command
+    handler: CommandHandler
+    effect: Effect
+    refine: Callable[[int, int], Effect] | None = None
+    loads: Callable[[int, int], bool] | None = None
+    binds: str = ""
+    step: s.Compiler | None = None
+
+    @property
+    def number(self) -> int:
+        return self.command.number
+
+    def effect_of(self, type: int, motor: int) -> Effect:
+        """The effect of this command with these type and motor/bank fields."""
+        refine = self.refine
+        return self.effect if refine is None else refine(type, motor)
+
+    def loads_accumulator(self, type: int, motor: int) -> bool:
+        loads = self.loads
+        return loads is not None and loads(type, motor)
+
+
+# --- refinements ---------------------------------------------------------------------------------
+def _gap(type: int, motor: int) -> Effect:
+    """A parameter the world computes is read through it (the world brings the engines to now and
+    follows the stage there): not a pure read. AP207, cleared by the read, is one: nothing any next
+    event depends on reads it."""
+    return WRITE if type in World.axis_numbers else _READ
+
+
+def _global_write(type: int, bank: int) -> Effect:
+    """SGP, RSGP, AGP by bank: user variables touch nothing the time loop reads; bank 3 configures
+    interrupts and timers; bank 0 holds addresses, reply suppression, the heartbeats, GP81."""
+    if bank == USER_BANK:
+        return _NONE
+    if bank == INTERRUPT_BANK:
+        return Effect.EVENTS
+    return WRITE | Effect.REQUESTS | Effect.PROGRAM
+
+
+def _ggp(type: int, bank: int) -> Effect:
+    """The tick timer GP132 reads the clock; every other GGP reads RAM or registers."""
+    return _READ if (bank, type) == TICK_TIMER else _NONE
+
+
+def _rfs(type: int, motor: int) -> Effect:
+    return _READ if type == 2 else WRITE  # RFS STATUS only reads (3.6.11)
+
+
+def _reads_value(type: int, motor: int) -> bool:
+    return True
+
+
+def _gco_reads(type: int, motor: int) -> bool:
+    return motor != 255  # GCO n, 255 copies the EEPROM to RAM and reads nothing
+
+
+def _rfs_reads(type: int, motor: int) -> bool:
+    return type == 2
+
+
+def _spec(number: int, handler: CommandHandler, effect: Effect, **more: object) -> Spec:
+    return Spec(COMMANDS[number], handler, effect, **more)  # type: ignore[arg-type]
+
+
+def _mvpa_type(type: int) -> int:
+    return type
+
+
+def _rotate_type(type: int) -> int:
+    return 0
+
+
+_NO = c.cmd_no_effect
+_SPECS = (
+    # motion, parameters, I/O (TMCM-6212 3.6.1-3.6.13, PD86-1180 4.6.1-4.6.15)
+    _spec(1, c.cmd_ror, WRITE), _spec(2, c.cmd_rol, WRITE), _spec(3, c.cmd_mst, WRITE),
+    _spec(4, c.cmd_mvp, WRITE), _spec(5, c.cmd_sap, WRITE, binds="write"),
+    _spec(6, c.cmd_gap, _READ, refine=_gap, loads=_reads_value, binds="read"),
+    _spec(7, c.cmd_stap, _NONE), _spec(8, c.cmd_rsap, WRITE),
+    _spec(9, c.cmd_sgp, WRITE, refine=_global_write, binds="write"),
+    _spec(10, c.cmd_ggp, _NONE, refine=_ggp, loads=_reads_value, binds="read"),
+    _spec(11, c.cmd_stgp, _NONE), _spec(12, c.cmd_rsgp, WRITE, refine=_global_write),
+    _spec(13, c.cmd_rfs, WRITE, refine=_rfs, loads=_rfs_reads), _spec(14, c.cmd_sio, _NONE),
+    _spec(15, c.cmd_gio, _READ, loads=_reads_value, binds="read"),
+    # calculation and flow (3.6.14-3.6.21): no effect in direct mode (manual 7.6) but CALC's reply
+    _spec(19, c.cmd_calc, _NONE, step=s.calc_), _spec(20, _NO, _NONE, step=s.comp),
+    _spec(21, _NO, _NONE, step=s.jc), _spec(22, _NO, _NONE, step=s.ja), _spec(23, _NO, _NONE, step=s.csub),
+    _spec(24, _NO, _NONE, step=s.rsub), _spec(25, c.cmd_ei, Effect.EVENTS), _spec(26, c.cmd_di, Effect.EVENTS),
+    _spec(27, _NO, Effect.EVENTS, step=s.wait_), _spec(28, _NO, Effect.EVENTS | Effect.PROGRAM, step=s.stop),
+    # coordinates, X register, accumulator transfers, interrupts (3.6.22-3.6.33)
+    _spec(30, c.cmd_sco, _NONE), _spec(31, c.cmd_gco, _NONE, loads=_gco_reads), _spec(32, c.cmd_cco, _READ),
+    _spec(33, _NO, _NONE, step=s.calcx), _spec(34, c.cmd_aap, WRITE),
+    _spec(35, c.cmd_agp, WRITE, refine=_global_write), _spec(36, c.cmd_cle, _NONE),
+    _spec(37, c.cmd_vect, Effect.EVENTS), _spec(38, _NO, Effect.EVENTS, step=s.reti), _spec(39, c.cmd_aco, _NONE),
+    # the PD28-1021's extended set (PD28-1021 manual 3.5, Table 5)
+    _spec(40, _NO, _NONE, step=s.calc_vv), _spec(41, _NO, _NONE, step=s.calc_va),
+    _spec(42, _NO, _NONE, step=s.calc_av), _spec(43, _NO, _NONE, step=s.calc_vx),
+    _spec(44, _NO, _NONE, step=s.calc_xv), _spec(45, _NO, _NONE, step=s.calc_v),
+    _spec(46, _NO, WRITE), _spec(48, _NO, Effect.EVENTS, step=s.rst), _spec(49, _NO, _NONE, step=s.djnz),
+    _spec(50, _NO, WRITE), _spec(51, _NO, WRITE),
+    _spec(55, _NO, _NONE, step=s.siv), _spec(56, _NO, _NONE, step=s.giv), _spec(57, _NO, _NONE, step=s.aiv),
+    _spec(80, _NO, _NONE, step=s.call),
+    # user functions (3.6.34): accepted, nothing to do in a virtual module
+    *(_spec(n, _NO, _NONE) for n in range(64, 72)),
+    # control commands, direct mode only (3.6.35, 3.6.36; PD86-1180 4.6.39)
+    *(_spec(n, c.control_handler(n), _CONTROL) for n in range(128, 134)),
+    _spec(134, c.control_handler(134), _NONE), _spec(135, c.control_handler(135), _NONE),
+    _spec(136, c.cmd_136, _NONE), _spec(137, c.cmd_137, ALL), _spec(138, c.cmd_138, Effect.EVENTS),
+    _spec(139, c.cmd_139, Effect.REQUESTS),
+)
+
+TABLE: Mapping[int, Spec] = MappingProxyType({spec.number: spec for spec in _SPECS})
+"""Every TMCL command the firmware knows, by number."""
+
+WITH_ACCUMULATOR: Mapping[int, tuple[int, Callable[[int], int]]] = MappingProxyType({
+    46: (4, _mvpa_type), 50: (2, _rotate_type), 51: (1, _rotate_type)})
+"""MVPA, ROLA, RORA: the direct-mode command they run with the accumulator as value."""
+
+
+def available(vm: VirtualModule, number: int) -> bool:
+    """Does the module have the command (its profile's command set)?"""
+    return number in vm.opcodes and number in TABLE
+
+
+def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
+    """Run one command in direct mode (or a program's command that acts as in direct mode). In
+    download mode (132) the commands other than control commands are stored instead (status 101,
+    3.6.36). A number the module's command set lacks is an "Invalid command" (2)."""
+    try:
+        if vm.download_mode and not program and command < CONTROL_FIRST:
+            return vm.store_instruction(command, type, motor, value)
+        spec = TABLE.get(command)
+        if spec is None or command not in vm.opcodes:
+            return _INVALID, 0
+        vm.scheduler.prepare(spec.effect_of(type, motor))
+        return spec.handler(vm, type, motor, value, program)
+    except TmclStatus as exc:
+        return exc.status, 0
+
+
+def suppressible(command: int) -> bool:
+    """May GP255 = 1 suppress the reply? "The reply will not be suppressed for GAP, GGP and GIO
+    commands" (TMCM-6212 manual 5.1): not for the reads the request path binds."""
+    spec = TABLE.get(command)
+    return spec is None or spec.binds != "read"
+
+
+def _ok(status: int) -> bool:
+    return status == _OK
