@@ -18,3 +18,17 @@ def sdist(tmp_path_factory):
     base = tmp_path_factory.mktemp("sdist")
     tree = with_leftovers(snapshot(base / "tree"))
     return Built(tree, build(tree, base / "dist", "sdist"))
+
+
+@pytest.fixture(scope="session")
+def wheel(sdist, tmp_path_factory):
+    """The wheel built from the unpacked sdist (as pip builds one), for this Python."""
+    import tarfile
+
+    from tests.distribution import Built, build
+
+    base = tmp_path_factory.mktemp("wheel")
+    with tarfile.open(sdist.path) as archive:
+        archive.extractall(base, filter="data")
+    (tree,) = [p for p in base.iterdir() if p.is_dir()]
+    return Built(tree, build(tree, base / "dist", "wheel"))

@@ -11,11 +11,8 @@ from __future__ import annotations
 import fnmatch
 import posixpath
 import re
-import tarfile
 
-import pytest
-
-from tests.distribution import LEFTOVERS, PROJECT, Built, build
+from tests.distribution import LEFTOVERS, PROJECT, Built
 
 LINK = re.compile(r"\]\(([^)\s]+)\)")
 """A Markdown link or image target."""
@@ -115,16 +112,6 @@ def test_the_metadata_claims_the_python_versions_of_pyproject(sdist):
         ["Programming Language :: Python :: 3.11", "Programming Language :: Python :: 3.12",
          "Programming Language :: Python :: 3.13"]
     assert 'Requires-Dist: starlette>=1.2; extra == "test"' in headers
-
-
-@pytest.fixture(scope="module")
-def wheel(sdist, tmp_path_factory):
-    """The wheel built from the unpacked sdist (as pip builds one), for this Python."""
-    base = tmp_path_factory.mktemp("wheel")
-    with tarfile.open(sdist.path) as archive:
-        archive.extractall(base, filter="data")
-    (tree,) = [p for p in base.iterdir() if p.is_dir()]
-    return Built(tree, build(tree, base / "dist", "wheel"))
 
 
 def test_the_wheel_built_from_the_sdist_carries_the_whole_package(sdist, wheel):
