@@ -30,7 +30,7 @@ import pytest
 from packaging.requirements import Requirement
 from packaging.specifiers import SpecifierSet
 
-from tests.distribution import PROJECT, claimed_versions, clean_env, interpreter, snapshot
+from tests.distribution import PROJECT, ROOT, claimed_versions, clean_env, interpreter, snapshot
 
 CLAIMED = claimed_versions()
 BELOW = (CLAIMED[0][0], CLAIMED[0][1] - 1)
@@ -112,6 +112,19 @@ def test_requires_python_admits_the_claimed_versions_and_not_the_one_below():
     assert all(f"{label(v)}.0" in spec for v in CLAIMED)
     assert f"{label(BELOW)}.99" not in spec
     assert HERE in CLAIMED
+
+
+def test_the_readme_states_the_claimed_versions_and_the_one_ci_runs_on():
+    """Issue 32: "The README states the Python versions that CI tests". CI runs `.ci/run`, whose
+    `python3 -m venv` takes the `python3` of PATH; the README names its version and the claimed ones."""
+    readme = " ".join((ROOT / "README.md").read_text(encoding="utf-8").split())
+    python3 = run("python3", "-c", "import sys; print(*sys.version_info[:2], sep='.')").stdout.strip()
+    assert "python3 -m venv .venv" in (ROOT / ".ci" / "run").read_text(encoding="utf-8")
+    assert f"CI runs the second command on Python {python3}." in readme
+    claimed = [label(v) for v in CLAIMED]
+    listed = ", ".join(claimed[:-1]) + f" and {claimed[-1]}"
+    assert f"On {listed}, the versions the package claims," in readme
+    assert f"with Python {', '.join(claimed[:-1])} or {claimed[-1]}, from the repository root" in readme
 
 
 def test_this_environment_meets_the_test_extra_with_an_httpx2_testclient():
