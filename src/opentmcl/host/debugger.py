@@ -304,8 +304,7 @@ class Debugger:
     def _term(self, name: str, index: int | None) -> int:
         """One name of a `value` expression, read from the module now."""
         spec = name if index is None else f"{name}.{index}"
-        ap = re.fullmatch(r"ap(\d+)", name.lower())
-        if ap and index is None:
+        if index is None and re.fullmatch(r"ap\d+", name.lower()):   # apP: motor 0
             spec = f"{spec}.0"
         try:
             watch = parse_watch(spec, "print")
@@ -322,7 +321,7 @@ class Debugger:
             raise DebugError(f"cannot print {name!r}: parameter names need the module's profile")
         axis = self.module.axis(index or 0)     # AxisNumberError for a motor the module lacks
         try:
-            return axis.get(axis.param(name).number)
+            return axis.get(name)
         except UnknownParameterError as axis_error:
             try:
                 self.module.global_param(name)
