@@ -11,13 +11,10 @@ The module is watched with GAP over its TCP endpoint, a second connection, not t
 """
 from __future__ import annotations
 
-import subprocess
-import sys
-import urllib.parse
-
 import pytest
 
-from .rawhttp import start_cli, stop_cli
+from .processes import served_module
+from .processes import watcher as watch
 
 TIMEOUT_MS = 120000  # a guard against hanging: a 9600-baud link reads a table in seconds
 GAP, SAP = 6, 5
@@ -27,41 +24,16 @@ TABLE = "#param-axis-table"
 
 @pytest.fixture(scope="module")
 def paced():
-    """(dashboard URL, the module's TCP URL) of a TMCM-6212 on a paced pty."""
+    """A TMCM-6212 on a paced pty with `opentmcl dashboard --to` in front (tests/web/processes.py)."""
     pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
-    serve = subprocess.Popen([sys.executable, "-m", "opentmcl", "serve", "--module", "TMCM-6212", "--pty",
-                              "--pace", "--tcp", "127.0.0.1:0"], stdout=subprocess.PIPE,
-                             stderr=subprocess.STDOUT, text=True)
-    try:
-        tcp = serial = None
-        for line in serve.stdout:
-            words = line.split()
-            if words[:1] == ["tcp"]:
-                tcp = words[-1]
-            if words[:1] == ["pty"]:
-                serial = next(w for w in words if w.startswith("serial://"))
-                break
-        assert tcp and serial, "serve printed no tcp and pty lines"
-        proc, url, _ = start_cli(["dashboard", "--to", f"{serial}?baud=9600", "--web", "127.0.0.1:0"],
-                                 "dashboard for")
-        try:
-            yield url, tcp
-        finally:
-            out = stop_cli(proc)
-            assert "Traceback" not in out, out
-    finally:
-        stop_cli(serve)
+    with served_module("paced") as served:
+        yield served
 
 
 @pytest.fixture
 def watcher(paced):
-    from opentmcl.host import Client
-    from opentmcl.host.transports.tcp import TcpTransport
-
-    host, port = paced[1].removeprefix("tcp://").rsplit(":", 1)
-    client = Client(TcpTransport(host, int(port)), timeout=10.0)
-    yield client
-    client.close()
+    with watch(paced) as client:
+        yield client
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +42,7 @@ def page(browser, paced):
     page = browser.new_page()
     errors: list[str] = []
     page.on("pageerror", lambda exc: errors.append(str(exc)))
-    page.goto(paced[0])
+    page.goto(f"http://127.0.0.1:{paced.port}/")
     page.wait_for_selector("#axis-0", timeout=TIMEOUT_MS)
     page.click("#views-nav a[data-view='parameters']")
     page.wait_for_selector(f"{TABLE}[data-index]:not(.loading) #param-axis-4", timeout=TIMEOUT_MS)
@@ -163,7 +135,7 @@ def test_a_write_naming_another_module_is_refused(paced, watcher):
     that names another module than the page's is refused with 400; nothing is written."""
     from .rawhttp import post_json
 
-    port = urllib.parse.urlsplit(paced[0]).port
+    port = paced.port
     before = watcher.reply(GAP, MAX_POSITIONING_SPEED, 1).value
     r = post_json(port, "/m/1/api/params/axis", {"axis": 1, "number": 4, "value": 4242, "module": 2})
     assert r.status == 400 and "module 2" in r.error and "\n" not in r.error

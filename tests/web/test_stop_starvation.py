@@ -14,18 +14,14 @@ needed 13-35 s or never answered, in every attempt.
 from __future__ import annotations
 
 import socket
-import subprocess
-import sys
 import threading
 import time
-import urllib.parse
-from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass
 
 import pytest
 
-from .rawhttp import get_json, post_json, start_cli, stop_cli
+from .processes import GENEROUS, Served, served_module, wait_for, watcher
+from .rawhttp import get_json, post_json
 
 pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
 
@@ -34,74 +30,10 @@ ATTEMPTS = 3
 SPEED = 5000            # pps: MST ramps it down in about 0.1 s (AP17 = 51200 pps^2)
 AXES = 6                # TMCM-6212 manual 1
 ROR, MST, GAP, ACTUAL_SPEED = 1, 3, 6, 3
-GENEROUS = 30.0         # a guard against hanging, never a timing assert
-
-
-@dataclass
-class Served:
-    port: int           # the dashboard's
-    tcp: str            # tcp://HOST:PORT of the module
-
-
-def _tcp_url(lines: list[str]) -> str:
-    return next(line.split()[-1] for line in lines if line.strip().startswith("tcp "))
-
-
-@contextmanager
-def served_module(mode: str) -> Iterator[Served]:
-    """"serve": `opentmcl serve --web`; "dashboard": `opentmcl serve` and `opentmcl dashboard --to`."""
-    args = ["serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0"]
-    if mode == "serve":
-        proc, url, lines = start_cli([*args, "--web", "127.0.0.1:0"], "dashboard http")
-        try:
-            yield Served(urllib.parse.urlsplit(url).port, _tcp_url(lines))
-        finally:
-            out = stop_cli(proc)
-            assert "Traceback" not in out, out
-        return
-    module = subprocess.Popen([sys.executable, "-m", "opentmcl", *args], stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, text=True)
-    try:
-        lines = []
-        for line in module.stdout:
-            lines.append(line)
-            if line.strip().startswith("tcp "):
-                break
-        tcp = _tcp_url(lines)
-        proc, url, _ = start_cli(["dashboard", "--to", tcp, "--web", "127.0.0.1:0"], "dashboard for")
-        try:
-            yield Served(urllib.parse.urlsplit(url).port, tcp)
-        finally:
-            out = stop_cli(proc)
-            assert "Traceback" not in out, out
-    finally:
-        stop_cli(module)
-
-
-@contextmanager
-def watcher(served: Served):
-    """The test's own TCP client of the module (a second connection, not the dashboard's)."""
-    from opentmcl.host import Client
-    from opentmcl.host.transports.tcp import TcpTransport
-
-    host, port = served.tcp.removeprefix("tcp://").rsplit(":", 1)
-    client = Client(TcpTransport(host, int(port)), timeout=10.0)
-    try:
-        yield client
-    finally:
-        client.close()
 
 
 def speeds(client) -> list[int]:
     return [client.reply(GAP, ACTUAL_SPEED, axis).value for axis in range(AXES)]
-
-
-def wait_for(predicate, what: str) -> None:
-    end = time.monotonic() + GENEROUS
-    while not predicate():
-        if time.monotonic() > end:
-            raise AssertionError(f"not reached: {what}")
-        time.sleep(0.02)
 
 
 def all_turning(client) -> None:
@@ -183,7 +115,7 @@ def test_stop_all_with_45_heavy_assemble_requests_in_flight():
             for t in threads:
                 t.start()
             try:
-                wait_for(lambda: 200 in statuses and 503 in statuses, "assembling and refusing")
+                wait_for(lambda: 200 in statuses, "assembling")
                 yield
             finally:
                 done.set()
@@ -192,22 +124,116 @@ def test_stop_all_with_45_heavy_assemble_requests_in_flight():
 
         times = best_of(served, client, heavy_load)
         assert min(t for _, t in times) < BOUND, times
-        assert set(statuses) <= {200, 503}, sorted(set(statuses))
+        assert set(statuses) == {200, 503}, sorted(set(statuses))  # some refused at once: bounded
 
 
 @pytest.mark.parametrize("mode", ["serve", "dashboard"])
 def test_stop_all_during_a_module_scan(mode):
     """Issue 28 item 2: "a running module scan holds the link". A scan of addresses 1..255 with the
-    longest time-out per address (0.5 s, docs/dashboard.md "Module scan") runs; STOP ALL is answered
-    and every axis stands within 1 s, on the server's bus (`serve --web`) and over a TCP link
-    (`dashboard --to`), where the scan shares the dashboard's one client."""
+    longest time-out per address the dashboard takes (`TIMEOUT_MAX`, 0.5 s, docs/dashboard.md
+    "Module scan") runs; STOP ALL is answered and every axis stands within 1 s, on the server's bus
+    (`serve --web`) and over a TCP link (`dashboard --to`), where the scan shares the dashboard's
+    one client."""
+    from opentmcl.web.scan import TIMEOUT_MAX
+
     with served_module(mode) as served, watcher(served) as client:
         @contextmanager
         def scanning():
-            r = post_json(served.port, "/api/scan", {"first": 1, "last": 255, "timeout": 0.5})
+            r = post_json(served.port, "/api/scan", {"first": 1, "last": 255, "timeout": TIMEOUT_MAX})
             assert r.status == 200, r.body[:300]
             wait_for(lambda: get_json(served.port, "/api/scan")["done"] >= 2, "the scan under way")
             yield
 
         times = best_of(served, client, scanning)
         assert min(t for _, t in times) < BOUND, times
+
+
+LOOP = "Loop:\n    ROR 2, 5000\n    WAIT TICKS, 0, 5\n    JA Loop\n"  # manual 3.6.1, 3.6.17, 3.6.9
+
+
+def program_mode(client) -> int:
+    """Command 135 type 1: the mode in the top byte (manual 3.6.36; 0 stop, 1 run)."""
+    return (client.reply(135, 1).value & 0xFFFFFFFF) >> 24
+
+
+def best_time(measure) -> list[float]:
+    """Up to ATTEMPTS calls of `measure()` (seconds), stopping at the first within BOUND."""
+    times: list[float] = []
+    for _ in range(ATTEMPTS):
+        times.append(measure())
+        print(f"answered and done after {times[-1]:.3f} s")
+        if times[-1] < BOUND:
+            break
+    return times
+
+
+def test_console_mst_and_program_stop_during_a_module_scan():
+    """Issue 28 item 2: "a running module scan holds the link: console MST 0 took 15.1 s, a program
+    stop 19.9 s". `opentmcl dashboard --to tcp://...` scans 1..255 at the longest time-out per
+    address on its one link; the console's MST 0 (manual 3.6.3) is answered and axis 0 stands
+    within 1 s, and the program view's Stop (128, 3.6.36) is answered with the program stopped
+    (135 over TCP) within 1 s. Neither cancels the scan."""
+    from opentmcl.web.scan import TIMEOUT_MAX
+
+    with served_module("dashboard") as served, watcher(served) as client:
+        def scanning() -> None:
+            if not get_json(served.port, "/api/scan")["running"]:
+                body = {"first": 1, "last": 255, "timeout": TIMEOUT_MAX}
+                assert post_json(served.port, "/api/scan", body).status == 200
+            wait_for(lambda: get_json(served.port, "/api/scan")["done"] >= 2, "the scan under way")
+
+        def console_mst() -> float:
+            client.request(ROR, 0, 0, SPEED)
+            wait_for(lambda: client.reply(GAP, ACTUAL_SPEED, 0).value == SPEED, "axis 0 turning")
+            scanning()
+            start = time.monotonic()
+            r = post_json(served.port, "/m/1/api/console", {"line": "MST 0"}, timeout=GENEROUS)
+            assert r.status == 200 and r.json()["ok"], r.body[:300]
+            wait_for(lambda: client.reply(GAP, ACTUAL_SPEED, 0).value == 0, "axis 0 at speed 0")
+            return time.monotonic() - start
+
+        def program_stop() -> float:
+            # through the dashboard: its polling waits while it downloads (132..133, manual 3.6.36)
+            r = post_json(served.port, "/m/1/api/program/download", {"source": LOOP}, timeout=GENEROUS)
+            assert r.status == 200 and r.json()["ok"], r.body[:300]
+            client.request(129)  # run (manual 3.6.36)
+            wait_for(lambda: program_mode(client) == 1, "the program running")
+            scanning()
+            start = time.monotonic()
+            r = post_json(served.port, "/m/1/api/program/stop", {}, timeout=GENEROUS)
+            assert r.status == 200 and r.json()["mode"] == 0, r.body[:300]
+            wait_for(lambda: program_mode(client) == 0, "the program stopped")
+            return time.monotonic() - start
+
+        assert min(best_time(console_mst)) < BOUND
+        assert min(best_time(program_stop)) < BOUND
+        assert get_json(served.port, "/api/scan")["running"]  # stops do not end the scan; STOP ALL does
+        post_json(served.port, "/api/scan/cancel", {})
+
+
+def test_a_download_gives_the_link_up_to_a_console_stop():
+    """Issue 28: "a download ... gives the link up to a stop". On a link paced at 9600 baud (each
+    instruction a round trip of about 19 ms) a download holds the link from 132 to 133 (a command
+    sent in between would be stored, manual 3.6.36); the console's MST 0 ends it between two
+    instructions: the download leaves download mode (133) and answers that a stop cancelled it,
+    and MST 0 is answered within 1 s and axis 0 stands (GAP over TCP)."""
+    source = "\n".join(f"    MVP ABS, 0, {i}" for i in range(1000)) + "\n    STOP\n"
+    with served_module("paced") as served, watcher(served) as client:
+        client.request(ROR, 0, 0, SPEED)  # before the download: a request meanwhile would be stored
+        wait_for(lambda: client.reply(GAP, ACTUAL_SPEED, 0).value == SPEED, "axis 0 turning")
+        assert get_json(served.port, "/m/1/api/state")["download"] is None  # the state is there to poll
+        answers: list = []
+        downloading = threading.Thread(daemon=True, target=lambda: answers.append(
+            post_json(served.port, "/m/1/api/program/download", {"source": source}, timeout=120)))
+        downloading.start()
+        wait_for(lambda: (get_json(served.port, "/m/1/api/state")["download"] or [0])[0] >= 5,
+                 "the download under way")
+        start = time.monotonic()
+        r = post_json(served.port, "/m/1/api/console", {"line": "MST 0"}, timeout=GENEROUS)
+        answered = time.monotonic() - start
+        downloading.join(GENEROUS)
+        assert r.status == 200 and r.json()["ok"], r.body[:300]
+        assert answers[0].status == 400 and "cancelled by a stop command" in answers[0].error, answers[0].body
+        wait_for(lambda: client.reply(GAP, ACTUAL_SPEED, 0).value == 0, "axis 0 at speed 0")
+        print(f"MST 0 answered after {answered:.3f} s")
+        assert answered < BOUND

@@ -277,7 +277,7 @@ class ModuleIndex:
             if found[0]["baud"] not in (None, getattr(link, "baud", None)):
                 raise DashboardError(f"module {address} answered at {found[0]['baud']} baud; "
                                      "connect the dashboard at that rate to open it")
-            d = await self.lanes.bulk_run(self._open, address)
+            d = await self.lanes.read(self._open, address)
             self.opened.append(Poller(d).start())
         return {"address": address, "url": f"{request.scope.get('root_path', '')}/m/{address}/"}
 
@@ -354,7 +354,8 @@ class ModuleApi:
         return await run_in_threadpool(self.d.overview)
 
     async def state(self, _request: Request) -> object:
-        return self.d.state or await run_in_threadpool(self.d.sample_slow)
+        state = self.d.state or await run_in_threadpool(self.d.sample_slow)
+        return {**state, "download": self.d.downloading}  # [sent, of] while a download runs, else null
 
     async def motion(self, request: Request) -> object:
         try:
@@ -368,10 +369,10 @@ class ModuleApi:
             n = int(request.path_params["axis"])
         except ValueError:
             raise BadRequest("axis must be a number") from None
-        return {"axis": n, "params": await self.lanes.bulk_run(self.d.axis_parameters, n)}
+        return {"axis": n, "params": await self.lanes.read(self.d.axis_parameters, n)}
 
     async def global_parameters(self, _request: Request) -> object:
-        return {"params": await self.lanes.bulk_run(self.d.global_parameters)}
+        return {"params": await self.lanes.read(self.d.global_parameters)}
 
     def _shown_module(self, b: Json) -> None:
         """A write names the module its page shows (`module`: the address, optional for scripts):
@@ -427,16 +428,16 @@ class ModuleApi:
         return {"source": self.d.source, "state": state, "lines": lines}
 
     async def assemble(self, request: Request) -> object:
-        async with self.lanes.bulk.admitted():  # refused before the body is decoded when busy
+        async with self.lanes.cpu.admitted():  # refused before the body is decoded when busy
             b = await _body(request)
-            result = await self.lanes.bulk.run(self.d.assemble, _str(b, "source"))
+            result = await self.lanes.cpu.run(self.d.assemble, _str(b, "source"))
         result.pop("_program", None)
         return result
 
     async def download(self, request: Request) -> object:
-        async with self.lanes.bulk.admitted():
+        async with self.lanes.cpu.admitted():
             b = await _body(request)
-            return await self.lanes.bulk.run(self.d.download, _str(b, "source"))
+            return await self.lanes.cpu.run(self.d.download, _str(b, "source"))
 
     async def set_breakpoints(self, request: Request) -> object:
         lines = _line_numbers(await _body(request), "lines")

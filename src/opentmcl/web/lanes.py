@@ -3,9 +3,13 @@ can make a stop wait for a thread:
 
 - `StopLane`: a thread of its own for STOP ALL and the stop commands (MST, 128, 131 from the
   console or the program view), never shared with other requests;
-- `BulkLane`: the long requests (assembling, downloads, parameter tables and files, opening a
-  module) on at most `BULK_WORKERS` threads, with at most `BULK_WAITING` more waiting; a request
-  beyond that is answered 503 at once (`Busy`), before its body is even decoded;
+- two `BulkLane`s for the long requests, each with a few threads and at most `BULK_WAITING`
+  requests waiting; a request beyond that is answered 503 at once (`Busy`), before its body is
+  even decoded. `Lanes.cpu` (one thread) computes: assembling, downloads, parameter files;
+  `Lanes.reads` (two threads) reads many values: parameter tables, exports, opening a module.
+  One thread for the CPU work: each more thread that computes takes the interpreter's lock
+  (GIL) from the stop thread and the event loop in turn (with two, STOP ALL under 45 assemble
+  requests took three times as long);
 - everything else (one or a few requests to the module) on Starlette's thread pool.
 """
 from __future__ import annotations
@@ -22,8 +26,7 @@ if TYPE_CHECKING:
 
 T = TypeVar("T")
 
-BULK_WORKERS = 2    # at once: two cores; a stop thread and the event loop still get their turn
-BULK_WAITING = 16   # waiting behind them; more are refused with 503
+BULK_WAITING = 16   # requests waiting for a thread of a bulk lane; more are refused with 503
 
 
 class Busy(Exception):
@@ -47,7 +50,7 @@ class BulkLane:
     """At most `workers` long requests run at once and `waiting` more wait; `admitted()` refuses
     the next one (Busy) before any of its work is done, `run()` runs its blocking part."""
 
-    def __init__(self, workers: int = BULK_WORKERS, waiting: int = BULK_WAITING) -> None:
+    def __init__(self, workers: int, waiting: int = BULK_WAITING) -> None:
         self.workers, self.waiting = workers, waiting
         self.count = 0          # admitted and not finished; changed only on the event loop
         self._limiter: anyio.CapacityLimiter | None = None  # made inside the event loop on first use
@@ -55,8 +58,7 @@ class BulkLane:
     @contextlib.asynccontextmanager
     async def admitted(self) -> AsyncIterator[None]:
         if self.count >= self.workers + self.waiting:
-            raise Busy(f"busy: {self.count} long requests (assemble, download, parameter tables) "
-                       "are running or waiting; try again")
+            raise Busy(f"busy: {self.count} long requests like this one are running or waiting; try again")
         self.count += 1
         try:
             yield
@@ -76,12 +78,13 @@ class Lanes:
 
     def __init__(self) -> None:
         self.stop = StopLane()
-        self.bulk = BulkLane()
+        self.cpu = BulkLane(1)
+        self.reads = BulkLane(2)
 
-    async def bulk_run(self, fn: Callable[..., T], *args: object) -> T:
-        """`fn(*args)` admitted to and run on the bulk lane (for requests with no body to read)."""
-        async with self.bulk.admitted():
-            return await self.bulk.run(fn, *args)
+    async def read(self, fn: Callable[..., T], *args: object) -> T:
+        """`fn(*args)` admitted to and run on the reads lane (requests without a body to decode)."""
+        async with self.reads.admitted():
+            return await self.reads.run(fn, *args)
 
     def close(self) -> None:
         self.stop.close()

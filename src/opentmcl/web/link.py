@@ -48,6 +48,11 @@ class LinkGate:
         self._normal: deque[_Waiter] = deque()
 
     @property
+    def waiting(self) -> int:
+        """Threads waiting for a turn (stops and others)."""
+        return len(self._urgent) + len(self._normal)
+
+    @property
     def urgent_waiting(self) -> bool:
         """A stop waits for the link: give it up at the next point where that is safe."""
         return bool(self._urgent)

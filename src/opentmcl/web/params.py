@@ -113,14 +113,14 @@ class ParamsApi:
             axis = int(request.path_params["axis"])
         except ValueError:
             raise _Refused("axis must be a number") from None
-        return await self.lanes.bulk_run(self.read_values, axis)
+        return await self.lanes.read(self.read_values, axis)
 
     # --- export / diff / apply ---
     async def export(self, request: Request) -> object:
         fmt = request.query_params.get("format", "json")
         if fmt not in ("json", "toml"):
             raise _Refused(f"format must be json or toml, not {fmt[:20]!r}")
-        ps = await self.lanes.bulk_run(self._guarded, lambda: paramset.export_set(self.d.module))
+        ps = await self.lanes.read(self._guarded, lambda: paramset.export_set(self.d.module))
         assert isinstance(ps, paramset.ParamSet)
         text = paramset.to_json(ps) if fmt == "json" else paramset.to_toml(ps)
         name = f"{ps.module}-address{self.d.module.address}.{fmt}"
@@ -138,9 +138,9 @@ class ParamsApi:
                 "changes": [_change(c) for c in changes], "warnings": warnings}
 
     async def diff(self, request: Request) -> object:
-        async with self.lanes.bulk.admitted():
+        async with self.lanes.cpu.admitted():
             text = _text(await _body(request))
-            return await self.lanes.bulk.run(self._guarded, lambda: self._diff(text))
+            return await self.lanes.cpu.run(self._guarded, lambda: self._diff(text))
 
     def _apply(self, text: str) -> Json:
         ps = paramset.parse(text)
@@ -149,9 +149,9 @@ class ParamsApi:
         return {"applied": applied, "changes": [_change(c) for c in changes]}
 
     async def apply(self, request: Request) -> object:
-        async with self.lanes.bulk.admitted():
+        async with self.lanes.cpu.admitted():
             text = _text(await _body(request))
-            return await self.lanes.bulk.run(self._guarded, lambda: self._apply(text))
+            return await self.lanes.cpu.run(self._guarded, lambda: self._apply(text))
 
 
 class ChartsApi:

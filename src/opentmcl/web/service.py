@@ -124,6 +124,7 @@ class Dashboard:
         self._runner: threading.Thread | None = None
         self._cancel = threading.Event()
         self.abort_download = threading.Event()  # set by stop-all: a download ends at its next instruction
+        self.downloading: tuple[int, int] | None = None  # (instructions sent, of) while a download runs
         self.stops = 0  # STOP ALLs so far: a Run or Step that arrived before the last one is refused
         self.closed = threading.Event()  # set by stop(): live connections end
         self.profile = self.module.profile
@@ -410,7 +411,8 @@ class Dashboard:
         prog = result.pop("_program")
         self.cancel_run()
 
-        def abort_point(_done: int, _total: int) -> None:
+        def abort_point(done: int, total: int) -> None:
+            self.downloading = (done, total)
             if self.abort_download.is_set():
                 raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
             if self.lock.urgent_waiting:
@@ -419,8 +421,11 @@ class Dashboard:
         try:
             # One turn from 132 to 133: a command sent meanwhile would be stored, not executed
             # (manual 3.6.36). A stop ends it between two instructions; verifying (134) takes turns.
-            with self.lock:
-                loader.download(prog.instructions, verify=False, progress=abort_point)
+            try:
+                with self.lock:
+                    loader.download(prog.instructions, verify=False, progress=abort_point)
+            finally:
+                self.downloading = None
             loader.verify(prog.instructions)
         except LoaderError as exc:
             raise DashboardError(str(exc)) from None
