@@ -24,7 +24,7 @@ so one page serves every module). An unknown address is a 404 with {"error": ...
     WS   /ws                       {"type": "samples"} 25 times a second, {"type": "state"} on change
 
 Every request passes `guard.Guard` first (Host allow-list, token, Origin, X-OpenTMCL header, body limit).
-Stops run on a thread of their own, long requests on a bounded lane (web/lanes.py).
+Stops run on a thread of their own, long requests on bounded lanes (web/lanes.py).
 """
 from __future__ import annotations
 
@@ -284,7 +284,8 @@ class ModuleIndex:
     def _open(self, address: int) -> Dashboard:
         client = self.scanner.client
         try:
-            d = Dashboard(client.module(address), url=f"scan (address {address})")
+            with self.scanner.gate:  # its version string too in a turn (not during a baud-rate scan)
+                d = Dashboard(client.module(address), url=f"scan (address {address})")
             d.profile.name  # noqa: B018 - the profile from the version string, or the error now
         except TmclError as exc:
             raise DashboardError(f"cannot open module {address}: {exc}") from None
@@ -313,7 +314,7 @@ class ModuleApi:
     """The page, JSON API and WebSocket of one module (its `Dashboard`), relative to its
     /m/{address} prefix. Each API method reads the request and answers a JSON object (None: ok);
     the `Dashboard` calls talk to the module, so they run in a thread: stops on the stop lane,
-    long requests on the bulk lane, the others in Starlette's thread pool (web/lanes.py)."""
+    long requests on the cpu or reads lane, the others in Starlette's thread pool (web/lanes.py)."""
 
     def __init__(self, dashboard: Dashboard, lanes: Lanes) -> None:
         self.d = dashboard
