@@ -13,6 +13,7 @@ from collections.abc import Iterable, Sequence
 
 from ..host import Client, TmclError
 from ..host.module import profile_for_version
+from .link import link_gate
 from .service import Dashboard, DashboardError
 
 MST, RFS, STOP_APPLICATION = 3, 13, 128
@@ -63,10 +64,12 @@ def stop_found(client: Client, address: int, version: str) -> dict[str, object]:
     except TmclError:
         name, axes, opcodes = version, 6, frozenset({STOP_APPLICATION})
     stopped = []
+    gate = link_gate(client)
     for command, axis in ([(STOP_APPLICATION, 0)] if STOP_APPLICATION in opcodes else []) + \
             [(MST, a) for a in range(axes)]:
         try:
-            client.request(command, 0, axis, 0, address=address)
+            with gate.urgent():
+                client.request(command, 0, axis, 0, address=address)
             if command == MST:
                 stopped.append(axis)
         except TmclError as exc:
@@ -121,7 +124,6 @@ def _rfs_status(d: Dashboard, axis: int) -> int | None:
     if RFS not in d.profile.opcodes:
         return None
     try:
-        with d.lock:
-            return d.module.reply(RFS, RFS_STATUS, axis).value
+        return d.module.reply(RFS, RFS_STATUS, axis).value
     except TmclError:
         return None
