@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
+from ..handover import STOP
 from ..host import Client, TmclError
 from ..host.module import profile_for_version
 from .link import link_gate
@@ -68,7 +69,7 @@ def stop_found(client: Client, address: int, version: str) -> dict[str, object]:
     for command, axis in ([(STOP_APPLICATION, 0)] if STOP_APPLICATION in opcodes else []) + \
             [(MST, a) for a in range(axes)]:
         try:
-            with gate.urgent():
+            with gate.hold(STOP):
                 client.request(command, 0, axis, 0, address=address)
             if command == MST:
                 stopped.append(axis)

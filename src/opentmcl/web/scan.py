@@ -150,9 +150,9 @@ class Scanner:
 
     def _lend(self, original: int, baud: int) -> None:
         """A stop waits: the link back at its own rate for it, then on with the scan at `baud`."""
-        if self.gate.urgent_waiting:
+        if self.gate.stops_waiting:
             self._set_baud(original)
-            self.gate.yield_turn()
+            self.gate.yield_to_stops()
             self._set_baud(baud)
 
     def _scan(self, addresses: range, timeout: float, baud: int | None,

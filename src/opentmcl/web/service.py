@@ -22,10 +22,12 @@ import time
 from collections import deque
 from dataclasses import dataclass
 
+from ..handover import STOP
 from ..host import Module, TmclError, TmclStatusError, VersionReply
 from ..protocol.frame import Reply
+from ..protocol.opcodes import STOP_COMMANDS
 from ..protocol.status import message
-from .link import STOP_COMMANDS, TURN_REQUESTS, LinkLoader, LinkModule, link_gate
+from .link import TURN_REQUESTS, LinkLoader, LinkModule, link_gate
 
 log = logging.getLogger("opentmcl.web")
 
@@ -415,7 +417,7 @@ class Dashboard:
             self.downloading = (done, total)
             if self.abort_download.is_set():
                 raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
-            if self.lock.urgent_waiting:
+            if self.lock.stops_waiting:
                 raise DashboardError("download cancelled by a stop command (download mode left with 133)")
         loader = self._loader()
         try:
@@ -492,7 +494,7 @@ class Dashboard:
     def stop(self) -> dict:
         """128, then the program state, both as a stop: ahead of other requests on the link."""
         self.cancel_run()
-        with self.lock.urgent():
+        with self.lock.hold(STOP):
             self._do(lambda: self._loader().stop())
             return self.program_state()
 
@@ -510,7 +512,7 @@ class Dashboard:
     def reset(self) -> dict:
         """131, then the program state, both as a stop (see `stop`)."""
         self.cancel_run()
-        with self.lock.urgent():
+        with self.lock.hold(STOP):
             self._do(lambda: self._loader().reset())
             return self.program_state()
 
