@@ -130,10 +130,10 @@ class Dashboard:
         self.stops = 0  # STOP ALLs so far: a Run or Step that arrived before the last one is refused
         self.closed = threading.Event()  # set by stop(): live connections end
         self.profile = self.module.profile
-        self.version = self._try(self.module.firmware_version, "?")
+        self.version = self.attempt(self.module.firmware_version, "?")
 
     # --- plumbing --------------------------------------------------------------------
-    def _try(self, fn, default=None):
+    def attempt(self, fn, default=None):
         """Call fn(); a failing link marks the module disconnected and gives `default`."""
         try:
             out = fn()
@@ -162,7 +162,7 @@ class Dashboard:
                     answers = list(exc.answers or [None] * len(batch))
                 return [a.value if isinstance(a, Reply) else None for a in answers]
 
-            out += self._try(run, [None] * len(batch))
+            out += self.attempt(run, [None] * len(batch))
         return out
 
     @contextlib.contextmanager
@@ -181,7 +181,7 @@ class Dashboard:
             self.last_error = str(exc)
             raise DashboardError(str(exc)) from None
 
-    def _do(self, fn):
+    def act(self, fn):
         """Call fn() for a user action (errors: `_user_action`); its requests take their turns."""
         with self._user_action():
             out = fn()
@@ -199,7 +199,7 @@ class Dashboard:
             self.connected = True
             return out
 
-    def _axis(self, number) -> int:
+    def check_axis(self, number) -> int:
         if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number < self.profile.axes:
             raise DashboardError(f"{self.profile.name} has axes 0..{self.profile.axes - 1}, not {number!r}")
         return number
@@ -245,7 +245,7 @@ class Dashboard:
     # --- parameters -------------------------------------------------------------------------
     def axis_parameters(self, axis: int) -> list[dict]:
         """The axis parameter table of `axis` with its values (GAP, read in batches)."""
-        axis = self._axis(axis)
+        axis = self.check_axis(axis)
         params = sorted(self.profile.axis_parameters.values(), key=lambda p: p.number)
         values = iter(self.read_many([(6, p.number, axis, 0) for p in params if p.readable]))
         out = []
@@ -272,32 +272,32 @@ class Dashboard:
 
     def set_axis_parameter(self, axis: int, number: int, value: int) -> int:
         """SAP, then GAP to show what the module took (manual 3.6.5/3.6.6)."""
-        axis = self._axis(axis)
+        axis = self.check_axis(axis)
         p = self.profile.axis_parameters.get(number)
         if p is None or not p.writable:
             raise DashboardError(f"axis parameter {number} is not writable on {self.profile.name}")
-        self._do(lambda: self.module.request(5, number, axis, int(value)))
-        return self._do(lambda: self.module.reply(6, number, axis).value) if p.readable else int(value)
+        self.act(lambda: self.module.request(5, number, axis, int(value)))
+        return self.act(lambda: self.module.reply(6, number, axis).value) if p.readable else int(value)
 
     def set_global_parameter(self, bank: int, number: int, value: int) -> int:
         p = self.profile.global_parameters.get((bank, number))
         if p is None or not p.writable:
             raise DashboardError(f"global parameter {number} of bank {bank} is not writable on {self.profile.name}")
-        self._do(lambda: self.module.request(9, number, bank, int(value)))
-        return self._do(lambda: self.module.reply(10, number, bank).value) if p.readable else int(value)
+        self.act(lambda: self.module.request(9, number, bank, int(value)))
+        return self.act(lambda: self.module.reply(10, number, bank).value) if p.readable else int(value)
 
     def store(self, kind: str, number: int, axis_or_bank: int, restore: bool = False) -> None:
         """STAP/RSAP (axis) or STGP/RSGP (global), manual 3.6.7-3.6.10 / PD86-1180 4.6.7-4.6.8."""
         if kind == "axis":
             command = RSAP if restore else STAP
-            axis_or_bank = self._axis(axis_or_bank)
+            axis_or_bank = self.check_axis(axis_or_bank)
         elif kind == "global":
             command = RSGP if restore else STGP
         else:
             raise DashboardError(f"unknown parameter kind {kind!r}")
         if command not in self.profile.opcodes:
             raise DashboardError(f"{self.profile.name} has no command {command} (store/restore)")
-        self._do(lambda: self.module.request(command, number, axis_or_bank))
+        self.act(lambda: self.module.request(command, number, axis_or_bank))
 
     # --- direct mode console ---------------------------------------------------------------
     def console(self, line: str) -> dict:
@@ -361,8 +361,8 @@ class Dashboard:
         io = self.profile.io.get((bank, port))
         if io is None or io.kind != "output":
             raise DashboardError(f"no output port {port} in bank {bank}")
-        self._do(lambda: self.module.request(14, port, bank, int(value)))
-        return self._do(lambda: self.module.reply(15, port, bank).value)
+        self.act(lambda: self.module.request(14, port, bank, int(value)))
+        return self.act(lambda: self.module.reply(15, port, bank).value)
 
     def force_input(self, bank: int, port: int, value: int | None) -> None:
         """Virtual modules only: hold an input at `value` (None releases it). No TMCL command
@@ -484,6 +484,12 @@ class Dashboard:
             if st.mode in (0, 3) or st.pc in self.breakpoints:
                 return
 
+    def halt_stepping(self) -> bool:
+        """End the host-side stepping to a breakpoint after its current step; True when it ran."""
+        runner = self._runner
+        self._cancel.set()
+        return runner is not None and runner.is_alive()
+
     def cancel_run(self) -> None:
         self._cancel.set()
         runner = self._runner
@@ -495,7 +501,7 @@ class Dashboard:
         """128, then the program state, both as a stop: ahead of other requests on the link."""
         self.cancel_run()
         with self.lock.hold(STOP):
-            self._do(lambda: self._loader().stop())
+            self.act(lambda: self._loader().stop())
             return self.program_state()
 
     def step(self, since: int | None = None) -> dict:
@@ -513,7 +519,7 @@ class Dashboard:
         """131, then the program state, both as a stop (see `stop`)."""
         self.cancel_run()
         with self.lock.hold(STOP):
-            self._do(lambda: self._loader().reset())
+            self.act(lambda: self._loader().reset())
             return self.program_state()
 
     def program_state(self) -> dict:
@@ -521,7 +527,7 @@ class Dashboard:
         from ..host.debugger import describe_flags
 
         seq = next(self._state_seq)   # taken before the read: a later state has a larger number
-        st = self._try(lambda: self._loader().status())
+        st = self.attempt(lambda: self._loader().status())
         if st is None:
             return {"mode": None}
         line = None
