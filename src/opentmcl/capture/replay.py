@@ -305,7 +305,7 @@ def _sim_profile_file(target, address: int | None) -> str | None:
     import urllib.parse
 
     from ..host.errors import TmclConnectionError
-    from ..host.transports.inprocess import _parse_modules
+    from ..host.transports.inprocess import parse_modules
     from ..modules.profile_file import looks_like_path
 
     if not isinstance(target, str) or not target.startswith("sim://"):
@@ -313,7 +313,7 @@ def _sim_profile_file(target, address: int | None) -> str | None:
     url = urllib.parse.urlsplit(target)
     spec = url.netloc + url.path if ".toml" in url.path.lower() else (url.netloc or url.path.lstrip("/"))
     try:
-        specs = _parse_modules(spec, 1)
+        specs = parse_modules(spec, 1)
     except TmclConnectionError:  # a target the proxy could not have opened: keep the identity
         return None
     for name, at in specs:

@@ -69,7 +69,7 @@ def _record(args: argparse.Namespace, axes: list[int]) -> Trace:
     from ..host import TmclError, UnknownParameterError
     from ..plot import run_virtual
     from .load import read_program
-    from .run import _scenario
+    from .run import scenario_option
 
     path = Path(args.file)
     is_program = path.suffix.lower() in PROGRAM_SUFFIXES
@@ -80,7 +80,7 @@ def _record(args: argparse.Namespace, axes: list[int]) -> Trace:
     if args.file == "-":
         raise CliError("FILE - (record only) needs --to URL")
     scenario_path = args.scenario if is_program else args.file
-    scenario = _scenario(scenario_path)
+    scenario = scenario_option(scenario_path)
     module = args.module or getattr(scenario, "module", None) or "TMCM-6212"
     program = read_program(args.file, module).instructions if is_program else None
     # A scenario alone runs for the full --seconds: its world may move things at any time.

@@ -13,7 +13,7 @@ from collections.abc import Callable
 from fractions import Fraction
 from functools import partial
 from operator import attrgetter
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 from ..modules.profile import ModuleProfile, Param
 from ..modules.profile_file import ProfileError
@@ -128,11 +128,13 @@ class Axis:
 
     def get(self, number: int) -> int:
         """GAP `number` (TMCM-6212 3.6.6): the value now; TmclStatus(3) if it cannot be read."""
-        return self.reader(number)()
+        value = self.reader(number)()
+        return int(value) if value.__class__ is bool else value
 
     def reader(self, number: int) -> Callable[[], int]:
         """The read of axis parameter `number`, bound to this axis: the one rule of GAP, which the
-        request path and programs bind ahead (requests.py). TmclStatus(3) if it cannot be read."""
+        request path and programs bind ahead (requests.py). TmclStatus(3) if it cannot be read.
+        AP8 reads as the engine's flag, a bool (1 or 0 on the wire)."""
         read = self._readers.get(number)
         if read is None:
             if number not in self.readable:
@@ -149,11 +151,10 @@ class Axis:
             return lambda: self.from_engine(number, velocity(e))
         attribute = ENGINE_READS.get(number)
         if attribute is not None and (number < 135 or hasattr(e, attribute)):
-            value = partial(attrgetter(attribute), e)
-            return (lambda: int(value())) if number == 8 else value
+            return partial(attrgetter(attribute), e)
         if number == 207:
             return self._take_error_flags
-        return partial(self.ram.get, number, self.params[number].default)
+        return cast("Callable[[], int]", partial(self.ram.get, number, self.params[number].default))
 
     def __getstate__(self) -> dict[str, object]:
         """A copy (copy.deepcopy, pickle) makes its own readers: these are bound to this axis."""

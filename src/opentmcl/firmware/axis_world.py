@@ -73,7 +73,7 @@ class AxisWorld:
         self.enc_offset = -self._quantized(self.phys)   # the encoder counter starts at 0
         self.current = CurrentModel()
         self._update_static()
-        self._update_raw()
+        self.update_raw()
 
     @property
     def vm(self):
@@ -114,7 +114,7 @@ class AxisWorld:
     @property
     def physical_position(self) -> int:
         self.vm.sync()
-        self._follow()
+        self.follow()
         return self.phys
 
     # --- state ------------------------------------------------------------------------------------
@@ -123,7 +123,7 @@ class AxisWorld:
         free-wheel" (TMCM-6212 4.1): the step counter runs on, the rotor does not follow it."""
         return self.has(167) and self.p(167, 1) == 0
 
-    def _follow(self) -> None:
+    def follow(self) -> None:
         """Bring the physical position up to the counter (unless steps are being lost or the
         driver is off; then the stage stays and the frame offset follows the counter)."""
         counter = self.engine.position
@@ -137,7 +137,7 @@ class AxisWorld:
         else:
             self.phys = counter + self.offset
 
-    def _update_raw(self) -> None:
+    def update_raw(self) -> None:
         for name, sw in self.stage.switches().items():
             self.raw[name] = self.stage.active(sw, self.phys, self.raw[name])
 
@@ -189,14 +189,14 @@ class AxisWorld:
     def set_toff(self, value: int) -> None:
         """SAP 167: the stage follows up to now under the old setting; after re-enabling it
         continues from where it stands."""
-        self._follow()
+        self.follow()
         self._axis.ram[167] = value
-        self._follow()
+        self.follow()
 
     def speed(self) -> int:
         """Speed of the rotor (stage) in the unit of AP3: 0 at rest, while steps are lost or the
         driver is off; signed like AP3 (TMCM-6212 AP29 "Speed measured by the motor driver")."""
-        self._follow()
+        self.follow()
         if self.slipping or self.driver_off():
             return 0
         return self._axis.from_engine(29, self.engine.velocity)
@@ -205,14 +205,14 @@ class AxisWorld:
         """AP215: the angle of the rotor within one round in 0..top (PD86-1180 5: "Absolute
         value of the encoder. 0... 255"), from the physical position; AP209 writes and the
         prescaler do not change it."""
-        self._follow()
+        self.follow()
         cpr = self.spec.encoder_counts or self.caps.encoder_counts
         counts = (self.phys * cpr) // self._steps_per_round()
         return (counts % cpr) * (top + 1) // cpr
 
     def relabel(self, counter: int) -> None:
         """Overwrite the position counter (AP1, reference point); the stage stays where it is."""
-        self._follow()
+        self.follow()
         self.engine.set_position(counter)
         self.offset = self.phys - self.engine.position
 
@@ -260,9 +260,8 @@ class AxisWorld:
         return load
 
     def _pps(self, v) -> float:
-        e = self.engine
         if self.caps.velocity_unit == "tmc429":
-            div = e._params.get("pulse_divisor", 0) if hasattr(e, "_params") else 0
+            div = self.p(154)  # AP154 pulse divisor (PD86-1180 manual 5)
             return float(v) * CLOCK_HZ / ((1 << div) * 2048 * 32)
         return float(v)
 
@@ -295,8 +294,8 @@ class AxisWorld:
     def check(self) -> None:
         if self.axis is None:
             return
-        self._follow()
-        self._update_raw()
+        self.follow()
+        self.update_raw()
         self.current.update(self)
         search = self.vm.reference_search(self._axis)
         if search.active:
@@ -451,7 +450,7 @@ class AxisWorld:
         gp79 = self.vm.globals.ram.get((0, 79), 0)
         return (eng, self.offset, self.slipping, tuple(self.raw.values()), tuple(sorted(self.forced.items())),
                 self.watch, self.load, tuple(ram.get(n, 0) for n in self.SIGNATURE_PARAMS), gp79,
-                search.active, search._cond)
+                search.active, search.condition)
 
     def next_event(self) -> int | None:
         """Absolute tick of this axis's next world event (callers check `interesting()` first)."""
@@ -480,7 +479,7 @@ class AxisWorld:
         """The earliest tick after `now` at which a check can change something: a position the
         counter reaches (switch edges, load steps, ends, null channel, deviation limit, the
         reference search's watch), a step of a load over time, or the stop-on-stall speed."""
-        self._follow()
+        self.follow()
         if self._due_again(now):
             return now + 1
         off = self.driver_off()

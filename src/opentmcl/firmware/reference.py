@@ -49,6 +49,11 @@ class ReferenceSearch:
         self._replay: list[object] | None = None   # readings given back while a copy catches up
 
     @property
+    def condition(self) -> Cond | None:
+        """What the search waits for now (None when it waits for nothing)."""
+        return self._cond
+
+    @property
     def active(self) -> bool:
         """The search runs. A motion command from outside (MVP, ROR, ROL, MST, a SHUTDOWN stop)
         ends it: the motor no longer does what the search commanded (docs/world.md)."""
@@ -77,8 +82,8 @@ class ReferenceSearch:
         world = ax.world
         world.vm.sync()
         self.aw = world.axis(ax.index)
-        self.aw._follow()
-        self.aw._update_raw()
+        self.aw.follow()
+        self.aw.update_raw()
         self.mode = ax.ram.get(193, 1)
         ax.error_flags = 0              # PD86-1180 4.28: RFS start resets the deviation flags
         self.active = True

@@ -20,8 +20,8 @@ from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .axis import Axis
 from .commands import StatusReply
-from .effects import ALL, Effect
 from .eeprom import Eeprom
+from .effects import Effect
 from .globals import GlobalParameters
 from .heartbeat import OF_INTERFACE, Heartbeats
 from .interpreter import Interpreter
@@ -178,13 +178,17 @@ class VirtualModule:
             fast = self._reads.get(frame)
         except TypeError:  # a mutable buffer: the general path reads it
             fast = None
-        heartbeat = OF_INTERFACE.get(interface)
-        if fast is not None and heartbeat is not None:
-            hb = self.heartbeats
-            hb.last[heartbeat] = self.scheduler.now  # restart the heartbeat
-            hb.fired = False
-            self.scheduler.sync_for_read()
-            return fast()
+        if fast is not None:
+            heartbeat = OF_INTERFACE.get(interface)
+            if heartbeat is not None:
+                sched = self.scheduler
+                now = sched.now
+                hb = self.heartbeats
+                hb.last[heartbeat] = now  # restart the heartbeat
+                hb.fired = False
+                if sched.synced_at != now:
+                    sched.sync_for_read()
+                return fast()
         return self._handle_general(frame, interface)
 
     def _handle_general(self, frame: bytes, interface: str) -> bytes:

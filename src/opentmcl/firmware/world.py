@@ -23,8 +23,8 @@ from ..motion import CLOCK_HZ
 from ..motion.scenario import Scenario, ScenarioError, load_scenario
 from ..motion.stage import Profile, ceil_ticks
 from . import flags as fl
-from .effects import Effect
 from .axis_world import AxisWorld
+from .effects import Effect
 from .io import threshold
 
 if TYPE_CHECKING:
@@ -207,8 +207,8 @@ class World:
     def read_axis(self, axis: Axis, number: int) -> int | None:
         aw = self.axes_world[axis.index]
         self.vm.sync()
-        aw._follow()
-        aw._update_raw()
+        aw.follow()
+        aw.update_raw()
         if number in (9, 10, 11):
             left, right, home = aw.logical()
             return int({9: home, 10: right, 11: left}[number])
@@ -232,7 +232,7 @@ class World:
         aw = self.axes_world[axis.index]
         if number == 209:
             self.vm.sync()
-            aw._follow()
+            aw.follow()
             aw.set_encoder(value)
             return True
         if number == 1:
