@@ -20,6 +20,7 @@ import tomllib
 from collections.abc import Callable
 from pathlib import Path
 
+from .. import registry
 from ..limits import InputTooLarge, read_bytes, size_text
 from .bounds import AXES_MAX, NESTING_MAX, excess, too_deep
 from .names import compact
@@ -28,7 +29,7 @@ from .profile import CAPABILITY_VALUES, STORABLE_USER_VARIABLES, USER_VARIABLES,
 MAX_FILE_BYTES = 1024 * 1024
 """Largest profile file read (the built-in ones are about 60 kB)."""
 MAX_DEPTH = 8
-ENGINES = ("sixpoint", "linear", "tmc429")
+
 _TABLES = {"axis_parameter": ("number",), "global_parameter": ("bank", "number"), "io": ("bank", "port"),
            "interrupt": ("number",)}
 _MODULE_INT = ("axes", "firmware_binary", "program_memory", "coordinates", "user_variables",
@@ -223,8 +224,9 @@ def _check_extras(m: RawProfile) -> list[str]:
 def _check_module_choices(m: RawProfile) -> list[str]:
     """The engine name and the lists of [module]."""
     errors = []
-    if m.get("engine") not in ENGINES:
-        errors.append(f"module.engine: must be one of {', '.join(ENGINES)}, got {m.get('engine')!r}")
+    engines = registry.of(registry.ENGINES).available()
+    if m.get("engine") not in engines:
+        errors.append(f"module.engine: must be one of {', '.join(engines)}, got {m.get('engine')!r}")
     ops = m.get("opcodes")
     if not isinstance(ops, list) or not all(_is_int(o) and 0 <= o <= 255 for o in ops):
         errors.append("module.opcodes: expected a list of command numbers 0..255")
