@@ -99,12 +99,17 @@ def _encode_all(st: State, profile: ModuleProfile | None) -> tuple[list[Instruct
 
 
 def _check_size(st: State, profile: ModuleProfile | None) -> None:
+    """The program must fit the module's memory: the error points at the first instruction that
+    does not fit (at none when the source has no instruction)."""
     size = len(st.statements) + int(st.append_stop)
-    if profile is not None and st.origin + size > profile.program_memory:
-        over = st.statements[max(0, min(profile.program_memory - st.origin, len(st.statements) - 1))]
-        at = f" from address {st.origin}" if st.origin else ""
-        fail(over.where, over.column, f"program has {size} instructions{at}; "
-             f"{profile.name} program memory holds {profile.program_memory}")
+    if profile is None or st.origin + size <= profile.program_memory:
+        return
+    at = f" from address {st.origin}" if st.origin else ""
+    message = f"program has {size} instructions{at}; {profile.name} program memory holds {profile.program_memory}"
+    if not st.statements:
+        raise AsmError(st.filename, 0, 0, message)
+    over = st.statements[max(0, min(profile.program_memory - st.origin, len(st.statements) - 1))]
+    fail(over.where, over.column, message)
 
 
 def finish(st: State, profile: ModuleProfile | None) -> Program:
