@@ -28,6 +28,22 @@ def test_the_origin_may_be_the_last_address():
         assemble("STOP", module="PD86-1180", append_stop=False, origin=size)
 
 
+def test_a_program_without_instructions_beyond_the_memory_is_an_error_without_a_position():
+    """The same rule when the source has no instruction to point at (only comments and constants,
+    or nothing): the appended STOP at the size is an error naming the file, line 0 (docs/
+    tmcl-assembler.md: line 0 is "no position"); at the last address it fits."""
+    size = load_profile("TMCM-6212").program_memory
+    assert assemble("", module="TMCM-6212", origin=size - 1).instructions == [(28, 0, 0, 0)]
+    for source, append_stop in (("", True), ("// a comment\nK = 1\n", True), ("", False)):
+        with pytest.raises(AsmError) as err:
+            assemble(source, filename="empty.tmc", module="TMCM-6212", origin=size + 1 - append_stop,
+                     append_stop=append_stop)
+        count = int(append_stop)
+        assert str(err.value) == (f"empty.tmc: program has {count} instructions from address {size + 1 - append_stop}; "
+                                  f"TMCM-6212 program memory holds {size}")
+        assert (err.value.line, err.value.column) == (0, 0)
+
+
 def test_type_and_motor_take_255_and_refuse_256():
     """Type and motor/bank are one byte each: 0 and 255 are accepted, -1 and 256 refused."""
     assert assemble("SAP 255, 255, 1").instructions[0] == (5, 255, 255, 1)

@@ -134,3 +134,41 @@ def test_a_loaded_profile_is_the_target(tmp_path):
     assert prog.module == "TMCM-2212"
     assert [(d.line, d.column, d.message) for d in prog.warnings] == [
         (2, 5, "ROR: motor 2 does not exist on TMCM-2212 (motors 0..1)")]
+
+
+def test_motor_255_copies_coordinates_only_for_sco_and_gco():
+    """TMCM-6212 3.6.22-3.6.23: "SCO 0, 255, 0 copies all coordinates ... from RAM to the EEPROM",
+    GCO 0, 255 back; CCO (3.6.24) and ACO (3.6.25) have no such form: their motor 255 is no motor."""
+    assert warned("SCO 0, 255, 0\nGCO 5, 255") == []
+    assert warned("CCO 0, 255\nACO 1, 255") == [
+        (1, 8, "CCO: motor 255 does not exist on TMCM-6212 (motors 0..5)"),
+        (2, 8, "ACO: motor 255 does not exist on TMCM-6212 (motors 0..5)")]
+
+
+def test_the_pd28_and_pd86_commands_on_a_motor():
+    """PD28-1021 3.5 Table 5: MVPA, ROLA and RORA take a <motor number>; PD86-1180 4.4.1: STAP and
+    RSAP take <parameter>, <motor number>. The PD28-1021 and PD86-1180 have one motor (0)."""
+    assert warned("MVPA ABS, 0\nROLA 0\nRORA 0", "PD28-1021") == []
+    assert [m for _, _, m in warned("MVPA ABS, 1\nROLA 1\nRORA 1", "PD28-1021")] == [
+        f"{name}: motor 1 does not exist on PD28-1021 (motor 0 only)" for name in ("MVPA", "ROLA", "RORA")]
+    assert [m for _, _, m in warned("STAP 4, 1\nRSAP 4, 1", "PD86-1180")] == [
+        f"{name}: motor 1 does not exist on PD86-1180 (motor 0 only)" for name in ("STAP", "RSAP")]
+
+
+def test_the_check_reads_what_fields_name_from_the_command_set():
+    """Issue 33: "No bare opcode sets remain outside [the command table]". The check compares no
+    command number with a literal: what each field names is `Command.meanings` (protocol/opcodes.py)."""
+    import ast
+
+    from opentmcl.lang import capabilities_check
+
+    tree = ast.parse(Path(capabilities_check.__file__).read_text(encoding="utf-8"))
+    numbers = [node.lineno for node in ast.walk(tree)
+               if isinstance(node, ast.Compare)
+               and any(isinstance(n, ast.Attribute) and n.attr == "command" for n in (node.left, *node.comparators))
+               and any(isinstance(c, ast.Constant) and isinstance(c.value, int)
+                       or isinstance(c, (ast.Set, ast.Tuple, ast.List)) for c in node.comparators)]
+    sets = [node.lineno for node in ast.walk(tree)
+            if isinstance(node, (ast.Set, ast.Tuple)) and len(node.elts) > 1
+            and all(isinstance(e, ast.Constant) and isinstance(e.value, int) for e in node.elts)]
+    assert numbers == [] and sets == []
