@@ -14,11 +14,11 @@ def test_returning_a_switch_that_was_never_forced_is_a_no_op(rig):
     r = rig("TMCM-6212", STAGE)
     aw = r.vm.world.axis(0)
     aw.force_switch("left", None)
-    assert aw.forced == {}
+    assert aw.switches.forced == {}
     assert r.gap(11) == 0
     aw.force_switch("home", 1)
     aw.force_switch("left", None)    # another switch is forced: it stays forced
-    assert aw.forced == {"home": 1} and r.gap(9) == 1
+    assert aw.switches.forced == {"home": 1} and r.gap(9) == 1
 
 
 def test_set_shutdown_drives_the_shutdown_pin(rig):
@@ -50,3 +50,24 @@ def test_1180_null_channel_clear_keeps_an_odd_prescaler(rig):
     r.vm.advance(30)
     assert r.gap(1) == 5000
     assert r.gap(210) == 6401
+
+
+def test_load_now_reads_the_load_and_a_mechanical_end(rig):
+    """docs/scenarios.md: `aw.load_now()  # load torque now (fraction of the torque at 100 %
+    current)`; docs/world.md "Load, current, stallGuard2, coolStep": the load from the scenario or
+    `set_load`, "pushing into a mechanical end adds 100" - only while pushing into it (ROR at the
+    right end), not while standing there nor moving away (ROL)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.25, "ends": [None, 1000]}}})
+    aw = r.vm.world.axis(0)
+    assert aw.load_now() == 0.25
+    aw.set_load(0.4)
+    assert aw.load_now() == 0.4
+    r.cmd(1, 0, 0, 2000)                          # ROR into the end at 1000
+    r.vm.advance(2.0)
+    assert r.phys() == 1000 and aw.load_now() == 100.4
+    r.cmd(3)                                      # MST: standing at the end
+    r.vm.advance(0.5)
+    assert aw.load_now() == 0.4
+    r.cmd(2, 0, 0, 2000)                          # ROL away from it
+    r.vm.advance(0.1)
+    assert r.phys() < 1000 and aw.load_now() == 0.4

@@ -162,20 +162,20 @@ def test_power_up_names_bank_and_port_of_a_missing_input():
 
 @pytest.mark.parametrize("command_each_tick", [False, True])
 def test_an_unresolved_next_tick_check_gives_up_after_four_ticks(rig, monkeypatch, command_each_tick):
-    """axis_world.py `AxisWorld._due_again`: "A check is due at the next tick; not more than 4
+    """world_events.py `EventLookup._due_again`: "A check is due at the next tick; not more than 4
     ticks in a row, since a check that cannot resolve it must not stall time" (docs/architecture.md
     "Time": events are looked up, not polled). A condition that stays due (here forced) is checked
     at the next tick 4 times, then only at the axis's own events: a millisecond of virtual time
     (16000 ticks) of a moving axis takes a handful of checks, not one per tick. A command at each
     tick starts the count again (docs/assumptions.md, "A check at the next tick")."""
-    from opentmcl.firmware.axis_world import AxisWorld
+    from opentmcl.firmware.world_checks import Checks
     r = rig("TMCM-6212", STAGE)
     r.cmd(1, 0, 0, V)
     r.vm.advance(0.01)
     checks = []
-    original = AxisWorld.check
-    monkeypatch.setattr(AxisWorld, "due_now", lambda self: self.index == 0)
-    monkeypatch.setattr(AxisWorld, "check", lambda self: (checks.append(r.vm.now), original(self))[1])
+    original = Checks.run
+    monkeypatch.setattr(Checks, "due_now", lambda self: self.aw.index == 0)
+    monkeypatch.setattr(Checks, "run", lambda self: (checks.append(r.vm.now), original(self))[1])
     if command_each_tick:
         for _ in range(6):
             r.cmd(1, 0, 0, V + len(checks))  # a new plan at each tick
