@@ -23,7 +23,7 @@ from .world_events import EventLookup
 if TYPE_CHECKING:
     from ..modules.profile import Capabilities
     from ..motion import RampEngine
-    from .axis import Axis
+    from .motor import Motor
     from .vm import VirtualModule
     from .world import World
 
@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 class AxisWorld:
     """Stage, switches, encoder, load and drive of one axis, bound to the module's axis."""
 
-    _axis: Axis
+    _axis: Motor
     """The bound axis (`axis` once `bind` ran; the checks and scans run only then)."""
     engine: RampEngine
 
@@ -41,7 +41,7 @@ class AxisWorld:
         self.spec = spec
         self.stage = spec.stage
         self.caps: Capabilities = world.vm.profile.capabilities
-        self.axis: Axis | None = None
+        self.axis: Motor | None = None
         self.watch: int | None = None          # counter position the reference search waits for
         self.rotor = Rotor(self)
         self.switches = Switches(self)
@@ -50,7 +50,7 @@ class AxisWorld:
         self.checks = Checks(self)
         self.events = EventLookup(self)
 
-    def bind(self, axis: Axis) -> None:
+    def bind(self, axis: Motor) -> None:
         """Power-up: the world (which persists) meets the module's new axis."""
         self.axis = axis
         self._axis = axis
@@ -67,7 +67,7 @@ class AxisWorld:
         return self.world.vm
 
     def p(self, number: int, default: int = 0) -> int:
-        """Axis parameter `number` in RAM; `default` on a module that does not have it."""
+        """Motor parameter `number` in RAM; `default` on a module that does not have it."""
         return self._axis.ram.get(number, default) if number in self._axis.params else default
 
     def has(self, number: int) -> bool:

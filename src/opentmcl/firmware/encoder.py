@@ -6,8 +6,8 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from .axis import Axis
     from .axis_world import AxisWorld
+    from .motor import Motor
 
 CLEAR_AT_NULL = 4
 """AP210 bit: clear the encoder at the next null channel (PD86-1180 manual 7.2, prescaler p + 4)."""
@@ -16,7 +16,7 @@ CLEAR_AT_NULL = 4
 class Encoder:
     """Encoder position AP209 (an offset over the counts of the rotor) and its null channel."""
 
-    axis: Axis
+    axis: Motor
 
     def __init__(self, aw: AxisWorld) -> None:
         self.aw = aw
@@ -25,7 +25,7 @@ class Encoder:
         self.null_from = 0                   # where the null-channel clear was armed
         self.null_channel_possible = aw.caps.null_channel
 
-    def bind(self, axis: Axis) -> None:
+    def bind(self, axis: Motor) -> None:
         """Power-up: the encoder counter starts at 0."""
         self.axis = axis
         self.offset = -self.quantized(self.aw.rotor.phys)

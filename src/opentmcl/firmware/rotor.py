@@ -7,8 +7,8 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ..motion import RampEngine
-    from .axis import Axis
     from .axis_world import AxisWorld
+    from .motor import Motor
 
 
 def sign(x) -> int:
@@ -18,7 +18,7 @@ def sign(x) -> int:
 class Rotor:
     """Where the stage really is, and how it follows the position counter."""
 
-    axis: Axis
+    axis: Motor
     engine: RampEngine
 
     def __init__(self, aw: AxisWorld) -> None:
@@ -27,7 +27,7 @@ class Rotor:
         self.offset = 0               # phys = counter + offset while no step is lost
         self.slipping = 0             # direction of the commanded motion while steps are lost
 
-    def bind(self, axis: Axis) -> None:
+    def bind(self, axis: Motor) -> None:
         """A new axis (power-up): the counter starts where the stage stands."""
         self.axis = axis
         self.engine = axis.engine

@@ -18,7 +18,6 @@ from ..modules.profile import ModuleProfile, load_profile
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
 from ..protocol.status import Status
 from .ascii import AsciiInterface
-from .axis import Axis
 from .commands import StatusReply
 from .eeprom import Eeprom
 from .effects import Effect
@@ -27,6 +26,7 @@ from .heartbeat import OF_INTERFACE, Heartbeats
 from .interpreter import Interpreter
 from .interrupts import Interrupts
 from .io import IOBanks
+from .motor import Motor
 from .program import ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
 from .requests import RequestPath, Setter, reply_bytes
@@ -87,13 +87,13 @@ class VirtualModule:
         self.globals = GlobalParameters(self)
         if self._address_override is not None:
             self.globals.ram[_ADDRESS] = self._address_override
-        self.axes: list[Axis] = []
+        self.axes: list[Motor] = []
         for i in range(prof.axes):
             ram = {}
             for num, p in prof.axis_parameters.items():
                 stored = ee.get_axis(i, num) if p.storable else None
                 ram[num] = p.default if stored is None else stored
-            self.axes.append(Axis(i, prof, ram))
+            self.axes.append(Motor(i, prof, ram))
         restore = self.globals.get_raw(0, 85) == 0
         self.user_vars = [0] * prof.user_variables
         for n in range(prof.storable_user_variables):
@@ -333,7 +333,7 @@ class VirtualModule:
                                      138, 1 << i).encode())
 
     # --- services used by the command handlers ---------------------------------------
-    def reference_search(self, axis: Axis) -> ReferenceSearch:
+    def reference_search(self, axis: Motor) -> ReferenceSearch:
         return self._searches[axis.index]
 
     def clear_error_flags(self, which: int) -> None:

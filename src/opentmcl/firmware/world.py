@@ -29,7 +29,7 @@ from .effects import Effect
 from .io import threshold
 
 if TYPE_CHECKING:
-    from .axis import Axis
+    from .motor import Motor
     from .vm import VirtualModule
 
 __all__ = ["AxisWorld", "ScenarioSource", "World"]
@@ -42,7 +42,7 @@ class World:
     """All axes' worlds plus the module's inputs, driven by a scenario."""
 
     axis_numbers: frozenset[int] = frozenset({9, 10, 11, 29, 180, 206, 208, 209, 215})
-    """Axis parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
+    """Motor parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
 
     def __init__(self, vm: VirtualModule, scenario: ScenarioSource = None) -> None:
         self.vm = vm
@@ -205,7 +205,7 @@ class World:
                     ax.engine.hard_stop()
             self.vm.interpreter.set_error_flag(fl.ESD)
 
-    def read_axis(self, axis: Axis, number: int) -> int | None:
+    def read_axis(self, axis: Motor, number: int) -> int | None:
         aw = self.axes_world[axis.index]
         self.vm.sync()
         aw.rotor.follow()
@@ -230,7 +230,7 @@ class World:
             return aw.encoder.absolute(axis.params[215].max)
         return None
 
-    def write_axis(self, axis: Axis, number: int, value: int) -> bool:
+    def write_axis(self, axis: Motor, number: int, value: int) -> bool:
         aw = self.axes_world[axis.index]
         if number == 209:
             self.vm.sync()

@@ -8,8 +8,8 @@ from . import flags as fl
 
 if TYPE_CHECKING:
     from ..motion import RampEngine
-    from .axis import Axis
     from .axis_world import AxisWorld
+    from .motor import Motor
 
 STALL, DEVIATION = 15, 21            # interrupt numbers + axis (firmware/interrupts.py)
 SG_EXTENDED, DEV_EXTENDED = 1, 2     # AP207 bits
@@ -18,13 +18,13 @@ SG_EXTENDED, DEV_EXTENDED = 1, 2     # AP207 bits
 class Checks:
     """What the world does to an axis at an event: stops, error flags, interrupts, lost steps."""
 
-    axis: Axis
+    axis: Motor
     engine: RampEngine
 
     def __init__(self, aw: AxisWorld) -> None:
         self.aw = aw
 
-    def bind(self, axis: Axis) -> None:
+    def bind(self, axis: Motor) -> None:
         self.axis = axis
         self.engine = axis.engine
 

@@ -10,8 +10,8 @@ from ..motion.stage import Profile, ceil_ticks
 
 if TYPE_CHECKING:
     from ..motion import RampEngine
-    from .axis import Axis
     from .axis_world import AxisWorld
+    from .motor import Motor
 
 DUE_TICKS = 4
 """Ticks in a row at which a check that cannot resolve its condition is due again."""
@@ -20,7 +20,7 @@ DUE_TICKS = 4
 class EventLookup:
     """The axis's next event and its cache."""
 
-    axis: Axis
+    axis: Motor
     engine: RampEngine
 
     SIGNATURE_PARAMS = (6, 7, 12, 13, 14, 24, 25, 26, 140, 141, 149, 167, 172, 174, 181, 182, 200, 202, 210, 212)
@@ -36,7 +36,7 @@ class EventLookup:
         self.due_plan: object = None
         self.null_channel_possible = aw.caps.null_channel
 
-    def bind(self, axis: Axis) -> None:
+    def bind(self, axis: Motor) -> None:
         self.axis = axis
         self.engine = axis.engine
         self.update_static()

@@ -1,4 +1,6 @@
-"""One axis of a virtual module: parameter RAM bound to its ramp engine.
+"""One motor of a virtual module (the "motor" field of the TMCL commands): its axis-parameter RAM
+bound to its ramp engine. (The host library's `Axis`, host/module.py, is what a program talks to;
+this is what answers it inside the virtual module.)
 
 Implements the axis-parameter semantics of SAP/GAP (TMCM-6212 manual 4.1,
 PD86-1180 manual 5): reads of live values come from the engine, writes of
@@ -34,7 +36,7 @@ if TYPE_CHECKING:
 
 ENGINE_READS = {0: "target_position", 1: "position", 8: "position_reached",
                 135: "actual_acceleration", 138: "ramp_mode"}
-"""Axis parameters read from the ramp engine (AP138: "Automatically set when using ROR, ROL, MST and MVP")."""
+"""Motor parameters read from the ramp engine (AP138: "Automatically set when using ROR, ROL, MST and MVP")."""
 VELOCITY_PARAMS = {2, 3, 4, 16, 19, 20, 22, 23, 29, 181, 182, 186, 194, 195}
 ACCEL_PARAMS = {5, 15, 17, 18}
 # Internal-unit ranges of the TMC5130 registers (TMC5130 datasheet; docs/motion.md) used when AP255 = 0.
@@ -42,7 +44,7 @@ INTERNAL_VMAX = 2**23 - 512
 INTERNAL_AMAX = 2**16 - 1
 
 
-class Axis:
+class Motor:
     world: World
     """The module's world, set by VirtualModule at power-up (firmware/world.py)."""
 
