@@ -264,7 +264,7 @@ def bus_dashboards(bus: ModuleBus, *, address: int | None = None,
     their clients."""
     from ..host import Client
     from ..server import vmapi
-    from .bus import BusTransport
+    from .bus_transport import BusTransport
 
     with bus.lock:
         vms = {vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS): vm for vm in bus.modules}

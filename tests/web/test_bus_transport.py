@@ -5,7 +5,7 @@ from opentmcl import VirtualModule
 from opentmcl.host import Client
 from opentmcl.protocol.frame import Reply, Request
 from opentmcl.server.bus import ModuleBus
-from opentmcl.web.bus import BusTransport
+from opentmcl.web.bus_transport import BusTransport
 
 
 class FakeClock:
