@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from ..handover import STOP
 from ..host import Module, TmclError, TmclStatusError, VersionReply
 from ..protocol.frame import Reply
-from ..protocol.opcodes import STOP_COMMANDS
+from ..protocol.opcodes import COMMANDS, GLOBAL_PARAMETER, STOP_COMMANDS
 from ..protocol.status import message
 from .link import TURN_REQUESTS, LinkLoader, LinkModule, link_gate
 
@@ -41,7 +41,12 @@ CARD_PARAMS = {"target_position": 0, "position": 1, "velocity": 3, "target_reach
                "right": 10, "left": 11, "load": 206, "current": 180, "max_current": 6}
 STAP, RSAP, STGP, RSGP = 7, 8, 11, 12
 USER_BANK = 2
-VARIABLE_COMMANDS = {9, 10, 11, 12, 35}  # SGP, GGP, STGP, RSGP, AGP with bank 2 name a user variable
+
+
+def _names_a_global(command: int, type: int) -> bool:
+    """SGP, GGP, STGP, RSGP, AGP: with bank 2 they name a user variable (protocol meanings)."""
+    cmd = COMMANDS.get(command)
+    return cmd is not None and cmd.naming(GLOBAL_PARAMETER, type) is not None
 
 
 def _short(text: str, limit: int = 200) -> str:
@@ -547,7 +552,7 @@ class Dashboard:
         shown = set(range(min(USER_VARIABLES_SHOWN, self.profile.user_variables)))
         if self.program is not None:
             for ins in self.program.instructions:
-                if ins.command in VARIABLE_COMMANDS and ins.motor == USER_BANK:
+                if ins.motor == USER_BANK and _names_a_global(ins.command, ins.type):
                     if 0 <= ins.type < self.profile.user_variables:
                         shown.add(ins.type)
         return sorted(shown)
