@@ -1,5 +1,5 @@
-"""Review of issue 16: a heartbeat that is already up when a program sets it stops the motors at the
-next event, also when pure instructions follow (the run-ahead must not skip that event).
+"""A heartbeat that is already up when a program sets it stops the motors at the next event, also
+when pure instructions follow (the run-ahead must not skip that event), and leaves no event behind.
 
 TMCM-6212 manual 5.1 (Bank 0), global parameter 68: "Serial heartbeat for RS485 interface and USB interface. If
 this time limit is up and no further command is received by the module the motor will be stopped."
@@ -14,7 +14,10 @@ import pytest
 
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
 from opentmcl.firmware.vm import VirtualModule
+from opentmcl.lang.assembler import assemble
 from opentmcl.protocol.frame import Request
+
+from .test_program_support import Wire
 
 SGP, GGP, CALC, WAIT, STOP, ROR, GAP = 9, 10, 19, 27, 28, 1, 6
 PURE_TAILS = {
@@ -98,3 +101,21 @@ def test_can_heartbeat_gp82_up_at_sgp_stops_at_next_instruction() -> None:
     ref.advance_to(start + 2 * INSTRUCTION_TICKS)
     assert vm.request(GAP, 3, 0).value == 0
     assert vm.request(GAP, 1, 0).value == ref.request(GAP, 1, 0).value
+
+
+def test_after_a_heartbeat_stop_and_stop_no_event_is_left():
+    """TMCM-6212 5.1 GP68 "If this time limit is up and no further command is received by the
+    module the motor will be stopped"; `VirtualModule.next_event_in()` "Seconds until the next
+    internal event (engine, heartbeat, program, world), or None". A 1 ms heartbeat expires at the
+    tick of the program's 10th instruction (one instruction per 100 us, docs/assumptions.md
+    "Instruction rate"), a CALC; the 11th is STOP. Afterwards the motor stands, the program has
+    stopped and the heartbeat has fired: nothing is left to happen."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    w = Wire(vm)
+    w.download(assemble("CALC ADD, 1\n" * 10 + "STOP\n", module="TMCM-6212").instructions)
+    w.ok(9, 68, 0, 1)
+    w.ok(4, 0, 0, 10_000_000)   # a long move: its ramp has events far ahead
+    w.run()
+    vm.advance(0.002)
+    assert vm.next_event_in() is None
+    assert (w.ok(6, 3, 0), w.state, w.a) == (0, 0, 10)
