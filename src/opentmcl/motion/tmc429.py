@@ -30,7 +30,7 @@ from .tmc429_arith import (
     sign,
 )
 from .tmc429_follow import Steps, end_bound
-from .tmc429_plan import FollowPhase, Plan, plan_linear
+from .tmc429_plan import FollowPhase, LinearPlan, Plan, plan_linear
 from .tmc429_state import RampState
 
 __all__ = ["A_LIMIT", "HOLD_MODE", "RAMP_MODE", "SOFT_MODE", "V_LIMIT", "VELOCITY_MODE",
@@ -49,7 +49,10 @@ NEAR_END = 1 << 20
 NEAR_SPAN = 4 * NEAR_END
 """How far that walk goes at most; a longer stretch is reported at the cycle it reached."""
 MEMO_SIZE = 4096
-_PLANS: dict[tuple, tuple[int, Plan | None]] = {}
+FollowRel = tuple[int, tuple[int, int, int, bool] | None]
+"""A follow stretch relative to now: (event - now, (cycle - now, units added, |v|, moved) of
+the state just before the event, or None when not walked)."""
+_PLANS: dict[tuple, tuple[int, LinearPlan | None, FollowRel | None]] = {}
 
 
 def clear_memos() -> None:
@@ -257,22 +260,20 @@ class Tmc429Ramp:
         hit = _PLANS.get(key)
         if hit is None:
             plan = plan_linear(st, None)
-            stored = self._follow_event() if plan is None else plan
+            rel = self._follow_event() if plan is None else None
             if len(_PLANS) >= MEMO_SIZE:
                 _PLANS.clear()
-            _PLANS[key] = (st.now, stored)
+            _PLANS[key] = (st.now, plan, rel)
+            shift = 0
         else:
-            now0, stored = hit
+            now0, plan, rel = hit
             shift = st.now - now0
-        if type(stored) is tuple and len(stored) == 3:
-            event, clamp, phase = stored
-            if hit is None:
-                return stored
-            return (None if event is None else event + shift,
-                    None if clamp is None else clamp + shift, phase.shifted(shift))
-        return self._follow_phase(stored)
+        if plan is None:
+            assert rel is not None
+            return self._follow_phase(rel)
+        return _shifted(plan, shift) if shift else plan
 
-    def _follow_event(self) -> tuple[int, tuple[int, int, int, bool] | None]:
+    def _follow_event(self) -> FollowRel:
         """A follow stretch for next_event, relative to now: (event - now, None) with the event a
         cycle surely before its end (`end_bound`) when that may be more than NEAR_END cycles away,
         else (event - now, (cycle - now, units added, |v|, moved)) for the state just before
@@ -288,7 +289,7 @@ class Tmc429Ramp:
                                                            st.now + NEAR_SPAN)
         return event - st.now, (t - st.now, total, w_end, moved)
 
-    def _follow_phase(self, rel: tuple[int, tuple[int, int, int, bool] | None]) -> Plan:
+    def _follow_phase(self, rel: FollowRel) -> Plan:
         """The plan of a follow stretch from `_follow_event`'s answer, at now."""
         st = self._st
         offset, walked = rel
@@ -373,12 +374,11 @@ class Tmc429Ramp:
         while self._st.now < until:
             cached = self._plan
             event, _clamp, phase = cached if cached is not None else self._plan_for(until)
-            beyond = event is None or event > until
-            if type(phase) is FollowPhase:
-                event = self._follow_to(phase, until if beyond else event - 1)
+            if isinstance(phase, FollowPhase):
+                event = self._follow_to(phase, until if event is None or event > until else event - 1)
                 if event > until:
                     return                          # inside the stretch: a cached plan stays
-            elif beyond:
+            elif event is None or event > until:
                 if cached is not None:
                     self._jump_within(phase, until)
                 else:
@@ -406,22 +406,25 @@ class Tmc429Ramp:
         if self._plan is not None and self._plan[2].t0 != self._st.now:
             self._plan = None    # a linear phase lists its steps from t0: re-plan from now
         while self._st.now < until:
-            event, _clamp, phase = self._plan if self._plan is not None else self._plan_for(until)
-            end = until if event is None or event > until else event - 1
-            if type(phase) is FollowPhase:
-                event = self._follow_to(phase, end, out)
-                if event > until:
-                    return out
-            else:
-                if end > self._st.now:
-                    out.extend((t, phase.direction) for t in phase.step_cycles(end))
-                self._jump(phase, end)
-                if end == until:
-                    return out
+            event = self._steps_to(until, out)
+            if event > until:
+                break
             step = self._cycle(event)
             if step:
                 out.append((event, step))
         return out
+
+    def _steps_to(self, until: int, out: Steps) -> int:
+        """Go through the coming phase up to `until` or its event, listing its steps in `out`;
+        return the event (> until: none by then)."""
+        event, _clamp, phase = self._plan if self._plan is not None else self._plan_for(until)
+        end = until if event is None or event > until else event - 1
+        if isinstance(phase, FollowPhase):
+            return self._follow_to(phase, end, out)
+        if end > self._st.now:
+            out.extend((t, phase.direction) for t in phase.step_cycles(end))
+        self._jump(phase, end)
+        return until + 1 if event is None or end == until else event
 
     def time_at_position(self, position: int, *, max_phases: int = 1000) -> int | None:
         """First cycle >= now where X_ACTUAL == position if nothing is written, else None.
@@ -444,7 +447,7 @@ class Tmc429Ramp:
                 return found
             if event is None:
                 return None
-            if type(phase) is LinearPhase:
+            if isinstance(phase, LinearPhase):
                 probe._jump(phase, event - 1)
             probe._cycle(event)
             if probe._st.x == target:
@@ -455,7 +458,7 @@ class Tmc429Ramp:
         """The cycle before `event` at which X_ACTUAL first equals `target` in `phase`; a follow
         stretch is walked up to there on the way."""
         st = self._st
-        if type(phase) is FollowPhase:
+        if isinstance(phase, FollowPhase):
             if event is None:
                 raise AssertionError("a follow stretch always ends")
             steps: Steps = []
@@ -479,3 +482,10 @@ class Tmc429Ramp:
         clone._plan = self._plan
         clone._base = self._base
         return clone
+
+
+def _shifted(plan: LinearPlan, shift: int) -> LinearPlan:
+    """A memoised linear plan moved `shift` cycles later (a multiple of both tick periods)."""
+    event, clamp, phase = plan
+    return (None if event is None else event + shift, None if clamp is None else clamp + shift,
+            phase.shifted(shift))

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from math import isqrt
+from math import isqrt, sqrt
 
 RAMP_MODE, SOFT_MODE, VELOCITY_MODE, HOLD_MODE = 0, 1, 2, 3
 """RAMP_MODE register values (6.1.10.1)."""
@@ -110,10 +110,14 @@ def linear_floor_sum(count: int, start: int, slope: int) -> int:
     return floor_sum(count, 256, -slope, last)
 
 
-def first_true(pred: Callable[[int], bool], lo: int, hi: int, period: int) -> int | None:
-    """Smallest j in lo..hi with pred(j) (pred monotone false..true), as cycle j*period."""
+def first_true(pred: Callable[[int], bool], lo: int, hi: int, period: int,
+               guess: int | None = None) -> int | None:
+    """Smallest j in lo..hi with pred(j) (pred monotone false..true), as cycle j*period. A
+    `guess` near the answer is checked first and the search gallops from it."""
     if hi < lo or not pred(hi):
         return None
+    if guess is not None and lo < guess < hi:
+        lo, hi = _gallop(pred, lo, hi, guess)
     while lo < hi:
         mid = (lo + hi) // 2
         if pred(mid):
@@ -121,6 +125,26 @@ def first_true(pred: Callable[[int], bool], lo: int, hi: int, period: int) -> in
         else:
             lo = mid + 1
     return lo * period
+
+
+def _gallop(pred: Callable[[int], bool], lo: int, hi: int, guess: int) -> tuple[int, int]:
+    """A narrower lo..hi around the first true j, probing guess, then 1, 2, 4 ... away."""
+    step = 1
+    if pred(guess):
+        hi = guess
+        while hi - step >= lo:
+            if not pred(hi - step):
+                return hi - step + 1, hi
+            hi -= step
+            step *= 2
+        return lo, hi
+    lo = guess + 1
+    while lo + step - 1 < hi:
+        if pred(lo + step - 1):
+            return lo, lo + step - 1
+        lo += step
+        step *= 2
+    return lo, hi
 
 
 # --- a linear phase ----------------------------------------------------------------------------
@@ -198,7 +222,26 @@ class LinearPhase:
         if t_hi is None:
             raise AssertionError("unbounded search in a ramping phase")
         lo, hi = self.i0 + 1, t_hi // self.pulse_period
-        return first_true(lambda i: self.acc0 + self.pulse_sum(i) >= need, lo, hi, self.pulse_period)
+        return first_true(lambda i: self.acc0 + self.pulse_sum(i) >= need, lo, hi, self.pulse_period,
+                          self._pulse_guess(need - self.acc0))
+
+    def _pulse_guess(self, units: int) -> int | None:
+        """The pulse tick where the accumulator would have added `units`, |v| taken as
+        continuous from the first ramp tick on (its mean over each ramp period, less the half
+        unit a pulse's floor loses on average); a float estimate for `first_true`."""
+        c1, (u0, b) = self.smooth_start()
+        alpha = self.delta / self.ramp_period
+        disc = b * b + 512 * alpha * self.pulse_period * (units - u0)
+        if disc < 0:
+            return None
+        return int((c1 + (sqrt(disc) - b) / alpha) // self.pulse_period)
+
+    def smooth_start(self) -> tuple[int, tuple[float, float]]:
+        """(first ramp tick c1 after t0, (units added before c1, mean |v| - 127.5 right after
+        c1)): the start of the continuous model of `_pulse_guess`."""
+        c1 = (self.j0 + 1) * self.ramp_period
+        pulses = (c1 - 1) // self.pulse_period - self.i0
+        return c1, (pulses * (self.w0 >> 8), self.w0 + self.delta / 2 - 127.5)
 
     def step_cycles(self, t_hi: int) -> list[int]:
         """Cycles of every step on cycles t0+1 .. t_hi, in order."""

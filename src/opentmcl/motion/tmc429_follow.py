@@ -146,31 +146,33 @@ def _fast(regs: FollowRegisters, wk: Walk, t: int, w: int, last: int) -> tuple[i
     """As many ticks as the fast runs take from cycle t: (t, |v|, whether pulses with |v| > 0
     were added). Stops before anything the general walk must see (an arrival, `last`, the
     lowest target) and at once when the velocity is still below its target."""
-    rp, pp, a = regs.ramp_period, regs.pulse_period, regs.a_max
+    rp, pp = regs.ramp_period, regs.pulse_period
     c = (t // rp + 1) * rp                          # the next ramp tick
-    n = w >> 8
     ran = False
     if t != c - 1:                                  # the rest of this interval at |v|
         count = (c - 1) // pp - t // pp
-        if c - 1 > last or count * n >= wk.left:
+        if c - 1 > last or count * (w >> 8) >= wk.left:
             return t, w, False
-        wk.total += count * n
+        wk.total += count * (w >> 8)
         ran = count > 0 and w > 0
         t = c - 1
-    if a == 0:                                      # |v| never changes: up to arrival or last
+    if regs.a_max == 0:                             # |v| never changes: up to arrival or last
         return _steady(regs, wk, t, w, last, ran)
-    left = wk.left
-    pm, sh, vmax = regs.pmul, 3 + regs.pdiv, regs.v_max
-    if n < vmax and (n < regs.v_min or pm * left >> sh >= (n + 1) * (n + 1)):
-        return t, w, ran                            # the target is above |v|: rising
-    period_ratio = rp // pp
-    if a < 256:
-        c2, w, left = _levels(c, w, left, last + 1, period_ratio, rp, a, pm, sh, regs.floor, vmax)
+    if _rising(regs, w, wk.left):
+        return t, w, ran
+    args = (wk.left, last + 1, rp // pp, rp, regs.a_max, regs.pmul, 3 + regs.pdiv)
+    if regs.a_max < 256:
+        c2, w, left = _levels(c, w, *args, regs.floor, regs.v_max)
     else:
-        c2, w, left = _ticks(c, w, left, last + 1, period_ratio, rp, a, pm, sh, regs.floor << 8,
-                             vmax)
+        c2, w, left = _ticks(c, w, *args, regs.floor << 8, regs.v_max)
     wk.total = wk.units - left
     return c2 - 1, w, ran or c2 > c
+
+
+def _rising(regs: FollowRegisters, w: int, left: int) -> bool:
+    """The target for `left` units is above the level of |v| = w (the velocity may rise)."""
+    n = w >> 8
+    return n < regs.v_max and (n < regs.v_min or regs.pmul * left >> (3 + regs.pdiv) >= (n + 1) ** 2)
 
 
 def _steady(regs: FollowRegisters, wk: Walk, t: int, w: int, last: int,
@@ -199,10 +201,10 @@ def _levels(c: int, w: int, left: int, last1: int, period_ratio: int, rp: int, a
     while U >= L(m): (PMUL * U - m^2 * 2^(3+PDIV)) // (PMUL * P * m) + 1 ticks in the level in
     all; else the level has the J ticks. Then one tick falls by A_MAX into level m - 1, adding
     P (m - 1) units. Levels above V_MAX only fall. Stops before a pass that would reach the
-    arrival pulse, a cycle past last1 - 1 or level `floor` + 1; returns (next ramp tick, |v|,
+    arrival pulse, a cycle past last1 - 1 or level `floor`; returns (next ramp tick, |v|,
     units left) there."""
     m = w >> 8
-    stop = floor + 1
+    stop = floor                                # a pass at level m ends above (m - 1) * 256
     budget = (last1 - c) // rp                  # whole ticks before last1
     used = 0
     pm_p = pm * period_ratio

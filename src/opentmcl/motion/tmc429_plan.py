@@ -11,6 +11,7 @@ ramp tick where the computed target V_TARGET binds (6.1.9); from there the veloc
 from __future__ import annotations
 
 from dataclasses import dataclass
+from math import sqrt
 
 from .tmc429_arith import (
     HOLD_MODE,
@@ -42,6 +43,7 @@ class FollowPhase:
 Plan = tuple[int | None, int | None, LinearPhase | FollowPhase]
 """(event, clamp, phase): the first cycle > now to apply exactly (None: none ever) and the cycle
 where the ramp reaches its target (reported by next_event, also exact)."""
+LinearPlan = tuple[int | None, int | None, LinearPhase]
 
 
 def ramp_target(st: RampState) -> tuple[int | None, bool]:
@@ -73,16 +75,11 @@ def linear_phase(st: RampState, vt: int) -> LinearPhase:
     """The phase from now in which |v| moves by A_MAX per ramp tick towards `vt` (or stays, in
     hold_mode, at A_MAX = 0 or on the target), 6.1.9.2."""
     rp, pp = 32 << st.ramp_div, 32 << st.pulse_div
-    v0, a = st.v, st.a_max
-    ramping = a > 0 and v0 != vt and st.mode != HOLD_MODE
+    v0 = st.v
+    ramping = st.a_max > 0 and v0 != vt and st.mode != HOLD_MODE
     direction = sign(v0) if v0 != 0 else (sign(vt) if ramping else 0)
     w0 = abs(v0)
-    if not ramping:
-        delta = 0
-    elif sign(vt) == direction and abs(vt) > w0:
-        delta = a
-    else:
-        delta = -a
+    delta = _delta(st.a_max, ramping, direction, vt, w0)
     j0, i0 = st.now // rp, st.now // pp
     acc0, i_dir = st.acc, i0 + 1
     if direction != 0 and direction != st.acc_dir:
@@ -93,7 +90,15 @@ def linear_phase(st: RampState, vt: int) -> LinearPhase:
     return LinearPhase(st.now, rp, pp, j0, i0, w0, delta, direction, acc0, i_dir)
 
 
-def plan_linear(st: RampState, until: int | None) -> Plan | None:
+def _delta(a: int, ramping: bool, direction: int, vt: int, w0: int) -> int:
+    """Change of |v| per ramp tick: +A_MAX towards a higher |vt| in the same direction,
+    -A_MAX otherwise, 0 without a ramp."""
+    if not ramping:
+        return 0
+    return a if sign(vt) == direction and abs(vt) > w0 else -a
+
+
+def plan_linear(st: RampState, until: int | None) -> LinearPlan | None:
     """The linear phase from now and its end (looked for up to `until`), or None when the
     computed ramp_mode target binds at the next ramp tick (a follow stretch starts)."""
     target, binds = ramp_target(st)
@@ -122,26 +127,37 @@ def _ramp_events(st: RampState, phase: LinearPhase, vt: int,
     """(first ramp tick that changes the phase, clamp): the tick where |v| reaches `vt` or
     changes sign, the release of a soft stop at standstill (6.1.10.2) and the stop at the target
     once |v| <= V_MIN (6.1.3)."""
-    rp, a, j0, w0 = phase.ramp_period, st.a_max, phase.j0, phase.w0
-    events: list[int] = []
-    clamp = None
-    if phase.delta != 0:
-        if sign(vt) == phase.direction or vt == 0:
-            k_end = ceil_div(abs(abs(vt) - w0), a)       # reaches vt (or 0)
-        else:
-            k_end = ceil_div(w0, a)                       # changes sign
-        clamp = (j0 + k_end) * rp
-        events.append(clamp)
+    rp, j0, w0 = phase.ramp_period, phase.j0, phase.w0
+    clamp = _clamp(st, phase, vt)
+    events = [] if clamp is None else [clamp]
     if st.stopping and st.mode != HOLD_MODE and w0 == 0:
-        events.append((j0 + 1) * rp)                      # release at once
+        events.append((j0 + 1) * rp)                          # release at once
     if dx_zero and not st.stopping and st.mode in (RAMP_MODE, SOFT_MODE):
-        limit = st.v_min * 256
-        if w0 <= limit:
-            if w0 != 0:
-                events.append((j0 + 1) * rp)
-        elif a > 0:
-            events.append((j0 + ceil_div(w0 - limit, a) + 1) * rp)
+        stop = _stop_at_target(st, phase)
+        if stop is not None:
+            events.append(stop)
     return (min(events) if events else None), clamp
+
+
+def _clamp(st: RampState, phase: LinearPhase, vt: int) -> int | None:
+    """The ramp tick where a ramping |v| reaches `vt` (or 0, or changes sign)."""
+    if phase.delta == 0:
+        return None
+    if sign(vt) == phase.direction or vt == 0:
+        k_end = ceil_div(abs(abs(vt) - phase.w0), st.a_max)   # reaches vt (or 0)
+    else:
+        k_end = ceil_div(phase.w0, st.a_max)                  # changes sign
+    return (phase.j0 + k_end) * phase.ramp_period
+
+
+def _stop_at_target(st: RampState, phase: LinearPhase) -> int | None:
+    """At the target: the ramp tick that stops the motor once |v| <= V_MIN * 256 (6.1.3)."""
+    limit, w0, j0 = st.v_min * 256, phase.w0, phase.j0
+    if w0 <= limit:
+        return (j0 + 1) * phase.ramp_period if w0 != 0 else None
+    if st.a_max > 0:
+        return (j0 + ceil_div(w0 - limit, st.a_max) + 1) * phase.ramp_period
+    return None
 
 
 def _step_event(st: RampState, phase: LinearPhase, dx_zero: bool, bound: int | None) -> int | None:
@@ -161,15 +177,19 @@ def _step_limit(st: RampState, direction: int, dx_zero: bool) -> int | None:
         return None
     if dx_zero:
         return 1
-    dx = st.dx()
-    s, d = sign(dx), abs(dx)
     if st.stopping:          # only the stop at the target matters now
         return (st.xt - st.x) * direction % st.modulus or st.modulus
+    dx = st.dx()
+    s, d = sign(dx), abs(dx)
     if direction == s:                                     # towards the target: arrival
-        if st.mode == SOFT_MODE:
-            return min(d, d - _soft_first(st, d) + 1)
-        return d
-    flip = st.half - d + (1 if s < 0 else 0)               # away: dx wraps to the other sign
+        return min(d, d - _soft_first(st, d) + 1) if st.mode == SOFT_MODE else d
+    return _away_limit(st, s, d)
+
+
+def _away_limit(st: RampState, s: int, d: int) -> int:
+    """Steps away from a target d steps off in direction s until dx wraps to the other sign (or,
+    in soft_mode, until the speed for the growing distance changes)."""
+    flip = st.half - d + (1 if s < 0 else 0)
     if st.mode == SOFT_MODE and st.soft_speed(d) < st.v_max:
         return min(flip, _soft_last(st, d, d + flip) - d + 1)
     return flip
@@ -213,6 +233,23 @@ def _fires(st: RampState, ph: LinearPhase, units0: int, j: int) -> bool:
     return speed < st.v_max
 
 
+def _trigger_guess(st: RampState, ph: LinearPhase, units0: int) -> int | None:
+    """Where `_find_trigger` starts looking in a ramping phase: the ramp tick where |v| + A_MAX
+    meets 256 sqrt(p' U) (less half a level for the square root's floor), |v| and U taken as
+    continuous as in `LinearPhase._pulse_guess`; a float estimate only."""
+    rp, pp = ph.ramp_period, ph.pulse_period
+    c1, (u0, b) = ph.smooth_start()
+    k = 65536.0 * st.pmul / (1 << (3 + st.pdiv))
+    alpha = ph.delta / rp
+    beta = ph.w0 + st.a_max + 128
+    qa = alpha * alpha + k * alpha / (512 * pp)
+    qb = 2 * alpha * beta + k * b / (256 * pp)
+    disc = qb * qb - 4 * qa * (beta * beta - k * (units0 - u0))
+    if qa <= 0 or disc < 0:
+        return None
+    return int((c1 + (sqrt(disc) - qb) / (2 * qa)) // rp)
+
+
 def _find_trigger(st: RampState, ph: LinearPhase, units0: int, t_hi: int | None) -> int | None:
     """First ramp tick (cycle) of `ph` at which the computed ramp_mode target binds (monotone:
     the remaining distance only falls, the velocity only rises)."""
@@ -221,7 +258,8 @@ def _find_trigger(st: RampState, ph: LinearPhase, units0: int, t_hi: int | None)
     if ph.delta != 0:
         if t_hi is None:               # a ramping phase always ends at its clamp
             raise AssertionError("unbounded trigger search in a ramping phase")
-        return first_true(lambda j: _fires(st, ph, units0, j), j_lo, t_hi // rp, rp)
+        return first_true(lambda j: _fires(st, ph, units0, j), j_lo, t_hi // rp, rp,
+                          _trigger_guess(st, ph, units0))
     # |v| = V_MAX * 256 held: binds once units < level_start(V_MAX)
     u = ph.w0 >> 8
     if u == 0 or st.v_max == 0:
