@@ -1,0 +1,316 @@
+"""One twin's run through a capture, in virtual time (docs/capture.md "Replay").
+
+The module acted on each request somewhere inside its window (capture/timing.py), and which
+instant matters: an MST 2 ms later stops an axis 100 steps further on. Two twins bracket it. The
+"hi" twin acts on each request at the instant that leaves its axis further on later (an MST as late
+as it can, a start as early as it can; the sign is that of the axis speed before the request minus
+the speed the request asks for), the "lo" twin at the other end of the window. A read is answered
+at the start of its window, and the twin's value is followed over the whole sampling interval
+[window start - time tolerance, window end + time tolerance]: at its ends, at every event of the
+twin in between (a ramp phase change, an arrival, a switch edge: between two events a position is
+quadratic and a speed linear in time) and at a turning point, so the range is the true range of
+the value over the interval. Requests act in capture order.
+"""
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+
+from ..firmware.commands import execute
+from ..modules.state import READ_CLEARS
+from ..motion import CLOCK_HZ
+from ..protocol.frame import FRAME_LEN
+from .decode import parameter_name
+from .timing import Slot
+
+GAP, GGP, GIO, GCO, RFS, APP_STATUS = 6, 10, 15, 31, 13, 135
+ROR, ROL, MST, MVP, SAP = 1, 2, 3, 4, 5
+APPLICATION_STATUS = 128
+"""GGP 128: 1 while a TMCL program runs."""
+MAX_STEPS = 400
+"""Most twin events stepped through between two points of the timeline; beyond, the twin jumps."""
+MAX_TRACE = 20000
+"""Most (time, position, speed) points kept per axis for the plots."""
+
+
+def windowed(rec: dict, profile) -> bool:
+    """A read whose answer is followed over its sampling interval (GAP, GGP, GIO, GCO, 135, RFS
+    STATUS), except a value its reading changes (AP207)."""
+    command = rec.get("command")
+    if command == RFS:
+        return rec.get("type") == 2
+    if command not in (GAP, GGP, GIO, GCO, APP_STATUS):
+        return False
+    return parameter_name(profile, command, rec["type"], rec["motor"]) not in READ_CLEARS
+
+
+def _sign(x: int) -> int:
+    return (x > 0) - (x < 0)
+
+
+@dataclass
+class Result:
+    """What the twin answered to one request, and the range of the value over its interval."""
+
+    raw: bytes
+    t: float
+    lo: int | None = None
+    hi: int | None = None
+    running: bool = False
+    """A TMCL program was running when the request acted."""
+
+    def include(self, value: int) -> None:
+        self.lo = value if self.lo is None or value < self.lo else self.lo
+        self.hi = value if self.hi is None or value > self.hi else self.hi
+
+
+@dataclass
+class _Window:
+    n: int
+    command: int
+    type: int
+    motor: int
+    position: bool
+    result: Result
+    open: bool = True
+    last: tuple[float, int, int] | None = None   # (t, value, speed) for a position: the turning point
+
+
+@dataclass
+class _Watch:
+    n: int
+    motor: int
+    kind: str     # position | speed | search
+    value: int = 0
+
+
+@dataclass
+class TwinRun:
+    """A twin's answers (`results` by request number), events, and motion timing."""
+
+    policy: str
+    results: dict[int, Result] = field(default_factory=dict)
+    skipped: set[int] = field(default_factory=set)
+    events: list[tuple[float, bytes]] = field(default_factory=list)
+    done: dict[int, float] = field(default_factory=dict)
+    """request n of a motion command -> when the twin's axis got there (arrival, speed, search end)."""
+    trace: dict[int, list[tuple[float, int, int]]] = field(default_factory=dict)
+
+
+class Twin:
+    """Runs one `VirtualModule` through the slots of a capture (see the module doc)."""
+
+    def __init__(self, vm, policy: str, tau: float, trace_axes: set[int]) -> None:
+        self.vm, self.policy, self.tau = vm, policy, tau
+        self.run = TwinRun(policy)
+        self.windows: dict[int, _Window] = {}
+        self.watches: dict[int, _Watch] = {}
+        self.trace_axes = sorted(m for m in trace_axes if m < vm.profile.axes)
+        self.last_action = 0
+
+    # -- reading the twin (pure reads) -------------------------------------------------------
+    def read(self, command: int, type_: int, motor: int) -> int | None:
+        if self.vm.download_mode:
+            return None
+        out = execute(self.vm, command, type_, motor, 0, program=False)
+        if isinstance(out, tuple) and out[0] == 100:
+            return int(out[1])
+        return None
+
+    def now(self) -> float:
+        return self.vm.now / CLOCK_HZ
+
+    # -- time ----------------------------------------------------------------------------------
+    def advance(self, tick: int) -> None:
+        """Step to `tick` event by event, sampling the open windows and watching motions."""
+        steps = 0
+        while self.vm.now < tick:
+            nxt = tick
+            if steps < MAX_STEPS:
+                dt = self.vm.next_event_in()
+                if dt is not None:
+                    nxt = min(tick, self.vm.now + max(1, round(dt * CLOCK_HZ)))
+            self.vm.advance_to(nxt)
+            steps += 1
+            self.after_step()
+
+    def after_step(self) -> None:
+        t = self.now()
+        for raw in self.vm.drain_events():
+            self.run.events.append((t, raw))
+        for w in self.windows.values():
+            if w.open:
+                self.sample(w)
+        if self.watches:
+            self.check_watches()
+        self.trace()
+
+    def sample(self, w: _Window) -> None:
+        value = self.read(w.command, w.type, w.motor)
+        if value is None:
+            return
+        w.result.include(value)
+        if w.position:
+            speed = self.read(GAP, 3, w.motor)
+            if speed is None:
+                return
+            t = self.now()
+            if w.last is not None and _sign(w.last[2]) * _sign(speed) < 0:
+                # the speed crossed zero between two samples: the position turned there
+                t0, x0, v0 = w.last
+                t_turn = t0 + (t - t0) * v0 / (v0 - speed)
+                w.result.include(round(x0 + v0 * (t_turn - t0) / 2))
+            w.last = (t, value, speed)
+
+    def trace(self) -> None:
+        t = self.now()
+        for motor in self.trace_axes:
+            points = self.run.trace.setdefault(motor, [])
+            if len(points) >= MAX_TRACE:
+                continue
+            x, v = self.read(GAP, 1, motor), self.read(GAP, 3, motor)
+            if x is not None and v is not None and (not points or points[-1][0] != t):
+                points.append((t, x, v))
+
+    # -- motions and their end -----------------------------------------------------------------
+    def check_watches(self) -> None:
+        for n, w in list(self.watches.items()):
+            if w.kind == "position":
+                done = self.read(GAP, 8, w.motor) == 1
+            elif w.kind == "speed":
+                done = self.read(GAP, 3, w.motor) == w.value
+            else:
+                done = self.read(RFS, 2, w.motor) == 0
+            if done:
+                self.run.done[n] = self.now()
+                del self.watches[n]
+
+    def watch(self, rec: dict) -> None:
+        """After a motion request that succeeded: watch for its end (superseding the axis's last)."""
+        command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
+        kind = None
+        if command == MVP or (command == SAP and type_ == 0):
+            kind, target = "position", 0
+        elif command in (ROR, ROL):
+            kind, target = "speed", value if command == ROR else -value
+        elif command == MST:
+            kind, target = "speed", 0
+        elif command == SAP and type_ == 2:
+            kind, target = "speed", value
+        elif command == RFS and type_ == 0:
+            kind, target = "search", 0
+        if kind is None or motor >= self.vm.profile.axes:
+            return
+        for n in [n for n, w in self.watches.items() if w.motor == motor]:
+            del self.watches[n]
+        self.watches[rec["n"]] = _Watch(rec["n"], motor, kind, target)
+        self.check_watches()
+
+    # -- the sign of an action's timing ----------------------------------------------------------
+    def effect(self, rec: dict) -> int | None:
+        """d(later position)/d(delay) of the request's axis as a sign; None when unknown."""
+        command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
+        axis_command = command in (ROR, ROL, MST, MVP, RFS) or (command == SAP and type_ in (0, 1, 2, 4))
+        if not axis_command:
+            return 0 if command in (GAP, GGP, GIO, GCO, 136) or command == SAP else None
+        if motor >= self.vm.profile.axes:
+            return 0
+        v0 = self.read(GAP, 3, motor)
+        x0 = self.read(GAP, 1, motor)
+        if v0 is None or x0 is None:
+            return None
+        if command == SAP and type_ == 1:
+            return -_sign(v0)   # a position overwritten later keeps the distance run until then
+        if command == MST or (command == RFS and type_ == 1):
+            v1 = 0
+        elif command in (ROR, ROL):
+            v1 = value if command == ROR else -value
+        elif command == SAP and type_ == 2:
+            v1 = value
+        elif command == SAP and type_ == 4:
+            v1 = _sign(v0) * value
+        elif command == MVP and type_ in (0, 1) or command == SAP and type_ == 0:
+            target = value if type_ == 0 or command == SAP else x0 + value
+            vmax = self.read(GAP, 4, motor) or 0
+            v1 = _sign(target - x0) * vmax
+        else:
+            return None
+        return _sign(v0 - v1)
+
+    def late(self, rec: dict) -> bool:
+        """Does this twin act at the end of the request's window?"""
+        sign = self.effect(rec)
+        if sign is None:
+            return self.policy == "lo"
+        return sign > 0 if self.policy == "hi" else sign < 0
+
+    # -- acting ---------------------------------------------------------------------------------
+    def act(self, slot: Slot) -> None:
+        rec = slot.rec
+        if rec["kind"] == "ascii":
+            if getattr(self.vm, "ascii_mode", False):
+                self.vm.feed_ascii(rec["bytes"])
+            return
+        if not self.vm.accepts_address(rec["address"]):
+            self.run.skipped.add(rec["n"])   # another module's request (the twin follows GP66/GP87)
+            return
+        running = self.read(GGP, APPLICATION_STATUS, 0) == 1
+        raw = self.vm.handle(rec["bytes"]) if len(rec["bytes"]) == FRAME_LEN else b""
+        result = self.run.results.setdefault(rec["n"], Result(raw, self.now()))
+        result.raw, result.t, result.running = raw, self.now(), running
+        for ev in self.vm.drain_events():
+            self.run.events.append((self.now(), ev))
+        if len(raw) == FRAME_LEN and raw[2] == 100 and windowed(rec, self.vm.profile):
+            result.include(int.from_bytes(raw[4:8], "big", signed=True))
+        if len(raw) == FRAME_LEN and raw[2] == 100:
+            self.watch(rec)
+        self.trace()
+
+    def go(self, slots: list[Slot]) -> TwinRun:
+        """Run every slot; see the module doc."""
+        points: list[tuple[int, int, int, str, Slot]] = []
+        profile = self.vm.profile
+        for i, slot in enumerate(slots):
+            rec = slot.rec
+            if rec["kind"] == "request" and windowed(rec, profile):
+                heapq.heappush(points, (self._tick(slot.e - self.tau), 0, i, "open", slot))
+                heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close", slot))
+        index = 0
+        pending: tuple[int, Slot, bool] | None = None   # the next action: (tick, slot, decided)
+        while index < len(slots) or points or pending is not None:
+            if pending is None and index < len(slots):
+                slot = slots[index]
+                pending = (max(self._tick(slot.e), self.last_action), slot, False)
+            head = points[0][0] if points else None
+            if pending is not None and (head is None or pending[0] < head or
+                                        (pending[0] == head and points[0][1] > 0)):
+                tick, slot, decided = pending
+                self.advance(tick)
+                if not decided and slot.rec["kind"] == "request" and slot.s > slot.e \
+                        and not windowed(slot.rec, profile) and self.late(slot.rec):
+                    pending = (max(self._tick(slot.s), tick), slot, True)
+                    continue
+                self.act(slot)
+                self.last_action = self.vm.now
+                pending = None
+                index += 1
+                continue
+            tick, _, i, kind, slot = heapq.heappop(points)
+            self.advance(tick)
+            n = slot.rec["n"]
+            if kind == "open":
+                rec = slot.rec
+                result = self.run.results.setdefault(n, Result(b"", self.now()))
+                position = rec["command"] == GAP and rec["type"] in (1, 209)
+                w = self.windows[n] = _Window(n, rec["command"], rec["type"], rec["motor"], position, result)
+                if self.vm.accepts_address(rec["address"]):
+                    self.sample(w)
+            else:
+                closing = self.windows.pop(n, None)
+                if closing is not None and self.vm.accepts_address(slot.rec["address"]):
+                    self.sample(closing)
+        return self.run
+
+    @staticmethod
+    def _tick(t: float) -> int:
+        return max(0, round(t * CLOCK_HZ))
