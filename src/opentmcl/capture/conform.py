@@ -51,8 +51,9 @@ TRAVEL_GUARD = 0.9
 """A rotation is stopped once the axis is this share of `max_travel` away from where it began."""
 
 
-class ConformError(TmclError):
-    """The battery cannot go on (a move that does not end, a program that does not stop)."""
+class ConformError(ValueError):
+    """The battery cannot go on (a move that does not end, an axis beyond its travel, a program
+    already running): the CLI reports it in one line, exit status 2."""
 
 
 @dataclass

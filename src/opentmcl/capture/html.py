@@ -127,8 +127,9 @@ def _causes(report: ReplayReport) -> str:
         if more:
             lines = "".join(f'<div class="knock">{_e(d)}{" (again)" if d in cause.repeats else ""}</div>'
                             for d in sorted(more, key=lambda d: d.t))
-            folded = (f"<details><summary>{len(cause.repeats)} more like it, {len(cause.knock_on)} knock-on "
-                      f"divergences</summary>{lines}</details>")
+            parts = ([f"{len(cause.repeats)} more like it"] if cause.repeats else []) + \
+                ([f"{len(cause.knock_on)} knock-on divergences"] if cause.knock_on else [])
+            folded = f"<details><summary>{', '.join(parts)}</summary>{lines}</details>"
         note = f'<div class="note">{_e(cause.note)}</div>' if cause.note else ""
         items.append(f'<li class="cause"><b>{_e(cause.title())}</b><div class="root">{_e(cause.root)}</div>'
                      f"{note}{folded}</li>")

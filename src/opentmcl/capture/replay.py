@@ -417,6 +417,7 @@ def _captured_module(cap: Capture, address: int | None, notes: list[str]) -> str
     if module is not None and (module in module_names() or module.lower().endswith(".toml")):
         return module
     versions = [i.get("firmware_version") for i in cap.identities if isinstance(i.get("firmware_version"), str)]
+    versions += [r["version"] for r in cap.frames if r["kind"] == "version" and isinstance(r.get("version"), str)]
     if snap is not None and snap.firmware_version:
         versions.append(snap.firmware_version)
     binary = _binary_version(cap)
@@ -544,10 +545,12 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
     report = ReplayReport(cap.path, vms[0].profile.name, address, link=cap.link, tolerance=tol)
     try:
         snap = _initial_state(cap, cap_slots, vms[0].profile, address, initial_state, notes)
+        # the state applies from its own instant in this capture, else from the start; never after a request
+        start = min([snap.t if initial_state is None else 0.0, *(s.e for s in cap_slots[:1])])
         runs = []
         for vm, policy in zip(vms, ("lo", "hi"), strict=True):
             twin = Twin(vm, policy, tol.time, motion_axes)
-            twin.advance(round(snap.t * 16_000_000))
+            twin.advance(round(start * 16_000_000))
             applied = apply_snapshot(vm, snap, scope=state_scope)
             if policy == "lo":
                 notes.extend(applied)

@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ..modules.profile import ModuleProfile
     from .format import Capture
 
-GAP, GGP, GIO, SAP, SGP, SIO, MST = 6, 10, 15, 5, 9, 14, 3
+GAP, GGP, GIO, SAP, SGP, SIO, MST, MVP = 6, 10, 15, 5, 9, 14, 3, 4
 READ_MEMORY, DOWNLOAD, END_DOWNLOAD = 134, 132, 133
 USER_VARIABLE_BANK = 2
 OUTPUT_BANK = 2
@@ -276,19 +276,22 @@ def _apply_program(vm, program: dict[int, tuple[int, int, int, int]], notes: lis
 
 
 def _apply_position(vm, motor: int, values: dict[int, int], notes: list[str]) -> None:
-    """Target and actual position at rest (AP0, AP1): set without a move; a moving axis starts at rest."""
+    """Target and actual position (AP0, AP1) without a move: the actual position is set to the
+    target, MVP ABS goes there (which makes it the target MVP REL counts from, manual 3.6.4), and
+    when the axis stood elsewhere (after ROR and MST) MST and the actual position follow. A moving
+    axis starts at rest."""
     target, actual = values.get(0), values.get(1)
     speed = values.get(3, 0)
     if speed:
         notes.append(f"axis {motor} was moving at the snapshot ({speed}): the twin starts it at rest (inferred)")
     if actual is None:
         return
-    if target is not None and target != actual:
-        # target and actual differ at rest (after ROR/MST): set the target without a move, then stop
-        _set(vm, notes, f"axis {motor} actual_position", SAP, 1, motor, target)
-        _set(vm, notes, f"axis {motor} target_position", SAP, 0, motor, target)
+    target = actual if target is None else target
+    _set(vm, notes, f"axis {motor} actual_position", SAP, 1, motor, target)
+    _set(vm, notes, f"axis {motor} target_position", MVP, 0, motor, target)
+    if target != actual:
         vm.request(MST, 0, motor, 0)
-    _set(vm, notes, f"axis {motor} actual_position", SAP, 1, motor, actual)
+        _set(vm, notes, f"axis {motor} actual_position", SAP, 1, motor, actual)
 
 
 def apply_snapshot(vm, snap: Snapshot, *, scope: str = "all") -> list[str]:

@@ -100,7 +100,7 @@ def _start_proxy(args: argparse.Namespace, capture: str):
 
 def run(args: argparse.Namespace) -> int:
     from ..capture import CaptureError, ReplayError, replay
-    from ..capture.conform import Battery, Options
+    from ..capture.conform import Battery, ConformError, Options
     from ..host.connect import open_bus
     from ..modules.profile import load_profile
     from ..modules.profile_file import ProfileError
@@ -132,9 +132,11 @@ def run(args: argparse.Namespace) -> int:
                                     "axis": axis, "label": label})
             print(f"  {phase}{'' if axis is None else f' axis {axis}'}: {label}", file=sys.stderr, flush=True)
 
+        battery = Battery(client, profile, options, mark)
         try:
-            battery = Battery(client, profile, options, mark)
             battery.run()
+        except ConformError as exc:   # every axis got MST and the settings are back (Battery.emergency)
+            raise CliError(f"{exc}; every axis was stopped, the capture is {capture}") from None
         finally:
             client.close()
     finally:

@@ -1,0 +1,138 @@
+"""Issue 30 item 3: the state at capture start. `proxy` reads the module before it relays (every
+readable axis and global parameter and port, the program memory on request), with reading commands
+only; `replay` starts the twin from that snapshot, `--initial-state FILE` takes one explicitly, and
+without one the replay says which values it inferred (capture/snapshot.py, docs/capture.md)."""
+from __future__ import annotations
+
+import json
+import sys
+import time
+
+import pytest
+
+import opentmcl
+from opentmcl import VirtualModule
+from opentmcl.capture import read_capture, replay
+from opentmcl.capture.proxy import Proxy, ProxySession
+from opentmcl.capture.snapshot import snapshot_of
+from opentmcl.server import Server, TcpServer
+
+from .helpers import Tool, cli
+
+pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX")
+
+READS = {6, 10, 15, 134, 136}
+"""GAP, GGP, GIO, 134 (read program memory), 136 (firmware version): TMCM-6212 manual 3.6."""
+
+
+def use_the_module(url: str) -> None:
+    """What happened before the capture: a move to 51200 (manual 3.6.4), AP6 = 100, user variable 5 = 77."""
+    module = opentmcl.connect(url)
+    try:
+        client = module.client
+        for fields in [(5, 5, 0, 1_000_000), (5, 4, 0, 400_000), (4, 0, 0, 51200), (5, 6, 0, 100), (9, 5, 2, 77)]:
+            client.request(*fields)
+        deadline = time.monotonic() + 20
+        while client.reply(6, 8, 0).value != 1:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+    finally:
+        module.close()
+
+
+def host_session(url: str) -> None:
+    """What the host program does while captured: reads, a relative move there and back, reads."""
+    module = opentmcl.connect(url)
+    try:
+        client = module.client
+        start = client.reply(6, 1, 0).value
+        for fields in [(6, 209, 0), (6, 6, 0), (10, 5, 2), (6, 0, 0)]:
+            client.reply(*fields)
+        for step in (1000, -1000):   # there and back: the next session starts where this one did
+            client.request(4, 1, 0, step)
+            deadline = time.monotonic() + 20
+            while client.reply(6, 8, 0).value != 1:
+                assert time.monotonic() < deadline
+                time.sleep(0.01)
+        assert client.reply(6, 1, 0).value == start
+    finally:
+        module.close()
+
+
+def test_the_twin_starts_from_the_snapshot_and_says_what_it_inferred_without_one(tmp_path):
+    """A capture that begins after the module moved (problem 3: 14 divergences from the unknown
+    start position). With the proxy's snapshot the replay agrees; without one (--snapshot none) the
+    replay infers the positions from the first reads and says so, but no setting: AP6, the user
+    variable and the speed of the move (AP4, AP5 set before the capture) diverge by name;
+    `--initial-state` with the first capture makes that one agree too."""
+    with Tool("serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "0") as served:
+        use_the_module(served.endpoint("tcp"))
+        for name, snapshot in (("with.jsonl", "full"), ("without.jsonl", "none")):
+            with Tool("proxy", "--to", served.endpoint("tcp"), "--tcp", "127.0.0.1:0", "--log",
+                      str(tmp_path / name), "--snapshot", snapshot) as proxy:
+                host_session(proxy.endpoint("tcp"))
+                if snapshot == "full":
+                    assert any(line.startswith("snapshot of TMCM-6212 at address 1: ") for line in proxy.lines)
+    snap = snapshot_of(read_capture(tmp_path / "with.jsonl"), 1)
+    assert snap.axis[0][1] == 51200 and snap.axis[0][6] == 100 and snap.globals[(2, 5)] == 77
+    with_snapshot = cli("replay", str(tmp_path / "with.jsonl"))
+    assert with_snapshot.returncode == 0, with_snapshot.stdout + with_snapshot.stderr
+    assert "note: initial state: the capture's snapshot" in with_snapshot.stdout
+    without = cli("replay", str(tmp_path / "without.jsonl"), "--module", "TMCM-6212")
+    assert without.returncode == 1
+    assert "note: axis 0 actual_position = 51200 (inferred from its first read" in without.stdout
+    roots = [line for line in without.stdout.splitlines() if line.startswith("t=")]
+    assert len(roots) == 3 and "[max_current]: value: captured 100, virtual 128" in roots[0], without.stdout
+    assert "GGP 5, 2: value: captured 77, virtual 0" in roots[1]   # settings are not inferred:
+    assert "MVP REL, 0, 1000: duration" in roots[2]                 # nor the speed of the move
+    given = cli("replay", str(tmp_path / "without.jsonl"), "--module", "TMCM-6212",
+                "--initial-state", str(tmp_path / "with.jsonl"))
+    assert given.returncode == 0, given.stdout + given.stderr
+
+
+def _chain(tmp_path, snapshot_program: bool):
+    """A served module, an outer proxy that records what the inner proxy's snapshot sends, and the
+    inner proxy with its snapshot: (server, outer, inner, inner's TCP endpoint)."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    for fields in [(132, 0, 0, 10), (4, 1, 0, 3200), (27, 1, 0, 0), (28, 0, 0, 0), (133, 0, 0, 0)]:
+        vm.request(*fields)   # a program at 10: MVP REL 3200, WAIT POS, STOP (manual 3.6.36)
+    srv = Server([vm])
+    behind = srv.add(TcpServer(srv.bus, "127.0.0.1", 0, idle_timeout=0))
+    srv.start()
+    outer = Proxy(behind.url, log=str(tmp_path / "outer.jsonl"))
+    middle = outer.listen(TcpServer(outer, "127.0.0.1", 0, idle_timeout=0, session=ProxySession))
+    outer.start()
+    inner = Proxy(middle.url, log=str(tmp_path / "inner.jsonl"), snapshot="full", snapshot_program=snapshot_program)
+    front = inner.listen(TcpServer(inner, "127.0.0.1", 0, session=ProxySession))
+    inner.start()
+    return srv, outer, inner, front.url
+
+
+def test_the_snapshot_reads_only_and_carries_the_program_into_the_twin(tmp_path):
+    """The snapshot sends reading commands only (all it sent passes an outer proxy: GAP, GGP, GIO,
+    136, 134); with the program memory (command 134, "on request") the twin runs the program the
+    host starts (129 type 1) as the module did; without it the twin has no program to run."""
+    srv, outer, inner, url = _chain(tmp_path, snapshot_program=True)
+    try:
+        module = opentmcl.connect(url)
+        client = module.client
+        client.request(129, 1, 0, 10)
+        deadline = time.monotonic() + 20
+        while client.reply(10, 128, 0).value != 0 or client.reply(6, 1, 0).value != 3200:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        module.close()
+    finally:
+        inner.stop()
+        outer.stop()
+        srv.stop()
+    sent = {r["command"] for r in read_capture(tmp_path / "outer.jsonl").frames
+            if r["kind"] == "request" and r["t"] < inner.snapshot.t}
+    assert sent <= READS and {6, 10, 15, 134, 136} <= sent
+    cap = read_capture(tmp_path / "inner.jsonl")
+    snap = snapshot_of(cap, 1)
+    assert snap.complete and snap.program[10] == (4, 1, 0, 3200) and snap.program[12] == (28, 0, 0, 0)
+    assert replay(cap, "TMCM-6212").ok
+    lines = [json.loads(x) for x in (tmp_path / "inner.jsonl").read_text().splitlines()]
+    (tmp_path / "noprog.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines if r.get("part") != "program"))
+    assert not replay(tmp_path / "noprog.jsonl", "TMCM-6212").ok
