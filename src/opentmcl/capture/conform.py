@@ -97,13 +97,13 @@ class Battery:
     def run(self) -> None:
         try:
             self.identity()
+            if self.options.allow_motion and self.send(GGP, 128, 0) == 1:
+                raise ConformError("a TMCL program is running on the module: stop it before a motion run "
+                                   "(opentmcl send '128 0, 0, 0' --to URL)")
             self.survey()
             if self.options.allow_writes or self.options.allow_motion:
                 self.edges()
             if self.options.allow_motion:
-                if self.send(GGP, 128, 0) == 1:
-                    raise ConformError("a TMCL program is running on the module: stop it before a motion "
-                                       "run (opentmcl send '128' --to URL)")
                 for axis in self.options.axes:
                     self.motion(axis)
         except BaseException:

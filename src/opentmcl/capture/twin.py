@@ -238,9 +238,11 @@ class Twin:
         return _sign(v0 - v1)
 
     def late(self, rec: dict) -> bool:
-        """Does this twin act at the end of the request's window?"""
+        """Does this twin act at the end of the request's window? By the sign of its effect on the
+        axis's later positions; when it has none or it is not known, the "lo" twin acts late and
+        the "hi" twin early, so that each end of the window is played by one of them."""
         sign = self.effect(rec)
-        if sign is None:
+        if not sign:
             return self.policy == "lo"
         return sign > 0 if self.policy == "hi" else sign < 0
 
@@ -266,17 +268,42 @@ class Twin:
             self.watch(rec)
         self.trace()
 
+    def open(self, slot: Slot) -> None:
+        rec = slot.rec
+        n = rec["n"]
+        result = self.run.results.setdefault(n, Result(b"", self.now()))
+        position = rec["command"] == GAP and rec["type"] in (1, 209)
+        w = self.windows[n] = _Window(n, rec["command"], rec["type"], rec["motor"], position, result)
+        if self.vm.accepts_address(rec["address"]):
+            self.sample(w)
+
+    def close(self, slot: Slot) -> None:
+        closing = self.windows.pop(slot.rec["n"], None)
+        if closing is not None and self.vm.accepts_address(slot.rec["address"]):
+            self.sample(closing)
+
     def go(self, slots: list[Slot]) -> TwinRun:
-        """Run every slot; see the module doc."""
-        points: list[tuple[int, int, int, str, Slot]] = []
+        """Run every slot; see the module doc. A module handles requests one after the other, so a
+        read's sampling interval starts no earlier than the last request before it that changes
+        anything acts, and ends no later than the next such request acts (whatever the time
+        tolerance); reads in between change nothing."""
+        points: list[tuple[int, int, int, str]] = []
         profile = self.vm.profile
+        reads = [s.rec["kind"] == "request" and windowed(s.rec, profile) for s in slots]
+        last_write = []   # index of the last slot before each that changes anything (-1: none)
+        w = -1
         for i, slot in enumerate(slots):
-            rec = slot.rec
-            if rec["kind"] == "request" and windowed(rec, profile):
-                heapq.heappush(points, (self._tick(slot.e - self.tau), 0, i, "open", slot))
-                heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close", slot))
-        index = 0
+            last_write.append(w)
+            if not reads[i]:
+                w = i
+            if reads[i]:
+                heapq.heappush(points, (self._tick(slot.e - self.tau), 0, i, "open"))
+                heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close"))
+        index = 0   # slots acted on so far
         pending: tuple[int, Slot, bool] | None = None   # the next action: (tick, slot, decided)
+        waiting: dict[int, int] = {}   # window -> the slot that must act before it opens
+        opened: set[int] = set()
+        closed: set[int] = set()
         while index < len(slots) or points or pending is not None:
             if pending is None and index < len(slots):
                 slot = slots[index]
@@ -290,25 +317,38 @@ class Twin:
                         and not windowed(slot.rec, profile) and self.late(slot.rec):
                     pending = (max(self._tick(slot.s), tick), slot, True)
                     continue
+                if not reads[index]:
+                    for j in [j for j in opened if j < index]:   # sampled before this request acted
+                        self.close(slots[j])
+                        opened.discard(j)
+                        closed.add(j)
                 self.act(slot)
                 self.last_action = self.vm.now
                 pending = None
                 index += 1
+                for j in [j for j, after in waiting.items() if after < index]:
+                    del waiting[j]
+                    self.open(slots[j])
+                    if j in closed:
+                        self.close(slots[j])
+                    else:
+                        opened.add(j)
                 continue
-            tick, _, i, kind, slot = heapq.heappop(points)
-            self.advance(tick)
-            n = slot.rec["n"]
+            tick, _, i, kind = heapq.heappop(points)
             if kind == "open":
-                rec = slot.rec
-                result = self.run.results.setdefault(n, Result(b"", self.now()))
-                position = rec["command"] == GAP and rec["type"] in (1, 209)
-                w = self.windows[n] = _Window(n, rec["command"], rec["type"], rec["motor"], position, result)
-                if self.vm.accepts_address(rec["address"]):
-                    self.sample(w)
+                if index <= last_write[i]:   # the request that changed something before it has not acted
+                    waiting[i] = last_write[i]
+                    continue
+                self.advance(tick)
+                self.open(slots[i])
+                opened.add(i)
+            elif i in opened:
+                self.advance(tick)
+                self.close(slots[i])
+                opened.discard(i)
+                closed.add(i)
             else:
-                closing = self.windows.pop(n, None)
-                if closing is not None and self.vm.accepts_address(slot.rec["address"]):
-                    self.sample(closing)
+                closed.add(i)   # closed before it could open: only its own answer counts
         return self.run
 
     @staticmethod
