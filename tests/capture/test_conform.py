@@ -22,9 +22,10 @@ from .recorder import PLANTED
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals need POSIX")
 
 MOTION = ["--module", "TMCM-6212", "--allow-motion", "--max-travel", "20000", "--axes", "0",
-          "--max-speed", "40000", "--max-accel", "204800"]
+          "--max-speed", "40000", "--max-accel", "204800", "--clock-lag", "0.05"]
 """Moves of up to 20000 µsteps at up to 40000 pps and 204800 pps^2, four times the 51200 pps^2
-the planted module's ramp keeps to."""
+the planted module's ramp keeps to. A served module answers from a clock up to 2 ms behind the
+wall clock, more while a loaded machine keeps its process waiting: 50 ms allowed."""
 CAUSES = ["identity: 136 0 (firmware string): firmware string",
           "parameters: axis 0: GAP 194, 0 [reference_search_speed]: value",
           "status codes: axis 0: SAP 4, 0, 7999774 [max_positioning_speed]: status"]
@@ -43,7 +44,8 @@ def assert_planted(done, data) -> None:
     titles = [c["title"] for c in data["causes"]]
     assert [t.split(" (")[0] if t.endswith("times)") else t for t in titles[:3]] == CAUSES and len(titles) == 4, titles
     assert titles[3].startswith("move durations: axis 0: MVP ABS, 0, 20000: duration"), titles
-    assert "acceleration about 5" in data["causes"][3]["note"] and "204800 on the twin" in data["causes"][3]["note"]
+    module, twin = data["accelerations"]["0"]["acceleration"].values()
+    assert module < twin / 2 and "acceleration about" in data["causes"][3]["note"]   # 51200 against 204800
     assert data["causes"][0]["root"]["captured"] == "'6212V200'"
     assert sum(1 + len(c["repeats"]) + len(c["knock_on"]) for c in data["causes"]) == len(data["divergences"])
     moves = [m for m in data["moves"] if m["request"] == "MVP ABS, 0, 20000"]

@@ -76,7 +76,8 @@ def test_regenerated_captures_replay_cleanly(regenerated):
         for options, address in runs:
             module = options[1] if options[0] == "--module" else None
             scenario = options[1] if options[0] == "--scenario" else None
-            report = replay(regenerated / name, module, address=address, scenario=scenario)
+            # served modules answer from a clock up to 2 ms behind, more on a loaded machine
+            report = replay(regenerated / name, module, address=address, scenario=scenario, clock_lag=0.05)
             assert report.ok, report.text()
             assert report.compared > 4
 

@@ -21,6 +21,9 @@ from .helpers import Tool, cli
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX")
 
+SERVED = ("--clock-lag", "0.05")
+"""A served module answers from a clock up to 2 ms behind the wall clock (docs/endpoints.md "Real
+time"), more while a loaded machine keeps its process waiting: 50 ms allowed (docs/capture.md)."""
 READS = {6, 10, 15, 134, 136}
 """GAP, GGP, GIO, 134 (read program memory), 136 (firmware version): TMCM-6212 manual 3.6."""
 
@@ -75,10 +78,10 @@ def test_the_twin_starts_from_the_snapshot_and_says_what_it_inferred_without_one
                     assert any(line.startswith("snapshot of TMCM-6212 at address 1: ") for line in proxy.lines)
     snap = snapshot_of(read_capture(tmp_path / "with.jsonl"), 1)
     assert snap.axis[0][1] == 51200 and snap.axis[0][6] == 100 and snap.globals[(2, 5)] == 77
-    with_snapshot = cli("replay", str(tmp_path / "with.jsonl"))
+    with_snapshot = cli("replay", str(tmp_path / "with.jsonl"), *SERVED)
     assert with_snapshot.returncode == 0, with_snapshot.stdout + with_snapshot.stderr
     assert "note: initial state: the capture's snapshot" in with_snapshot.stdout
-    without = cli("replay", str(tmp_path / "without.jsonl"), "--module", "TMCM-6212")
+    without = cli("replay", str(tmp_path / "without.jsonl"), "--module", "TMCM-6212", *SERVED)
     assert without.returncode == 1
     assert "note: axis 0 actual_position = 51200 (inferred from its first read" in without.stdout
     roots = [line for line in without.stdout.splitlines() if line.startswith("t=")]
@@ -86,7 +89,7 @@ def test_the_twin_starts_from_the_snapshot_and_says_what_it_inferred_without_one
     assert "GGP 5, 2: value: captured 77, virtual 0" in roots[1]   # settings are not inferred:
     assert "MVP REL, 0, 1000: duration" in roots[2]                 # nor the speed of the move
     given = cli("replay", str(tmp_path / "without.jsonl"), "--module", "TMCM-6212",
-                "--initial-state", str(tmp_path / "with.jsonl"))
+                "--initial-state", str(tmp_path / "with.jsonl"), *SERVED)
     assert given.returncode == 0, given.stdout + given.stderr
 
 
@@ -132,7 +135,7 @@ def test_the_snapshot_reads_only_and_carries_the_program_into_the_twin(tmp_path)
     cap = read_capture(tmp_path / "inner.jsonl")
     snap = snapshot_of(cap, 1)
     assert snap.complete and snap.program[10] == (4, 1, 0, 3200) and snap.program[12] == (28, 0, 0, 0)
-    assert replay(cap, "TMCM-6212").ok
+    assert replay(cap, "TMCM-6212", clock_lag=0.05).ok
     lines = [json.loads(x) for x in (tmp_path / "inner.jsonl").read_text().splitlines()]
     (tmp_path / "noprog.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines if r.get("part") != "program"))
-    assert not replay(tmp_path / "noprog.jsonl", "TMCM-6212").ok
+    assert not replay(tmp_path / "noprog.jsonl", "TMCM-6212", clock_lag=0.05).ok

@@ -3,11 +3,11 @@
     report = opentmcl.replay("run.jsonl", module="PD86-1180")
     assert report.ok, report.text()
 
-The captured host requests for one module address are sent to two fresh `VirtualModule`s, the
+The captured host requests for one module address are sent to four fresh `VirtualModule`s, the
 twins, each started from the module's state at capture start (the capture's snapshot, another
 one given, or values inferred from the first reads). The module acted on each request somewhere
 between the end of the request on the wire and the start of its reply (capture/timing.py); the
-twins act at the two ends that bracket what it can have done (capture/twin.py). A reply agrees
+twins act at the ends that bracket what it can have done (capture/twin.py). A reply agrees
 when its status and command agree with a twin's, and its value lies in the twins' range of that
 value over the interval in which the module could have sampled it, widened by the tolerances.
 Tolerances only widen: the twins' runs do not depend on them. Divergences are grouped under their
@@ -35,6 +35,8 @@ if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
     from ..motion.scenario import Scenario
 
+POLICIES = ("hi", "lo", "early", "late")
+"""The twins (capture/twin.py): the highest and lowest positions, the earliest and latest actions."""
 DEFAULT_LATENCY = 0.05
 """Seconds a command-138 event may take from the module's arrival to the wire (tolerance `latency`)."""
 TOLERANCE_KEYS = ("time", "position", "velocity", "load", "timer", "latency")
@@ -160,7 +162,7 @@ def _value(raw: bytes) -> int:
 
 
 class _Comparer:
-    """Compares every captured reply with the two twins' runs (see the module doc)."""
+    """Compares every captured reply with the twins' runs (see the module doc)."""
 
     def __init__(self, cap: Capture, profile, address: int, tol: Tolerance, report: ReplayReport) -> None:
         self.cap, self.profile, self.address, self.tol, self.report = cap, profile, address, tol, report
@@ -541,18 +543,18 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
     cap_slots = slots(cap, clock_lag)
     motion_axes = {s.rec["motor"] for s in cap_slots if s.rec["kind"] == "request" and s.rec["address"] == address
                    and s.rec["command"] in (1, 2, 3, 4, 13)}
-    vms = [_virtual_module(module, address, eeprom, scenario) for _ in range(2)]
+    vms = [_virtual_module(module, address, eeprom, scenario) for _ in POLICIES]
     report = ReplayReport(cap.path, vms[0].profile.name, address, link=cap.link, tolerance=tol)
     try:
         snap = _initial_state(cap, cap_slots, vms[0].profile, address, initial_state, notes)
         # the state applies from its own instant in this capture, else from the start; never after a request
         start = min([snap.t if initial_state is None else 0.0, *(s.e for s in cap_slots[:1])])
         runs = []
-        for vm, policy in zip(vms, ("lo", "hi"), strict=True):
+        for vm, policy in zip(vms, POLICIES, strict=True):
             twin = Twin(vm, policy, tol.time, motion_axes)
             twin.advance(round(start * 16_000_000))
             applied = apply_snapshot(vm, snap, scope=state_scope)
-            if policy == "lo":
+            if policy == POLICIES[0]:
                 notes.extend(applied)
             runs.append(twin.go(cap_slots))
     finally:
@@ -579,7 +581,7 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
     report.causes = group(comparer.checks)
     _diagnose(report)
     real = _real_traces(cap_slots, address, motion_axes)
-    report.traces = {m: {"module": real[m], "twin": runs[1].trace.get(m, [])} for m in sorted(motion_axes)}
+    report.traces = {m: {"module": real[m], "twin": runs[0].trace.get(m, [])} for m in sorted(motion_axes)}
     return report
 
 

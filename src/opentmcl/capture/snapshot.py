@@ -232,6 +232,28 @@ def _differs(vm, command: int, type_: int, motor: int, value: int) -> bool:
     return reply is None or reply.status != 100 or reply.value != value
 
 
+def _differing(vm, snap: Snapshot) -> list[str]:
+    """The settings of the snapshot that differ from the twin's power-up values, one text each."""
+    prof = vm.profile
+    out = []
+    for motor, values in sorted(snap.axis.items()):
+        for number, value in sorted(values.items()):
+            p = prof.axis_parameters.get(number)
+            if p is not None and p.writable and not is_state(p.name) and motor < prof.axes:
+                reply = vm.request(GAP, number, motor, 0)
+                if reply is not None and reply.status == 100 and reply.value != value:
+                    out.append(f"axis {motor} {p.name} {value} (profile {reply.value})")
+    for (bank, number), value in sorted(snap.globals.items()):
+        p = prof.global_parameters.get((bank, number))
+        name = p.name if p is not None else f"user variable {number}" if bank == USER_VARIABLE_BANK else None
+        if name is None or (p is not None and (not p.writable or is_state(p.name))):
+            continue
+        reply = vm.request(GGP, number, bank, 0)
+        if reply is not None and reply.status == 100 and reply.value != value:
+            out.append(f"{name} {value} (profile {reply.value})")
+    return out
+
+
 def _set(vm, notes: list[str], what: str, command: int, type_: int, motor: int, value: int) -> None:
     reply = vm.request(command, type_, motor, value)
     if reply is not None and reply.status != 100:
@@ -300,6 +322,11 @@ def apply_snapshot(vm, snap: Snapshot, *, scope: str = "all") -> list[str]:
     timer). Returns notes on what could not be reproduced."""
     notes: list[str] = []
     prof = vm.profile
+    differing = _differing(vm, snap)
+    if differing:
+        shown = ", ".join(differing[:8]) + (f" and {len(differing) - 8} more" if len(differing) > 8 else "")
+        verb = "the twin takes them" if scope == "all" else "the twin keeps the profile's (settings from the profile)"
+        notes.append(f"{len(differing)} settings at capture start differ from the profile's: {shown}; {verb}")
     if scope == "all":
         _apply_config(vm, snap, notes)
         if snap.program:

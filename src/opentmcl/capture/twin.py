@@ -1,10 +1,12 @@
 """One twin's run through a capture, in virtual time (docs/capture.md "Replay").
 
 The module acted on each request somewhere inside its window (capture/timing.py), and which
-instant matters: an MST 2 ms later stops an axis 100 steps further on. Two twins bracket it. The
+instant matters: an MST 2 ms later stops an axis 100 steps further on. Four twins bracket it. The
 "hi" twin acts on each request at the instant that leaves its axis further on later (an MST as late
 as it can, a start as early as it can; the sign is that of the axis speed before the request minus
-the speed the request asks for), the "lo" twin at the other end of the window. A read is answered
+the speed the request asks for), the "lo" twin at the other end of the window: they bound the
+positions. The "early" twin acts on every request at the start of its window and the "late" twin at
+the end: they bound the speeds while a ramp follows a request. A read is answered
 at the start of its window, and the twin's value is followed over the whole sampling interval
 [window start - time tolerance, window end + time tolerance]: at its ends, at every event of the
 twin in between (a ramp phase change, an arrival, a switch edge: between two events a position is
@@ -24,7 +26,9 @@ from .decode import parameter_name
 from .timing import Slot
 
 GAP, GGP, GIO, GCO, RFS, APP_STATUS = 6, 10, 15, 31, 13, 135
-ROR, ROL, MST, MVP, SAP = 1, 2, 3, 4, 5
+ROR, ROL, MST, MVP, SAP, RSAP, SGP, SIO = 1, 2, 3, 4, 5, 8, 9, 14
+READS_OF = {SAP: GAP, RSAP: GAP, SGP: GGP, SIO: GIO}
+"""A setting written and the command that reads it back (same type and motor or bank)."""
 APPLICATION_STATUS = 128
 """GGP 128: 1 while a TMCL program runs."""
 MAX_STEPS = 400
@@ -208,17 +212,26 @@ class Twin:
 
     # -- the sign of an action's timing ----------------------------------------------------------
     def effect(self, rec: dict) -> int | None:
-        """d(later position)/d(delay) of the request's axis as a sign; None when unknown."""
+        """The sign of d(later position)/d(delay) for the request's axis: +1 or -1 for a motion
+        command, 0 for a request that does not change where any axis goes (a setting of an axis
+        at rest, a global parameter, an output), None when it is not known (a program started, a
+        reference search, a ramp setting changed while the axis moves)."""
         command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
-        axis_command = command in (ROR, ROL, MST, MVP, RFS) or (command == SAP and type_ in (0, 1, 2, 4))
-        if not axis_command:
-            return 0 if command in (GAP, GGP, GIO, GCO, 136) or command == SAP else None
-        if motor >= self.vm.profile.axes:
-            return 0
+        prof = self.vm.profile
+        if command in (SGP, SIO, 138, 7, 11, 134, 136) or command in (GAP, GGP, GIO, GCO, APP_STATUS):
+            return None if command == SGP and self.read(GGP, APPLICATION_STATUS, 0) == 1 else 0
+        motion = command in (ROR, ROL, MST, MVP, RFS) or command in (SAP, RSAP)
+        if not motion or motor >= prof.axes:
+            return None
         v0 = self.read(GAP, 3, motor)
         x0 = self.read(GAP, 1, motor)
         if v0 is None or x0 is None:
             return None
+        if command in (SAP, RSAP) and type_ not in (0, 1, 2, 4):
+            p = prof.axis_parameters.get(type_)
+            return None if v0 and p is not None and p.engine else 0   # a ramp setting while moving
+        if command == RSAP:
+            return None if v0 else 0
         if command == SAP and type_ == 1:
             return -_sign(v0)   # a position overwritten later keeps the distance run until then
         if command == MST or (command == RFS and type_ == 1):
@@ -237,12 +250,15 @@ class Twin:
             return None
         return _sign(v0 - v1)
 
-    def late(self, rec: dict) -> bool:
-        """Does this twin act at the end of the request's window? By the sign of its effect on the
-        axis's later positions; when it has none or it is not known, the "lo" twin acts late and
-        the "hi" twin early, so that each end of the window is played by one of them."""
-        sign = self.effect(rec)
-        if not sign:
+    def late(self, sign: int | None) -> bool:
+        """Does this twin act at the end of the request's window? The "early" and "late" twins
+        always at their end; the others by the sign of its effect on the axis's later positions;
+        when the effect is not known, the "lo" twin acts late and the "hi" twin early, so that each
+        end of the window is played by one of them; a request that changes where no axis goes acts
+        at the start in both."""
+        if self.policy in ("early", "late"):
+            return self.policy == "late" and sign != 0
+        if sign is None:
             return self.policy == "lo"
         return sign > 0 if self.policy == "hi" else sign < 0
 
@@ -267,6 +283,15 @@ class Twin:
         if len(raw) == FRAME_LEN and raw[2] == 100:
             self.watch(rec)
         self.trace()
+
+    @staticmethod
+    def changes(rec: dict, sign: int | None, read: dict) -> bool:
+        """May acting on `rec` change what `read` reads? A request that moves nothing (sign 0)
+        changes only the setting it writes; any other request anything."""
+        if sign != 0 or rec["kind"] != "request":
+            return True
+        reads = READS_OF.get(rec["command"])
+        return reads == read["command"] and rec["type"] == read["type"] and rec["motor"] == read["motor"]
 
     def open(self, slot: Slot) -> None:
         rec = slot.rec
@@ -301,6 +326,7 @@ class Twin:
                 heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close"))
         index = 0   # slots acted on so far
         pending: tuple[int, Slot, bool] | None = None   # the next action: (tick, slot, decided)
+        sign: int | None = None   # the effect of the pending action, once decided
         waiting: dict[int, int] = {}   # window -> the slot that must act before it opens
         opened: set[int] = set()
         closed: set[int] = set()
@@ -313,13 +339,14 @@ class Twin:
                                         (pending[0] == head and points[0][1] > 0)):
                 tick, slot, decided = pending
                 self.advance(tick)
-                if not decided and slot.rec["kind"] == "request" and slot.s > slot.e \
-                        and not windowed(slot.rec, profile) and self.late(slot.rec):
-                    pending = (max(self._tick(slot.s), tick), slot, True)
-                    continue
+                if not decided and not reads[index]:
+                    sign = self.effect(slot.rec) if slot.rec["kind"] == "request" else None
+                    if slot.s > slot.e and self.late(sign):
+                        pending = (max(self._tick(slot.s), tick), slot, True)
+                        continue
                 if not reads[index]:
-                    for j in [j for j in opened if j < index]:   # sampled before this request acted
-                        self.close(slots[j])
+                    for j in [j for j in opened if j < index and self.changes(slot.rec, sign, slots[j].rec)]:
+                        self.close(slots[j])   # sampled before this request acted
                         opened.discard(j)
                         closed.add(j)
                 self.act(slot)

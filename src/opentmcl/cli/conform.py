@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     from ..modules.profile_file import ProfileError
 
     _check(args)
-    kwargs = comparison_kwargs(args)
+    kwargs = comparison_kwargs(args, settings="profile")
     try:
         profile = load_profile(args.module)
     except ProfileError as exc:
@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
     for note in battery.skipped:
         print(f"  skipped: {note}", file=sys.stderr, flush=True)
     try:
-        report = replay(capture, args.module, address=args.address, state_scope="state", **kwargs)
+        report = replay(capture, args.module, address=args.address, **kwargs)
     except (CaptureError, ReplayError) as exc:
         raise CliError(str(exc)) from None
     print(report.text(), flush=True)

@@ -1,7 +1,8 @@
 """`opentmcl replay`: send a capture's host requests to a virtual module in virtual time, compare replies.
 
     opentmcl replay FILE [--module NAME|PROFILE.toml] [--address N] [--eeprom F] [--scenario F]
-                    [--initial-state FILE] [--tolerance KEY=VALUE[,KEY=VALUE...]]... [--clock-lag S]
+                    [--initial-state FILE] [--settings snapshot|profile]
+                    [--tolerance KEY=VALUE[,KEY=VALUE...]]... [--clock-lag S]
                     [--report FILE.json] [--junit FILE.xml] [--html DIR]
 
 Prints the root causes first, each with the divergences it explains (time, request as TMCL text,
@@ -36,6 +37,10 @@ def add_comparison_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--initial-state", metavar="FILE",
                    help="start the twin from this snapshot: a capture with one, or a profile written by "
                         "opentmcl profile probe (default: the capture's own snapshot, else inferred values)")
+    p.add_argument("--settings", choices=("snapshot", "profile"), default=None,
+                   help="where the twin's settings come from: the snapshot (default for replay: the module as it "
+                        "was), or the profile's defaults with only the positions from the snapshot (default for "
+                        "conform: checks the profile)")
     p.add_argument("--tolerance", "-t", action="append", default=[], metavar="KEY=VALUE",
                    help="time=SECONDS (added at both ends of each sampling interval, default 0), position=, "
                         "velocity=, load=, timer= (absolute; timers are not compared unless given), "
@@ -61,13 +66,15 @@ def write_reports(report, args: argparse.Namespace) -> None:
                 raise CliError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
-def comparison_kwargs(args: argparse.Namespace) -> dict:
+def comparison_kwargs(args: argparse.Namespace, settings: str = "snapshot") -> dict:
+    """replay()'s keyword arguments from the comparison options; `settings`: the command's default."""
     from ..capture.timing import CLOCK_LAG
 
     lag = CLOCK_LAG if args.clock_lag is None else args.clock_lag
     if not 0 <= lag < 1:
         raise CliError(f"--clock-lag must be 0 <= SECONDS < 1, got {args.clock_lag}")
-    return {"tolerance": args.tolerance, "initial_state": args.initial_state, "clock_lag": lag}
+    scope = "all" if (args.settings or settings) == "snapshot" else "state"
+    return {"tolerance": args.tolerance, "initial_state": args.initial_state, "clock_lag": lag, "state_scope": scope}
 
 
 def run(args: argparse.Namespace) -> int:
