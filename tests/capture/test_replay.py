@@ -16,7 +16,6 @@ from opentmcl.capture.decode import HOST, MODULE, Decoder
 from opentmcl.protocol.frame import Request
 
 from .helpers import Tool, cli
-
 from .recorder import HEADER, edit, record
 
 MOVE = [(0.1, (5, 4, 0, 51200)), (0.2, (4, 0, 0, 200000)), (2.0, (6, 1, 0, 0)), (2.1, (6, 3, 0, 0)),
