@@ -18,7 +18,6 @@ from __future__ import annotations
 import heapq
 from dataclasses import dataclass, field
 
-from ..firmware.commands import execute
 from ..modules.state import READ_CLEARS
 from ..motion import CLOCK_HZ
 from ..protocol.frame import FRAME_LEN
@@ -105,6 +104,9 @@ class Twin:
     """Runs one `VirtualModule` through the slots of a capture (see the module doc)."""
 
     def __init__(self, vm, policy: str, tau: float, trace_axes: set[int]) -> None:
+        from ..firmware.commands import execute  # the firmware loads when a replay runs, not on import
+
+        self.execute = execute
         self.vm, self.policy, self.tau = vm, policy, tau
         self.run = TwinRun(policy)
         self.windows: dict[int, _Window] = {}
@@ -116,7 +118,7 @@ class Twin:
     def read(self, command: int, type_: int, motor: int) -> int | None:
         if self.vm.download_mode:
             return None
-        out = execute(self.vm, command, type_, motor, 0, program=False)
+        out = self.execute(self.vm, command, type_, motor, 0, program=False)
         if isinstance(out, tuple) and out[0] == 100:
             return int(out[1])
         return None
