@@ -57,7 +57,7 @@ def keys(report) -> set:
     return {(d.n, d.what, d.parameter) for d in report.divergences}
 
 
-@settings(max_examples=25, deadline=None, derandomize=True,
+@settings(max_examples=40, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(steps=st.lists(STEP, min_size=1, max_size=10), narrow=TOLERANCE, wider=TOLERANCE)
 def test_widening_a_tolerance_never_adds_a_divergence(tmp_path, steps, narrow, wider):

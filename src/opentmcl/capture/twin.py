@@ -27,6 +27,7 @@ from .timing import Slot
 GAP, GGP, GIO, GCO, RFS, APP_STATUS = 6, 10, 15, 31, 13, 135
 ROR, ROL, MST, MVP, SAP, RSAP, SGP, SIO = 1, 2, 3, 4, 5, 8, 9, 14
 READS_OF = {SAP: GAP, RSAP: GAP, SGP: GGP, SIO: GIO}
+FACTORY_RESET = 137
 """A setting written and the command that reads it back (same type and motor or bank)."""
 APPLICATION_STATUS = 128
 """GGP 128: 1 while a TMCL program runs."""
@@ -287,13 +288,17 @@ class Twin:
         self.trace()
 
     @staticmethod
-    def changes(rec: dict, sign: int | None, read: dict) -> bool:
-        """May acting on `rec` change what `read` reads? A request that moves nothing (sign 0)
-        changes only the setting it writes; any other request anything."""
-        if sign != 0 or rec["kind"] != "request":
+    def writes(rec: dict, read: dict) -> bool:
+        """Does `rec` write what `read` reads (SAP/RSAP and GAP, SGP and GGP, SIO and GIO of the
+        same type and motor or bank; 137 everything)? Only such a write bounds the read's sampling
+        interval: a motion command changes moving values anyway, and a twin out of phase with the
+        module by a window would cut the interval where the module still sampled."""
+        if rec["kind"] != "request":
+            return False
+        if rec["command"] == FACTORY_RESET:
             return True
-        reads = READS_OF.get(rec["command"])
-        return reads == read["command"] and rec["type"] == read["type"] and rec["motor"] == read["motor"]
+        return READS_OF.get(rec["command"]) == read["command"] and rec["type"] == read["type"] \
+            and rec["motor"] == read["motor"]
 
     def open(self, slot: Slot) -> None:
         rec = slot.rec
@@ -311,18 +316,25 @@ class Twin:
 
     def go(self, slots: list[Slot]) -> TwinRun:
         """Run every slot; see the module doc. A module handles requests one after the other, so a
-        read's sampling interval starts no earlier than the last request before it that changes
-        anything acts, and ends no later than the next such request acts (whatever the time
-        tolerance); reads in between change nothing."""
+        read's sampling interval starts no earlier than the last request before it that writes
+        what it reads acts, and ends no later than the next such request acts (whatever the time
+        tolerance)."""
         points: list[tuple[int, int, int, str]] = []
         profile = self.vm.profile
         reads = [s.rec["kind"] == "request" and windowed(s.rec, profile) for s in slots]
-        last_write = []   # index of the last slot before each that changes anything (-1: none)
-        w = -1
+        last_write = []   # for each read: the last slot before it that writes what it reads (-1: none)
+        written: dict[tuple, int] = {}
         for i, slot in enumerate(slots):
-            last_write.append(w)
-            if not reads[i]:
-                w = i
+            rec = slot.rec
+            if reads[i]:
+                key = (rec["command"], rec["type"], rec["motor"])
+                last_write.append(max(written.get(key, -1), written.get(("all",), -1)))
+            else:
+                last_write.append(-1)
+                if rec["kind"] == "request" and rec["command"] == FACTORY_RESET:
+                    written[("all",)] = i
+                elif rec["kind"] == "request" and rec["command"] in READS_OF:
+                    written[(READS_OF[rec["command"]], rec["type"], rec["motor"])] = i
             if reads[i]:
                 heapq.heappush(points, (self._tick(slot.e - self.tau), 0, i, "open"))
                 heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close"))
@@ -347,7 +359,7 @@ class Twin:
                         pending = (max(self._tick(slot.s), tick), slot, True)
                         continue
                 if not reads[index]:
-                    for j in [j for j in opened if j < index and self.changes(slot.rec, sign, slots[j].rec)]:
+                    for j in [j for j in opened if j < index and self.writes(slot.rec, slots[j].rec)]:
                         self.close(slots[j])   # sampled before this request acted
                         opened.discard(j)
                         closed.add(j)
