@@ -14,6 +14,7 @@ import time
 
 import pytest
 
+from opentmcl import VirtualModule
 from opentmcl.capture import read_capture
 
 from .helpers import Tool, cli
@@ -29,6 +30,19 @@ wall clock, more while a loaded machine keeps its process waiting: 50 ms allowed
 CAUSES = ["identity: 136 0 (firmware string): firmware string",
           "parameters: axis 0: GAP 194, 0 [reference_search_speed]: value",
           "status codes: axis 0: SAP 4, 0, 7999774 [max_positioning_speed]: status"]
+
+
+def stood(url: str) -> str:
+    """Wait until the served module has stood past its power-down delay (TMCM-6212 AP214: 2 s) and
+    reads the standby current a real module that was switched on a while ago reads (AP180; the
+    twins then stand too, docs/capture.md): a condition, polled up to 30 s."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    vm.advance(10)
+    standby = str(vm.request(6, 180, 0, 0).value)
+    deadline = time.monotonic() + 30
+    while cli("send", "GAP 180, 0", "--to", url).stdout.strip() != standby:
+        assert time.monotonic() < deadline, "the served module never reached its standby current"
+    return url
 
 
 def conform(url: str, tmp, name: str, *extra: str):
@@ -64,8 +78,8 @@ def planted(tmp_path_factory):
 def test_conform_over_a_pty_paced_at_9600_baud_names_exactly_the_planted_differences(planted):
     """The one long run (about 30 s): every frame takes 9.375 ms on the wire each way."""
     with Tool("serve", "--module", str(planted / "planted.toml"), "--pty", "--pace") as served:
-        done, data = conform(f"serial://{served.endpoint('pty')}?baud=9600", planted, "pty", "--html",
-                             str(planted / "html"))
+        url = stood(f"serial://{served.endpoint('pty')}?baud=9600")
+        done, data = conform(url, planted, "pty", "--html", str(planted / "html"))
     assert_planted(done, data)
     cap = read_capture(planted / "pty.jsonl")
     assert cap.link == {"interface": "serial", "baud": 9600, "frame_time": 0.009375}
@@ -83,10 +97,10 @@ def test_conform_over_tcp_planted_and_unchanged(planted):
     """Over TCP (no wire time known) the same four differences; against an unchanged TMCM-6212 the
     same run agrees in every area (exit 0)."""
     with Tool("serve", "--module", str(planted / "planted.toml"), "--tcp", "127.0.0.1:0", "--idle-timeout", "0") as served:
-        done, data = conform(served.endpoint("tcp"), planted, "tcp")
+        done, data = conform(stood(served.endpoint("tcp")), planted, "tcp")
     assert_planted(done, data)
     with Tool("serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "0") as served:
-        done, data = conform(served.endpoint("tcp"), planted, "same")
+        done, data = conform(stood(served.endpoint("tcp")), planted, "same")
     assert done.returncode == 0, done.stdout
     assert data["ok"] and not data["causes"] and "all replies agree" in done.stdout
     assert all(a["agree"] == a["checks"] for a in data["areas"].values())
@@ -97,7 +111,8 @@ def test_conform_over_tcp_planted_and_unchanged(planted):
 def test_conform_is_read_only_by_default(tmp_path):
     """Without --allow-writes or --allow-motion only 136, GAP, GGP and GIO are sent."""
     with Tool("serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--idle-timeout", "0") as served:
-        done = cli("conform", served.endpoint("tcp"), "--module", "TMCM-6212", "--capture", str(tmp_path / "r.jsonl"))
+        done = cli("conform", stood(served.endpoint("tcp")), "--module", "TMCM-6212", "--capture",
+                   str(tmp_path / "r.jsonl"))
     assert done.returncode == 0, done.stdout + done.stderr
     sent = {r["command"] for r in read_capture(tmp_path / "r.jsonl").frames if r["kind"] == "request"}
     assert sent == {6, 10, 15, 136}

@@ -139,3 +139,36 @@ def test_the_snapshot_reads_only_and_carries_the_program_into_the_twin(tmp_path)
     lines = [json.loads(x) for x in (tmp_path / "inner.jsonl").read_text().splitlines()]
     (tmp_path / "noprog.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines if r.get("part") != "program"))
     assert not replay(tmp_path / "noprog.jsonl", "TMCM-6212", clock_lag=0.05).ok
+
+
+def _snapshotted(tmp_path, stood: float):
+    """A capture of a TMCM-6212 that stood `stood` seconds before the capture began: its state
+    snapshot (as `proxy --snapshot state` takes it), then reads of AP180 on every axis."""
+    from opentmcl.capture.snapshot import snapshot_records, take_snapshot
+    from opentmcl.modules.profile import load_profile
+
+    from .recorder import Recorder
+
+    rec = Recorder()
+    rec.vm.advance(stood)
+    ask = lambda c, t, m, v: (lambda r: r.value if r.status == 100 else None)(rec.vm.request(c, t, m, v))  # noqa: E731
+    snap = take_snapshot(ask, load_profile("TMCM-6212"), 1, scope="state")
+    rec.records += snapshot_records(snap, 0.0)
+    for axis in range(6):
+        rec.request(stood + 0.1 + axis * 0.01, (6, 180, axis, 0))
+    lines = rec.records
+    for r in lines:   # capture time starts when the capture does
+        if "t" in r and r.get("record") == "frame":
+            r["t"] = round(r["t"] - stood, 6)
+    return rec.write(tmp_path / f"stood{stood}.jsonl")
+
+
+def test_a_module_that_stood_long_reads_its_standby_current_and_the_twins_stand_too(tmp_path):
+    """A capture seldom starts at power-up: a TMCM-6212 that has stood longer than its power-down
+    delay (AP214, 2 s by default) reads its standby current in AP180. The snapshot shows it, so
+    the twins stand 10 s before the capture (a note says so); a module fresh from power-up keeps
+    its running current for those 2 s and the twins start at once."""
+    stood = replay(_snapshotted(tmp_path, 5.0), "TMCM-6212", state_scope="state")
+    assert stood.ok and any("the twins stood 10 s before the capture" in n for n in stood.notes), stood.text()
+    fresh = replay(_snapshotted(tmp_path, 0.0), "TMCM-6212", state_scope="state")
+    assert fresh.ok and not any("stood" in n for n in fresh.notes), fresh.text()

@@ -71,10 +71,24 @@ class Decoder:
         self.identity: dict | None = None
         self._seq = 0
 
+    def _completes(self, direction: str, data: bytes) -> bool:
+        """Do the module bytes buffered and `data` make a whole reply (a valid checksum, or the
+        version string 136 asked for)? A reply the proxy read in two pieces with a pause between is
+        still the module's reply: the pause was the proxy's (a loaded machine), not the module's."""
+        stream = self._streams[direction]
+        if direction != MODULE or self.ascii[direction]:
+            return False
+        frame = bytes(stream.buf) + data[:FRAME_LEN - len(stream.buf)]
+        if len(frame) < FRAME_LEN:
+            return False
+        oldest = self._pending[0] if self._pending else None
+        version = oldest is not None and oldest["command"] == GET_FIRMWARE_VERSION and oldest["type"] == 0
+        return checksum_ok(frame) or (version and all(0x20 <= b < 0x7F for b in frame[1:]))
+
     def feed(self, t: float, direction: str, data: bytes) -> list[dict]:
         out: list[dict] = []
         stream = self._streams[direction]
-        if stream.buf and t - stream.last > self.gap:
+        if stream.buf and t - stream.last > self.gap and not self._completes(direction, data):
             out.append(self._record(stream.last, direction, "garbage", bytes(stream.buf)))
             stream.buf.clear()
         pos = 0

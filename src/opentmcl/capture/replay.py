@@ -503,6 +503,47 @@ def _initial_state(cap: Capture, cap_slots: list[Slot], profile, address: int,
     return snap
 
 
+IDLE = 10.0
+"""Seconds a twin may stand before the capture: longer than the longest power-down delay of the
+profiles (TMCM-6212 AP214: 4.17 s), after which a standing motor gets its standby current."""
+
+
+def _readings(snap: Snapshot, vm) -> tuple[int, int]:
+    """(read-only axis values of the snapshot the twin reads alike, those it reads otherwise)."""
+    same = other = 0
+    for motor, values in snap.axis.items():
+        for number, value in values.items():
+            p = vm.profile.axis_parameters.get(number)
+            if p is None or p.writable or motor >= vm.profile.axes or moving_class(p.name) not in ("load", "flag"):
+                continue
+            reply = vm.request(GAP, number, motor, 0)
+            if reply is not None and reply.status == 100:
+                same, other = (same + 1, other) if reply.value == value else (same, other + 1)
+    return same, other
+
+
+def _idle(make_vm, snap: Snapshot, start: float, scope: str, notes: list[str]) -> float:
+    """How long the twins stand before the capture: 0, or IDLE when the snapshot's read-only
+    readings (load, flags: a motor at standby current, AP180) agree better with a twin that has
+    stood that long. A capture seldom starts right after power-up; the snapshot says which."""
+    if not any(snap.axis.values()):
+        return 0.0
+    scores = []
+    for idle in (0.0, IDLE):
+        vm = make_vm()
+        try:
+            vm.advance(idle + start)
+            apply_snapshot(vm, snap, scope=scope)
+            scores.append(_readings(snap, vm))
+        finally:
+            vm.close()
+    if scores[1][1] < scores[0][1]:
+        notes.append(f"the twins stood {IDLE:g} s before the capture: the snapshot's readings (standby "
+                     f"current, flags) agree with that in {scores[1][0]} of {sum(scores[1])} values")
+        return IDLE
+    return 0.0
+
+
 def _real_traces(cap_slots: list[Slot], address: int, axes: set[int]) -> dict[int, dict[str, list]]:
     """The module's positions and speeds as the host read them (middle of each window)."""
     out: dict[int, dict[str, list]] = {m: {"position": [], "speed": []} for m in axes}
@@ -549,10 +590,11 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
         snap = _initial_state(cap, cap_slots, vms[0].profile, address, initial_state, notes)
         # the state applies from its own instant in this capture, else from the start; never after a request
         start = min([snap.t if initial_state is None else 0.0, *(s.e for s in cap_slots[:1])])
+        idle = _idle(lambda: _virtual_module(module, address, eeprom, scenario), snap, start, state_scope, notes)
         runs = []
         for vm, policy in zip(vms, POLICIES, strict=True):
-            twin = Twin(vm, policy, tol.time, motion_axes)
-            twin.advance(round(start * 16_000_000))
+            twin = Twin(vm, policy, tol.time, motion_axes, idle)
+            twin.start(start)
             applied = apply_snapshot(vm, snap, scope=state_scope)
             if policy == POLICIES[0]:
                 notes.extend(applied)

@@ -104,11 +104,11 @@ class TwinRun:
 class Twin:
     """Runs one `VirtualModule` through the slots of a capture (see the module doc)."""
 
-    def __init__(self, vm, policy: str, tau: float, trace_axes: set[int]) -> None:
+    def __init__(self, vm, policy: str, tau: float, trace_axes: set[int], idle: float = 0.0) -> None:
         from ..firmware.commands import execute  # the firmware loads when a replay runs, not on import
 
         self.execute = execute
-        self.vm, self.policy, self.tau = vm, policy, tau
+        self.vm, self.policy, self.tau, self.idle = vm, policy, tau, idle
         self.run = TwinRun(policy)
         self.windows: dict[int, _Window] = {}
         self.watches: dict[int, _Watch] = {}
@@ -125,7 +125,8 @@ class Twin:
         return None
 
     def now(self) -> float:
-        return self.vm.now / CLOCK_HZ
+        """Capture time."""
+        return self.vm.now / CLOCK_HZ - self.idle
 
     # -- time ----------------------------------------------------------------------------------
     def advance(self, tick: int) -> None:
@@ -314,6 +315,10 @@ class Twin:
         if closing is not None and self.vm.accepts_address(slot.rec["address"]):
             self.sample(closing)
 
+    def start(self, t: float) -> None:
+        """Stand idle until capture time `t` (the twin's clock starts `idle` seconds before 0)."""
+        self.advance(self._tick(t))
+
     def go(self, slots: list[Slot]) -> TwinRun:
         """Run every slot; see the module doc. A module handles requests one after the other, so a
         read's sampling interval starts no earlier than the last request before it that writes
@@ -392,6 +397,6 @@ class Twin:
                 closed.add(i)   # closed before it could open: only its own answer counts
         return self.run
 
-    @staticmethod
-    def _tick(t: float) -> int:
-        return max(0, round(t * CLOCK_HZ))
+    def _tick(self, t: float) -> int:
+        """The twin's tick of capture time `t` (the twin may have stood `idle` seconds before)."""
+        return max(0, round((t + self.idle) * CLOCK_HZ))
