@@ -173,3 +173,13 @@ def test_a_module_that_stood_long_reads_its_standby_current_and_the_twins_stand_
     assert stood.ok and any("the twins stood 10 s before the capture" in n for n in stood.notes), stood.text()
     fresh = replay(_snapshotted(tmp_path, 0.0), "TMCM-6212", state_scope="state")
     assert fresh.ok and not any("stood" in n for n in fresh.notes), fresh.text()
+
+
+def test_a_snapshot_nobody_answers_ends_the_proxy_in_one_line(tmp_path):
+    """Issue 30 item 3: the proxy reads the module at --address (default 1) before it relays; when
+    nobody answers there it ends at once (exit 3, one line naming the way out: --address or
+    --snapshot none) instead of relaying a capture without its state."""
+    done = cli("proxy", "--to", "sim://TMCM-6212@3", "--tcp", "127.0.0.1:0", "--log", str(tmp_path / "c.jsonl"))
+    assert done.returncode == 3 and len(done.stderr.splitlines()) == 1, done.stderr
+    assert "snapshot of the module at address 1 failed (--snapshot none" in done.stderr
+    assert "--address" in done.stderr

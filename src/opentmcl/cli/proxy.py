@@ -106,10 +106,11 @@ def run(args: argparse.Namespace) -> int:
     proxy = build_proxy(args)
     try:
         proxy.start()
+    except TmclError as exc:   # the snapshot: the module did not answer (exit 3) or is unknown
+        raise CliError(f"the snapshot of the module at address {args.address} failed (--snapshot none "
+                       f"relays without one): {exc}") from exc
     except OSError as exc:
         raise start_error("proxy", exc, args.tcp) from None
-    except TmclError as exc:   # the snapshot: the module did not answer (exit 3) or is unknown
-        raise CliError(f"snapshot of the module at address {args.address}: {exc}") from exc
     except (KeyError, ValueError) as exc:   # --snapshot-module names no profile
         raise CliError(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)) from None
     stop = threading.Event()
