@@ -3,7 +3,9 @@
 A figure is (name, value, reference, goal): `reference` is measured in the same run (a yardstick
 such as the minimal handler, or the slower path the figure is compared with), so `ratio` =
 value / reference does not depend on how loaded the machine was. `value` None means "n/a" (the
-code under test lacks the API the scenario needs).
+code under test lacks the API the scenario needs). A `Goal` says what the value or the ratio
+should reach, and so whether this run met it; a goal given as text is shown but not judged (it
+compares with another tree: bench/ab_goals.py).
 """
 from __future__ import annotations
 
@@ -22,12 +24,37 @@ def use_cpu_time() -> None:
     clock = time.process_time
 
 
+@dataclass(frozen=True)
+class Goal:
+    """What a figure should reach: its value (or, `on_ratio`, value / reference) `op` `bound`, with
+    `op` ">=" (at least) or "<" (below). `text` is how the table shows it (default "op bound")."""
+
+    op: str
+    bound: float
+    on_ratio: bool = False
+    text: str = ""
+
+    def __post_init__(self) -> None:
+        if self.op not in (">=", "<"):
+            raise ValueError(f"a goal is '>=' or '<' a bound, not {self.op!r}")
+
+    def __str__(self) -> str:
+        return self.text or f"{self.op} {self.bound:g}"
+
+    def met(self, value: float | None, ratio: float | None) -> bool | None:
+        """Whether the figure reaches the goal; None when what it is judged on was not measured."""
+        got = ratio if self.on_ratio else value
+        if got is None:
+            return None
+        return got >= self.bound if self.op == ">=" else got < self.bound
+
+
 @dataclass
 class Figure:
     name: str
     value: float | None
     reference: float | None = None
-    goal: str = ""
+    goal: Goal | str = ""
     reference_name: str = ""
 
     @property
@@ -36,9 +63,21 @@ class Figure:
             return None
         return self.value / self.reference
 
+    @property
+    def met(self) -> bool | None:
+        """True or False for a `Goal` this run reached or missed; None without one (or n/a)."""
+        return self.goal.met(self.value, self.ratio) if isinstance(self.goal, Goal) else None
+
+    def verdict(self) -> str:
+        """The goal column's verdict: "pass", "FAIL", "n/a" (not measured), "-" (a goal another
+        run judges), "" (no goal)."""
+        if isinstance(self.goal, Goal):
+            return {True: "pass", False: "FAIL", None: "n/a"}[self.met]
+        return "-" if self.goal else ""
+
     def as_json(self) -> dict:
         return {"value": self.value, "reference": self.reference, "reference_name": self.reference_name,
-                "ratio": self.ratio, "goal": self.goal}
+                "ratio": self.ratio, "goal": str(self.goal), "met": self.met}
 
 
 def figures_of(label: str, values: dict[str, float]) -> list[Figure]:

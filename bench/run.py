@@ -4,9 +4,12 @@
     python bench/run.py --quick              # short run, as CI does it (tests/test_bench.py)
     python bench/run.py --json PATH          # where the table goes as JSON (default bench/results/latest.json)
     python bench/run.py --compare OLD.json   # also print OLD next to this run, with new / old
+    python bench/run.py --check              # exit status 1 when a goal was missed (else 0 either way)
 
 Every figure has a name, a value, the reference it is compared with (measured in the same run;
-"-" where a figure has none), the ratio value / reference and the goal (docs/performance.md):
+"-" where a figure has none), the ratio value / reference, the goal (docs/performance.md) and
+whether this run met it ("pass", "FAIL"; "-" for a goal against an older tree, bench/ab_goals.py),
+with a summary line at the end:
 
 - the request path of a polling host (bench_polling.py): the minimal-handler floor against
   `vm.handle`; `connect("sim://")` `Module.request` against `vm.handle`; a host polling GAP 8 + GAP 1
@@ -50,7 +53,7 @@ import bench_tmc429  # noqa: E402
 import bench_trace  # noqa: E402
 import figures as figures_module  # noqa: E402
 import opentmcl  # noqa: E402
-from figures import Figure, figures_of, use_cpu_time  # noqa: E402
+from figures import Figure, Goal, figures_of, use_cpu_time  # noqa: E402
 from opentmcl import VirtualModule  # noqa: E402
 from opentmcl.motion import CLOCK_HZ  # noqa: E402
 from opentmcl.protocol.frame import Request  # noqa: E402
@@ -117,17 +120,18 @@ RESULTS = Path(__file__).resolve().parent / "results" / "latest.json"
 
 # Figures of the older benchmarks that have a yardstick in the same run: figure -> (its
 # reference among the figures, goal of the ratio).
-PAIRS = {
-    "endpoints TCP round trips/s: ours": ("endpoints TCP bare echo round trips/s", ">= 0.5 of echo"),
-    "endpoints pty round trips/s: ours": ("endpoints pty bare echo round trips/s", ">= 0.5 of echo"),
+HALF_OF_ECHO = Goal(">=", 0.5, on_ratio=True, text=">= 0.5 of echo")
+PAIRS: dict[str, tuple[str, Goal | str]] = {
+    "endpoints TCP round trips/s: ours": ("endpoints TCP bare echo round trips/s", HALF_OF_ECHO),
+    "endpoints pty round trips/s: ours": ("endpoints pty bare echo round trips/s", HALF_OF_ECHO),
     "endpoints TCP round trips/s: our client (opentmcl.connect)": ("endpoints TCP round trips/s: PyTrinamic client",
-                                                                   ">= 1x PyTrinamic"),
+                                                                   Goal(">=", 1, on_ratio=True, text=">= 1x PyTrinamic")),
     "proxy through the proxy (capture on), median ms": ("proxy direct round trip, median ms", ""),
 }
 GOALS = {  # the older figures' targets, in the goal column
-    "proxy added by the proxy, ms (target < 1)": "< 1 ms",
-    "memory world trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": "< 100 MB",
-    "memory plot trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": "< 100 MB",
+    "proxy added by the proxy, ms (target < 1)": Goal("<", 1, text="< 1 ms"),
+    "memory world trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": Goal("<", 100, text="< 100 MB"),
+    "memory plot trace MB per hour at 10 ms, 6 axes, compact columns (target < 100)": Goal("<", 100, text="< 100 MB"),
 }
 
 
@@ -145,16 +149,16 @@ def measure(quick: bool) -> list[Figure]:
     scale = 0.1 if quick else 1.0
     out = bench_polling.measure(quick) + bench_bus.measure(quick) + bench_interp.measure(quick)
     out += [Figure("6212 six axes, 10-revolution moves, virtual s per wall s (target >= 3600)",
-                   bench_6212(3600 * scale), goal=">= 3600"),
+                   bench_6212(3600 * scale), goal=Goal(">=", 3600)),
             Figure("6212 six axes, short fast moves, virtual s per wall s", bench_6212_short(300 * scale)),
             Figure("PD86-1180 pulse_div=ramp_div=0, virtual s per wall s (target >= 100)", bench_1180(20 * scale),
-                   goal=">= 100")]
+                   goal=Goal(">=", 100))]
     for label, older in (("engine", bench_sixpoint.measure), ("TMC429", bench_tmc429.measure),
                          ("endpoints", bench_endpoints.measure), ("memory", bench_trace.measure),
                          ("proxy", bench_proxy.measure)):
         out += figures_of(label, older(quick=quick))
     out.append(Figure("in-process round trips per s (target >= 50000)", bench_round_trips(int(200000 * scale)),
-                      goal=">= 50,000"))
+                      goal=Goal(">=", 50_000, text=">= 50,000")))
     pair(out)
     return out
 
@@ -178,21 +182,42 @@ def number(value: float | None) -> str:
     return f"{value:,.2f}" if abs(value) < 100 else f"{value:,.0f}"
 
 
-def table(rows: list[list[str]]) -> str:
+def table(rows: list[list[str]], left: int = 1) -> str:
+    """Columns: the first and the last `left` ones flush left, the others right."""
     widths = [max(len(r[i]) for r in rows) for i in range(len(rows[0]))]
     lines = []
     for r in rows:
-        cells = [r[0].ljust(widths[0])] + [c.rjust(w) for c, w in zip(r[1:-1], widths[1:-1], strict=True)] + [r[-1]]
+        cells = [c.ljust(w) if i == 0 or i >= len(r) - left else c.rjust(w)
+                 for i, (c, w) in enumerate(zip(r, widths, strict=True))]
         lines.append("  ".join(cells).rstrip())
     return "\n".join(lines)
 
 
 def report(figures: list[Figure]) -> str:
-    rows = [["figure", "value", "reference", "ratio", "goal"]]
+    rows = [["figure", "value", "reference", "ratio", "goal", "verdict"]]
     for f in figures:
         rows.append([f.name, number(f.value), "-" if f.reference is None else number(f.reference),
-                     "-" if f.ratio is None else f"{f.ratio:.3f}", f.goal])
-    return table(rows)
+                     "-" if f.ratio is None else f"{f.ratio:.3f}", str(f.goal), f.verdict()])
+    return table(rows, left=2)
+
+
+def summary(figures: list[Figure]) -> str:
+    """One line: how many goals this run met and missed, and how many it cannot judge; then each
+    missed figure on a line of its own."""
+    judged = [f for f in figures if f.goal]
+    missed = [f for f in judged if f.met is False]
+    met = sum(1 for f in judged if f.met)
+    line = f"goals: {met} of {len(judged)} met, {len(missed)} missed"
+    if len(judged) - met - len(missed):
+        line += (f", {len(judged) - met - len(missed)} not judged in this run "
+                 "(n/a, or against an older tree: bench/ab_goals.py)")
+    return "\n".join([line] + [f"  missed: {f.name}: value {number(f.value)}, ratio "
+                                f"{'-' if f.ratio is None else f'{f.ratio:.3f}'}, goal {f.goal}" for f in missed])
+
+
+def exit_status(figures: list[Figure], check: bool) -> int:
+    """0, or with --check 1 when a goal was missed."""
+    return 1 if check and any(f.met is False for f in figures) else 0
 
 
 def document(figures: list[Figure], quick: bool, commit_id: str | None = None) -> dict:
@@ -217,7 +242,7 @@ def compare(old: dict, new: dict) -> str:
     return f"old: {old.get('commit')}\nnew: {new.get('commit')}\n" + table(rows)
 
 
-def main(argv: list[str] | None = None) -> dict:
+def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--quick", action="store_true", help="short run")
     ap.add_argument("--json", type=Path, default=RESULTS, metavar="PATH", help="write the figures here as JSON")
@@ -226,6 +251,8 @@ def main(argv: list[str] | None = None) -> dict:
                     "with this process's CPU time instead of wall time: steadier on a shared machine")
     ap.add_argument("--commit", metavar="TEXT", help="the commit to record, where the measured opentmcl is not a "
                     "git checkout (a `git archive` tree)")
+    ap.add_argument("--check", action="store_true", help="exit with status 1 when a goal was missed "
+                    "(without it the status is 0 either way)")
     args = ap.parse_args(argv)
     old = None
     if args.compare is not None:
@@ -247,8 +274,10 @@ def main(argv: list[str] | None = None) -> dict:
     if old is not None:
         print()
         print(compare(old, doc))
-    return doc
+    print()
+    print(summary(figures))
+    return exit_status(figures, args.check)
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -7,9 +7,8 @@ packages of the layer contract (`[tool.importlinter]` in pyproject, docs/archite
 from __future__ import annotations
 
 import re
-from pathlib import Path
-
 import tomllib
+from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 OUTSIDE = re.compile(r"DESIGN\.md|FACTS\.md|\bshared/")

@@ -167,8 +167,8 @@ def test_capture_of_a_sim_profile_file_replays_against_that_file(tmp_path):
     profile.write_text('extends = "TMCM-6212"\n[module]\nname = "MY-6212"\nfirmware_version = "6212V999"\n'
                        '[[axis_parameter]]\nnumber = 4\ndefault = 1234\n')
     with Tool("proxy", "--to", f"sim://{profile}", "--tcp", "127.0.0.1:0", "--log", str(tmp_path / "c.jsonl")) as px:
-        assert cli("send", "136 0, 0, 0", "--to", px.endpoint("tcp")).stdout.strip() == "6212V999"
-        assert cli("send", "GAP 4, 0", "--to", px.endpoint("tcp")).stdout.strip() == "1234"
+        assert cli("send", "136 0, 0, 0", "--plain", "--to", px.endpoint("tcp")).stdout.strip() == "6212V999"
+        assert cli("send", "GAP 4, 0", "--plain", "--to", px.endpoint("tcp")).stdout.strip() == "1234"
     done = cli("replay", str(tmp_path / "c.jsonl"))
     assert done.returncode == 0 and "against MY-6212 at address 1" in done.stdout, done.stdout + done.stderr
     assert cli("replay", str(tmp_path / "c.jsonl"), "--module", "TMCM-6212").returncode == 1

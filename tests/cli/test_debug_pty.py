@@ -146,3 +146,67 @@ def test_ctrl_c_stops_a_free_run(tmp_path):
     out = t.read_until(PROMPT)
     assert "interrupted; program stopped" in out and "[stopped]" in out
     assert t.close() == 0
+
+
+def test_help_lists_every_command_and_no_undocumented_one():
+    """Issue 32 item 7: "The debugger's help lists "Undocumented commands: EOF"". End of input
+    (Ctrl-D) is no command to type: `help` lists only documented commands, `print` among them, and
+    `help quit` says that Ctrl-D leaves too -- which it does, with status 0."""
+    t = Terminal("debug", str(EXAMPLES / "tmcm6212_7.4_user_variables.tmc"))
+    t.read_until(PROMPT)
+    out = t.command("help")
+    assert "Documented commands" in out and "Undocumented" not in out and "EOF" not in out
+    listed = set(out.split("=\n", 1)[1].split())
+    assert {"print", "p", "quit", "step", "cont", "break", "watch", "info"} <= listed
+    assert "Ctrl-D" in t.command("help quit")
+    os.write(t.master, b"\x04")                       # Ctrl-D at the prompt: end of input
+    assert t.proc.wait(timeout=HANG_GUARD) == 0
+    os.close(t.master)
+
+
+MOVE = """\
+    SAP 4, 0, 1000        // maximum positioning speed (TMCM-6212 manual 4.1, AP 4)
+    SGP 0, 3, 500         // timer 0 period (manual 5.1, bank 3)
+    SGP 42, 2, 21         // user variable 42
+    MVP ABS, 0, 5000
+    WAIT POS, 0, 0
+    STOP
+"""
+
+
+def test_print_reads_registers_variables_and_parameters_by_number_or_name(tmp_path):
+    """Issue 32 item 7: "no way to print an expression or a parameter by name". After the program
+    ran to its STOP: axis parameters by our name, the manual's number (AP1, ap1.0), PyTrinamic's
+    name, NAME.M for another motor; a global parameter by name; expressions in the assembler's
+    syntax (precedence, C division) over A, user variables and parameters."""
+    src = tmp_path / "move.tmc"
+    src.write_text(MOVE)
+    t = Terminal("debug", str(src))
+    t.read_until(PROMPT)
+    assert "[stopped]" in t.command("cont")
+    for line, shown in [("print actual_position", "actual_position = 5000"),
+                        ("print AP1", "AP1 = 5000"),
+                        ("p ap1.0 - target0", "ap1.0 - target0 = 0"),
+                        ("print MaxVelocity", "MaxVelocity = 1000"),
+                        ("print actual_position.1", "actual_position.1 = 0"),
+                        ("print timer_0", "timer_0 = 500"),
+                        ("print var42", "var42 = 21"),
+                        ("print var42 * 2 + a", "var42 * 2 + a = 42"),       # A: 0, nothing loaded it
+                        ("print (var42 + 1) * -7 / 4", "(var42 + 1) * -7 / 4 = -38"),   # -38.5 truncated
+                        ("print state", "state = stop")]:
+        assert t.command(line).strip().splitlines()[-1] == shown, line   # after the echoed input
+    assert t.close() == 0
+
+
+def test_print_explains_what_it_cannot_print(timer_session):
+    """Bad input to `print`: one error line each, the session goes on."""
+    t = timer_session
+    assert "cannot print 'bogus': no register, variable or parameter of TMCM-6212" in t.command("print bogus")
+    assert "did you mean actual_position" in t.command("print actual_positon")
+    assert "division by zero" in t.command("print 1/0")
+    assert "expression ends too early" in t.command("print a +")
+    assert "flags is text" in t.command("print flags + 1")
+    assert "timer_0 is a global parameter" in t.command("print timer_0.1")
+    assert "usage: print EXPR" in t.command("print")
+    assert "Traceback" not in t.buf.decode(errors="replace")
+    assert "PC=" in t.command("info")

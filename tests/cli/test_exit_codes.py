@@ -47,7 +47,8 @@ def test_2_for_input_that_names_nothing_3_for_a_link_that_fails():
         done = cli("send", "GAP 1, 0", "--to", f"tcp://127.0.0.1:{port}")
     assert done.returncode == 3 and f"tcp://127.0.0.1:{port}" in one_line(done)
     ok = cli("send", "GAP 1, 0", "--to", SIM)
-    assert ok.returncode == 0 and ok.stdout == "0\n" and ok.stderr == ""
+    assert ok.returncode == 0 and ok.stdout == "status 100 (Successfully executed, no error), value 0\n"
+    assert ok.stderr == ""
 
 
 def test_2_for_a_bad_profile_given_to_demo(tmp_path):

@@ -65,7 +65,7 @@ def test_cli_send_to_a_tcp_endpoint(capsys):
     tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0))
     server.start()
     try:
-        assert main(["send", "MVP ABS, 0, 1000", "GAP 0, 0", "--to", tcp.url]) == 0
+        assert main(["send", "MVP ABS, 0, 1000", "GAP 0, 0", "--plain", "--to", tcp.url]) == 0
     finally:
         server.stop()
     out = capsys.readouterr().out.splitlines()

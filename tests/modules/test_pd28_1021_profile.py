@@ -7,17 +7,12 @@ Choices: docs/assumptions.md.
 """
 from __future__ import annotations
 
-import sys
+import tomllib
 from importlib import resources
 
 import pytest
 
 from opentmcl.modules.profile import ModuleProfile, parse_profile
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 
 def _load(fname: str) -> ModuleProfile:

@@ -4,17 +4,12 @@ Rows quoted in the docstrings are copied from the manual's tables (tab-separated
 """
 from __future__ import annotations
 
-import sys
+import tomllib
 from importlib import resources
 
 import pytest
 
 from opentmcl.modules.profile import ModuleProfile, Param, parse_profile
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 
 @pytest.fixture(scope="module")

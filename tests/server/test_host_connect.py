@@ -55,7 +55,7 @@ def test_serial_url_with_a_pyserial_opentmcl_port(capsys, monkeypatch):
 
     monkeypatch.setattr(serial, "protocol_handler_packages",
                         [p for p in serial.protocol_handler_packages if p != "opentmcl.urlhandler"])
-    assert main(["send", "GGP 66, 0", "--to", "serial://?port=opentmcl://TMCM-6212@3", "--address", "3"]) == 0
+    assert main(["send", "GGP 66, 0", "--plain", "--to", "serial://?port=opentmcl://TMCM-6212@3", "--address", "3"]) == 0
     assert capsys.readouterr().out == "3\n"
 
 

@@ -1,5 +1,5 @@
-"""The bus in real time (issue 28, docs/architecture.md "Real time"): the bus lock hands over in
-order of urgency, the simulation advances in bounded slices, and the modules' clock lags (and
+"""The bus in real time (issue 28, docs/architecture.md "Real time"): stops take the bus first
+(the lock itself: tests/test_handover.py), the simulation advances in bounded slices, and the modules' clock lags (and
 drops what it cannot catch up) instead of the replies.
 
 Costs are measured on a work clock the tests drive, so nothing here depends on the machine's speed.
@@ -11,8 +11,8 @@ import threading
 import pytest
 
 from opentmcl import VirtualModule
+from opentmcl.handover import BACKGROUND, REQUEST, STOP
 from opentmcl.server.bus import ModuleBus, urgency
-from opentmcl.server.buslock import BACKGROUND, REQUEST, STOP, BusLock
 from opentmcl.server.pacing import MIN_SLICE, REQUEST_BUDGET, SLICE_BUDGET, Pacer
 
 from .helpers import request
@@ -52,62 +52,6 @@ def costly_bus(cost: float, *, max_lag: float = 1.0, runner: bool = True):
     bus = ModuleBus([vm], clock=wall, min_step=0.0, pacer=Pacer(wall, max_lag=max_lag, work_clock=work))
     bus.runner_attached = runner
     return bus, vm, wall
-
-
-def queue_up(lock: BusLock, urgencies: list[int], order: list[int]) -> list[threading.Thread]:
-    """Threads that each wait for `lock` at one urgency, queued in the order given."""
-    threads = []
-    for u in urgencies:
-        def take(u=u):
-            with lock.hold(u):
-                order.append(u)
-        t = threading.Thread(target=take)
-        t.start()
-        n = len(threads) + 1
-        while lock.waiting() < n:  # queued before the next one starts
-            threading.Event().wait(0.001)
-        threads.append(t)
-    return threads
-
-
-def test_the_lock_goes_to_stops_then_requests_then_background():
-    """docs/architecture.md "Real time": "Stop requests go first"; a clock slice never starts while
-    a request waits. Queued background, request, stop, request, background: served stop first,
-    then the requests in arrival order, then the background slices."""
-    lock = BusLock()
-    order: list[int] = []
-    lock.acquire()
-    threads = queue_up(lock, [BACKGROUND, REQUEST, STOP, REQUEST, BACKGROUND], order)
-    lock.release()
-    for t in threads:
-        t.join(10)
-    assert order == [STOP, REQUEST, REQUEST, BACKGROUND, BACKGROUND]
-
-
-def test_a_thread_that_lets_go_queues_behind_those_waiting():
-    """Handing over: the clock thread that releases and asks again right away waits behind the
-    request that was already waiting (no barging)."""
-    lock = BusLock()
-    order: list[str] = []
-    lock.acquire(BACKGROUND)
-    waiter = threading.Thread(target=lambda: (lock.acquire(), order.append("request"), lock.release()))
-    waiter.start()
-    while lock.waiting() < 1:
-        threading.Event().wait(0.001)
-    lock.release()
-    with lock.hold(BACKGROUND):
-        order.append("slice")
-    waiter.join(10)
-    assert order == ["request", "slice"]
-
-
-def test_the_lock_is_reentrant_and_checks_its_owner():
-    lock = BusLock()
-    with lock, lock.hold(STOP):
-        assert lock.held()
-    assert not lock.held()
-    with pytest.raises(RuntimeError):
-        lock.release()
 
 
 @pytest.mark.parametrize("command, expected", [(3, STOP), (128, STOP), (131, STOP), (6, REQUEST),

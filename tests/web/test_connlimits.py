@@ -1,7 +1,8 @@
 """The dashboard's connection limits (docs/dashboard.md, "Threat model"; issue 11 problem 3 for the
 web server): a connection that never completes a request head is closed, a body that never
-completes is refused with 408, and connections beyond the cap are closed at once, so idle or
-trickling clients cannot hold the process's file descriptors for ever. Real sockets throughout;
+completes is refused with 408, and the connections are capped, so idle or trickling clients cannot
+hold the process's file descriptors for ever; beyond the cap an idle connection gives its place to
+a new one, and a reserve carries STOP ALL (issue 28 item 2). Real sockets throughout;
 the first test runs a real `opentmcl dashboard` process with its default limits."""
 from __future__ import annotations
 
@@ -61,19 +62,113 @@ def limited():
         handle.stop()
 
 
-def test_connections_beyond_the_cap_are_closed_and_the_slots_come_back(limited):
-    """Three idle connections and a fourth that asks: answered (the last slot). A fifth while four
-    are open is closed at once; after the idle ones go, requests are answered again."""
+def test_an_idle_connection_gives_its_place_to_a_new_one(limited):
+    """Issue 28 item 2 (the rule of docs/dashboard.md "Threat model"): with the four connections of
+    the cap open and silent, a fifth is not closed: the connection that has waited longest for a
+    request head is closed instead, and the fifth's request is answered."""
     port = limited
-    idle = [socket.create_connection(("127.0.0.1", port)) for _ in range(3)]
-    fourth = socket.create_connection(("127.0.0.1", port), timeout=GENEROUS)
-    fourth.sendall(f"GET /api/modules HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n".encode())
-    assert read_reply(fourth).status == 200       # kept alive: still counts as open
-    fifth = socket.create_connection(("127.0.0.1", port))
-    assert closed_by_server(fifth)
-    for sock in (*idle, fourth, fifth):
+    idle = [socket.create_connection(("127.0.0.1", port)) for _ in range(4)]
+    assert get_json(port, "/api/modules")[0]["address"] == 1   # a fifth, answered
+    assert closed_by_server(idle[0])                              # the oldest gave its place
+    for sock in idle:
         sock.close()
-    assert get_json(port, "/api/modules")[0]["address"] == 1
+
+
+def test_a_kept_alive_connection_counts_as_waiting_from_its_last_response(limited):
+    """A connection kept alive after a response waits for its next head from then on: a new
+    connection takes the place of one that connected after it but has waited longer."""
+    port = limited
+    early = socket.create_connection(("127.0.0.1", port), timeout=GENEROUS)
+    a, b = (socket.create_connection(("127.0.0.1", port), timeout=GENEROUS) for _ in range(2))
+    ask = f"GET /api/modules HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n".encode()
+    early.sendall(ask)
+    assert read_reply(early).status == 200        # kept alive: waiting since this response
+    late = socket.create_connection(("127.0.0.1", port), timeout=GENEROUS)  # the fourth
+    newcomer = socket.create_connection(("127.0.0.1", port))
+    assert closed_by_server(a)                    # connected after `early`, waited longer
+    early.sendall(ask)                            # well within the 5 s keep-alive
+    assert read_reply(early).status == 200        # still open
+    for sock in (early, a, b, late, newcomer):
+        sock.close()
+
+
+@pytest.fixture
+def busy_cap():
+    """A dashboard with 2 connections and a reserve of 2, a long body time-out, and a way to hold
+    a connection busy: a POST whose body never completes (a request being answered)."""
+    import opentmcl
+    from opentmcl.web import start_dashboard
+
+    module = opentmcl.connect("sim://TMCM-6212?clock=real")
+    handle = start_dashboard(module, "127.0.0.1", 0, on_stop=module.close, poll=False, max_connections=2,
+                             reserve=2, body_timeout=GENEROUS, head_timeout=GENEROUS)
+    held: list[socket.socket] = []
+
+    def hold_busy(path: str = "/m/1/api/console") -> socket.socket:
+        """A connection whose request is being answered: its body is read (the server's "100
+        Continue", RFC 9110 10.1.1, says so) and never completes."""
+        head = [f"POST {path} HTTP/1.1", f"Host: 127.0.0.1:{handle.port}", "Content-Length: 100",
+                "Expect: 100-continue"]
+        head += [f"{k}: {v}" for k, v in page_headers(handle.port).items()]
+        sock = socket.create_connection(("127.0.0.1", handle.port), timeout=GENEROUS)
+        sock.sendall(("\r\n".join(head) + "\r\n\r\n").encode())
+        assert sock.recv(64).startswith(b"HTTP/1.1 100 ")
+        sock.sendall(b'{"line": ')
+        held.append(sock)
+        return sock
+
+    try:
+        yield handle.port, hold_busy
+    finally:
+        for sock in held:
+            sock.close()
+        handle.stop()
+
+
+def test_the_reserve_carries_stop_all_only(busy_cap):
+    """Issue 28 item 2: STOP ALL gets its own connection slot. Both ordinary connections carry a
+    request being answered (nothing to evict); a third connection is a reserve one: any other
+    request on it is a 503 with the reason, STOP ALL is answered (program stop 128 and MST on every
+    axis, TMCM-6212 manual 3.6.36, 3.6.3)."""
+    port, hold_busy = busy_cap
+    hold_busy()
+    hold_busy()
+    r = request(port, "GET", "/api/modules")
+    assert r.status == 503 and "only carry STOP ALL" in r.error and "\n" not in r.error
+    r = post_json(port, "/api/stop-all", {})
+    assert r.status == 200 and r.json()["ok"] and r.json()["modules"][0]["axes_stopped"] == [0, 1, 2, 3, 4, 5]
+
+
+def test_the_reserve_refuses_a_websocket(busy_cap):
+    """A reserve connection does not become a WebSocket (which would hold it for ever): 503."""
+    from .rawhttp import ws_upgrade
+
+    port, hold_busy = busy_cap
+    hold_busy()
+    hold_busy()
+    reply = ws_upgrade(port, "/m/1/ws", origin=f"http://127.0.0.1:{port}")
+    assert reply.status == 503 and "STOP ALL" in reply.error
+
+
+def test_idle_connections_in_the_reserve_give_way_to_stop_all(busy_cap):
+    """Both ordinary connections busy, the reserve filled by two silent connections: STOP ALL on
+    a new connection evicts the reserve connection that waited longest and is answered; only
+    when every connection carries a request is a new one closed at once."""
+    port, hold_busy = busy_cap
+    hold_busy()
+    hold_busy()
+    idle = [socket.create_connection(("127.0.0.1", port))]
+    idle.append(socket.create_connection(("127.0.0.1", port)))
+    r = post_json(port, "/api/stop-all", {})
+    assert r.status == 200 and r.json()["ok"]
+    assert closed_by_server(idle[0])
+    hold_busy("/api/stop-all")  # the reserve slot STOP ALL left (a reserve connection carries only that)
+    hold_busy("/api/stop-all")  # takes idle[1]'s place
+    assert closed_by_server(idle[1])
+    refused = socket.create_connection(("127.0.0.1", port))  # every connection is busy now
+    assert closed_by_server(refused)
+    for sock in (*idle, refused):
+        sock.close()
 
 
 def test_a_body_that_never_completes_is_refused_and_changes_nothing(limited):

@@ -136,3 +136,17 @@ def test_serve_web_with_allow_host_requires_the_printed_token():
     finally:
         stop_cli(proc)
     assert proc.returncode == 0 and also.strip() == f"also at http://{NAME}:{parts.port}/?token={token}"
+
+
+@pytest.mark.parametrize("path", ["//evil.example/", "///evil.example/x", "/\\evil.example/", "/\\/evil.example/"])
+def test_opening_a_token_url_never_redirects_off_site(lan, path):
+    """Issue 28 item 5: "`GET //evil.example/?token=T` redirects off-site". The redirect that drops
+    the token names a path of this site: one leading slash (a browser reads `//host` and `/\\host`
+    as another site), so the Location never leaves the dashboard."""
+    port, token, _ = lan
+    r = request(port, "GET", f"{path}?token={token}", host=f"{NAME}:{port}")
+    assert r.status == 303, (r.status, r.body[:200])
+    location = r.headers["location"]
+    assert location.startswith("/") and location[1:2] not in ("/", "\\"), location
+    assert "evil.example" in location  # the path kept, as a path of this site
+    assert urllib.parse.urlsplit(urllib.parse.urljoin(f"http://{NAME}:{port}/", location)).netloc == f"{NAME}:{port}"

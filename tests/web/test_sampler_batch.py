@@ -84,9 +84,12 @@ def test_a_lost_link_is_all_gaps_and_marks_it(dash):
     assert dash.connected is False and "link down" in dash.last_error
 
 
-def test_live_status_is_one_batch_each(dash):
+def test_live_status_is_read_in_batches_of_one_turn(dash):
     """`sample_fast` (position and speed of six axes) is one batch of 12; the slow status reads
-    its axis cards, ports and user variables in one batch each."""
+    its axis cards, ports and user variables in batches of at most `TURN_REQUESTS` each (issue 28:
+    a stop waits for at most one batch on the link), no single requests."""
+    from opentmcl.web.link import TURN_REQUESTS
+
     module = dash.module
     module.request(5, 1, 4, 4000)   # actual position of axis 4 (manual 4.1 parameter 1)
     module.batches.clear()
@@ -96,5 +99,7 @@ def test_live_status_is_one_batch_each(dash):
     assert sample.position[4] == 4000 and sample.position[:4] == [0, 0, 0, 0]
     module.batches.clear()
     state = dash.sample_slow()
-    assert len(module.batches) == 3 and module.singles == 0
+    cards = 6 * 10  # six axes, the ten card parameters of the TMCM-6212 (manual 4.1)
+    assert module.batches[:cards // TURN_REQUESTS] == [TURN_REQUESTS] * (cards // TURN_REQUESTS)
+    assert max(module.batches) <= TURN_REQUESTS and module.singles == 0
     assert state["axes"][4]["position"] == 4000

@@ -92,12 +92,7 @@ def test_run_takes_the_module_from_the_scenario(capsys, tmp_path):
 def test_documented_examples_are_valid_scenarios():
     """docs/scenarios.md: every TOML example in the schema document loads and runs on its module."""
     import re
-    import sys
-
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
+    import tomllib
     doc = (EXAMPLES.parents[1] / "docs" / "scenarios.md").read_text()
     blocks = re.findall(r"```toml\n(.*?)```", doc, re.S)
     assert len(blocks) == 3

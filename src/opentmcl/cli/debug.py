@@ -12,12 +12,14 @@ virtual module in this process (virtual time: `sleep` and WAITs pass instantly).
   watch EXPR...     add watches: a x pc flags state varN outN inN adcN posN targetN speedN apP.M gpN[.B]
   unwatch [EXPR]    remove one watch, or all
   info              status, A, X, PC, flags and the watches
+  print EXPR        a value now: a watch expression, apP[.M], a parameter name (actual_position,
+                    NAME.M for motor M) or an expression of them (a + x, var42 * 2, pos0 - target0)
   list [L|ADDR]     the program around the PC (or an address)
   run [L|ADDR]      start freely (129) from a label/address (default: current)
   stop / reset      128 / 131
   sleep SECONDS     let time pass (virtual modules: instantly)
   set var N VALUE   SGP N, 2, VALUE
-  quit              leave (the module keeps its state)
+  quit              leave (the module keeps its state); so does Ctrl-D (end of input)
 
 Ctrl-C interrupts a running `cont`/`until` and stops the program (128).
 """
@@ -73,7 +75,7 @@ class BoundedLines:
 
 class DebugShell(cmd.Cmd):
     prompt = "(tmcl) "
-    intro = "OpenTMCL debugger - type help for the commands, quit to leave."
+    intro = "OpenTMCL debugger - type help for the commands, quit (or Ctrl-D) to leave."
 
     def __init__(self, debugger: Debugger, *, stdin: BoundedLines | None = None,
                  stdout: TextIO | None = None) -> None:
@@ -121,9 +123,13 @@ class DebugShell(cmd.Cmd):
         self.say()
         return True
 
+    def get_names(self) -> list[str]:
+        """The names `help` lists: end of input (Ctrl-D) is no command to type (`quit` says so)."""
+        return [name for name in super().get_names() if name != "do_EOF"]
+
     # --- commands ---------------------------------------------------------------------------
     def do_quit(self, arg: str) -> bool:
-        """quit: leave the debugger"""
+        """quit: leave the debugger (so does Ctrl-D); the module keeps its state"""
         return True
 
     do_q = do_quit
@@ -196,6 +202,12 @@ class DebugShell(cmd.Cmd):
         self.show_stop(self.dbg.status())
 
     do_i = do_info
+
+    def do_print(self, arg: str) -> None:
+        """print EXPR: a value now: a watch expression, apP[.M], a parameter name (NAME.M: motor M), or numbers and those with + - * / % & | ^ ~ << >> ( )"""
+        self.say(f"{arg.strip()} = {self.dbg.value(arg)}")
+
+    do_p = do_print
 
     def do_list(self, arg: str) -> None:
         """list [LABEL|ADDR]: program listing around the PC or an address"""
@@ -308,7 +320,7 @@ def run(args: argparse.Namespace) -> int:
             loader.reset()
             specs = [s for item in args.watch for s in item.split(",") if s.strip()]
             dbg = Debugger(loader, program.instructions, program.labels, program.source,
-                           watches=parse_watches(specs))
+                           watches=parse_watches(specs), module=module)
         except (TmclError, DebugError) as exc:
             raise CliError(str(exc)) from None
         shell = DebugShell(dbg, stdin=None if sys.stdin.isatty() else BoundedLines(sys.stdin))

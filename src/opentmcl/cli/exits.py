@@ -111,21 +111,35 @@ def no_reply_hint(url: str | None, address: int | None, host_address: int | None
 _STATUS_CHECKS = {
     1: "the frame arrived damaged: check the cabling, the baud rate and that one host talks at a time",
     2: "the module has no such command: check the command number in its manual",
-    3: "the module has no such type or parameter number: see `opentmcl profile show {module}`",
-    4: "check the value, motor and bank against the module's ranges: see `opentmcl profile show {module}`",
+    3: "the module has no such type or parameter number: see {table}",
+    4: "check the value, motor and bank against the module's ranges: see {table}",
 }
 
 
-def _module_of(args: object) -> str:
-    """The module type the command names (--module, a sim:// URL), else the placeholder NAME."""
+def module_of(args: object) -> str | None:
+    """The module type the command names: --module, or the one module of a sim:// URL (set by
+    `send` from the module's version string when it answered an error status); else None."""
     given = getattr(args, "module", None)
     if isinstance(given, str) and given:
         return given
     url = getattr(args, "url", None) or ""
     if url.lower().startswith("sim://"):
-        name = urllib.parse.urlsplit(url).netloc
-        return name or "NAME"
-    return "NAME"
+        parts = urllib.parse.urlsplit(url)
+        spec = parts.netloc + parts.path if ".toml" in parts.path.lower() else parts.netloc
+        name = spec.partition("@")[0]
+        return name if name and "," not in spec else None
+    return None
+
+
+def profile_table(module: str | None) -> str:
+    """Where the module's parameter numbers and ranges are: its `opentmcl profile show` command,
+    or, when its type is not known, that command's choices."""
+    if module:
+        return f"`opentmcl profile show {module}`"
+    from ..modules import module_names
+
+    return (f"`opentmcl profile show` with the module's type ({', '.join(module_names())} or a profile file; "
+            "`opentmcl send 136` asks the module)")
 
 
 def status_hint(exc: BaseException, args: object) -> str:
@@ -135,7 +149,7 @@ def status_hint(exc: BaseException, args: object) -> str:
     root = _root(exc)
     if not isinstance(root, TmclStatusError) or root.status not in _STATUS_CHECKS:
         return ""
-    return "; " + _STATUS_CHECKS[root.status].format(module=_module_of(args))
+    return "; " + _STATUS_CHECKS[root.status].format(table=profile_table(module_of(args)))
 
 
 def hint_for(exc: BaseException, args: object) -> str:

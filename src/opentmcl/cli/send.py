@@ -2,8 +2,16 @@
 
 An instruction is written as in TMCL source (TMCM-6212 manual 3.6: ``MVP ABS, 0, 1000``,
 ``GAP 1, 0``, ``SAP 4, 0, 51200``) or, for control commands that have no mnemonic (manual
-3.6.36), as numbers ``COMMAND, TYPE, MOTOR, VALUE`` (e.g. ``136, 0, 0, 0``). Each reply's value
-is printed on its own line (the text for the version string of command 136 type 0).
+3.6.36), as numbers ``COMMAND, TYPE, MOTOR, VALUE`` (e.g. ``136, 0, 0, 0``).
+
+Each reply is one line with its status as the manual words it (TMCM-6212 manual 3.2.1, table 4):
+
+  status 100 (Successfully executed, no error), value 51200
+  version 6212V105                  (136 type 0: the special reply, which has no status)
+  instruction MVP REL, 0, -10000    (134: the stored instruction)
+
+--plain prints the value alone (51200, 6212V105, MVP REL, 0, -10000), for scripts; -v the whole
+reply. A reply with an error status is an error (exit status 4, docs/cli.md).
 """
 from __future__ import annotations
 
@@ -14,7 +22,7 @@ from typing import TYPE_CHECKING
 from . import CliError
 
 if TYPE_CHECKING:
-    from ..host import VersionReply
+    from ..host import Client, VersionReply
     from ..protocol.frame import Reply
     from ..protocol.replies import MemoryReply
 
@@ -34,8 +42,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "on CAN the URL's ?id=N chooses the module")
     p.add_argument("--host-address", type=int, default=2, help="reply (host) address (default 2)")
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for each reply (default 5)")
+    p.add_argument("--plain", action="store_true",
+                   help="print each reply's value alone (a number, the version string, the instruction): for scripts")
     p.add_argument("-v", "--verbose", action="count", default=0,
-                   help="print the whole reply, not just the value; also log at INFO (-vv: DEBUG, every frame)")
+                   help="print the whole reply (addresses, status, command, value); also log at INFO "
+                        "(-vv: DEBUG, every frame); --plain still prints the value alone")
     p.set_defaults(func=run)
 
 
@@ -49,28 +60,52 @@ def parse(text: str) -> tuple[int, int, int, int]:
         raise CliError(str(exc)) from None
 
 
-def _show(reply: Reply | VersionReply | MemoryReply | None, verbose: bool) -> str:
+def _show(reply: Reply | VersionReply | MemoryReply | None, verbose: bool, plain: bool) -> str:
+    """One reply as the user reads it (the default), its value alone (`plain`) or whole (`verbose`)."""
     from ..host import VersionReply
     from ..protocol.replies import MemoryReply
     from ..protocol.status import message
 
-    if isinstance(reply, VersionReply):
-        return f"host {reply.reply_address}: {reply.text}" if verbose else reply.text
     if reply is None:
         return "(no reply)"
+    if isinstance(reply, VersionReply):
+        if plain:
+            return reply.text
+        return f"host {reply.reply_address}: {reply.text}" if verbose else f"version {reply.text}"
     if isinstance(reply, MemoryReply):  # command 134: the stored instruction
         from ..protocol.opcodes import format_instruction
 
         fields = (reply.command, reply.type, reply.motor, reply.value)
-        return format_instruction(*fields) or ", ".join(map(str, fields))
-    if not verbose:
+        shown = format_instruction(*fields) or ", ".join(map(str, fields))
+        return shown if plain else f"instruction {shown}"
+    if plain:
         return str(reply.value)
+    if not verbose:
+        return f"status {reply.status} ({message(reply.status)}), value {reply.value}"
     return (f"host {reply.reply_address}, module {reply.module_address}, status {reply.status} "
             f"({message(reply.status)}), command {reply.command}, value {reply.value}")
 
 
+def _name_the_module(client: Client, args: argparse.Namespace) -> None:
+    """After an error status, the module type for the hint (cli/exits.py `status_hint`) when the
+    command line does not name it: from the module's version string (command 136 type 0, TMCM-6212
+    manual 3.6.36), as `connect` finds its profile. Nothing when it cannot be told."""
+    from ..host import TmclError, VersionReply
+    from ..host.module import profile_for_version
+    from .exits import module_of
+
+    if module_of(args) is not None:
+        return
+    try:
+        reply = client.request(136, 0, 0, 0)
+        if isinstance(reply, VersionReply):
+            args.module = profile_for_version(reply.text).name
+    except (TmclError, ValueError):
+        pass
+
+
 def run(args: argparse.Namespace) -> int:
-    from ..host import TmclError, open_bus
+    from ..host import TmclError, TmclStatusError, open_bus
 
     if not args.url:
         raise CliError(f"no module URL: give --to URL (or set ${ENV_URL})")
@@ -90,8 +125,10 @@ def run(args: argparse.Namespace) -> int:
             try:
                 reply = client.request(command, type_, motor, value)
             except (TmclError, ValueError, TypeError) as exc:
+                if isinstance(exc, TmclStatusError):
+                    _name_the_module(client, args)
                 raise CliError(str(exc)) from None
-            print(_show(reply, args.verbose), flush=True)
+            print(_show(reply, args.verbose, args.plain), flush=True)
     finally:
         client.close()
     return 0

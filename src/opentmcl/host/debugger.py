@@ -12,6 +12,11 @@ Watch expressions (case-insensitive): ``a``, ``x``, ``pc``, ``flags``, ``state``
 ``varN`` (user variable N), ``outN`` / ``inN`` / ``adcN`` (GIO N on bank 2 / 0 / 1),
 ``posN`` / ``targetN`` / ``speedN`` (AP1 / AP0 / AP3 of motor N), ``apP.M`` (axis parameter P
 of motor M), ``gpN`` or ``gpN.B`` (global parameter N of bank B, default 0).
+
+`Debugger.value` (the debugger's `print`) reads one of these, or an expression in the assembler's
+operand syntax over them, ``apP`` (axis parameter P of motor 0) and parameter names of the module
+profile (``actual_position``, the manual's title or PyTrinamic's ``ActualPosition``; ``NAME.M``
+for motor M).
 """
 from __future__ import annotations
 
@@ -20,10 +25,19 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from ..lang.assembler import ExpressionError, evaluate
 from ..lang.binfile import Instruction
 from ..protocol.opcodes import format_instruction
-from .errors import TmclStatusError, TmclTypeError, TmclValueError, check_int, check_timeout
+from .errors import (
+    TmclStatusError,
+    TmclTypeError,
+    TmclValueError,
+    UnknownParameterError,
+    check_int,
+    check_timeout,
+)
 from .loader import MODES, AppStatus, Loader
+from .module import Module
 
 INSTRUCTION_SECONDS = 0.0001  # one TMCL instruction of the virtual modules (100 µs)
 WAIT_SLICE = 0.01             # how long the debugger lets a WAIT run between two looks
@@ -91,13 +105,13 @@ def _flags(ld: Loader) -> str:
     return describe_flags(ld.flags())
 
 
-def parse_watch(spec: str) -> Watch:
+def parse_watch(spec: str, verb: str = "watch") -> Watch:
     """One watch expression (see the module docstring); DebugError if it cannot be read."""
     if not isinstance(spec, str):
         raise TmclTypeError(f"a watch expression is a string, got {spec!r}")
     text = spec.strip().lower()
     if any(int(n) > 255 for n in re.findall(r"\d+", text)):  # type and motor/bank are bytes (manual 3.1)
-        raise DebugError(f"cannot watch {spec!r}: numbers must be 0..255")
+        raise DebugError(f"cannot {verb} {spec!r}: numbers must be 0..255")
     if text in _SIMPLE:
         return Watch(text, _SIMPLE[text])
     if text == "flags":
@@ -111,7 +125,7 @@ def parse_watch(spec: str) -> Watch:
     m = re.fullmatch(r"gp(\d+)(?:\.(\d+))?", text)
     if m:
         return Watch(text, _ggp(int(m.group(1)), int(m.group(2) or 0)))
-    raise DebugError(f"cannot watch {spec!r}: use a, x, pc, flags, state, varN, outN, inN, adcN, "
+    raise DebugError(f"cannot {verb} {spec!r}: use a, x, pc, flags, state, varN, outN, inN, adcN, "
                      f"posN, targetN, speedN, apP.M or gpN[.B]")
 
 
@@ -141,6 +155,8 @@ class Debugger:
     source: Sequence[SourceText | None] = field(default_factory=list)
     breakpoints: set[int] = field(default_factory=set)
     watches: list[Watch] = field(default_factory=list)
+    module: Module | None = None
+    """The module behind `loader`, for parameters by name in `value` (none: numbers only)."""
 
     # --- addresses ----------------------------------------------------------------------------
     def address(self, text: str) -> int:
@@ -257,3 +273,65 @@ class Debugger:
 
     def watch_values(self) -> list[tuple[str, int | str]]:
         return [(w.name, read_watch(self.loader, w)) for w in self.watches]
+
+    # --- print ------------------------------------------------------------------------------------
+    def value(self, text: str) -> int | str:
+        """What ``print TEXT`` shows: one watch expression as it is (flags and state as text), else
+        the value of an expression in the assembler's operand syntax whose names are watch
+        expressions without text, ``apP`` (motor 0) and parameter names (``NAME.M``: motor M)."""
+        if not isinstance(text, str):
+            raise TmclTypeError(f"an expression is a string, got {text!r}")
+        spec = text.strip()
+        if not spec:
+            raise DebugError("usage: print EXPR (a, x, pc, varN, apP[.M], a parameter name, ... with + - * / ...)")
+        try:
+            return parse_watch(spec, "print").read(self.loader)
+        except DebugError:
+            pass
+        dotted: dict[str, tuple[str, int]] = {}
+
+        def undot(m: re.Match[str]) -> str:  # NAME.M is no name of the expression syntax
+            key = f"_{len(dotted)}_"
+            dotted[key] = (m.group(1), int(m.group(2)))
+            return key
+
+        plain = _DOTTED.sub(undot, spec)
+        try:
+            return evaluate(plain, lambda name: self._term(*dotted.get(name, (name, None))))
+        except ExpressionError as exc:
+            raise DebugError(f"cannot print {spec!r}: {exc}") from None
+
+    def _term(self, name: str, index: int | None) -> int:
+        """One name of a `value` expression, read from the module now."""
+        spec = name if index is None else f"{name}.{index}"
+        if index is None and re.fullmatch(r"ap\d+", name.lower()):   # apP: motor 0
+            spec = f"{spec}.0"
+        try:
+            watch = parse_watch(spec, "print")
+        except DebugError:
+            return self._parameter(name, index)
+        got = watch.read(self.loader)
+        if isinstance(got, str):
+            raise DebugError(f"{spec} is text ({got}), not a number: print it alone")
+        return got
+
+    def _parameter(self, name: str, index: int | None) -> int:
+        """An axis parameter (of motor `index`, default 0) or a global parameter by its name."""
+        if self.module is None:
+            raise DebugError(f"cannot print {name!r}: parameter names need the module's profile")
+        axis = self.module.axis(index or 0)     # AxisNumberError for a motor the module lacks
+        try:
+            return axis.get(name)
+        except UnknownParameterError as axis_error:
+            try:
+                self.module.global_param(name)
+            except UnknownParameterError:
+                raise DebugError(f"cannot print {name!r}: no register, variable or parameter of "
+                                 f"{self.module.name} has that name ({axis_error.args[0]})") from None
+        if index is not None:
+            raise DebugError(f"cannot print {name}.{index}: {name} is a global parameter, its name implies its bank")
+        return self.module.get_global(name)
+
+
+_DOTTED = re.compile(r"\b([A-Za-z_]\w*)\.(\d+)\b")
+"""``NAME.M``: a parameter of motor M or bank M in a `Debugger.value` expression."""

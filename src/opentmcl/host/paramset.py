@@ -15,18 +15,13 @@ parameter, or a value outside the manual's range raises `ParamSetError` and noth
 from __future__ import annotations
 
 import json
-import sys
+import tomllib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from ..modules.profile import ModuleProfile, Param
 from .errors import TmclValueError
 from .module import GAP, GGP, SAP, SGP, Module
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 FORMAT = "opentmcl-parameters"
 FORMAT_VERSION = 1

@@ -34,7 +34,7 @@ from typing import TYPE_CHECKING
 from .errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError
 
 if TYPE_CHECKING:
-    from typing import Self  # Python 3.11; annotations only, so 3.10 imports the module
+    from typing import Self  # annotations only
 
     from ..registry import Registry
 

@@ -566,6 +566,10 @@ def _resolve_checked(name: str, col: int, where: _Where, st: _State) -> int:
 
 
 def _eval(e: _Expr, where: _Where, st: _State) -> int:
+    return _walk(e, lambda node: _lookup(node.name, node.column, where, st), lambda c, msg: _fail(where, c, msg))
+
+
+def _walk(e: _Expr, name_value: Callable[[_Expr], int], fail: _Fail) -> int:
     """The value of `e`, without recursion (a long chain like 1+1+...+1 is a deep tree)."""
     todo: list[tuple[_Expr, bool]] = [(e, False)]
     values: list[int] = []
@@ -574,7 +578,7 @@ def _eval(e: _Expr, where: _Where, st: _State) -> int:
         if node.kind == "num":
             values.append(node.value)
         elif node.kind == "name":
-            values.append(_lookup(node.name, node.column, where, st))
+            values.append(name_value(node))
         elif not ready:
             todo.append((node, True))
             todo.extend((a, False) for a in reversed(node.args))
@@ -582,20 +586,39 @@ def _eval(e: _Expr, where: _Where, st: _State) -> int:
             n = len(node.args)
             vals = values[-n:]
             del values[-n:]
-            values.append(_combine(node, vals, where))
+            values.append(_combine(node, vals, fail))
     return values[0]
 
 
-def _combine(e: _Expr, vals: list[int], where: _Where) -> int:
+def _combine(e: _Expr, vals: list[int], fail: _Fail) -> int:
     try:
         result = _apply(e.op, *vals)
         if abs(result) > MAX_INTERMEDIATE:
-            _fail(where, e.column, "expression value out of range (more than 64 bits)")
+            fail(e.column, "expression value out of range (more than 64 bits)")
         return result
     except ZeroDivisionError:
-        _fail(where, e.column, "division by zero")
+        fail(e.column, "division by zero")
     except ValueError as exc:
-        _fail(where, e.column, str(exc))
+        fail(e.column, str(exc))
+
+
+class ExpressionError(ValueError):
+    """An expression `evaluate` cannot read or compute; `column` (0-based) is where."""
+
+    def __init__(self, column: int, message: str) -> None:
+        super().__init__(message)
+        self.column = column
+
+
+def evaluate(text: str, lookup: Callable[[str], int]) -> int:
+    """The value of `text`, written as an operand of this assembler (literals, names, ``+ - * / %
+    & | ^ ~ << >>`` and parentheses, C-style division), each name's value given by `lookup` (which
+    raises for a name it does not know). ExpressionError for text that is no expression."""
+
+    def fail(column: int, message: str) -> NoReturn:
+        raise ExpressionError(column, message)
+
+    return _walk(_ExprParser(text, 0, fail).parse(), lambda node: lookup(node.name), fail)
 
 
 def _operand_value(stmt: _Stmt, op: _Operand, fld: str, st: _State) -> int:

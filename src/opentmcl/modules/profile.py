@@ -62,7 +62,6 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
 from __future__ import annotations
 
 import os
-import sys
 from dataclasses import dataclass, field, fields
 from functools import cache, cached_property
 from typing import Any
@@ -279,12 +278,8 @@ def _normalise(name: str) -> str:
 @cache
 def _builtin_raw(fname: str) -> RawProfile:
     # imported here, on the first profile read: `import opentmcl` stays cheap (docs/host.md)
+    import tomllib
     from importlib import resources
-
-    if sys.version_info >= (3, 11):
-        import tomllib
-    else:  # pragma: no cover
-        import tomli as tomllib
 
     text = resources.files("opentmcl.modules").joinpath("data", fname).read_text(encoding="utf-8")
     return tomllib.loads(text)  # a TOML document is a table

@@ -16,7 +16,7 @@ Every error is one line naming its key path, e.g. ``axis_parameter[2].max: expec
 """
 from __future__ import annotations
 
-import sys
+import tomllib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -25,11 +25,6 @@ from .bounds import AXES_MAX, NESTING_MAX, excess, too_deep
 from .names import compact
 from .profile import CAPABILITY_VALUES, STORABLE_USER_VARIABLES, USER_VARIABLES, RawProfile
 from .state import snapshot_errors
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 MAX_FILE_BYTES = 1024 * 1024
 """Largest profile file read (the built-in ones are about 60 kB)."""

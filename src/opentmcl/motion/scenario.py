@@ -9,17 +9,12 @@ from __future__ import annotations
 
 import math
 import os
-import sys
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..limits import TEXT_MAX, InputTooLarge, read_bytes
 from .stage import Load, Profile, Stage, Switch, home_switch, left_switch, right_switch
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 SWITCH_NAMES = ("left", "right", "home")
 

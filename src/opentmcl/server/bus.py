@@ -24,7 +24,7 @@ wall clock when that costs at most `pacing.REQUEST_BUDGET` (without a runner:
 by at most one slice of that), and `RealTimeRunner`, the background thread,
 simulates the rest in bounded slices
 (`pacing.SLICE_BUDGET`), giving the bus to every waiting request between two
-of them (`buslock`); it also hands unsolicited replies (the command-138
+of them (`handover`); it also hands unsolicited replies (the command-138
 "target position reached" reply, manual 3.6.35) to the endpoint through which
 the module was last addressed. Requests that stop motion or a program (MST,
 128, 131) take the bus before every other waiting request. When the
@@ -41,9 +41,9 @@ from collections.abc import Callable, Iterable
 from functools import partial
 from typing import NamedTuple, Protocol
 
+from ..handover import BACKGROUND, REQUEST, STOP, HandoverLock
 from ..protocol.opcodes import STOP_COMMANDS
 from . import canmap, vmapi
-from .buslock import BACKGROUND, REQUEST, STOP, BusLock
 from .pacing import REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
 
 
@@ -112,8 +112,8 @@ def _changes_map(frame: bytes) -> bool:
 
 
 def urgency(data: bytes) -> int:
-    """`buslock.STOP` when received bytes hold a request that stops motion or a program (a command
-    byte of `STOP_COMMANDS` at a frame position), else `buslock.REQUEST`."""
+    """`handover.STOP` when received bytes hold a request that stops motion or a program (a command
+    byte of `STOP_COMMANDS` at a frame position), else `handover.REQUEST`."""
     for command in data[1::9]:
         if command in STOP_COMMANDS:
             return STOP
@@ -154,7 +154,7 @@ class ModuleBus:
             raise ValueError("a bus needs at least one module")
         if min_step < 0:
             raise ValueError("min_step must not be negative")
-        self.lock = BusLock()
+        self.lock = HandoverLock()
         self._clock = clock
         self.pacer = Pacer(clock) if pacer is None else pacer
         self.min_step = min_step

@@ -24,6 +24,7 @@ so one page serves every module). An unknown address is a 404 with {"error": ...
     WS   /ws                       {"type": "samples"} 25 times a second, {"type": "state"} on change
 
 Every request passes `guard.Guard` first (Host allow-list, token, Origin, X-OpenTMCL header, body limit).
+Stops run on a thread of their own, long requests on bounded lanes (web/lanes.py).
 """
 from __future__ import annotations
 
@@ -48,9 +49,11 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from ..host import TmclError
 from . import motion
 from . import params as data_views
+from .connlimits import STOP_ALL_PATH
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
+from .lanes import Busy, Lanes
 from .scan import TIMEOUT_DEFAULT, TIMEOUT_MAX, Scanner
-from .service import FAST_HZ, Dashboard, DashboardError, Poller
+from .service import FAST_HZ, Dashboard, DashboardError, Poller, is_stop
 
 log = logging.getLogger("opentmcl.web")
 
@@ -134,10 +137,12 @@ def _line_numbers(data: Json, key: str) -> list[int]:
 
 def json_api(handler: ApiHandler) -> Endpoint:
     """An endpoint answering `handler`'s result as JSON; the caller's mistakes are a 400 with
-    {"error": "<one line>"}."""
+    {"error": "<one line>"}, too many long requests at once a 503 (web/lanes.py)."""
     async def endpoint(request: Request) -> Response:
         try:
             result = await handler(request)
+        except Busy as exc:
+            return JSONResponse({"error": str(exc)}, status_code=503, headers={"Retry-After": "1"})
         except (BadRequest, DashboardError) as exc:
             return JSONResponse({"error": str(exc)}, status_code=400)
         except ValueError as exc:  # e.g. a number literal too long to convert: still the input's fault
@@ -166,7 +171,7 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
         Route("/", index.home),
         Route("/favicon.ico", favicon),
         Route("/api/modules", index.modules),
-        Route("/api/stop-all", json_api(index.stop_all), methods=post),
+        Route(STOP_ALL_PATH, json_api(index.stop_all), methods=post),
         Route("/api/scan", json_api(index.scan_status)),
         Route("/api/scan", json_api(index.scan_start), methods=post),
         Route("/api/scan/cancel", json_api(index.scan_cancel), methods=post),
@@ -192,6 +197,7 @@ class ModuleIndex:
     stop-all over every module and the module scan of the link (that of the first module)."""
 
     def __init__(self, dashboards: Sequence[Dashboard]) -> None:
+        self.lanes = Lanes()
         self.by_address: dict[int, Dashboard] = {}
         self.routers: dict[int, Router] = {}
         for d in dashboards:
@@ -206,7 +212,7 @@ class ModuleIndex:
         if d.module.address in self.by_address:
             raise ValueError(f"two dashboards for module address {d.module.address}")
         self.by_address[d.module.address] = d
-        self.routers[d.module.address] = Router(routes=ModuleApi(d).routes())
+        self.routers[d.module.address] = Router(routes=ModuleApi(d, self.lanes).routes())
 
     async def dispatch(self, scope: Scope, receive: Receive, send: Send) -> None:
         """/m/{address}/...: the module's own routes, or the 404 of an address not served."""
@@ -218,16 +224,17 @@ class ModuleIndex:
         await router(scope, receive, send)
 
     def close(self) -> None:
-        """Stop the scan and the pollers of the modules opened from it."""
+        """Stop the scan, the pollers of the modules opened from it and the stop lane's thread."""
         self.scanner.cancel()
         self.scanner.join()
         for poller in self.opened:
             poller.dashboard.closed.set()
             poller.stop()
+        self.lanes.close()
 
     # --- stop-all and the scan ---
     async def stop_all(self, _request: Request) -> object:
-        return await run_in_threadpool(self._stop_all)
+        return await self.lanes.stop.run(self._stop_all)  # its own thread: nothing queues ahead
 
     def _stop_all(self) -> Json:
         """A running scan is cancelled first: it holds the link for a request (a baud-rate scan for
@@ -270,14 +277,15 @@ class ModuleIndex:
             if found[0]["baud"] not in (None, getattr(link, "baud", None)):
                 raise DashboardError(f"module {address} answered at {found[0]['baud']} baud; "
                                      "connect the dashboard at that rate to open it")
-            d = await run_in_threadpool(self._open, address)
+            d = await self.lanes.read(self._open, address)
             self.opened.append(Poller(d).start())
         return {"address": address, "url": f"{request.scope.get('root_path', '')}/m/{address}/"}
 
     def _open(self, address: int) -> Dashboard:
         client = self.scanner.client
         try:
-            d = Dashboard(client.module(address), url=f"scan (address {address})")
+            with self.scanner.gate:  # its version string too in a turn (not during a baud-rate scan)
+                d = Dashboard(client.module(address), url=f"scan (address {address})")
             d.profile.name  # noqa: B018 - the profile from the version string, or the error now
         except TmclError as exc:
             raise DashboardError(f"cannot open module {address}: {exc}") from None
@@ -305,10 +313,12 @@ class ModuleIndex:
 class ModuleApi:
     """The page, JSON API and WebSocket of one module (its `Dashboard`), relative to its
     /m/{address} prefix. Each API method reads the request and answers a JSON object (None: ok);
-    the `Dashboard` calls talk to the module, so they run in the thread pool."""
+    the `Dashboard` calls talk to the module, so they run in a thread: stops on the stop lane,
+    long requests on the cpu or reads lane, the others in Starlette's thread pool (web/lanes.py)."""
 
-    def __init__(self, dashboard: Dashboard) -> None:
+    def __init__(self, dashboard: Dashboard, lanes: Lanes) -> None:
         self.d = dashboard
+        self.lanes = lanes
 
     def routes(self) -> list[BaseRoute]:
         post = ["POST"]
@@ -334,7 +344,7 @@ class ModuleApi:
             Route("/api/program/step", json_api(self.step), methods=post),
             Route("/api/program/reset", json_api(self.reset), methods=post),
             WebSocketRoute("/ws", self.live),
-            *data_views.routes(self.d),  # parameter sets and chart samples (web/params.py)
+            *data_views.routes(self.d, self.lanes),  # parameter sets and chart samples (web/params.py)
         ]
 
     async def index(self, _request: Request) -> Response:
@@ -345,7 +355,8 @@ class ModuleApi:
         return await run_in_threadpool(self.d.overview)
 
     async def state(self, _request: Request) -> object:
-        return self.d.state or await run_in_threadpool(self.d.sample_slow)
+        state = self.d.state or await run_in_threadpool(self.d.sample_slow)
+        return {**state, "download": self.d.downloading}  # [sent, of] while a download runs, else null
 
     async def motion(self, request: Request) -> object:
         try:
@@ -359,30 +370,43 @@ class ModuleApi:
             n = int(request.path_params["axis"])
         except ValueError:
             raise BadRequest("axis must be a number") from None
-        return {"axis": n, "params": await run_in_threadpool(self.d.axis_parameters, n)}
+        return {"axis": n, "params": await self.lanes.read(self.d.axis_parameters, n)}
 
     async def global_parameters(self, _request: Request) -> object:
-        return {"params": await run_in_threadpool(self.d.global_parameters)}
+        return {"params": await self.lanes.read(self.d.global_parameters)}
+
+    def _shown_module(self, b: Json) -> None:
+        """A write names the module its page shows (`module`: the address, optional for scripts):
+        another module's page must not write here (docs/dashboard-parameters.md)."""
+        shown = _optional_int(b, "module")
+        if shown is not None and shown != self.d.module.address:
+            raise BadRequest(f"the value was typed on the page of module {shown}; this is module "
+                             f"{self.d.module.address}: nothing written")
 
     async def set_axis_parameter(self, request: Request) -> object:
         b = await _body(request)
         axis, number, value = _int(b, "axis"), _int(b, "number"), _int(b, "value")
+        self._shown_module(b)
         return {"value": await run_in_threadpool(self.d.set_axis_parameter, axis, number, value)}
 
     async def set_global_parameter(self, request: Request) -> object:
         b = await _body(request)
         bank, number, value = _int(b, "bank"), _int(b, "number"), _int(b, "value")
+        self._shown_module(b)
         return {"value": await run_in_threadpool(self.d.set_global_parameter, bank, number, value)}
 
     async def store(self, request: Request) -> object:
         b = await _body(request)
         kind, number, index = _str(b, "kind"), _int(b, "number"), _int(b, "index")
+        self._shown_module(b)
         await run_in_threadpool(self.d.store, kind, number, index, bool(b.get("restore", False)))
         return None
 
     async def console(self, request: Request) -> object:
-        b = await _body(request)
-        return await run_in_threadpool(self.d.console, _str(b, "line"))
+        line = _str(await _body(request), "line")
+        if is_stop(line):  # MST, 128, 131: on the stop lane, never behind other requests
+            return await self.lanes.stop.run(self.d.console, line)
+        return await run_in_threadpool(self.d.console, line)
 
     # --- I/O ---
     async def set_output(self, request: Request) -> object:
@@ -405,14 +429,16 @@ class ModuleApi:
         return {"source": self.d.source, "state": state, "lines": lines}
 
     async def assemble(self, request: Request) -> object:
-        b = await _body(request)
-        result = await run_in_threadpool(self.d.assemble, _str(b, "source"))
+        async with self.lanes.cpu.admitted():  # refused before the body is decoded when busy
+            b = await _body(request)
+            result = await self.lanes.cpu.run(self.d.assemble, _str(b, "source"))
         result.pop("_program", None)
         return result
 
     async def download(self, request: Request) -> object:
-        b = await _body(request)
-        return await run_in_threadpool(self.d.download, _str(b, "source"))
+        async with self.lanes.cpu.admitted():
+            b = await _body(request)
+            return await self.lanes.cpu.run(self.d.download, _str(b, "source"))
 
     async def set_breakpoints(self, request: Request) -> object:
         lines = _line_numbers(await _body(request), "lines")
@@ -422,17 +448,18 @@ class ModuleApi:
         return await self._program_action(partial(self.d.run, self.d.stops))  # stops at arrival
 
     async def stop(self, _request: Request) -> object:
-        return await self._program_action(self.d.stop)
+        return await self._program_action(self.d.stop, stop=True)
 
     async def step(self, _request: Request) -> object:
         return await self._program_action(partial(self.d.step, self.d.stops))
 
     async def reset(self, _request: Request) -> object:
-        return await self._program_action(self.d.reset)
+        return await self._program_action(self.d.reset, stop=True)
 
-    async def _program_action(self, action: Callable[[], object]) -> object:
-        """Run `action`; its own answer when it has one (step), else the program state."""
-        out = await run_in_threadpool(action)
+    async def _program_action(self, action: Callable[[], object], stop: bool = False) -> object:
+        """Run `action` (128 and 131 on the stop lane); its own answer when it has one (step),
+        else the program state."""
+        out = await (self.lanes.stop.run(action) if stop else run_in_threadpool(action))
         return out if isinstance(out, dict) else await run_in_threadpool(self.d.program_state)
 
     # --- the live WebSocket ---

@@ -7,11 +7,13 @@ before any route, so a refused request changes nothing.
 3. Every method but GET/HEAD, and the WebSocket upgrade: an Origin, when sent, must be the
    dashboard's own, and the request must carry ``X-OpenTMCL: 1`` (WebSocket: subprotocol
    ``opentmcl``), which a cross-site form cannot send.
-4. A body is at most `MAX_BODY` bytes, read before the route runs and never beyond the limit,
+4. A request head (request line and header lines) is at most `HEAD_MAX` bytes, however it
+   arrived (uvicorn bounds only a head still incomplete).
+5. A body is at most `MAX_BODY` bytes, read before the route runs and never beyond the limit,
    and must be complete within `BODY_TIMEOUT` seconds (a body sent a byte at a time holds no
    connection for ever).
 
-Refusals are 403, 408 or 413 with ``{"error": "<one line>"}`` and a log line.
+Refusals are 400, 403, 408 or 413 with ``{"error": "<one line>"}`` and a log line.
 """
 from __future__ import annotations
 
@@ -28,6 +30,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 log = logging.getLogger("opentmcl.web")
 
+HEAD_MAX = 16 * 1024         # bytes of a request line and headers (h11's default, made explicit)
 MAX_BODY = 1 << 20           # 1 MiB: a full 6144-instruction program source is well below
 BODY_TIMEOUT = 30.0          # seconds for the whole body: 1 MiB takes under 10 s even at 1 Mbit/s
 HEADER = "x-opentmcl"        # value "1"; a custom header needs a CORS preflight, never granted
@@ -88,6 +91,10 @@ class Guard:
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
+            return
+        size = head_size(scope)
+        if size > HEAD_MAX:
+            await self.refuse(scope, receive, send, 400, f"request head of {size} bytes, more than {HEAD_MAX}")
             return
         conn = HTTPConnection(scope)
         reason = self.refusal(conn, scope)
@@ -156,7 +163,7 @@ class Guard:
     async def set_cookie(conn: HTTPConnection, token: str, scope: Scope, receive: Receive, send: Send) -> None:
         """The page opened with ?token=...: keep the token in a cookie, drop it from the address bar."""
         query = urllib.parse.urlencode([(k, v) for k, v in conn.query_params.multi_items() if k != "token"])
-        target = scope.get("root_path", "") + scope["path"] + (f"?{query}" if query else "")
+        target = same_site_path(scope.get("root_path", "") + scope["path"]) + (f"?{query}" if query else "")
         response = RedirectResponse(target, status_code=303, headers={"Cache-Control": "no-store"})
         response.set_cookie(cookie_name(scope), token, httponly=True, samesite="strict", path="/")
         await response(scope, receive, send)
@@ -201,6 +208,21 @@ def same_origin(origin: str, authority: tuple[str, str]) -> bool:
         return False
     default = "443" if scheme == "https" else "80"
     return (parsed[0], parsed[1] or default) == (authority[0], authority[1] or default)
+
+
+def head_size(scope: Scope) -> int:
+    """Bytes of the request head as received: request line and ``name: value`` lines, each with
+    its CRLF, and the empty line (whitespace h11 dropped around values is not counted)."""
+    path = scope.get("raw_path") or scope.get("path", "").encode("latin-1", "replace")
+    query = scope.get("query_string", b"")
+    line = len(scope.get("method", "GET")) + 1 + len(path) + (1 + len(query) if query else 0) + len(" HTTP/1.1\r\n")
+    return line + sum(len(k) + 2 + len(v) + 2 for k, v in scope.get("headers", ())) + 2
+
+
+def same_site_path(path: str) -> str:
+    """`path` as a redirect target that stays on this site: one leading slash (``//host/`` and
+    ``/\\host/`` name another site to a browser)."""
+    return "/" + path.lstrip("/\\")
 
 
 def cookie_name(scope: Scope) -> str:

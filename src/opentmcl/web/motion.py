@@ -11,8 +11,10 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
+from ..handover import STOP
 from ..host import Client, TmclError
 from ..host.module import profile_for_version
+from .link import link_gate
 from .service import Dashboard, DashboardError
 
 MST, RFS, STOP_APPLICATION = 3, 13, 128
@@ -28,13 +30,11 @@ def stop_module(d: Dashboard) -> dict[str, object]:
     errors: list[str] = []
     d.abort_download.set()  # a download holds the module from 132 to 133: it ends at the next instruction
     d.stops += 1  # a Run or Step that arrived before this and is not sent yet is refused (before our 128)
-    runner = d._runner
-    stepping = runner is not None and runner.is_alive()
-    d._cancel.set()  # the host-side stepping ends after its current step; 128 first, not its WAIT
+    stepping = d.halt_stepping()  # the host-side stepping ends after its current step; 128 first, not its WAIT
     if STOP_APPLICATION in d.profile.opcodes:
         for _ in range(2 if stepping else 1):  # again after the join: a step sent meanwhile
             try:
-                d._do(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
+                d.act(lambda: d.module.request(STOP_APPLICATION, 0, 0, 0))
             except DashboardError as exc:
                 errors.append(f"program stop: {exc}")
             d.cancel_run()
@@ -43,7 +43,7 @@ def stop_module(d: Dashboard) -> dict[str, object]:
     stopped = []
     for axis in range(d.profile.axes):
         try:
-            d._do(lambda a=axis: d.module.request(MST, 0, a, 0))
+            d.act(lambda a=axis: d.module.request(MST, 0, a, 0))
             stopped.append(axis)
         except DashboardError as exc:
             errors.append(f"MST {axis}: {exc}")
@@ -63,10 +63,12 @@ def stop_found(client: Client, address: int, version: str) -> dict[str, object]:
     except TmclError:
         name, axes, opcodes = version, 6, frozenset({STOP_APPLICATION})
     stopped = []
+    gate = link_gate(client)
     for command, axis in ([(STOP_APPLICATION, 0)] if STOP_APPLICATION in opcodes else []) + \
             [(MST, a) for a in range(axes)]:
         try:
-            client.request(command, 0, axis, 0, address=address)
+            with gate.hold(STOP):
+                client.request(command, 0, axis, 0, address=address)
             if command == MST:
                 stopped.append(axis)
         except TmclError as exc:
@@ -92,7 +94,7 @@ def velocity_unit(d: Dashboard, axis: int) -> str:
     if caps.velocity_unit == "tmc429":
         return "internal"
     if caps.unit_mode and UNIT_MODE in d.profile.axis_parameters:
-        mode = d._try(lambda: d.module.reply(6, UNIT_MODE, axis).value)
+        mode = d.attempt(lambda: d.module.reply(6, UNIT_MODE, axis).value)
         if mode == 0:
             return "internal"
     return "pps"
@@ -101,17 +103,17 @@ def velocity_unit(d: Dashboard, axis: int) -> str:
 def motion_info(d: Dashboard, axis: int) -> dict[str, object]:
     """What the motion tools show for `axis`: unit and range of the velocity (AP2's range), the
     maximum positioning speed (AP4), positions and the reference search status."""
-    axis = d._axis(axis)
+    axis = d.check_axis(axis)
     params = d.profile.axis_parameters
     speed = params.get(TARGET_SPEED)
     out: dict[str, object] = {
         "axis": axis, "unit": velocity_unit(d, axis),
         "velocity_min": 0 if speed is None else max(0, speed.min),
         "velocity_max": 0 if speed is None else speed.max,
-        "max_positioning_speed": d._try(lambda: d.module.reply(6, MAX_POSITIONING_SPEED, axis).value),
+        "max_positioning_speed": d.attempt(lambda: d.module.reply(6, MAX_POSITIONING_SPEED, axis).value),
     }
     for key, number in POSITION_KEYS.items():
-        out[key] = d._try(lambda n=number: d.module.reply(6, n, axis).value) if number in params else None
+        out[key] = d.attempt(lambda n=number: d.module.reply(6, n, axis).value) if number in params else None
     out["rfs_status"] = _rfs_status(d, axis)
     return out
 
@@ -121,7 +123,6 @@ def _rfs_status(d: Dashboard, axis: int) -> int | None:
     if RFS not in d.profile.opcodes:
         return None
     try:
-        with d.lock:
-            return d.module.reply(RFS, RFS_STATUS, axis).value
+        return d.module.reply(RFS, RFS_STATUS, axis).value
     except TmclError:
         return None

@@ -18,12 +18,12 @@ from __future__ import annotations
 import json
 from collections.abc import Awaitable, Callable
 
-from starlette.concurrency import run_in_threadpool
 from starlette.requests import Request
 from starlette.responses import JSONResponse, Response
 from starlette.routing import BaseRoute, Route
 
 from ..host import TmclError, paramset
+from .lanes import Busy, Lanes
 from .sampler import Sampler
 from .service import Dashboard, DashboardError
 
@@ -38,10 +38,13 @@ class _Refused(Exception):
 
 
 def _api(handler: Callable[[Request], Awaitable[object]]) -> Callable[[Request], Awaitable[Response]]:
-    """JSON answers; the caller's mistakes are a 400 with {"error": "<one line>"}."""
+    """JSON answers; the caller's mistakes are a 400 with {"error": "<one line>"}, too many long
+    requests at once a 503 (web/lanes.py)."""
     async def endpoint(request: Request) -> Response:
         try:
             result = await handler(request)
+        except Busy as exc:
+            return JSONResponse({"error": str(exc)}, status_code=503, headers={"Retry-After": "1"})
         except paramset.ParamSetError as exc:
             return JSONResponse({"error": str(exc)[:300], "problems": exc.problems[:200]}, status_code=400)
         except (_Refused, DashboardError, ValueError) as exc:
@@ -76,16 +79,17 @@ def _change(c: paramset.Change) -> Json:
 
 
 class ParamsApi:
-    """Batched reads, export, diff and apply of one dashboard's module."""
+    """Batched reads, export, diff and apply of one dashboard's module (on the bulk lane)."""
 
-    def __init__(self, dashboard: Dashboard) -> None:
+    def __init__(self, dashboard: Dashboard, lanes: Lanes) -> None:
         self.d = dashboard
+        self.lanes = lanes
 
     def _guarded(self, fn: Callable[[], object]) -> object:
-        """`fn` under the module lock; a link or status error is a DashboardError."""
+        """`fn`, whose requests take their turns on the link (a stop goes between two of them);
+        a link or status error is a DashboardError."""
         try:
-            with self.d.lock:
-                return fn()
+            return fn()
         except paramset.ParamSetError:
             raise
         except TmclError as exc:
@@ -96,11 +100,11 @@ class ParamsApi:
         d, p = self.d, self.d.profile
         if not 0 <= axis < p.axes:
             raise DashboardError(f"{p.name} has axes 0..{p.axes - 1}, not {axis}")
-        module = d.module
-        axis_values = {str(n): d._try(lambda n=n: module.reply(6, n, axis).value)
-                       for n, q in sorted(p.axis_parameters.items()) if q.readable}
-        global_values = {f"{b}:{n}": d._try(lambda b=b, n=n: module.reply(10, n, b).value)
-                         for (b, n), q in sorted(p.global_parameters.items()) if q.readable}
+        axis_numbers = [n for n, q in sorted(p.axis_parameters.items()) if q.readable]
+        globals_ = [(b, n) for (b, n), q in sorted(p.global_parameters.items()) if q.readable]
+        values = d.read_many([(6, n, axis, 0) for n in axis_numbers] + [(10, n, b, 0) for b, n in globals_])
+        axis_values = {str(n): v for n, v in zip(axis_numbers, values, strict=False)}
+        global_values = {f"{b}:{n}": v for (b, n), v in zip(globals_, values[len(axis_numbers):], strict=True)}
         return {"axis": axis, "values": {"axis": axis_values, "global": global_values},
                 "connected": d.connected}
 
@@ -109,14 +113,14 @@ class ParamsApi:
             axis = int(request.path_params["axis"])
         except ValueError:
             raise _Refused("axis must be a number") from None
-        return await run_in_threadpool(self.read_values, axis)
+        return await self.lanes.read(self.read_values, axis)
 
     # --- export / diff / apply ---
     async def export(self, request: Request) -> object:
         fmt = request.query_params.get("format", "json")
         if fmt not in ("json", "toml"):
             raise _Refused(f"format must be json or toml, not {fmt[:20]!r}")
-        ps = await run_in_threadpool(self._guarded, lambda: paramset.export_set(self.d.module))
+        ps = await self.lanes.read(self._guarded, lambda: paramset.export_set(self.d.module))
         assert isinstance(ps, paramset.ParamSet)
         text = paramset.to_json(ps) if fmt == "json" else paramset.to_toml(ps)
         name = f"{ps.module}-address{self.d.module.address}.{fmt}"
@@ -134,8 +138,9 @@ class ParamsApi:
                 "changes": [_change(c) for c in changes], "warnings": warnings}
 
     async def diff(self, request: Request) -> object:
-        text = _text(await _body(request))
-        return await run_in_threadpool(self._guarded, lambda: self._diff(text))
+        async with self.lanes.cpu.admitted():
+            text = _text(await _body(request))
+            return await self.lanes.cpu.run(self._guarded, lambda: self._diff(text))
 
     def _apply(self, text: str) -> Json:
         ps = paramset.parse(text)
@@ -144,8 +149,9 @@ class ParamsApi:
         return {"applied": applied, "changes": [_change(c) for c in changes]}
 
     async def apply(self, request: Request) -> object:
-        text = _text(await _body(request))
-        return await run_in_threadpool(self._guarded, lambda: self._apply(text))
+        async with self.lanes.cpu.admitted():
+            text = _text(await _body(request))
+            return await self.lanes.cpu.run(self._guarded, lambda: self._apply(text))
 
 
 class ChartsApi:
@@ -180,9 +186,9 @@ class ChartsApi:
         return self.sampler.samples(q.get("client", "")[:64], since)
 
 
-def routes(dashboard: Dashboard) -> list[BaseRoute]:
+def routes(dashboard: Dashboard, lanes: Lanes) -> list[BaseRoute]:
     """The routes to mount beside the module's own (web/app.py ModuleApi.routes)."""
-    p, c = ParamsApi(dashboard), ChartsApi(Sampler(dashboard))
+    p, c = ParamsApi(dashboard, lanes), ChartsApi(Sampler(dashboard))
     post = ["POST"]
     return [
         Route("/api/params/values/{axis}", _api(p.values)),

@@ -155,7 +155,7 @@ class Sampler:
         while not self.d.closed.is_set():
             try:
                 self.tick()
-            except Exception:  # a bug must not stop the charts (link errors: Dashboard._try)
+            except Exception:  # a bug must not stop the charts (link errors: Dashboard.attempt)
                 log.exception("chart sampling failed")
             with self.lock:
                 if not self.clients:  # under the lock: a new subscriber starts a new thread

@@ -9,22 +9,30 @@ of its CAN ID (manual 3.1), so there the scan tries only the connection's own ad
 A module that answers every address byte (a USB link, docs/endpoints.md) is listed once, at its
 own address: after each version answer GGP 66 (manual 3.6.8) is asked at the same address, and a
 reply carrying another module address (GP66) means the answer was not that address's own.
+
+The scan gives the link up to a stop after each address (web/link.py): each address is one turn
+on the link, and a baud-rate scan, which holds the link throughout, lends it back at the link's
+own rate to a stop waiting. So a stop waits at most for one address: its time-out per address,
+which is why that is at most `TIMEOUT_MAX` (a module with the longest telegram pause, GP75 = 255
+ms, still answers at 9600 baud well within it).
 """
 from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Sequence
+from functools import partial
 
 from ..host import Client, TmclError, VersionReply
 from ..host.errors import TmclConnectionError, TmclTimeout
 from ..modules.profile import ModuleProfile
+from .link import link_gate
 from .service import DashboardError
 
 VERSION, GGP, SERIAL_ADDRESS = 136, 10, 66
 ADDRESSES = range(1, 256)
 # GP65 "RS485 baud rate" 0..11 (TMCM-6212 manual 5.1) without the rows "Not supported by PCs".
 BAUD_RATES = (9600, 14400, 19200, 28800, 38400, 57600, 115200)
-TIMEOUT_MIN, TIMEOUT_MAX, TIMEOUT_DEFAULT = 0.01, 2.0, 0.1
+TIMEOUT_MIN, TIMEOUT_MAX, TIMEOUT_DEFAULT = 0.01, 0.5, 0.1
 
 
 def link_kind(client: Client) -> str:
@@ -69,6 +77,7 @@ class Scanner:
         self.client = client
         self.served = served        # the addresses the dashboard serves (their pages exist)
         self.kind = link_kind(client)
+        self.gate = link_gate(client)
         self._lock = threading.Lock()
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
@@ -120,28 +129,41 @@ class Scanner:
             self._set(running=False, cancelled=self._cancel.is_set())
 
     def _scan_bauds(self, addresses: range, timeout: float, bauds: list[int]) -> None:
-        """Each baud rate in turn, with the client held so the dashboard's own polling does not
-        talk at a rate its module does not listen at; the link's rate comes back afterwards."""
+        """Each baud rate in turn, with the link held so the dashboard's own polling does not
+        talk at a rate its module does not listen at; the link's rate comes back afterwards, and
+        in between for a stop that waits (`_lend`)."""
         transport = self.client.transport
         original = transport.baud  # type: ignore[attr-defined]
-        with self.client._lock:
+        with self.gate:
             try:
                 for baud in bauds:
                     if self._cancel.is_set():
                         break
-                    transport.baud = baud  # type: ignore[attr-defined]
-                    transport.reset_input()
-                    self._scan(addresses, timeout, baud)
+                    self._set_baud(baud)
+                    self._scan(addresses, timeout, baud, partial(self._lend, original, baud))
             finally:
-                transport.baud = original  # type: ignore[attr-defined]
-                transport.reset_input()
+                self._set_baud(original)
 
-    def _scan(self, addresses: range, timeout: float, baud: int | None) -> None:
+    def _set_baud(self, baud: int) -> None:
+        self.client.transport.baud = baud  # type: ignore[attr-defined]
+        self.client.transport.reset_input()
+
+    def _lend(self, original: int, baud: int) -> None:
+        """A stop waits: the link back at its own rate for it, then on with the scan at `baud`."""
+        if self.gate.stops_waiting:
+            self._set_baud(original)
+            self.gate.yield_to_stops()
+            self._set_baud(baud)
+
+    def _scan(self, addresses: range, timeout: float, baud: int | None,
+              between: Callable[[], None] = lambda: None) -> None:
         for address in addresses:
+            between()
             if self._cancel.is_set():
                 return
-            version = self._ask(address, timeout)
-            foreign = version is not None and self._answers_for_another(address, timeout)
+            with self.gate:  # one turn per address: a stop goes before the next one
+                version = self._ask(address, timeout)
+                foreign = version is not None and self._answers_for_another(address, timeout)
             with self._lock:
                 self._status["done"] = int(self._status["done"]) + 1  # type: ignore[call-overload]
                 if version is None:

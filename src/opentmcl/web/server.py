@@ -15,7 +15,7 @@ import time
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING
 
-from .connlimits import HEAD_MAX, HEAD_TIMEOUT, KEEP_ALIVE, MAX_CONNECTIONS, protocol_class
+from .connlimits import HEAD_MAX, HEAD_TIMEOUT, KEEP_ALIVE, MAX_CONNECTIONS, RESERVE, protocol_class
 from .guard import BODY_TIMEOUT
 from .service import Dashboard, Poller
 
@@ -160,18 +160,19 @@ def start_dashboard(module: Module, host: str = "127.0.0.1", port: int = 8080, *
                     vm_lock: object = None, url: str = "", on_stop: Callable[[], None] | None = None,
                     poll: bool = True, allow_hosts: Iterable[str] = (), token: str | None = None,
                     head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS,
-                    body_timeout: float = BODY_TIMEOUT) -> DashboardHandle:
+                    body_timeout: float = BODY_TIMEOUT, reserve: int = RESERVE) -> DashboardHandle:
     """Serve the dashboard for a host `Module` at http://host:port/m/ADDRESS/ (the root redirects
     there) from a daemon thread.
 
     `vm`/`vm_lock`: the in-process VirtualModule behind `module` and the lock that guards it, for
     the virtual-only features (forcing inputs). `port` 0 picks a free port (see `handle.port`).
-    `allow_hosts`, `token`, `head_timeout`, `max_connections` and `body_timeout`: see `serve_dashboards`.
+    `allow_hosts`, `token`, `head_timeout`, `max_connections`, `body_timeout` and `reserve`: see
+    `serve_dashboards`.
     """
     dashboard = Dashboard(module, vm=vm, vm_lock=vm_lock, url=url)
     return serve_dashboards([dashboard], host, port, on_stop=on_stop, poll=poll, allow_hosts=allow_hosts,
                             token=token, head_timeout=head_timeout, max_connections=max_connections,
-                            body_timeout=body_timeout)
+                            body_timeout=body_timeout, reserve=reserve)
 
 
 def _bind(host: str, port: int) -> socket.socket:
@@ -198,7 +199,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
                      on_stop: Callable[[], None] | None = None, poll: bool = True,
                      allow_hosts: Iterable[str] = (), token: str | None = None,
                      head_timeout: float = HEAD_TIMEOUT, max_connections: int = MAX_CONNECTIONS,
-                     body_timeout: float = BODY_TIMEOUT) -> DashboardHandle:
+                     body_timeout: float = BODY_TIMEOUT, reserve: int = RESERVE) -> DashboardHandle:
     """Serve several `Dashboard`s (distinct module addresses) on one port, one poller each.
 
     Requests must name a loopback host, `host` or one of `allow_hosts` (guard.py). A token is
@@ -206,7 +207,8 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     is given; `handle.token`, `handle.open_url`); `token` also forces one on loopback.
 
     Connection limits (connlimits.py, guard.py): a request head must be complete within
-    `head_timeout` seconds and its body within `body_timeout`; at most `max_connections` at once.
+    `head_timeout` seconds and its body within `body_timeout`; at most `max_connections` at once,
+    and `reserve` more that carry only STOP ALL; an idle connection gives its place to a new one.
     """
     import uvicorn
 
@@ -222,7 +224,7 @@ def serve_dashboards(dashboards: list[Dashboard], host: str = "127.0.0.1", port:
     sock = _bind(host, port)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning", lifespan="off",
                             ws=_ws_implementation(), access_log=False, ws_max_size=WS_MAX_SIZE,
-                            http=protocol_class(head_timeout, max_connections), h11_max_incomplete_event_size=HEAD_MAX,
+                            http=protocol_class(head_timeout, max_connections, reserve), h11_max_incomplete_event_size=HEAD_MAX,
                             timeout_keep_alive=KEEP_ALIVE)
     server = uvicorn.Server(config)
     logging.getLogger("uvicorn.error").addFilter(_HANDSHAKE_FILTER)  # idempotent: one filter object

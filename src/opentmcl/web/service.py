@@ -7,6 +7,9 @@ virtual one (`opentmcl serve --web`). Only forcing inputs needs the in-process v
 
 A `Poller` thread samples position and velocity of every axis (the fast set) and, less often,
 the rest of the axis state and the program status; the web layer reads the samples.
+
+Every request takes a turn on the link (web/link.py): stops go first, and nothing holds the link
+for more than a short batch, except a download from 132 to 133, which a stop ends.
 """
 from __future__ import annotations
 
@@ -19,10 +22,12 @@ import time
 from collections import deque
 from dataclasses import dataclass
 
+from ..handover import STOP
 from ..host import Module, TmclError, TmclStatusError, VersionReply
-from ..host.client import MAX_BATCH
 from ..protocol.frame import Reply
+from ..protocol.opcodes import STOP_COMMANDS
 from ..protocol.status import message
+from .link import TURN_REQUESTS, LinkLoader, LinkModule, link_gate
 
 log = logging.getLogger("opentmcl.web")
 
@@ -86,16 +91,27 @@ def _param_info(p, axis_or_bank) -> dict:
             "readable": p.readable, "storable": p.storable}
 
 
+def is_stop(line: str) -> bool:
+    """Whether a console line is a stop command (MST, 128, 131: web/link.py STOP_COMMANDS)."""
+    from ..lang.direct import parse_direct
+
+    try:
+        return parse_direct(line.strip())[0] in STOP_COMMANDS
+    except ValueError:  # InstructionError too: the console answers it
+        return False
+
+
 class Dashboard:
-    """The dashboard's view of one module. Thread-safe: one request at a time (`lock`)."""
+    """The dashboard's view of one module. Thread-safe: each request takes a turn on the link's
+    gate (`lock`, shared by every dashboard on the same host `Client`; web/link.py)."""
 
     def __init__(self, module: Module, *, vm=None, vm_lock=None, url: str = "",
                  clock=time.monotonic) -> None:
-        self.module = module
+        self.lock = link_gate(module.client)
+        self.module = LinkModule(module, self.lock)  # the same client; requests take turns
         self.vm = vm
         self.vm_lock = vm_lock if vm_lock is not None else threading.RLock()
         self.url = url
-        self.lock = threading.RLock()
         self.clock = clock
         self._state_seq = itertools.count(1)   # orders program states read at different times
         self.start = clock()
@@ -110,18 +126,17 @@ class Dashboard:
         self._runner: threading.Thread | None = None
         self._cancel = threading.Event()
         self.abort_download = threading.Event()  # set by stop-all: a download ends at its next instruction
+        self.downloading: tuple[int, int] | None = None  # (instructions sent, of) while a download runs
         self.stops = 0  # STOP ALLs so far: a Run or Step that arrived before the last one is refused
         self.closed = threading.Event()  # set by stop(): live connections end
-        with self.lock:
-            self.profile = module.profile
-            self.version = self._try(module.firmware_version, "?")
+        self.profile = self.module.profile
+        self.version = self.attempt(self.module.firmware_version, "?")
 
     # --- plumbing --------------------------------------------------------------------
-    def _try(self, fn, default=None):
+    def attempt(self, fn, default=None):
         """Call fn(); a failing link marks the module disconnected and gives `default`."""
         try:
-            with self.lock:
-                out = fn()
+            out = fn()
             self.connected = True
             return out
         except TmclStatusError:
@@ -132,12 +147,12 @@ class Dashboard:
             return default
 
     def read_many(self, requests: list[tuple[int, int, int, int]]) -> list[int | None]:
-        """The values of several reads (GAP/GGP/GIO) in `request_many` batches of at most
-        `MAX_BATCH`, in order: None for a read the module refused (its status) and for all of a
-        batch when the link failed."""
+        """The values of several reads (GAP/GGP/GIO) in `request_many` batches of
+        `TURN_REQUESTS` (one turn on the link each), in order: None for a read the module refused
+        (its status) and for all of a batch when the link failed."""
         out: list[int | None] = []
-        for start in range(0, len(requests), MAX_BATCH):
-            batch = requests[start:start + MAX_BATCH]
+        for start in range(0, len(requests), TURN_REQUESTS):
+            batch = requests[start:start + TURN_REQUESTS]
 
             def run(batch: list[tuple[int, int, int, int]] = batch) -> list[int | None]:
                 answers: list[object]
@@ -147,7 +162,7 @@ class Dashboard:
                     answers = list(exc.answers or [None] * len(batch))
                 return [a.value if isinstance(a, Reply) else None for a in answers]
 
-            out += self._try(run, [None] * len(batch))
+            out += self.attempt(run, [None] * len(batch))
         return out
 
     @contextlib.contextmanager
@@ -166,17 +181,16 @@ class Dashboard:
             self.last_error = str(exc)
             raise DashboardError(str(exc)) from None
 
-    def _do(self, fn):
-        """Call fn() for a user action under the module lock (errors: `_user_action`)."""
+    def act(self, fn):
+        """Call fn() for a user action (errors: `_user_action`); its requests take their turns."""
         with self._user_action():
-            with self.lock:
-                out = fn()
+            out = fn()
             self.connected = True
             return out
 
     def _unless_stopped(self, since: int | None, fn):
-        """fn() under the module lock, unless a STOP ALL came after the request arrived (`since`:
-        `stops` at its arrival). Under the lock, so STOP ALL's 128 cannot come between check and send."""
+        """fn() in one turn on the link, unless a STOP ALL came after the request arrived (`since`:
+        `stops` at its arrival). In one turn, so STOP ALL's 128 cannot come between check and send."""
         with self._user_action():
             with self.lock:
                 if since is not None and since != self.stops:
@@ -185,7 +199,7 @@ class Dashboard:
             self.connected = True
             return out
 
-    def _axis(self, number) -> int:
+    def check_axis(self, number) -> int:
         if isinstance(number, bool) or not isinstance(number, int) or not 0 <= number < self.profile.axes:
             raise DashboardError(f"{self.profile.name} has axes 0..{self.profile.axes - 1}, not {number!r}")
         return number
@@ -230,21 +244,27 @@ class Dashboard:
 
     # --- parameters -------------------------------------------------------------------------
     def axis_parameters(self, axis: int) -> list[dict]:
-        axis = self._axis(axis)
+        """The axis parameter table of `axis` with its values (GAP, read in batches)."""
+        axis = self.check_axis(axis)
+        params = sorted(self.profile.axis_parameters.values(), key=lambda p: p.number)
+        values = iter(self.read_many([(6, p.number, axis, 0) for p in params if p.readable]))
         out = []
-        for p in sorted(self.profile.axis_parameters.values(), key=lambda p: p.number):
+        for p in params:
             row = _param_info(p, axis)
-            row["value"] = self._try(lambda n=p.number: self.module.reply(6, n, axis).value) if p.readable else None
+            row["value"] = next(values) if p.readable else None
             row["can_store"] = p.storable and STAP in self.profile.opcodes
             row["can_restore"] = p.storable and RSAP in self.profile.opcodes
             out.append(row)
         return out
 
     def global_parameters(self) -> list[dict]:
+        """The global parameter table with its values (GGP, read in batches)."""
+        params = sorted(self.profile.global_parameters.items())
+        values = iter(self.read_many([(10, num, bank, 0) for (bank, num), p in params if p.readable]))
         out = []
-        for (bank, num), p in sorted(self.profile.global_parameters.items()):
+        for (bank, _num), p in params:
             row = _param_info(p, bank)
-            row["value"] = self._try(lambda n=num, b=bank: self.module.reply(10, n, b).value) if p.readable else None
+            row["value"] = next(values) if p.readable else None
             row["can_store"] = p.storable and STGP in self.profile.opcodes
             row["can_restore"] = p.storable and RSGP in self.profile.opcodes
             out.append(row)
@@ -252,32 +272,32 @@ class Dashboard:
 
     def set_axis_parameter(self, axis: int, number: int, value: int) -> int:
         """SAP, then GAP to show what the module took (manual 3.6.5/3.6.6)."""
-        axis = self._axis(axis)
+        axis = self.check_axis(axis)
         p = self.profile.axis_parameters.get(number)
         if p is None or not p.writable:
             raise DashboardError(f"axis parameter {number} is not writable on {self.profile.name}")
-        self._do(lambda: self.module.request(5, number, axis, int(value)))
-        return self._do(lambda: self.module.reply(6, number, axis).value) if p.readable else int(value)
+        self.act(lambda: self.module.request(5, number, axis, int(value)))
+        return self.act(lambda: self.module.reply(6, number, axis).value) if p.readable else int(value)
 
     def set_global_parameter(self, bank: int, number: int, value: int) -> int:
         p = self.profile.global_parameters.get((bank, number))
         if p is None or not p.writable:
             raise DashboardError(f"global parameter {number} of bank {bank} is not writable on {self.profile.name}")
-        self._do(lambda: self.module.request(9, number, bank, int(value)))
-        return self._do(lambda: self.module.reply(10, number, bank).value) if p.readable else int(value)
+        self.act(lambda: self.module.request(9, number, bank, int(value)))
+        return self.act(lambda: self.module.reply(10, number, bank).value) if p.readable else int(value)
 
     def store(self, kind: str, number: int, axis_or_bank: int, restore: bool = False) -> None:
         """STAP/RSAP (axis) or STGP/RSGP (global), manual 3.6.7-3.6.10 / PD86-1180 4.6.7-4.6.8."""
         if kind == "axis":
             command = RSAP if restore else STAP
-            axis_or_bank = self._axis(axis_or_bank)
+            axis_or_bank = self.check_axis(axis_or_bank)
         elif kind == "global":
             command = RSGP if restore else STGP
         else:
             raise DashboardError(f"unknown parameter kind {kind!r}")
         if command not in self.profile.opcodes:
             raise DashboardError(f"{self.profile.name} has no command {command} (store/restore)")
-        self._do(lambda: self.module.request(command, number, axis_or_bank))
+        self.act(lambda: self.module.request(command, number, axis_or_bank))
 
     # --- direct mode console ---------------------------------------------------------------
     def console(self, line: str) -> dict:
@@ -297,8 +317,7 @@ class Dashboard:
             raise DashboardError(_short(f"{_short(text, 40)}: {exc}")) from None
         out: dict[str, object] = {"line": text, "request": [command, type_, motor, value]}
         try:
-            with self.lock:
-                reply = self.module.request(command, type_, motor, value)
+            reply = self.module.request(command, type_, motor, value)  # a stop goes first (link.py)
         except TmclStatusError as exc:
             out.update(ok=False, status=exc.status, text=f"status {exc.status}: {message(exc.status)}")
             return out
@@ -342,8 +361,8 @@ class Dashboard:
         io = self.profile.io.get((bank, port))
         if io is None or io.kind != "output":
             raise DashboardError(f"no output port {port} in bank {bank}")
-        self._do(lambda: self.module.request(14, port, bank, int(value)))
-        return self._do(lambda: self.module.reply(15, port, bank).value)
+        self.act(lambda: self.module.request(14, port, bank, int(value)))
+        return self.act(lambda: self.module.reply(15, port, bank).value)
 
     def force_input(self, bank: int, port: int, value: int | None) -> None:
         """Virtual modules only: hold an input at `value` (None releases it). No TMCL command
@@ -386,7 +405,7 @@ class Dashboard:
 
     def download(self, source: str) -> dict:
         """Assemble, stop the program, download with verify (132, ..., 133, 134)."""
-        from ..host.loader import Loader, LoaderError
+        from ..host.loader import LoaderError
 
         result = self.assemble(source)
         if not result["ok"]:
@@ -394,15 +413,21 @@ class Dashboard:
         prog = result.pop("_program")
         self.cancel_run()
 
-        def abort_point(_done: int, _total: int) -> None:
+        def abort_point(done: int, total: int) -> None:
+            self.downloading = (done, total)
             if self.abort_download.is_set():
                 raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
-        loader = Loader(self.module)
+            if self.lock.stops_waiting:
+                raise DashboardError("download cancelled by a stop command (download mode left with 133)")
+        loader = self._loader()
         try:
-            # Under the lock from 132 to 133: a command sent meanwhile would be stored, not executed
-            # (manual 3.6.36). Stop-all ends it between two instructions; verifying (134) needs no lock.
-            with self.lock:
-                loader.download(prog.instructions, verify=False, progress=abort_point)
+            # One turn from 132 to 133: a command sent meanwhile would be stored, not executed
+            # (manual 3.6.36). A stop ends it between two instructions; verifying (134) takes turns.
+            try:
+                with self.lock:
+                    loader.download(prog.instructions, verify=False, progress=abort_point)
+            finally:
+                self.downloading = None
             loader.verify(prog.instructions)
         except LoaderError as exc:
             raise DashboardError(str(exc)) from None
@@ -412,10 +437,8 @@ class Dashboard:
         self.breakpoints = {b for b in self.breakpoints if b < len(prog.instructions)}
         return result
 
-    def _loader(self):
-        from ..host.loader import Loader
-
-        return Loader(self.module)
+    def _loader(self) -> LinkLoader:
+        return LinkLoader(self.module)
 
     def set_breakpoints(self, lines: list[int]) -> list[int]:
         """Breakpoints by editor line: the first instruction assembled from each line."""
@@ -453,14 +476,19 @@ class Dashboard:
         dbg = Debugger(self._loader())
         while not self._cancel.is_set():
             try:
-                # Not under self.lock: a stepped WAIT takes a while and the charts go on meanwhile
-                # (the Client serialises the requests themselves).
+                # Each request its own turn: a stepped WAIT takes a while and the charts go on meanwhile.
                 st = dbg.step()
             except TmclError as exc:
                 self.last_error = str(exc)
                 return
             if st.mode in (0, 3) or st.pc in self.breakpoints:
                 return
+
+    def halt_stepping(self) -> bool:
+        """End the host-side stepping to a breakpoint after its current step; True when it ran."""
+        runner = self._runner
+        self._cancel.set()
+        return runner is not None and runner.is_alive()
 
     def cancel_run(self) -> None:
         self._cancel.set()
@@ -469,9 +497,12 @@ class Dashboard:
             runner.join(timeout=5.0)
         self._runner = None
 
-    def stop(self) -> None:
+    def stop(self) -> dict:
+        """128, then the program state, both as a stop: ahead of other requests on the link."""
         self.cancel_run()
-        self._do(lambda: self._loader().stop())
+        with self.lock.hold(STOP):
+            self.act(lambda: self._loader().stop())
+            return self.program_state()
 
     def step(self, since: int | None = None) -> dict:
         """130 and the instruction waited out; `since` as for `run`."""
@@ -481,19 +512,22 @@ class Dashboard:
         loader = self._loader()
         self._unless_stopped(since, loader.step)
         with self._user_action():
-            Debugger(loader).after_step()  # not under self.lock, see _run_to_breakpoint
+            Debugger(loader).after_step()  # requests in turns, see _run_to_breakpoint
         return self.program_state()
 
-    def reset(self) -> None:
+    def reset(self) -> dict:
+        """131, then the program state, both as a stop (see `stop`)."""
         self.cancel_run()
-        self._do(lambda: self._loader().reset())
+        with self.lock.hold(STOP):
+            self.act(lambda: self._loader().reset())
+            return self.program_state()
 
     def program_state(self) -> dict:
         """Mode, PC (135 type 1), A (type 2), X (type 3), flags (type 4) and the user variables."""
         from ..host.debugger import describe_flags
 
         seq = next(self._state_seq)   # taken before the read: a later state has a larger number
-        st = self._try(lambda: self._loader().status())
+        st = self.attempt(lambda: self._loader().status())
         if st is None:
             return {"mode": None}
         line = None

@@ -1,6 +1,9 @@
 // The "parameters" view (docs/dashboard-parameters.md): axis and global tables that refresh while
 // visible, highlight changed values, edit in place within the manual's range, store/restore to
 // EEPROM, and export/import parameter sets with a diff that applies only on confirmation.
+// Every row carries its own axis (or bank) and module, and a write goes there and nowhere else:
+// only when that is the axis and module shown. A table being replaced by another axis's is
+// read-only until the new values arrive (issue 28: a value typed meanwhile went to the old axis).
 "use strict";
 (() => {
 const {api, el, log} = window.OpenTMCL;
@@ -9,7 +12,7 @@ const REFRESH_MS = 500;      // 2 Hz, one batched request (api/params/values/AXI
 const FLASH_MS = 1500;       // how long a changed value stays highlighted
 const BANK_TITLES = {0: "bank 0: global parameters", 2: "bank 2: user variables", 3: "bank 3: interrupt configuration"};
 const P = {axisParams: null, globalParams: null, values: null, timer: null, ctx: null, busy: false,
-           pendingFile: null};
+           pendingFile: null, axis: null, loading: false, loadSeq: 0};
 window.dashboard.params = P;  // for the browser tests and the curious
 
 const MARKUP = `
@@ -26,11 +29,12 @@ const MARKUP = `
       <label class="file-button">Import… <input type="file" id="param-import" accept=".json,.toml,application/json,application/toml,text/plain"></label>
     </div>
     <div id="param-import-panel" hidden></div>
-    <h3>Axis parameters</h3>
+    <h3 id="param-axis-title">Axis parameters</h3>
     <table id="param-axis-table" class="params"></table>
     <div id="param-global-tables"></div>`;
 
 const axisNow = () => Number($("param-axis").value || 0);
+const moduleShown = () => (P.ctx && P.ctx.overview ? P.ctx.overview.address : null);
 const mnemonic = (kind, store, restore) => kind === "axis" ? (restore ? "RSAP" : store ? "STAP" : "SAP")
                                                             : (restore ? "RSGP" : store ? "STGP" : "SGP");
 const excludedText = p => (p.excluded || []).length ? ` except ${p.excluded.join(", ")}` : "";  // e.g. PD86-1180 7.2 AP210
@@ -50,45 +54,65 @@ function checkValue(p, text) {
 
 function cellId(kind, p) { return kind === "axis" ? `param-axis-${p.number}` : `param-global-${p.bank}-${p.number}`; }
 
-function valueCell(kind, p, index) {
+function valueCell(kind, p, index, module) {
   const id = cellId(kind, p);
   if (!p.writable) return el("td", {class: "num"}, el("span", {id, class: "value"}, p.value ?? "-"));
   const input = el("input", {id, value: p.value ?? "", "data-number": p.number, title: `${rangeText(p)} ${p.unit}`.trim(),
+                             "data-kind": kind, "data-index": index, "data-module": module,
                              spellcheck: "false", autocomplete: "off"});
+  if (kind === "axis" && P.loading) input.disabled = true;
   input.addEventListener("input", () => { input.dataset.dirty = "1"; input.classList.remove("saved", "failed"); });
   input.addEventListener("blur", () => {  // leaving without Enter drops the edit; live values come back
     if (input.dataset.dirty && !input.classList.contains("failed")) { delete input.dataset.dirty; refresh(); }
   });
-  input.addEventListener("keydown", ev => { if (ev.key === "Enter") writeValue(kind, p, index, input); });
+  input.addEventListener("keydown", ev => { if (ev.key === "Enter") writeValue(kind, p, input); });
   return el("td", {class: "num"}, input);
 }
 
-async function writeValue(kind, p, index, input) {
+// Why a write from a row of (kind, index, module) must not be sent now, or "" when it may: the row
+// must be of the axis and module shown, and its table not being replaced.
+function notShown(kind, index, module) {
+  if (module !== moduleShown()) return `this row is of module ${module}, the page shows module ${moduleShown()}`;
+  if (kind !== "axis") return "";
+  if (P.loading || index !== P.axis) return `axis ${axisNow()} is being read; nothing written to axis ${index}`;
+  if (index !== axisNow()) return `this row is of axis ${index}, axis ${axisNow()} is chosen`;
+  return "";
+}
+
+async function writeValue(kind, p, input) {
   input.classList.remove("saved", "failed");
+  const index = Number(input.dataset.index), module = Number(input.dataset.module);
+  const refused = notShown(kind, index, module);
+  if (refused) {
+    input.classList.add("failed"); input.title = refused; log(refused, "err");
+    return;
+  }
   const checked = checkValue(p, input.value);
   if (checked.error) {
     input.classList.add("failed"); input.title = checked.error; log(checked.error, "err");
     return;
   }
-  const where = kind === "axis" ? index : p.bank;
-  log(`> ${mnemonic(kind)} ${p.number}, ${where}, ${checked.value}`, "req");
-  const body = kind === "axis" ? {axis: index, number: p.number, value: checked.value}
-                               : {bank: p.bank, number: p.number, value: checked.value};
+  log(`> ${mnemonic(kind)} ${p.number}, ${index}, ${checked.value}`, "req");
+  const body = kind === "axis" ? {axis: index, number: p.number, value: checked.value, module}
+                               : {bank: index, number: p.number, value: checked.value, module};
   try {
     const r = await api(`api/params/${kind}`, body);
     delete input.dataset.dirty;
     input.value = r.value; input.classList.add("saved"); input.title = `${rangeText(p)} ${p.unit}`.trim();
-    remember(kind, p, r.value);
+    remember(kind, p, index, r.value);
     log(`  ${p.name} = ${r.value}`, "ok");
   } catch (e) { input.classList.add("failed"); input.title = e.message; log(`  ${e.message}`, "err"); }
 }
 
-function remember(kind, p, value) {
+function remember(kind, p, index, value) {
   if (!P.values) return;
-  if (kind === "axis") P.values.axis[String(p.number)] = value; else P.values.global[`${p.bank}:${p.number}`] = value;
+  if (kind === "axis") { if (index === P.axis && !P.loading) P.values.axis[String(p.number)] = value; }
+  else P.values.global[`${index}:${p.number}`] = value;
 }
 
 function paramRows(table, params, kind, index) {
+  const module = moduleShown();
+  table.dataset.kind = kind; table.dataset.index = index; table.dataset.module = module;
   const filter = $("param-filter").value.trim().toLowerCase();
   const writableOnly = $("param-filter-writable").checked;
   const rows = [el("tr", {}, ...["#", "name", "value", "unit", "range", "access", "EEPROM"].map(h => el("th", {}, h)))];
@@ -97,42 +121,64 @@ function paramRows(table, params, kind, index) {
     if (filter && !p.name.includes(filter) && !p.title.toLowerCase().includes(filter) && String(p.number) !== filter) continue;
     const buttons = el("td", {});
     const where = kind === "axis" ? index : p.bank;
+    const lock = kind === "axis" && P.loading ? {disabled: ""} : {};
     if (p.can_store) buttons.append(el("button", {id: `${cellId(kind, p)}-store`, title: `${mnemonic(kind, true)} ${p.number}, ${where}`,
-                                                  onclick: () => storeParam(kind, p, index, false)}, "store"));
+                                                  ...lock, onclick: () => storeParam(kind, p, where, module, false)}, "store"));
     if (p.can_restore) buttons.append(el("button", {id: `${cellId(kind, p)}-restore`, title: `${mnemonic(kind, false, true)} ${p.number}, ${where}`,
-                                                    onclick: () => storeParam(kind, p, index, true)}, "restore"));
-    rows.push(el("tr", {class: p.writable ? "" : "ro"}, el("td", {class: "num"}, `${p.number}`),
-      el("td", {title: p.description || p.title}, p.title), valueCell(kind, p, index), el("td", {}, p.unit),
+                                                    ...lock, onclick: () => storeParam(kind, p, where, module, true)}, "restore"));
+    rows.push(el("tr", {class: p.writable ? "" : "ro", "data-kind": kind, "data-index": where, "data-module": module},
+      el("td", {class: "num"}, `${p.number}`),
+      el("td", {title: p.description || p.title}, p.title), valueCell(kind, p, where, module), el("td", {}, p.unit),
       el("td", {}, rangeText(p)), el("td", {}, p.access), buttons));
   }
   table.replaceChildren(...rows);
 }
 
-async function storeParam(kind, p, index, restore) {
-  const where = kind === "axis" ? index : p.bank;
+async function storeParam(kind, p, where, module, restore) {
+  const refused = notShown(kind, where, module);
+  if (refused) { log(refused, "err"); return; }
   log(`> ${mnemonic(kind, !restore, restore)} ${p.number}, ${where}`, "req");
   try {
-    await api("api/params/store", {kind, number: p.number, index: where, restore});
+    await api("api/params/store", {kind, number: p.number, index: where, restore, module});
     log(`  ${restore ? "restored" : "stored"} ${p.name}`, "ok");
     if (restore) refresh();
   } catch (e) { log(`  ${e.message}`, "err"); }
 }
 
-async function loadParams() {
-  const axis = axisNow();
+// The axis table of the axis chosen (and the global tables the first time and on Reload): the
+// axis table shown turns read-only at once and stays so until the values of that axis arrive (a
+// later choice wins over an answer still on its way).
+async function loadParams(withGlobals = false) {
+  const axis = axisNow(), seq = ++P.loadSeq;
+  setLoading(true, axis);
   try {
-    const [a, g] = await Promise.all([api(`api/params/axis/${axis}`), api("api/params/global")]);
-    P.axisParams = a.params; P.globalParams = g.params;
+    const [a, g] = await Promise.all([api(`api/params/axis/${axis}`),
+      withGlobals || !P.globalParams ? api("api/params/global") : {params: P.globalParams}]);
+    if (seq !== P.loadSeq || a.axis !== axisNow()) return;  // another axis was chosen meanwhile
+    P.axisParams = a.params; P.globalParams = g.params; P.axis = a.axis;
     P.values = {axis: {}, global: {}};
     for (const p of a.params) P.values.axis[String(p.number)] = p.value;
     for (const p of g.params) P.values.global[`${p.bank}:${p.number}`] = p.value;
+    setLoading(false, a.axis);
     renderParams();
-  } catch (e) { log(e.message, "err"); }
+  } catch (e) {
+    log(e.message, "err");
+    if (seq === P.loadSeq && P.axis !== null) { $("param-axis").value = String(P.axis); setLoading(false, P.axis); }
+  }
+}
+
+function setLoading(on, axis) {
+  P.loading = on;
+  const table = $("param-axis-table");
+  table.classList.toggle("loading", on);
+  if (on) table.dataset.loading = String(axis); else delete table.dataset.loading;
+  for (const node of table.querySelectorAll("input, button")) node.disabled = on;
+  $("param-axis-title").textContent = on ? `Axis parameters: reading axis ${axis} …` : `Axis parameters of axis ${axis}`;
 }
 
 function renderParams() {
   if (!P.axisParams) return;
-  paramRows($("param-axis-table"), P.axisParams, "axis", axisNow());
+  paramRows($("param-axis-table"), P.axisParams, "axis", P.axis);
   const banks = [...new Set(P.globalParams.map(p => p.bank))].sort((a, b) => a - b);
   $("param-global-tables").replaceChildren(...banks.flatMap(b => {
     const table = el("table", {id: `param-global-table-${b}`, class: "params"});
@@ -161,12 +207,12 @@ function showValue(id, value) {
 }
 
 async function refresh() {
-  if (P.busy || !P.axisParams) return;
+  if (P.busy || !P.axisParams || P.loading) return;
   P.busy = true;
-  const axis = axisNow();
+  const axis = P.axis;
   try {
     const r = await api(`api/params/values/${axis}`);
-    if (r.axis !== axisNow()) return;  // the axis changed meanwhile
+    if (r.axis !== P.axis || P.loading) return;  // another axis is being read meanwhile
     for (const [n, v] of Object.entries(r.values.axis)) showValue(`param-axis-${n}`, v);
     for (const [k, v] of Object.entries(r.values.global)) showValue(`param-global-${k.replace(":", "-")}`, v);
     P.values = r.values;
@@ -259,15 +305,15 @@ OpenTMCL.registerView("parameters", {
     root.innerHTML = MARKUP;
     const sel = $("param-axis");
     for (let i = 0; i < (ctx.overview ? ctx.overview.axes : 0); i++) sel.append(el("option", {value: i}, `${i}`));
-    sel.addEventListener("change", loadParams);
-    $("btn-params-reload").addEventListener("click", loadParams);
+    sel.addEventListener("change", () => loadParams());
+    $("btn-params-reload").addEventListener("click", () => loadParams(true));
     $("param-live").addEventListener("change", startLive);
     $("param-filter").addEventListener("input", renderParams);
     $("param-filter-writable").addEventListener("change", renderParams);
     $("btn-params-export-json").addEventListener("click", () => download("json"));
     $("btn-params-export-toml").addEventListener("click", () => download("toml"));
     $("param-import").addEventListener("change", ev => { importFile(ev.target.files[0]); ev.target.value = ""; });
-    loadParams();
+    loadParams(true);
   },
   show() { if (P.axisParams) refresh(); startLive(); },
   hide() { stopLive(); },

@@ -19,7 +19,7 @@ function panel() {
     el("h2", {}, "Modules on the link"),
     el("div", {class: "toolbar"},
       el("label", {}, "addresses ", num("scan-first", 1, 1, 255, 1), " … ", num("scan-last", 16, 1, 255, 1)),
-      el("label", {}, "time-out per address ", num("scan-timeout", 0.1, 0.01, 2, 0.01), " s"),
+      el("label", {}, "time-out per address ", num("scan-timeout", 0.1, 0.01, 0.5, 0.01), " s"),
       el("span", {id: "scan-bauds"}),
       el("button", {id: "btn-scan", onclick: start}, "Scan"),
       el("button", {id: "btn-scan-cancel", onclick: cancel, disabled: ""}, "Cancel"),
