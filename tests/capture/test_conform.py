@@ -40,7 +40,7 @@ def stood(url: str) -> str:
     vm.advance(10)
     standby = str(vm.request(6, 180, 0, 0).value)
     deadline = time.monotonic() + 30
-    while cli("send", "GAP 180, 0", "--to", url).stdout.strip() != standby:
+    while cli("send", "GAP 180, 0", "--plain", "--to", url).stdout.strip() != standby:
         assert time.monotonic() < deadline, "the served module never reached its standby current"
     return url
 
