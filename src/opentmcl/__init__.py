@@ -26,7 +26,7 @@ from .host import (
 )
 
 if TYPE_CHECKING:
-    from .capture import replay
+    from .capture.replay import replay  # the function (the package also has a submodule of that name)
     from .firmware.vm import VirtualModule
 
 __version__: str

@@ -25,6 +25,7 @@ from ..limits import InputTooLarge, read_bytes, size_text
 from .bounds import AXES_MAX, NESTING_MAX, excess, too_deep
 from .names import compact
 from .profile import CAPABILITY_VALUES, STORABLE_USER_VARIABLES, USER_VARIABLES, RawProfile
+from .state import snapshot_errors
 
 MAX_FILE_BYTES = 1024 * 1024
 """Largest profile file read (the built-in ones are about 60 kB)."""
@@ -41,7 +42,8 @@ _INT_FIELDS = ("number", "bank", "port", "min", "max", "default")
 _VALUE_FIELDS = ("min", "max", "default")   # a 32-bit value of a reply, signed or unsigned
 INT32_MIN, UINT32 = -(1 << 31), (1 << 32) - 1
 _STR_FIELDS = ("name", "kind", "access", "title", "unit", "description", "engine")
-_TOP = {"extends", "module", "remove", *_TABLES}
+_TOP = {"extends", "module", "remove", "snapshot", *_TABLES}
+"""`snapshot`: state values read by `profile probe` (modules/state.py); not inherited, no effect on the module."""
 _FILE_INDEX = "_file_index"  # of a keyless entry after merging: its index in the user's file
 
 
@@ -146,6 +148,8 @@ def merge(base: RawProfile, child: RawProfile, where: str = "") -> tuple[RawProf
 def validate(data: RawProfile) -> list[str]:
     """Schema errors of a resolved profile dict, one line each with its key path."""
     errors = [f"{key}: unknown key (a profile has {', '.join(sorted(_TOP))})" for key in data if key not in _TOP]
+    if "snapshot" in data:
+        errors += snapshot_errors(data["snapshot"])
     m = data.get("module")
     if not isinstance(m, dict):
         return errors + ["module: missing table [module]"]
@@ -380,6 +384,8 @@ def resolve(path: str | Path, builtin: Callable[[str], RawProfile], _depth: int 
     for key in data:
         if key not in _TOP:
             errors.append(f"{path}: {key}: unknown key (a profile has {', '.join(sorted(_TOP))})")
+    if "snapshot" in data:   # the file's own state values: not merged into the module
+        errors += [f"{path}: {line}" for line in snapshot_errors(data["snapshot"])]
     if errors:  # with the schema errors of the rest: every error at once, not in rounds
         raise ProfileError(errors + [f"{path}: {line}" for line in validate(merged)])
     if not data.get("module", {}).get("aliases"):
