@@ -351,7 +351,8 @@ async function mountCharts(root, ctx) {
       const chart = addChart({source: first, axes: [0]}) || addChart({source: "ws:position", axes: [0]});
       if (chart) {
         save(); resubscribe();
-        chart.node.scrollIntoView({block: "nearest"});  // a new chart below the fold comes into view (issue 31 item 6)
+        // a new chart below the fold comes into view (issue 31 item 6), once uPlot has laid out its legend
+        requestAnimationFrame(() => requestAnimationFrame(() => chart.node.scrollIntoView({block: "nearest"})));
       }
     });
     ctx.onSamples(onSamples);

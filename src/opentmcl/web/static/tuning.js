@@ -9,7 +9,7 @@
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
 const POLL_MS = 250, KEEP = 400;       // samples fetched 4 times a second; the last 400 (16 s) charted
-const CHECK_SECONDS = 5;              // the false-stall check watches this long
+const CHECK_SECONDS = 5;              // the false-stall check watches this long, unless changed on the page
 // coolStep's fields by their TMC chip names, with the TMCM-6212 manual 4.1 / PD86-1180 5 parameters.
 const COOLSTEP = [
   {name: "SEMIN", number: 172, meaning: v => v === 0 ? "0: coolStep off" : `lower stallGuard2 threshold ${v * 32} (AP172 × 32): below it the current rises`},
@@ -72,7 +72,8 @@ function markup(ov) {
           el("li", {}, el("b", {}, "Stop on stall: "), "set AP 181 below the working speed, so that the module stops the axis when the value reaches 0 there. ",
             el("button", {id: "sg-stop-half", onclick: () => useHalfSpeed()}, "AP 181 = half the working speed")),
           el("li", {}, el("b", {}, "Check for false stalls: "), "without the load, start from standstill and run at the working speed; no stall may appear. ",
-            el("button", {id: "sg-check", onclick: () => falseStallCheck()}, `Check for ${CHECK_SECONDS} s`),
+            el("button", {id: "sg-check", onclick: () => falseStallCheck()}, "Check"), " for ",
+            el("input", {id: "sg-check-seconds", type: "number", min: 1, max: 600, step: 1, value: CHECK_SECONDS, class: "small"}), " s",
             " ", el("span", {id: "sg-check-result"}, "")))),
       el("div", {class: "tool-panel", id: "cs-panel"},
         el("h3", {}, "coolStep"),
@@ -196,23 +197,25 @@ async function falseStallCheck() {
   setStall(false);
   const out = $("sg-check-result");
   out.className = ""; out.textContent = "checking…";
-  await OpenTMCL.send(`MST ${T.axis}`);
+  const seconds = Math.max(1, Math.min(600, Number($("sg-check-seconds").value) || CHECK_SECONDS));
+  await OpenTMCL.send(`MST ${T.axis}`);   // from standstill; a stall flag of before is read (and cleared) meanwhile
+  await new Promise(resolve => setTimeout(resolve, 3 * POLL_MS));
+  T.check = {until: Infinity, axis: T.axis, seq: T.since, stalled: false};
   await OpenTMCL.send(`ROR ${T.axis}, ${raw}`);
-  T.check = {until: performance.now() + CHECK_SECONDS * 1000, axis: T.axis};
+  T.check.until = performance.now() + seconds * 1000;
   await new Promise(resolve => {
     const tick = () => {
-      if (!T.check) { resolve(); return; }
-      if (T.stall || performance.now() > T.check.until) { resolve(); return; }
+      if (!T.check || T.check.stalled || performance.now() > T.check.until) { resolve(); return; }
       setTimeout(tick, 100);
     };
     tick();
   });
-  const stalled = T.stall;
+  const stalled = T.check ? T.check.stalled : false;
   T.check = null;
   await OpenTMCL.send(`MST ${T.axis}`);
   out.className = stalled ? "err" : "ok";
   out.textContent = stalled ? "false stall: raise the threshold (AP 174) by one and check again"
-                            : `no stall in ${CHECK_SECONDS} s at the working speed`;
+                            : `no stall in ${seconds} s at the working speed`;
   log(`stallGuard2 check on axis ${T.axis}: ${out.textContent}`, stalled ? "err" : "ok");
 }
 
@@ -301,7 +304,10 @@ async function poll() {
       const sample = {t: row[1], sg: get(206), v: get(3), cs: get(180), run: get(6), flag: get(207) ?? get(208)};
       T.rows.push(sample);
       const flagBit = stallNumber() === 207 ? sample.flag & 1 : (sample.flag & 1) && sample.v;
-      if (flagBit) setStall(true);
+      if (flagBit) {
+        setStall(true);
+        if (T.check && row[0] > T.check.seq) T.check.stalled = true;
+      }
     }
     if (T.rows.length > KEEP) T.rows.splice(0, T.rows.length - KEEP);
     draw();
