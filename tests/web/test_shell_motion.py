@@ -115,7 +115,7 @@ def test_velocity_range_is_the_target_speed_range(motion):
 def test_velocity_unit_follows_unit_mode(motion):
     """TMCM-6212 manual 4.1 AP255 "Unit mode": 1 (default) pps, 0 "the internal units of the TMC5130
     are used directly". The velocity field stays in pps (issue 31: physical units), and the module
-    value beside it says the module now takes internal units (16 MHz / 2^24 pps each, FACTS.md)."""
+    value beside it says the module now takes internal units (16 MHz / 2^24 pps each, docs/sources.md)."""
     page, six, _ = motion
     assert page.inner_text("#motion-5-unit") == "pps" and page.inner_text("#motion-5-velocity-raw") == ""
     six.client.request(5, 255, 5, 0)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 
 from ..host import TmclError
+from ..lang.assembler import Program
 from ..lang.binfile import Instruction
 from ..lang.disassembler import disassemble
 from ..protocol.opcodes import format_instruction
@@ -62,8 +63,7 @@ def read_back(d: Dashboard, editor_source: str) -> dict[str, object]:
     editor's program assembles to exactly them, "editor_ok", "differences": [{address, line,
     editor, module}], "diff": unified diff lines of the two disassemblies}."""
     stored = read_memory(d)
-    result = d.assemble(editor_source) if editor_source.strip() else {"ok": False}
-    prog = result.get("_program")
+    prog: Program | None = d.assemble(editor_source).get("_program") if editor_source.strip() else None
     mine: list[Instruction] = list(prog.instructions) if prog is not None else []
     same = prog is not None and [tuple(i) for i in mine] == [tuple(i) for i in stored]
     labels = dict(prog.labels) if same and prog is not None else None

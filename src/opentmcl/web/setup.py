@@ -28,33 +28,40 @@ class Item:
     number: int  # parameter number or port
 
 
+def _item(x: object) -> Item:
+    """One {kind, index, number} of the page, its types checked."""
+    kind, index, number = (x.get(k) for k in ("kind", "index", "number")) if isinstance(x, dict) else (None,) * 3
+    if kind not in ("axis", "global", "io") or not isinstance(index, int) or not isinstance(number, int) \
+            or isinstance(index, bool) or isinstance(number, bool):
+        raise DashboardError(f"a value is {{kind: axis|global|io, index, number}}, not {str(x)[:80]}")
+    return Item(str(kind), index, number)
+
+
+def _allowed(d: Dashboard, it: Item, writing: bool) -> bool:
+    """Whether the profile lets `it` be read (GAP/GGP/GIO) or written (SAP/SGP)."""
+    p = d.profile
+    if it.kind == "axis":
+        d.check_axis(it.index)
+        q = p.axis_parameters.get(it.number)
+        return q is not None and (q.writable if writing else q.readable)
+    if it.kind == "global":
+        g = p.global_parameters.get((it.index, it.number))
+        return g is not None and (g.writable if writing else g.readable)
+    io = p.io.get((it.index, it.number))
+    return not writing and io is not None and "R" in io.access
+
+
 def items(d: Dashboard, raw: object, *, writing: bool = False) -> list[Item]:
     """[{kind, index, number}, ...] checked against the profile (readable; writable when `writing`)."""
     if not isinstance(raw, list) or not raw or len(raw) > MAX_ITEMS:
         raise DashboardError(f"give 1..{MAX_ITEMS} values as [{{kind, index, number}}, ...]")
     out = []
     for x in raw:
-        kind, index, number = (x.get(k) for k in ("kind", "index", "number")) if isinstance(x, dict) else (None,) * 3
-        if kind not in ("axis", "global", "io") or not all(
-                isinstance(v, int) and not isinstance(v, bool) for v in (index, number)):
-            raise DashboardError(f"a value is {{kind: axis|global|io, index, number}}, not {str(x)[:80]}")
-        assert isinstance(index, int) and isinstance(number, int)
-        p = d.profile
-        if kind == "axis":
-            d.check_axis(index)
-            q = p.axis_parameters.get(number)
-            ok = q is not None and (q.writable if writing else q.readable)
-        elif kind == "global":
-            g = p.global_parameters.get((index, number))
-            ok = g is not None and (g.writable if writing else g.readable)
-        else:
-            io = p.io.get((index, number))
-            ok = not writing and io is not None and "R" in io.access
-        if not ok:
-            what = "written" if writing else "read"
-            raise DashboardError(f"{kind} parameter {number} ({'axis' if kind == 'axis' else 'bank'} {index}) "
-                                 f"cannot be {what} on {p.name}")
-        out.append(Item(str(kind), index, number))
+        it = _item(x)
+        if not _allowed(d, it, writing):
+            raise DashboardError(f"{it.kind} parameter {it.number} ({'axis' if it.kind == 'axis' else 'bank'} "
+                                 f"{it.index}) cannot be {'written' if writing else 'read'} on {d.profile.name}")
+        out.append(it)
     return out
 
 

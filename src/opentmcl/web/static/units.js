@@ -146,19 +146,20 @@ const units = {
   },
 };
 
-// The unit choice of one axis: a small form, used by the motion view (and anywhere else).
-units.chooser = function (axis, onSaved) {
+// The unit choice of one axis: a small form, used by the motion view and the wizards (`prefix`
+// keeps the ids of two forms of the same axis apart).
+units.chooser = function (axis, onSaved, prefix = "units") {
   const s = setting(axis);
-  const kind = el("select", {id: `units-${axis}-kind`, title: "units of this axis (kept with the parameter export)"},
+  const kind = el("select", {id: `${prefix}-${axis}-kind`, title: "units of this axis (kept with the parameter export)"},
     ...Object.entries(KINDS).map(([k, t]) => el("option", {value: k}, t)));
   kind.value = s.kind;
-  const name = el("input", {id: `units-${axis}-name`, value: s.name || "mm", size: 4, title: "name of the user unit"});
-  const per = el("input", {id: `units-${axis}-per-round`, type: "number", value: s.per_round || 5, step: "any", min: 0,
+  const name = el("input", {id: `${prefix}-${axis}-name`, value: s.name || "mm", size: 4, title: "name of the user unit"});
+  const per = el("input", {id: `${prefix}-${axis}-per-round`, type: "number", value: s.per_round || 5, step: "any", min: 0,
                            style: "width:70px", title: "user units per output round (e.g. the lead of a screw in mm)"});
-  const gear = el("input", {id: `units-${axis}-gear`, type: "number", value: s.gear || 1, step: "any", min: 0,
+  const gear = el("input", {id: `${prefix}-${axis}-gear`, type: "number", value: s.gear || 1, step: "any", min: 0,
                             style: "width:60px", title: "motor rounds per output round (gear ratio)"});
   const user = el("span", {class: "units-user"}, name, " ", per, " per round, gear ", gear, ":1 ");
-  const save = el("button", {id: `units-${axis}-save`, onclick: async () => {
+  const save = el("button", {id: `${prefix}-${axis}-save`, onclick: async () => {
     const v = {kind: kind.value};
     if (v.kind === "user") Object.assign(v, {name: name.value.trim(), per_round: Number(per.value), gear: Number(gear.value)});
     try { await setSetting(axis, v); if (onSaved) onSaved(); } catch (e) { log(`axis ${axis} units: ${e.message}`, "err"); }
@@ -166,6 +167,13 @@ units.chooser = function (axis, onSaved) {
   const sync = () => { user.hidden = kind.value !== "user"; };
   kind.addEventListener("change", sync);
   sync();
+  const follow = () => {  // a setting made elsewhere (another form, an imported file) shows here too
+    if (!kind.isConnected) { U.subs = U.subs.filter(cb => cb !== follow); return; }
+    const now = setting(axis);
+    if (document.activeElement !== kind) { kind.value = now.kind; sync(); }
+    if (now.kind === "user") { name.value = now.name; per.value = now.per_round; gear.value = now.gear; }
+  };
+  U.subs.push(follow);
   return el("span", {class: "units-chooser"}, "units ", kind, " ", user, save);
 };
 

@@ -138,7 +138,7 @@ async function cancel() {
       log(`  ${w.spec.title} cancelled: ${back.length} value(s) written back`, "ok");
       await units().reload();
     } catch (e) { log(`  ${e.message}`, "err"); return; }
-  } else log(`${w.spec.title} cancelled: nothing was sent`, "ok");
+  } else log(`${w.spec.title} cancelled: ${w.applied ? "nothing to write back" : "nothing was sent"}`, "ok");
   close();
 }
 
@@ -224,7 +224,7 @@ function motorSpec() {
         const perRound = 2 ** n * w.m.fullsteps;
         const v = u.velocity(a, w.values[`axis:${a}:4`]), acc = u.accel(a, w.values[`axis:${a}:5`]);
         return [
-          el("p", {}, u.chooser(a, () => render())),
+          el("p", {}, u.chooser(a, () => render(), "wiz-units")),
           el("p", {class: "hint"}, `${perRound} microsteps per round (${w.m.fullsteps} full steps × ${2 ** n}); ` +
             "pps = rps × full steps × microsteps (TMCM-6212 manual 6.5)"),
           field("wiz-velocity", "maximum positioning speed (AP 4)", w.m.velocity ?? (v === null ? "" : fmt(v)), {type: "number", step: "any", min: 0}, u.velocityUnit(a)),
@@ -309,7 +309,7 @@ function referenceSpec() {
       }},
       {title: "Speeds", body: w => {
         const u = units();
-        return [el("p", {}, u.chooser(a, () => render())),
+        return [el("p", {}, u.chooser(a, () => render(), "wiz-units")),
           field("wiz-search-speed", "search speed (AP 194)", w.r.search ?? fmt(u.velocity(a, w.values[`axis:${a}:194`])), {type: "number", step: "any", min: 0}, u.velocityUnit(a)),
           field("wiz-switch-speed", "switch speed (AP 195)", w.r.switch ?? fmt(u.velocity(a, w.values[`axis:${a}:195`])), {type: "number", step: "any", min: 0}, u.velocityUnit(a)),
           el("p", {class: "hint"}, `${W.params[194].description} ${W.params[195].description}`)];
