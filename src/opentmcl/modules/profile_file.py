@@ -222,6 +222,29 @@ def _check_extras(m: RawProfile) -> list[str]:
                                                                             ("max", UINT32)))):
         errors.append("module.pullups: expected a table {bank = 0..255, port = 0..255, max = 0.."
                       f"{UINT32}}}, got {pullups!r}"[:200])
+    return errors + _check_dashboard_extras(m)
+
+
+def _check_dashboard_extras(m: RawProfile) -> list[str]:
+    """The [module] keys the dashboard reads (docs/profiles.md "For the dashboard"): `current_scale`,
+    `reference_modes`, `analog_full_scale_volts`."""
+    errors = []
+    scale = m.get("current_scale")
+    if scale is not None:
+        ok = isinstance(scale, dict) and _is_int(scale.get("rms_ma")) and 0 < scale["rms_ma"] <= 1_000_000 \
+            and _is_int(scale.get("peak_ma", 1)) and 0 < scale.get("peak_ma", 1) <= 1_000_000 \
+            and scale.get("steps", 0) in (0, 32) and isinstance(scale.get("source", ""), str) \
+            and set(scale) <= {"rms_ma", "peak_ma", "steps", "source"}
+        if not ok:
+            errors.append("module.current_scale: expected a table {rms_ma = 1..1000000, peak_ma = 1..1000000, "
+                          f"steps = 0 or 32, source = text}}, got {scale!r}"[:200])
+    modes = m.get("reference_modes")
+    if modes is not None and not (isinstance(modes, list) and 0 < len(modes) <= 63
+                                  and all(isinstance(t, str) and 0 < len(t) <= 200 for t in modes)):
+        errors.append(f"module.reference_modes: expected a list of 1..63 texts (mode 1 first), got {modes!r}"[:200])
+    volts = m.get("analog_full_scale_volts")
+    if volts is not None and not (type(volts) in (int, float) and 0 < volts <= 1000):
+        errors.append(f"module.analog_full_scale_volts: expected a number of volts 0 < v <= 1000, got {volts!r}")
     return errors
 
 
