@@ -105,7 +105,7 @@ class Twin:
     """Runs one `VirtualModule` through the slots of a capture (see the module doc)."""
 
     def __init__(self, vm, policy: str, tau: float, trace_axes: set[int], idle: float = 0.0) -> None:
-        from ..firmware.commands import execute  # the firmware loads when a replay runs, not on import
+        from ..firmware.table import execute  # the firmware loads when a replay runs, not on import
 
         self.execute = execute
         self.vm, self.policy, self.tau, self.idle = vm, policy, tau, idle
