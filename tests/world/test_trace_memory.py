@@ -14,9 +14,7 @@ import pytest
 
 from opentmcl import VirtualModule
 from opentmcl.columns import Column
-from opentmcl.plot.trace import RECORDED
-from opentmcl.plot.trace import Trace as PlotTrace
-from opentmcl.trace import Trace, TraceFull
+from opentmcl.trace import HOST_CHANNELS, Trace, TraceFull
 
 ROWS = 2000
 
@@ -56,10 +54,10 @@ def test_plot_trace_of_six_axes_stays_under_200_bytes_per_sample():
     axes = list(range(6))
 
     def fill():
-        t = PlotTrace(axes)
+        t = Trace(axes)
         for i in range(ROWS):
             t.add(i * 0.01, {(a, ch): (i * 37 + a if ch == "position" else float(i % 500) if ch == "velocity"
-                                       else i % 2) for a in axes for ch in RECORDED})
+                                       else i % 2) for a in axes for ch in HOST_CHANNELS})
         return t
 
     per_sample = held_bytes(fill) / ROWS

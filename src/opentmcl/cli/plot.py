@@ -124,7 +124,7 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
 def _check_duration(args: argparse.Namespace) -> None:
     """Without --seconds a program's length is derived and capped to fit: only the interval counts."""
     from ..extras import MissingExtra, require
-    from ..plot.trace import check_duration
+    from ..plot.recording import check_duration
 
     derived = args.seconds is None and Path(args.file).suffix.lower() in PROGRAM_SUFFIXES
     try:
