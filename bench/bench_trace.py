@@ -66,11 +66,13 @@ def _turn(vm: VirtualModule, i: int) -> None:
             vm.request(4, 0, a, 0 if (i // TURN) % 2 else 200000)
 
 
-def _record(trace: Trace, vm: VirtualModule, rows: int) -> None:
+def _record(trace: Trace, vm: VirtualModule, rows: int) -> Trace:
     for i in range(rows):
         _turn(vm, i)
         vm.advance(INTERVAL)
         trace.sample(vm)
+    assert trace.nbytes()      # (the last samples, at most FLUSH_ROWS, go into the columns too)
+    return trace
 
 
 # --- the cost of a sample ---------------------------------------------------------------------------
@@ -184,8 +186,12 @@ def plot(rows: int) -> dict[str, float]:
 
     def held(n: int):   # what a recording of n samples keeps, with the module and client around it
         vm = VirtualModule("TMCM-6212", scenario=SCENARIO)
-        return _traced(lambda: run_virtual(program, axes=axes, seconds=(n - 1) * INTERVAL,
-                                           interval=INTERVAL, vm=vm, stop_when_idle=False))
+        def build() -> Trace:
+            trace = run_virtual(program, axes=axes, seconds=(n - 1) * INTERVAL, interval=INTERVAL, vm=vm,
+                                stop_when_idle=False)
+            assert trace.nbytes()  # (the last samples, at most FLUSH_ROWS, go into the columns too)
+            return trace
+        return _traced(build)
 
     (_, short_bytes), (trace, new_bytes) = held(rows // 2), held(rows)
     new_bytes = (new_bytes - short_bytes) * 2      # the cost of the samples alone: 2 x (n - n/2)

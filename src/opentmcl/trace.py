@@ -28,7 +28,7 @@ import io
 import math
 import os
 from array import array
-from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, overload
 
@@ -77,6 +77,7 @@ SHORT = {"position": "pos", "target": "target", "velocity": "vel", "target_reach
 LONG = {short: name for name, short in SHORT.items()}
 MAX_ROWS = 1_000_000     # a trace's samples: about 2.8 hours at 10 ms; `run` takes at most this many looks
 MAX_SAMPLES = 400_000    # a longer recording or CSV trace is refused (memory): 4000 s at 10 ms
+FLUSH_ROWS = 128         # samples kept as a list before they go into the columns together
 ORIGIN, HARD_STOP = "origin", "hard_stop"
 KINDS = (ORIGIN, HARD_STOP)
 LAYOUTS = ("trace", "table")
@@ -278,8 +279,9 @@ class Trace:
         self.channels: tuple[str, ...] | None = None if channels is None else _known(channels)
         self.max_rows = max_rows
         self.time: array[float] = array("d")
-        self.data: dict[Key, Column] = {}
-        self._appends: list[Callable[[float | int | None], None]] = []
+        self._data: dict[Key, Column] = {}
+        self._columns: list[Column] = []         # the columns in the order of a sample's values
+        self._pending: list[float | int | None] = []   # the values of the samples not yet in the columns
         self._reads: WorldReads | None = None
 
     def __len__(self) -> int:
@@ -291,27 +293,48 @@ class Trace:
         if self.channels is not None and self.channels != channels:
             raise ValueError(f"this trace keeps the channels {', '.join(self.channels)}; a sample of "
                              f"{', '.join(channels)} does not fit")
-        if not self.data:
+        if not self._data:
             self.channels = channels
-            self.data = {(ax, ch): Column() for ax in self.axes for ch in channels}
-            self._appends = [col.append for col in self.data.values()]
+            self._data = {(ax, ch): Column() for ax in self.axes for ch in channels}
+            self._columns = list(self._data.values())
 
     def _room(self) -> None:
         if len(self.time) >= self.max_rows:
             raise TraceFull(f"the trace holds {self.max_rows} rows already (the limit)")
 
+    @property
+    def data(self) -> dict[Key, Column]:
+        """(axis, channel) -> its column of values."""
+        if self._pending:
+            self._flush()
+        return self._data
+
+    def _flush(self) -> None:
+        """The pending samples into the columns, a column at a time (Column.extend)."""
+        pending, width = self._pending, len(self._columns)
+        for i, col in enumerate(self._columns):
+            col.extend(pending[i::width])
+        pending.clear()
+
+    def _keep(self, values: Iterable[float | int | None]) -> None:
+        pending = self._pending
+        pending += values
+        if len(pending) >= len(self._columns) * FLUSH_ROWS:
+            self._flush()
+
     def add(self, t: float, values: Mapping[Key, float | int | None]) -> None:
         """One sample at time `t`: (axis, channel) -> value; what `values` lacks is None."""
-        if not self.data:
+        if not self._data:
             self._open(self.channels or HOST_CHANNELS)
-        self.extend_row(t, [values.get(key) for key in self.data])
+        self.extend_row(t, [values.get(key) for key in self._data])
 
     def extend_row(self, t: float, values: Sequence[float | int | None]) -> None:
-        """One sample at time `t`: the values of `self.data`'s keys, in their order."""
+        """One sample at time `t`: the values of `data`'s keys, in their order."""
+        if len(values) != len(self._columns):
+            raise ValueError(f"a sample of this trace has {len(self._columns)} values, not {len(values)}")
         self._room()
         self.time.append(float(t))
-        for append, v in zip(self._appends, values, strict=True):
-            append(v)
+        self._keep(values)
 
     def sample(self, vm: VirtualModule) -> None:
         """Read one sample of WORLD_CHANNELS from the virtual module at its present time (no time
@@ -322,13 +345,12 @@ class Trace:
         self._room()
         values = reads.read()
         self.time.append(round(vm.now / CLOCK_HZ, 9))
-        for append, v in zip(self._appends, values, strict=True):
-            append(v)
+        self._keep(values)
 
     def _bind(self, vm: VirtualModule) -> WorldReads:
         """The reads of `vm`; at the first sample the axes, channels and units of the module."""
         n = len(vm.axes)
-        if self.all_axes and not self.data:
+        if self.all_axes and not self._data:
             self.axes = list(range(n))
         bad = [a for a in self.axes if not 0 <= a < n]
         if bad:
