@@ -423,18 +423,19 @@ class Trace:
         """The samples as dicts (a read-only sequence): values as the module answered them."""
         return _Rows(self)
 
+    def cells(self) -> tuple[list[str], list[list[str]]]:
+        """The row names and the rows as text (time to the millisecond, "" for None)."""
+        rows = self.rows
+        return rows.names, [["" if v is None else f"{v:.3f}" if n == "time" else str(v) for n, v in r.items()]
+                            for r in rows]
+
     def table(self) -> str:
         """The rows as an aligned text table."""
-        rows = self.rows
-        if not rows:
+        names, cells = self.cells()
+        if not cells:
             return ""
-        cols = rows.names
-        cells = [[("" if r[c] is None else (f"{r[c]:.3f}" if c == "time" else str(r[c]))) for c in cols]
-                 for r in rows]
-        widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
-        lines = [" ".join(c.rjust(w) for c, w in zip(cols, widths, strict=True))]
-        lines += [" ".join(v.rjust(w) for v, w in zip(row, widths, strict=True)) for row in cells]
-        return "\n".join(lines)
+        widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(names)]
+        return "\n".join(" ".join(v.rjust(w) for v, w in zip(row, widths, strict=True)) for row in [names, *cells])
 
     # --- CSV --------------------------------------------------------------------------------------
     @overload
@@ -452,35 +453,35 @@ class Trace:
         and ``<channel>_<axis>`` with velocity in pps (`from_csv` and `opentmcl plot` read it).
         layout "table": ``time`` and ``pos<axis>``, ``vel<axis>``, ... as the module answered
         (`opentmcl run --csv`, `demo --csv`)."""
-        if layout not in LAYOUTS:
+        write = {"trace": self._write_file, "table": self._write_table}.get(layout)
+        if write is None:
             raise ValueError(f"a CSV layout is one of {', '.join(LAYOUTS)}, not {layout!r}")
         if target is None:
             buf = io.StringIO()
-            self._write(buf, layout)
+            write(buf)
             return buf.getvalue()
         if isinstance(target, io.TextIOBase):
-            self._write(target, layout)
+            write(target)
             return None
         with open_atomic(target, text=True) as fh:   # a failed or killed write keeps the old file
-            self._write(fh, layout)
+            write(fh)
         return None
 
-    def _write(self, fh: Any, layout: str) -> None:
+    def _write_table(self, fh: Any) -> None:
+        names = self.row_keys()
         w = csv.writer(fh, lineterminator="\n")
-        if layout == "table":
-            rows = self.row_keys()
-            w.writerow(["time"] + [name for name, _ in rows])
-            w.writerows([t, *("" if v is None else v for v in values)]   # streamed, not a list
-                        for t, *values in zip(self.time, *(self.data[key] for _, key in rows), strict=True))
-            return
-        for line in [f"# module={self.module}"] + [f"# microsteps_{ax}={u},{f}" for ax, (u, f)
-                                                    in self.microsteps.items()] + meta_lines(self):
-            fh.write(line + "\n")
+        w.writerow(["time"] + [name for name, _ in names])
+        w.writerows([t, *("" if v is None else v for v in values)]   # streamed, not a list
+                    for t, *values in zip(self.time, *(self.data[key] for _, key in names), strict=True))
+
+    def _write_file(self, fh: Any) -> None:
+        meta = [f"# module={self.module}"] + [f"# microsteps_{ax}={u},{f}" for ax, (u, f) in self.microsteps.items()]
+        fh.writelines(line + "\n" for line in meta + meta_lines(self))
         keys = [(ax, ch) for ax in self.axes for ch in STORED if (ax, ch) in self.data]
+        w = csv.writer(fh, lineterminator="\n")
         w.writerow(["time_s"] + [f"{ch}_{ax}" for ax, ch in keys])
-        columns = [self._written(key) for key in keys]
         w.writerows([f"{t:.6f}", *("" if v is None else _fmt(v) for v in values)]
-                    for t, *values in zip(self.time, *columns, strict=True))
+                    for t, *values in zip(self.time, *map(self._written, keys), strict=True))
 
     def _written(self, key: Key) -> Iterable[float | int | None]:
         """A column as the trace file has it: velocity in pps."""

@@ -119,10 +119,7 @@ def _world_demo(args: argparse.Namespace) -> int:
 
         print(f"Virtual {vm.profile.name} in a physical world, virtual time; scenario:")
         print(f"  {args.scenario}")
-        rows = trace.rows
-        header = rows.names
-        cells = [["" if r[c] is None else (f"{r[c]:.3f}" if c == "time" else str(r[c])) for c in header]
-                 for r in rows]
+        header, cells = trace.cells()
         group = len(trace.channels or ()) or 1
         print("\n".join(fit(header, cells, width(), group=group)))   # an axis's columns together
     return 0
