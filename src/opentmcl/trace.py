@@ -214,7 +214,7 @@ class WorldReads:
             current = drive.current
             if drive_read:
                 current.update(aw)
-            values = [position(), velocity(), left, right, home, drive.load_value(),
+            values = [position(), velocity(), left, right, home, drive.load_value(),   # WORLD_CHANNELS
                       current.actual_scale(aw), encoder.position(), rotor.phys]
             for i in missing:
                 values[i] = None
@@ -326,9 +326,9 @@ class Trace:
         """One sample at time `t`: (axis, channel) -> value; what `values` lacks is None."""
         if not self._data:
             self._open(self.channels or HOST_CHANNELS)
-        self.extend_row(t, [values.get(key) for key in self._data])
+        self.add_row(t, [values.get(key) for key in self._data])
 
-    def extend_row(self, t: float, values: Sequence[float | int | None]) -> None:
+    def add_row(self, t: float, values: Sequence[float | int | None]) -> None:
         """One sample at time `t`: the values of `data`'s keys, in their order."""
         if len(values) != len(self._columns):
             raise ValueError(f"a sample of this trace has {len(self._columns)} values, not {len(values)}")
@@ -349,27 +349,28 @@ class Trace:
 
     def _bind(self, vm: VirtualModule) -> WorldReads:
         """The reads of `vm`; at the first sample the axes, channels and units of the module."""
-        n = len(vm.axes)
-        if self.all_axes and not self._data:
+        n, first = len(vm.axes), not self._data
+        if self.all_axes and first:
             self.axes = list(range(n))
         bad = [a for a in self.axes if not 0 <= a < n]
         if bad:
             raise ValueError(f"{vm.profile.name} has no axis {bad[0]}")
         self._open(WORLD_CHANNELS)
-        if not self.module:
+        if first:
             self._describe(vm)
         return WorldReads(vm, self.axes)
 
     def _describe(self, vm: VirtualModule) -> None:
-        """Module name, microstep settings (AP140, AP202) and TMC429 pulse divisors (AP154)."""
-        self.module = vm.profile.name
+        """Module name, microstep settings (AP140, AP202) and TMC429 pulse divisors (AP154), unless
+        given when the trace was made."""
+        self.module = self.module or vm.profile.name
         for a in self.axes:
             axis = vm.axes[a]
             readable = axis.readable
             usteps = 1 << axis.get(140) if 140 in readable else 256
-            self.microsteps[a] = (usteps, axis.get(202) if 202 in readable else 200)
+            self.microsteps.setdefault(a, (usteps, axis.get(202) if 202 in readable else 200))
             if vm.profile.capabilities.velocity_unit == "tmc429" and 154 in readable:
-                self.pulse_div[a] = axis.get(154)
+                self.pulse_div.setdefault(a, axis.get(154))
 
     def record(self, vm: VirtualModule, seconds: float, interval: float) -> _Rows:
         """Sample now and every `interval` virtual seconds for `seconds` (advances the module)."""
@@ -580,14 +581,14 @@ def _parse_csv(lines: Iterator[str]) -> Trace:
     order = [where[key] for key in keys]
     width = len(trace.data)
     for n, row in enumerate(rows, start=2):
-        _add_row(trace, row, n, len(header), order, width)
+        _read_row(trace, row, n, len(header), order, width)
     trace.module = meta.get("module", "")
     _read_events(trace, repeated)
     _read_microsteps(trace, meta)
     return trace
 
 
-def _add_row(trace: Trace, row: list[str], n: int, fields: int, order: list[int], width: int) -> None:
+def _read_row(trace: Trace, row: list[str], n: int, fields: int, order: list[int], width: int) -> None:
     if len(row) != fields:
         raise TraceError(f"trace row {n} has {len(row)} fields, expected {fields}")
     if len(trace) >= MAX_SAMPLES:
@@ -599,7 +600,7 @@ def _add_row(trace: Trace, row: list[str], n: int, fields: int, order: list[int]
             values[i] = float(text) if text != "" else None
     except ValueError:
         raise TraceError(f"trace row {n}: not a number") from None
-    trace.extend_row(t, values)
+    trace.add_row(t, values)
 
 
 def _read_microsteps(trace: Trace, meta: dict[str, str]) -> None:
