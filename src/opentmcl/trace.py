@@ -169,6 +169,11 @@ def parse_mark(value: str) -> Mark:
 
 # --- reading an in-process module ---------------------------------------------------------------
 
+WORLD_NUMBERS = (11, 10, 9, 206, 180, 209)
+"""The world's readings of a sample, in the order of WORLD_CHANNELS (left, right, home switch, load
+value, current, encoder); a parameter the module lacks reads as 0 (`readings` answers None)."""
+
+
 class WorldReads:
     """One sample of WORLD_CHANNELS from an in-process VirtualModule: per axis what GAP answers at
     this instant (the same readers and the same parts of the axis's world that GAP reads through,
@@ -192,8 +197,8 @@ class WorldReads:
                         if CHANNELS[ch][0] is not None and CHANNELS[ch][0] not in readable)
         position = axis.reader(1) if 1 in readable else _none
         velocity = axis.reader(3) if 3 in readable else _none
-        drive_read = 180 in readable or 206 in readable   # their reads bring the current model to now
-        return position, velocity, aw, aw.rotor, aw.switches, aw.encoder, drive_read, missing
+        numbers = tuple(n if n in readable else 0 for n in WORLD_NUMBERS)
+        return position, velocity, axis, aw.rotor, numbers, missing
 
     def bound_to(self, vm: VirtualModule) -> bool:
         """Made for this module, since its last power-up."""
@@ -202,20 +207,13 @@ class WorldReads:
     def read(self) -> list[int | None]:
         """The values of one sample: per axis in the order of WORLD_CHANNELS."""
         self.scheduler.sync_for_read()
+        readings = self.vm.world.readings
         out: list[int | None] = []
         ended = False
-        for position, velocity, aw, rotor, switches, encoder, drive_read, missing in self.parts:
+        for position, velocity, axis, rotor, numbers, missing in self.parts:
             slipping = rotor.slipping
-            rotor.follow()
+            values = [position(), velocity(), *readings(axis, numbers), rotor.phys]   # WORLD_CHANNELS
             ended = ended or (slipping and not rotor.slipping)
-            switches.update()
-            left, right, home = switches.logical()
-            drive = aw.drive
-            current = drive.current
-            if drive_read:
-                current.update(aw)
-            values = [position(), velocity(), left, right, home, drive.load_value(),   # WORLD_CHANNELS
-                      current.actual_scale(aw), encoder.position(), rotor.phys]
             for i in missing:
                 values[i] = None
             out += values
