@@ -290,7 +290,7 @@ def test_a_virtual_module_answers_alike_at_hand_and_through_the_buffer(program):
 
 # --- checked once, sent again -------------------------------------------------------------------
 
-class Axis(IntEnum):
+class Motor(IntEnum):
     ZERO = 0
 
 
@@ -313,9 +313,9 @@ def test_an_int_enum_is_a_plain_int():
     """An IntEnum member is an int: it is sent as its value, before and after the plain int."""
     client = Client(InProcessTransport(VirtualModule("TMCM-6212", address=1)))
     client.request(SAP, 4, 0, 1234)
-    assert client.request(GAP, 4, Axis.ZERO).value == 1234
+    assert client.request(GAP, 4, Motor.ZERO).value == 1234
     assert client.request(GAP, 4, 0).value == 1234
-    assert client.request(GAP, 4, Axis.ZERO).value == 1234
+    assert client.request(GAP, 4, Motor.ZERO).value == 1234
 
 
 def test_the_default_address_is_read_at_each_request():

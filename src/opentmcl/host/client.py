@@ -2,10 +2,15 @@
 
 One request is in flight at a time ("Do not send the next command before
 having received the reply!", manual 3.2) unless `request_many` is asked to send
-a window of them (`Transport.window`); a lock lets threads share a client.
-Replies are matched to the request by module address and command number;
-unsolicited "target position reached" replies (status 128, command 138) that
-arrive in between are kept and handed to `wait_position_reached`.
+a window of them (`Transport.window`); the link's lock (`Transport.lock`) lets
+threads share a client. Replies are matched to the request by module address and
+command number; unsolicited "target position reached" replies (status 128,
+command 138) that arrive in between are kept and handed to `wait_position_reached`.
+
+One path for every link: a request checked once is kept ready to send; the transport
+sends it (`Transport.exchange`, which in process may hand the reply over at once);
+the first frame, when it is the plain reply asked for, is decoded at once, and
+anything else is read by the general rule (`_read_plain`, `_read_reply`).
 """
 from __future__ import annotations
 
