@@ -176,7 +176,9 @@ def polling(quick: bool = False) -> list[Figure]:
                 lambda n=axes, t=dt: poll_module(n, t, budget, batched=True)])
             what = f"polling {axes} {'axes' if axes > 1 else 'axis'} every {dt * 1000:g} ms"
             six = (axes, dt) == (6, 0.01)
-            goal = Goal(">=", 1000, text=">= 5x today (>= 1,000)") if six else ""
+            # issue 33: "six-axis polling requests per second ... the goal of 0.5" of the same host
+            # answered by the minimal handler, measured in the same run
+            goal = Goal(">=", 0.5, on_ratio=True, text=">= 0.5 of the floor host") if six else ""
             out += [
                 Figure(f"{what}: vm.handle, virtual s/wall s", handle, floor_host, goal,
                        "the same host answered by the floor"),

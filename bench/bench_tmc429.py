@@ -13,7 +13,7 @@ pulse_div = ramp_div = 0, V_MAX = 2047, A_MAX = 1000 and returns:
   run of that scenario, and the same with the plan memo emptied before every
   event (the cost of planning each phase);
 - wall milliseconds of one long ramp_mode move at a small A_MAX (first braking,
-  follow memo cleared), where the braking stretch lasts V_MAX * 256 / A_MAX ramp
+  memos cleared), where the braking stretch lasts V_MAX * 256 / A_MAX ramp
   ticks (lower is better).
 """
 from __future__ import annotations
@@ -104,7 +104,7 @@ def _engine_run(virtual_seconds: float, distance: int, cold: bool = False) -> fl
     start = time.perf_counter()
     while e.now < horizon:
         if cold:
-            tmc429._FOLLOW_MEMO.clear()
+            tmc429.clear_memos()
         t = e.next_event()
         if t is None:
             target = distance - target
@@ -121,7 +121,7 @@ def _small_a_max_move_ms(a_max: int, distance: int) -> float:
     r = Tmc429Ramp(position_bits=32)
     r.set(pulse_div=0, ramp_div=0, v_max=V_MAX, v_min=1, a_max=a_max, pmul=pmul, pdiv=pdiv)
     r.set(x_target=distance)
-    tmc429._FOLLOW_MEMO.clear()
+    tmc429.clear_memos()
     start = time.perf_counter()
     while (e := r.next_event()) is not None:
         r.advance(e)

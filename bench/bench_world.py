@@ -1,6 +1,6 @@
 """Virtual seconds per wall second in a physical world (docs/world.md): the next-event scan of
-`AxisWorld` is on this path at every event. Run: python bench/bench_world.py [--quick]
-(process time, so other load on the machine matters less)
+the axis world (`EventLookup.scan`, firmware/world_events.py) is on this path at every event.
+Run: python bench/bench_world.py [--quick] (process time, so other load on the machine matters less)
 
 - TMCM-6212, examples/scenarios/tmcm6212_stage.toml: axes 0 and 1 (stage with switches, loads,
   hard stops, encoder; rotary table) move back and forth between switches, with stop-on-stall
@@ -66,7 +66,7 @@ def bench_next_event_scan(calls: int) -> float:
     now = vm.now
     start = time.process_time()
     for _ in range(calls):
-        aw._next_event(now)
+        aw.events.scan(now)
     return (time.process_time() - start) / calls * 1e6
 
 

@@ -76,13 +76,14 @@ def test_every_path_the_readme_and_docs_cite_is_in_the_sdist(sdist):
 
 
 def test_the_sdist_leaves_out_what_a_working_tree_collects(sdist):
-    """Bytecode, the accelerator compiled in place by `pip install -e` and bench results of the
-    developer's tree (tests/distribution.py LEFTOVERS, put into the built tree) stay out."""
+    """Bytecode, a compiled file left in place and bench results of the developer's tree
+    (tests/distribution.py LEFTOVERS, put into the built tree) stay out; the package is pure Python
+    (issue 33: "installs without a compiler"), so no C source travels either."""
     names = sdist.names()
     assert {n for n in LEFTOVERS if (sdist.tree / n).exists()} == set(LEFTOVERS)
     assert sorted(names & set(LEFTOVERS)) == []
     assert [n for n in names if "__pycache__" in n or n.endswith((".pyc", ".so"))] == []
-    assert "src/opentmcl/_accel.c" in names    # the accelerator's source does travel (setup.py)
+    assert [n for n in names if n.endswith((".c", ".h", ".pyi")) or n == "setup.py"] == []
 
 
 def test_the_metadata_names_no_placeholder_address(sdist):
@@ -112,6 +113,13 @@ def test_the_metadata_claims_the_python_versions_of_pyproject(sdist):
         ["Programming Language :: Python :: 3.11", "Programming Language :: Python :: 3.12",
          "Programming Language :: Python :: 3.13"]
     assert 'Requires-Dist: starlette>=1.2; extra == "test"' in headers
+
+
+def test_the_wheel_is_one_universal_pure_python_wheel(wheel):
+    """Issue 33: "the package is pure Python, installs without a compiler, and ships one universal
+    wheel": the wheel's tag is py3-none-any and it holds no compiled file."""
+    assert wheel.path.name.endswith("-py3-none-any.whl"), wheel.path.name
+    assert [n for n in wheel.names() if n.endswith((".so", ".pyd", ".c"))] == []
 
 
 def test_the_wheel_built_from_the_sdist_carries_the_whole_package(sdist, wheel):

@@ -26,7 +26,7 @@ from .host import (
 )
 
 if TYPE_CHECKING:
-    from .capture import replay
+    from .capture.replay import replay  # the function (the package also has a submodule of that name)
     from .firmware.vm import VirtualModule
 
 __version__: str
@@ -40,6 +40,11 @@ __all__ = ["Axis", "Module", "TmclConnectionError", "TmclError", "TmclStatusErro
 # opentmcl:// the pyserial URL handler. Nothing is imported until a URL uses them.
 _registry.of(_registry.TRANSPORTS).register("sim", "opentmcl.sim:open_sim")
 _registry.of(_registry.SERIAL_URL_HANDLERS).register("opentmcl", "opentmcl.urlhandler:register")
+# The ramp engines of motion/, named by the profiles' `[module] engine` (modules/ cannot import motion/).
+for _name, _target in (("sixpoint", "opentmcl.motion.sixpoint:SixPointRampEngine"),
+                       ("linear", "opentmcl.motion.linear:LinearRampEngine"),
+                       ("tmc429", "opentmcl.motion.tmc429_engine:Tmc429Engine")):
+    _registry.of(_registry.ENGINES).register(_name, _target)
 
 
 def _version() -> str:

@@ -41,6 +41,10 @@ class Registry:
             raise ValueError(f"lazy target must read 'package.module:attribute', got {target!r}")
         self._targets[key] = target
 
+    def forget(self, name: str) -> None:
+        """Drop `name` (registered, or found as an entry point and kept); nothing if unknown."""
+        self._targets.pop(name.lower(), None)
+
     def names(self) -> list[str]:
         """The registered names, in registration order."""
         return list(self._targets)
@@ -104,6 +108,15 @@ TRANSPORTS = "opentmcl.transports"
 """Group of the host library's transports: URL scheme -> factory(urllib.parse.SplitResult) -> Transport."""
 SERIAL_URL_HANDLERS = "opentmcl.serial_url_handlers"
 """Group of pyserial URL schemes: scheme -> hook() that makes `serial.serial_for_url` know it."""
+PROFILES = "opentmcl.profiles"
+"""Group of module profiles: module name -> the path of its TOML profile file, or a function of no
+arguments that answers one (modules/profile.py; the name is compared in lower case)."""
+ENGINES = "opentmcl.engines"
+"""Group of ramp engines: the name a profile's `[module] engine` gives -> the engine class (a
+motion.RampEngine made without arguments)."""
+ENDPOINTS = "opentmcl.endpoints"
+"""Group of serve endpoints: name -> factory(bus, spec, options) -> an object with start() and stop()
+(server/endpoints.py; `opentmcl serve --endpoint NAME[:SPEC]`)."""
 
 _REGISTRIES: dict[str, Registry] = {}
 

@@ -46,6 +46,23 @@ def test_partial_frame_after_a_silent_gap_is_garbage():
     assert [r["kind"] for r in d.feed(0.35, HOST, GGP_66[1:])] == ["request"]  # within the gap: joined
 
 
+def test_a_reply_read_in_pieces_after_a_pause_stays_a_reply():
+    """A module sends its reply whole; a pause between pieces of it at the proxy is the proxy's (a
+    loaded machine descheduled it, a paced link gives one byte at a time), so module bytes that
+    start a frame with a valid checksum (manual 3.2) stay that reply after any pause; when the
+    frame they start has none, the bytes before the pause are garbage and the rest is framed anew."""
+    d = decoder()
+    (req,) = d.feed(1.0, HOST, GGP_66)
+    assert d.feed(1.001, MODULE, GGP_66_REPLY[:3]) == []
+    out = [r for i, b in enumerate(GGP_66_REPLY[3:]) for r in d.feed(1.5 + i / 1000, MODULE, bytes([b]))]
+    assert [r["kind"] for r in out] == ["reply"] and out[0]["request"] == req["n"] and out[0]["value"] == 1
+    (req,) = d.feed(2.0, HOST, GGP_66)
+    d.feed(2.001, MODULE, b"\x55\x55")   # noise before a pause
+    recs = d.feed(2.5, MODULE, GGP_66_REPLY)
+    assert [r["kind"] for r in recs] == ["garbage", "reply"] and recs[0]["raw"] == "55 55"
+    assert recs[1]["request"] == req["n"] and recs[1]["value"] == 1
+
+
 def test_wrong_checksum_is_flagged():
     """Manual 3.2.1 status 1 "Wrong checksum"."""
     (rec,) = decoder().feed(0.0, HOST, GGP_66[:8] + b"\x00")

@@ -38,10 +38,16 @@ def test_example_capture_replays_with_zero_divergences(name):
 
 def test_reference_search_without_its_scenario_diverges_by_name():
     """Without the stage scenario the virtual axis finds no home switch (TMCM-6212 manual 3.6.10:
-    RFS STATUS is 0 only when the search has ended): the replay must say so, exit 1."""
+    RFS STATUS is 0 only when the search has ended): the replay must say so, exit 1. The root cause
+    is the search that never ends on the twin (issue 30 "Reports": root causes first); the RFS
+    STATUS reading that follows from it is listed beneath it as a knock-on."""
     done = cli("replay", str(EXAMPLES / "tmcm6212_program_reference_events.jsonl"))
     assert done.returncode == 1
-    assert any(line.startswith("t=") and "RFS STATUS, 0" in line for line in done.stdout.splitlines())
+    lines = done.stdout.splitlines()
+    roots = [line for line in lines if line.startswith("t=")]
+    assert len(roots) == 1 and "RFS START, 0: duration" in roots[0] and "virtual no end" in roots[0]
+    assert any(line.startswith("    t=") and "RFS STATUS, 0" in line and line.endswith("(knock-on)")
+               for line in lines[lines.index(roots[0]):])
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +76,8 @@ def test_regenerated_captures_replay_cleanly(regenerated):
         for options, address in runs:
             module = options[1] if options[0] == "--module" else None
             scenario = options[1] if options[0] == "--scenario" else None
-            report = replay(regenerated / name, module, address=address, scenario=scenario)
+            # served modules answer from a clock up to 2 ms behind, more on a loaded machine
+            report = replay(regenerated / name, module, address=address, scenario=scenario, clock_lag=0.05)
             assert report.ok, report.text()
             assert report.compared > 4
 

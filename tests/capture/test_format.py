@@ -88,3 +88,39 @@ def test_writer_stops_capturing_at_the_cap_and_the_file_stays_readable(tmp_path)
     lines = [json.loads(x) for x in path.read_text().splitlines()]
     assert [r["record"] for r in lines] == ["header", "frame", "frame", "frame", "truncated", "end"]
     assert len(read_capture(path).frames) == 3 and lines[-1]["frames"] == 3
+
+
+def test_a_torn_last_line_is_skipped_with_a_warning(tmp_path):
+    """Issue 30 item 4: a capture cut mid-line (a pulled cable, a full disk) keeps every complete
+    record: the torn last line is skipped with a one-line warning naming it, `replay` and `log show`
+    go on (exit 0 here, not 2)."""
+    reply = {"record": "frame", "n": 2, "t": 0.6, "dir": "module", "kind": "reply", "address": 1, "status": 100,
+             "command": 10, "value": 1, "request": 1, "raw": "02 01 64 0a 00 00 00 01 72"}
+    whole = json.dumps(reply).encode()
+    for cut in (1, len(whole) // 2, len(whole) - 1):   # the first byte, the middle, all but the "}"
+        path = write(tmp_path / "torn.jsonl", HEADER, FRAME, reply, extra=whole[:cut])
+        cap = read_capture(path)
+        assert len(cap.frames) == 2 and cap.warnings == [
+            f"{path}:4: torn last line skipped ({cut} bytes without an end: the capture was cut off)"]
+    for args in (("replay", str(path), "--module", "TMCM-6212"), ("log", "show", str(path))):
+        done = cli(*args)
+        assert done.returncode == 0, done.stderr
+        assert done.stderr.count("torn last line skipped") == 1 and f"{path}:4:" in done.stderr
+
+
+def test_a_torn_line_before_the_end_is_an_error_with_its_line_number(tmp_path):
+    """Issue 30 item 4: only the last line may be torn; anywhere else it is an error (exit 2) naming
+    the line; a complete last record without its newline is no torn line."""
+    torn = json.dumps(FRAME).encode()[:20]
+    path = tmp_path / "bad.jsonl"
+    path.write_bytes(json.dumps(HEADER).encode() + b"\n" + torn + b"\n" + json.dumps(FRAME).encode() + b"\n")
+    with pytest.raises(CaptureError, match=r"bad.jsonl:2: not a JSON record"):
+        read_capture(path)
+    done = cli("log", "show", str(path))
+    assert done.returncode == 2 and "bad.jsonl:2: not a JSON record" in done.stderr
+    path.write_bytes(json.dumps(HEADER).encode() + b"\n" + json.dumps(FRAME).encode())
+    cap = read_capture(path)
+    assert len(cap.frames) == 1 and cap.warnings == []
+    path.write_bytes(json.dumps(HEADER).encode()[:10])
+    with pytest.raises(CaptureError, match=r"bad.jsonl:1: not a capture file \(its only line is cut off\)"):
+        read_capture(path)

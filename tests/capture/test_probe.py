@@ -74,3 +74,44 @@ def test_probe_is_bounded_in_time_and_fails_in_one_line(tmp_path):
     assert "not type 1 at this address" in usb.stderr and "give that --address" in usb.stderr
     bad = cli("profile", "probe", "nope://x")
     assert bad.returncode == 2 and len(bad.stderr.splitlines()) == 1
+
+
+def test_probe_keeps_state_out_of_the_defaults_and_writes_a_snapshot_section(tmp_path):
+    """Issue 30 item 6: a probed module that has been used reads AP0/AP1/AP209 = 51200, a running
+    tick timer (GP132) and a random number (GP133) (TMCM-6212 manual 4.1, 5.1): those are state, so
+    the skeleton overrides no default with them and lists them under [snapshot]; a setting that
+    differs (AP6 = 100) still overrides its default. `replay --module probed.toml --initial-state
+    probed.toml` starts a twin from the section: a capture that begins there agrees."""
+    import tomllib
+
+    from opentmcl.capture import replay
+    from opentmcl.host.connect import open_bus
+    from opentmcl.host.probe import probe, skeleton
+
+    from .recorder import Recorder, edit
+
+    client = open_bus("sim://TMCM-6212")
+    for fields in [(5, 5, 0, 1_000_000), (5, 4, 0, 400_000), (4, 0, 0, 51200), (5, 6, 0, 100), (9, 133, 0, 4711)]:
+        client.request(*fields)
+    client.sleep(3.0)
+    text = skeleton(probe(client), "sim://TMCM-6212")
+    client.close()
+    out = tmp_path / "probed.toml"
+    out.write_text(text)
+    assert cli("profile", "check", str(out)).returncode == 0
+    data = tomllib.loads(text)
+    assert {e["number"]: e.get("default") for e in data["axis_parameter"]} == {6: 100, 4: 400_000, 5: 1_000_000}
+    assert not [e for e in data.get("global_parameter", []) if e["number"] in (132, 133)]
+    rows = {tuple(row[:2]): row[2] for row in data["snapshot"]["axis_parameter"]}
+    assert rows[(0, 0)] == rows[(0, 1)] == rows[(0, 209)] == 51200 and rows[(1, 1)] == 0
+    globals_ = {tuple(row[:2]): row[2] for row in data["snapshot"]["global_parameter"]}
+    assert globals_[(0, 132)] >= 3000 and (0, 133) in globals_
+    rec = Recorder()
+    for fields in [(5, 5, 0, 1_000_000), (5, 4, 0, 400_000), (4, 0, 0, 51200)]:
+        rec.vm.request(*fields)   # the state the module was in before the capture
+    for t, fields in [(5.0, (6, 1, 0, 0)), (5.01, (4, 1, 0, 1000)), (9.0, (6, 1, 0, 0)), (9.01, (6, 209, 0, 0))]:
+        rec.request(t, fields)
+    path = rec.write(tmp_path / "c.jsonl")
+    assert replay(path, out, initial_state=out).ok   # the probed profile from its own snapshot
+    edit(path, lambda r: r.get("kind") == "reply" and r.get("parameter") == "encoder_position", value=0)
+    assert replay(path, out, initial_state=out).parameters == ["encoder_position"]   # AP209 came from it

@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from opentmcl import VirtualModule
+from opentmcl.protocol.frame import Request
 
 from .conftest import Host
 
@@ -121,3 +122,73 @@ def test_a_host_address_without_a_character(ascii_host, host):
         assert out == b"ASAP 4, 0, 321\r" + b"ZA 100 0\r"
     else:
         assert out == b"ASAP 4, 0, 321\r"
+
+
+def test_an_ascii_line_leaves_no_binary_bytes_over():
+    """PD28-1021 manual 3.4.1: only the bytes after a BIN line are binary frames again
+    (`AsciiInterface.leftover`, which the bus hands to the binary framer). A feed that stays in
+    ASCII mode leaves nothing over, also after an earlier feed with BIN left a frame over."""
+    vm = VirtualModule("PD28-1021", address=1)
+    assert vm.request(139).status == 100
+    assert vm.feed_ascii(b"AGAP 1, 0\r").endswith(b"BA 100 0\r")
+    assert vm.ascii.leftover == b""
+    frame = Request(1, 6, 1, 0, 0).encode()
+    vm.feed_ascii(b"ABIN\r" + frame)
+    assert vm.ascii.leftover == frame
+    assert vm.request(139).status == 100
+    vm.feed_ascii(b"AGAP 1, 0\r")
+    assert vm.ascii.leftover == b""
+
+
+def test_ap138_reads_the_same_in_ascii_as_in_binary():
+    """PD86-1180 5 AP138 ramp mode "Automatically set when using ROR, ROL, MST and MVP"
+    (docs/assumptions.md "AP138 read-back": ROR gives 2, MVP 0); 4.5: AGAP answers as GAP does."""
+    host = Host(VirtualModule("PD86-1180", address=1))
+    vm = host.vm
+    host.ok(1, 0, 0, 100)                               # ROR 0, 100
+    assert host.ok(6, 138) == 2
+    host.ok(139)
+    vm.globals.set(0, 67, 0x20)                          # no echo, only the reply
+    assert vm.feed_ascii(b"AGAP 138, 0\r") == b"BA 100 2\r"
+    assert vm.feed_ascii(b"AMVP ABS, 0, 0\r") == b"BA 100 0\r"
+    assert vm.feed_ascii(b"AGAP 138, 0\r") == b"BA 100 0\r"
+
+
+# A module whose address has no ASCII address character ignores every ASCII line instead of raising.
+#
+# PD28-1021 manual 3.4.1: "As the first character, the address character has to be sent. The address
+# character is A when the module address is 1, B for modules with address 2 and so on." Global
+# parameter 66 takes 0..255, so a module at 0 or 27..255 has no character: no line is addressed to it.
+
+def _ascii_module(address: int) -> VirtualModule:
+    vm = VirtualModule("PD28-1021", address=address)
+    vm.request(139)  # enter ASCII mode (3.4.1)
+    assert vm.ascii_mode
+    return vm
+
+
+def test_last_address_with_a_character_is_answered() -> None:
+    """Address 26 is Z; the reply is host character (B: host address 2), module character, status,
+    value (3.4.3), after the echo of the line."""
+    vm = VirtualModule("PD28-1021", address=26)
+    ap4 = vm.request(6, 4).value
+    vm.request(139)
+    assert vm.feed_ascii(b"ZGAP 4,0\r") == b"ZGAP 4,0\rBZ 100 " + str(ap4).encode() + b"\r"
+
+
+@pytest.mark.parametrize("address", [0, 27, 255])
+@pytest.mark.parametrize("line", [b"AGAP 4,0\r", b"ZGAP 4,0\r", b"[GAP 4,0\r", b" BIN\r"])
+def test_address_without_a_character_ignores_every_line(address: int, line: bytes) -> None:
+    vm = _ascii_module(address)
+    assert vm.feed_ascii(line) == b""
+    assert vm.ascii_mode  # not even BIN of another module's line switched it back
+
+
+@pytest.mark.parametrize("name", ["PD28-1021", "PD86-1180"])
+def test_a_non_ascii_byte_in_an_ascii_line_is_a_status_not_a_crash(name):
+    """PD28-1021 3.4.2: a command line is ASCII text; a byte that is no ASCII character makes the
+    operand unreadable: the reply carries status 4 (house rule: bad input -> a status on the wire)."""
+    vm = VirtualModule(name)
+    vm.request(139)
+    vm.globals.set(0, 67, 0x20)  # 3.4.4 "When bit 5 is set ... there will be no echo"
+    assert vm.feed_ascii(b"AGAP 1, \xff0\r") == b"BA 4 0\r"

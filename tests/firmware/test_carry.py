@@ -38,7 +38,8 @@ def state(vm: VirtualModule) -> tuple:
     """What a run can differ in, read without commands (a command would end the carry)."""
     engines = tuple((e.now, e.position, e.velocity, tuple(tuple(p) for p in e._queue.pieces))
                     for e in (ax.engine for ax in vm.axes))
-    world = tuple((aw.phys, aw.offset, aw.slipping, tuple(aw.raw.values())) for aw in vm.world.axes_world)
+    world = tuple((aw.rotor.phys, aw.rotor.offset, aw.rotor.slipping, tuple(aw.switches.raw.values()))
+                  for aw in vm.world.axes_world)
     ints = vm.interrupts
     return (vm.now, vm.heartbeats.fired, dict(vm.heartbeats.last), engines, world, tuple(ints._due),
             tuple(sorted(ints.pending)), tuple(ax.error_flags for ax in vm.axes), tuple(vm.drain_events()))
@@ -217,7 +218,7 @@ def test_a_load_set_between_polls_ends_the_carry():
     for vm in (fast, ref):
         vm.world.axis(0).set_load(Profile([(ahead, 5.0)]), by="position")
     run_polls(fast, ref, 100)
-    assert fast.world.axis(0).slipping
+    assert fast.world.axis(0).rotor.slipping
 
 
 def test_a_world_acting_at_every_tick_is_not_carried():

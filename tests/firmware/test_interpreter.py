@@ -4,11 +4,15 @@ from __future__ import annotations
 
 import pytest
 
+from opentmcl import VirtualModule
 from opentmcl.firmware import flags
 from opentmcl.firmware.interpreter import INSTRUCTION_TICKS
+from opentmcl.firmware.wait import TICK
+from opentmcl.motion import CLOCK_HZ
 
 from .oracle import ReferenceModule
-from .test_program_support import T, Wire, module, run_program
+from .test_program_support import STOP, T, Wire, module, run_program
+from .test_program_support import run_raw as _run_raw
 
 INT_MIN, INT_MAX = -(2**31), 2**31 - 1
 
@@ -389,3 +393,127 @@ def test_wait_rfs_and_limsw_with_a_switch_on_the_stage():
     w.vm.advance(10.0)
     assert (w.state, w.pc, w.a) == (0, 5, 0)                       # searched, A = position 0
     assert not w.vm.flags & flags.ETO                              # the switch satisfied LIMSW
+
+
+def test_csub_beyond_program_memory_is_status_4_and_the_last_address_is_called():
+    """TMCM-6212 3.6.18 CSUB "<subroutine address>": an address outside the program memory is an
+    invalid value (3.2.1 Table 4 "4 Invalid value"; the call is ignored), while the last address
+    of the memory is called (the PC moves there and runs into the empty memory cell:
+    status 2, invalid command)."""
+    size = VirtualModule("TMCM-6212").program.size
+    w = _run_raw("TMCM-6212", (23, 0, 0, size), STOP, seconds=10 * T)
+    assert w.vm.interpreter.last_error == (0, 23, 4)
+    assert w.pc == 1
+    w = _run_raw("TMCM-6212", (23, 0, 0, size - 1), seconds=3 * T)
+    assert w.vm.interpreter.last_error == (size - 1, 0, 2)
+
+
+def test_wait_ticks_ends_exactly_one_tick_after_it_began():
+    """TMCM-6212 3.6.20 WAIT: "the TMCL program counter is set held at the address of this WAIT
+    command until the condition is met or the timeout has expired", "one tick is 10 milliseconds":
+    WAIT TICKS, 0, 1 still waits (135 wait flag, bit 16) 1/16 MHz before the 10 ms are up and no
+    longer waits when they are (the WAIT, the first instruction, begins after one instruction time,
+    100 us - docs/assumptions.md)."""
+    w = module()
+    w.download([(27, 0, 0, 1), (9, 0, 2, 1), STOP])
+    w.run()
+    w.vm.advance(0.001)
+    begun = INSTRUCTION_TICKS
+    assert w.ok(135, 0) >> 16 & 1
+    w.vm.advance_to(begun + CLOCK_HZ // 100 - 1)
+    assert w.ok(135, 0) >> 16 & 1
+    w.vm.advance_to(begun + CLOCK_HZ // 100)
+    assert not w.ok(135, 0) >> 16 & 1
+
+
+def test_wait_refsw_on_a_module_without_a_home_switch_parameter_times_out(tmp_path):
+    """TMCM-6212 3.6.20 "REFSW: Wait until a reference switch has been triggered ... The timeout flag
+    (ETO) will be set after a timeout limit has been reached". A profile that removes AP9 (home
+    switch state, 4.1; docs/profiles.md `[remove]`) has no switch to wait for: the WAIT ends by
+    its timeout of 5 ticks and sets ETO (docs/assumptions.md "Firmware edges where the manuals are
+    silent"), the same as on a module whose home switch stays open."""
+    path = tmp_path / "nohome.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOHOME-6212"\n'
+                    "[remove]\naxis_parameter = [9]\n")
+    for name in ("TMCM-6212", str(path)):
+        w = module(name)
+        w.download([(27, 2, 0, 5), (21, 8, 0, 3), (28, 0, 0, 0), (19, 9, 0, 9), (28, 0, 0, 0)])
+        w.run()
+        w.vm.advance(3 * T)
+        assert w.pc == 0, name  # still waiting
+        w.vm.advance(0.1)
+        assert (w.a, w.state) == (9, 0), name
+
+
+@pytest.mark.parametrize(("ticks", "wait"), [(-1, 0), (0, 0), (1, TICK)])
+def test_wait_ticks_0_goes_on_at_once_and_1_waits_one_tick(ticks, wait):
+    """TMCM-6212 3.6.20 WAIT TICKS: "one tick is 10 milliseconds"; docs/assumptions.md "WAIT":
+    `WAIT TICKS, 0, n` with n <= 0 does not wait, and the next instruction follows one slot
+    after the wait ends: SIO at 1 slot, WAIT at 2, the next SIO exactly at 3 slots + n ticks
+    (n = 1, the first that waits: 10 ms), to the clock tick."""
+    w = module()
+    w.download([(14, 0, 2, 1), (27, 0, 0, ticks), (14, 0, 2, 0), (28, 0, 0, 0)])
+    w.run()
+    due = w.vm.now + 3 * INSTRUCTION_TICKS + wait
+    w.vm.advance_to(due - 1)
+    assert w.out(0) == 1
+    w.vm.advance_to(due)
+    assert w.out(0) == 0
+
+
+def test_ja_beyond_program_memory_is_ignored_with_status_4():
+    """TMCM-6212 3.6.17 "JA <jump address>", 1 Features: 6144 commands, so 6144 is beyond the memory:
+    docs/assumptions.md "Program memory end": a JA one beyond the end is ignored (3.2.1 Table 4
+    "4 Invalid value" in the program's last error) and the program goes on; JA 6143 is taken."""
+    w = module()
+    size = w.vm.program.size
+    w.download([(22, 0, 0, size), (19, 9, 0, 3), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert (w.a, w.vm.interpreter.last_error) == (3, (0, 22, 4))
+    w = module()
+    w.download([(22, 0, 0, size - 1)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.vm.interpreter.last_error == (size - 1, 0, 2)
+
+
+@pytest.mark.parametrize(("period", "a"), [(0x7FFF_FFFF, 0x7FFF_FFFF), (0x8000_0000, -0x8000_0000),
+                                           (0xFFFF_FFFF, -1)])
+def test_ggp_of_an_unsigned_timer_period_loads_it_as_32_bits(period, a):
+    """TMCM-6212 5.4 bank 3: "Timer 0 period ... 0 .. 4294967295 [ms]"; 3.6.10 GGP in a program
+    loads the accumulator, a 32-bit register (3.5.5; 135 type 2 returns it on the wire as the
+    same 32 bits). The last signed value stays, 2^31 and 2^32 - 1 read back as -2^31 and -1."""
+    w = module()
+    w.ok(9, 0, 3, period - (1 << 32) if period > 0x7FFF_FFFF else period)
+    w.download([(10, 0, 3, 0), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(3 * T)
+    assert (w.a, w.state) == (a, 0)
+
+
+def test_flag_names_for_the_debugger():
+    """TMCM-6212 3.6.16 JC names ZE, EQ, GT, LT and the error flags ETO, EAL, EDV, EPO, ESD (3.6.29
+    CLE); `describe` spells each set flag with the manual's name, "-" for none."""
+    everything = flags.ZERO | flags.EQUAL | flags.GREATER | flags.LOWER | flags.ERROR_MASK
+    assert flags.describe(everything) == "ZE EQ GT LT ETO EAL EDV EPO ESD"
+    assert flags.describe(0) == "-"
+
+
+def test_csub_may_call_address_0():
+    """TMCM-6212 3.6.18 CSUB "Call subroutine": address 0 is a program address like any other; the
+    subroutine at 0 runs twice (once as the program, once when called) and RSUB returns."""
+    src = """
+    Sub:
+        GGP 5, 2
+        CALC ADD, 1
+        AGP 5, 2
+        COMP 2
+        JC EQ, Back
+        CSUB Sub
+        STOP
+    Back:
+        RSUB
+    """
+    w = run_program(src, 40 * T)
+    assert (w.var(5), w.state) == (2, 0)

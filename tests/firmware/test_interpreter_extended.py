@@ -7,7 +7,8 @@ import pytest
 
 from opentmcl.lang.assembler import assemble
 
-from .test_program_support import module
+from .test_program_support import STOP, T, module
+from .test_program_support import run_raw as _run_raw
 
 
 def run28(source: str, seconds: float = 0.05, setup=None, **asm):
@@ -115,3 +116,54 @@ def test_extended_commands_are_not_executed_on_other_modules():
     w.vm.advance(0.01)
     assert w.var(1) == 0 and w.a == 3
     assert w.vm.interpreter.last_error[1] == 45
+
+
+def test_calcv_takes_user_variable_0_and_the_last_one():
+    """PD28-1021 manual Table 5: "CALCV 45 <operation>, <value> Arithmetical operation between user
+    variable and direct value": variable 0 is the first user variable (TMCM-6212 3.6.9 bank 2
+    "0...255"), so CALCV ADD on it adds, and on the last one (255, the largest the motor byte holds)
+    too."""
+    w = module("PD28-1021")
+    last = len(w.vm.user_vars) - 1
+    w.ok(9, 0, 2, 10)
+    w.ok(9, last, 2, 20)
+    assert last == 255
+    w.download([(45, 0, 0, 5), (45, 0, last, 7), STOP])
+    w.run()
+    w.vm.advance(20 * T)
+    assert (w.var(0), w.var(last)) == (15, 27)
+    assert w.vm.interpreter.last_error is None
+
+
+def test_calcvv_with_an_operation_beyond_swap_is_status_3():
+    """PD28-1021 manual Table 5: "CALCVV <operation>, <user variable 1>, <user variable 2>" with the
+    operations of CALC (0 ADD ... 9 LOAD, TMCM-6212 3.6.14) and SWAP (10, "CALCVV SWAP"): operation
+    11 is none of them - TMCM-6212 3.2.1 Table 4 "3 Wrong type" - and variable 1 keeps its value."""
+    w = _run_raw("PD28-1021", (9, 1, 2, 6), (40, 11, 1, 2), STOP)
+    assert w.vm.interpreter.last_error == (1, 40, 3)
+    assert w.var(1) == 6
+
+
+def test_rst_restarts_at_address_0_and_refuses_the_end_of_memory():
+    """PD28-1021 manual Table 5: "RST 48 <jump address> Restart the program from the given
+    address". Address 0, the first of the program memory, is a valid target: the loop ADD 1 /
+    COMP 3 / JC EQ / RST 0 runs three times. The first address beyond the memory (2048, 1 Features
+    "2048 TMCL commands") is an invalid value (3.2.1 Table 4 "4 Invalid value"; the program goes on
+    after it) and the last one (2047) is taken (it runs into the empty memory cell: status 2)."""
+    w = module("PD28-1021")
+    size = w.vm.program.size
+    assert size == 2048
+    w.download([(19, 0, 0, 1), (20, 0, 0, 3), (21, 2, 0, 4), (48, 0, 0, 0), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(40 * T)
+    assert (w.a, w.state, w.vm.interpreter.last_error) == (3, 0, None)
+    w = module("PD28-1021")
+    w.download([(48, 0, 0, size), (19, 0, 0, 7), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert (w.a, w.vm.interpreter.last_error) == (7, (0, 48, 4))
+    w = module("PD28-1021")
+    w.download([(48, 0, 0, size - 1)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.vm.interpreter.last_error == (size - 1, 0, 2)

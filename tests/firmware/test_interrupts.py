@@ -200,3 +200,110 @@ def test_vect_255_is_a_wrong_type_vect_0_is_taken():
     assert vm.request(37, 255, 0, 0).status == 3
     assert vm.request(37, 255, 0, 10**6).status == 3
     assert vm.request(37, 0, 0, 0).status == 100
+
+
+def test_di_drops_the_pending_occurrence_of_its_interrupt():
+    """TMCM-6212 3.6.31 "DI <interrupt number>" disables an interrupt; docs/assumptions.md
+    (Interrupts): "DI n drops n's pending occurrence": interrupt 21 occurring during the handler of
+    15 is pending (3.5.6.2 "There is no interrupt nesting"); the handler's DI 21 drops it, so the
+    EI 21 after it does not bring it back and handler 21 never runs."""
+    src = ("VECT 15, Stall\nVECT 21, Dev\nEI 15\nEI 21\nEI 255\nIdle: JA Idle\n"
+           "Stall: GGP 10, 2\n CALC ADD, 1\n AGP 10, 2\n WAIT TICKS, 0, 1\n DI 21\n EI 21\n RETI\n"
+           "Dev: GGP 10, 2\n CALC ADD, 10\n AGP 10, 2\n RETI\n")
+    w = module()
+    w.load(src)
+    w.run()
+    w.vm.advance(20 * T)
+    assert w.vm.interrupts.trigger(15)
+    w.vm.advance(0.005)                       # inside handler 15 (its WAIT)
+    assert w.vm.interrupts.active == 15
+    assert w.vm.interrupts.trigger(21)        # latched, pending until RETI
+    w.vm.advance(0.1)
+    assert w.var(10) == 1 and w.vm.interrupts.active is None
+
+
+def test_reti_right_after_power_up_is_ignored():
+    """TMCM-6212 3.6.33 RETI ends an interrupt handling routine; docs/assumptions.md "Interrupts":
+    "RETI outside a handler is ignored". A program started with 129 type 0 ("from current
+    address", 3.6.36) just after power-up, whose first instruction is RETI, goes on to the next."""
+    w = module()
+    w.download([(38, 0, 0, 0), (19, 9, 0, 4), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert (w.a, w.state, w.vm.interpreter.last_error) == (4, 0, None)
+
+
+def test_vect_takes_the_last_address_and_refuses_the_first_beyond():
+    """TMCM-6212 3.6.32 "VECT <interrupt number>, <label>": the label is an address of the program
+    memory (1 Features: 6144 commands, 0...6143). 6143 is set; 6144 is an invalid value (3.2.1
+    Table 4 "4 Invalid value"), and the program goes on after it."""
+    w = module()
+    size = w.vm.program.size
+    w.download([(37, 0, 0, size - 1), (37, 1, 0, size), (28, 0, 0, 0)])
+    w.run()
+    w.vm.advance(10 * T)
+    assert w.vm.interrupts.vectors[0] == size - 1
+    assert w.vm.interpreter.last_error == (1, 37, 4)
+    assert (w.pc, w.state) == (2, 0)
+
+
+def test_rst_inside_a_handler_drops_its_context_so_reti_is_ignored():
+    """PD28-1021 Table 5: "RST 48 <jump address> Restart the program from the given address";
+    docs/assumptions.md "RST label: jump, dropping the subroutine stack and any interrupt context"
+    and "RETI outside a handler is ignored": a timer handler that restarts with RST and then
+    meets a RETI goes on past it (A = 7, the program stops)."""
+    w = module("PD28-1021")
+    w.load("VECT 0, Tick\nSGP 0, 3, 1\nEI 0\nEI 255\nIdle: JA Idle\n"
+           "Tick: RST After\nAfter: DI 255\nRETI\nCALC LOAD, 7\nSTOP\n")
+    w.run()
+    w.vm.advance(0.01)
+    assert (w.a, w.state, w.vm.interrupts.active) == (7, 0, None)
+
+
+def test_an_interrupt_pending_at_reti_into_a_wait_is_taken_next():
+    """TMCM-6212 3.5.6.2 "There is no interrupt nesting", 5.4 priority by number; docs/assumptions.md
+    "Interrupts": pending ones follow the RETI, and a WAIT interrupted by a handler resumes with
+    its original deadline. Timer 1 expires while timer 0's handler runs: after that RETI the
+    program is back in its WAIT with timer 1 pending, which is taken at once; each handler
+    switches its timer off (period 0), so each runs once, and the WAIT still ends after 1 s."""
+    src = ("VECT 0, T0\nVECT 1, T1\nEI 0\nEI 1\nEI 255\nSGP 0, 3, 10\nSGP 1, 3, 10\n"
+           "WAIT TICKS, 0, 100\nSIO 0, 2, 1\nSTOP\n"
+           "T0: SGP 0, 3, 0\nGGP 10, 2\nCALC ADD, 1\nAGP 10, 2\nRETI\n"
+           "T1: SGP 1, 3, 0\nGGP 11, 2\nCALC ADD, 1\nAGP 11, 2\nRETI\n")
+    w = module()
+    w.load(src)
+    w.run()
+    w.vm.advance(0.1)
+    assert (w.var(10), w.var(11), w.pc, w.out(0)) == (1, 1, 7, 0)
+    w.vm.advance(0.91)
+    assert w.out(0) == 1
+
+
+def test_an_enabled_interrupt_without_vector_does_not_hide_an_input_change():
+    """TMCM-6212 3.5.6.2: an interrupt is handled when it "is enabled and a valid interrupt vector
+    has been defined". Timer 0 enabled without a vector (EI 0, no VECT 0) must not stop the input
+    change interrupt 39 (IN0, both edges: SGP 39, 3, 3) from being seen."""
+    w = module()
+    w.load("EI 0\nVECT 39, In0\nEI 39\nSGP 39, 3, 3\nEI 255\nIdle: JA Idle\n"
+           "In0: GGP 10, 2\nCALC ADD, 1\nAGP 10, 2\nRETI\n")
+    w.run()
+    w.vm.advance(20 * T)
+    w.vm.io.drive_input(0, 0, 1)
+    w.vm.advance(20 * T)
+    assert w.var(10) == 1
+
+
+def test_a_module_without_a_timer_period_runs_its_other_timers(tmp_path):
+    """docs/profiles.md `[remove]`: a profile without bank-3 parameter 2 (timer 2's period, TMCM-6212
+    5.3) has no timer 2 (GGP 2, 3 is status 3, wrong type) - its program and timer 1 run as on
+    the TMCM-6212 (3.5.6.4 timer example, a 1 ms period here)."""
+    path = tmp_path / "notimer2.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOTIMER2-6212"\n'
+                    "[remove]\nglobal_parameter = [[3, 2]]\n")
+    w = module(str(path))
+    assert w(10, 2, 3).status == 3
+    w.load("VECT 1, T1\nSGP 1, 3, 1\nEI 1\nEI 255\nIdle: JA Idle\n"
+           "T1: GGP 10, 2\nCALC ADD, 1\nAGP 10, 2\nRETI\n", module="TMCM-6212")
+    w.run()
+    w.vm.advance(0.0105)
+    assert w.var(10) == 10

@@ -216,3 +216,21 @@ def test_sap_2_in_velocity_mode_sets_the_speed(anymod):
     anymod.ok(5, 2, 0, -2047)
     anymod.vm.advance(30.0)
     assert anymod.ok(6, 3, 0) == -2047
+
+
+def test_ror_and_rol_take_the_range_of_the_target_speed_ap2(tmp_path):
+    """TMCM-6212 3.6.1 ROR / 3.6.2 ROL "Internal function: ... the velocity value is transferred
+    to axis parameter #2 (target velocity)": the range checked is AP2's. A profile that narrows
+    AP2 to -1000 ... 1000 (docs/profiles.md, an existing number merged) and leaves AP3 (actual
+    speed) at +-7999774 takes ROR / ROL 1000 and refuses 1001 with status 4 (invalid value)."""
+    path = tmp_path / "slow.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "SLOW-6212"\n'
+                    "[[axis_parameter]]\nnumber = 2\nmin = -1000\nmax = 1000\n")
+    h = Host(VirtualModule(str(path), address=1))
+    assert h(1, 0, 0, 1000).status == 100
+    assert h.ok(6, 2, 0) == 1000
+    assert h(1, 0, 0, 1001).status == 4
+    assert h(2, 0, 1, 1000).status == 100
+    assert h.ok(6, 2, 1) == -1000
+    assert h(2, 0, 1, 1001).status == 4
+    assert h.ok(6, 2, 1) == -1000  # the refused ROL changed nothing

@@ -52,3 +52,11 @@ def test_in_a_program_lacking_opcode_is_2_control_command_is_6(name, lacking):
     vm.request(129, 1, 0, 2)
     vm.advance(0.01)
     assert vm.interpreter.last_error == (2, 138, 6)
+
+
+def test_an_unknown_command_is_status_2_with_value_0():
+    """TMCM-6212 3.2.1 Table 4 "2 Invalid command": a command number the module does not have (99)
+    is answered with status 2 and, as every error reply (docs/assumptions.md), value 0."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    reply = vm.request(99, 0, 0, 1234)
+    assert (reply.status, reply.command, reply.value) == (2, 99, 0)

@@ -8,6 +8,10 @@ import pytest
 from opentmcl import VirtualModule
 
 from .conftest import Host
+from .test_program_support import Wire
+
+INTERNAL_VMAX = 2**23 - 512   # docs/assumptions.md "Velocity parameters with AP255 = 0"
+INTERNAL_AMAX = 2**16 - 1
 
 
 def test_factory_defaults_readable(anymod):
@@ -199,3 +203,48 @@ def test_unit_mode_switch_keeps_the_motion_and_reexpresses_the_ramp(m6212):
     m6212.ok(5, 255, 0, 1)
     assert abs(m6212.ok(6, 4, 0) - 51200) <= 1          # and back in pps
     assert abs(m6212.ok(6, 3, 0) - 51200) <= 1
+
+
+def test_internal_units_bound_only_velocity_and_acceleration():
+    """TMCM-6212 4.1 AP255 "Units of velocity and acceleration/deceleration settings: 0 - the internal
+    units of the TMC5130 are used directly": only those parameters change their range; AP6 "Maximum
+    current 0...255" keeps its own (255 accepted, 256 status 4 "Invalid value")."""
+    host = Host(VirtualModule("TMCM-6212", address=1))
+    host.ok(5, 255, 0, 0)
+    assert (host(5, 6, 0, 255).status, host(5, 6, 0, 256).status) == (100, 4)
+
+
+def test_the_eeprom_lock_holds_after_a_power_cycle(tmp_path):
+    """PD86-1180 6.1 GP73 "Configuration EEPROM lock flag ... Write: 1234 to lock the EEPROM,
+    4321 to unlock it. Read: 1=EEPROM locked", access RWE: the lock is kept in the EEPROM, so a
+    module powered up again on the same EEPROM is still locked - 4.6.7 STAP "will not have any
+    effect when the configuration EEPROM is locked ... the error code 5" - until 4321 unlocks it."""
+    path = tmp_path / "ee.json"
+    Wire(VirtualModule("PD86-1180", address=1, eeprom=path)).ok(9, 73, 0, 1234)
+    again = Wire(VirtualModule("PD86-1180", address=1, eeprom=path))
+    assert again.ok(10, 73, 0) == 1
+    assert again(7, 4, 0).status == 5
+    again.ok(9, 73, 0, 4321)
+    third = Wire(VirtualModule("PD86-1180", address=1, eeprom=path))
+    assert third.ok(10, 73, 0) == 0
+    assert third(7, 4, 0).status == 100
+
+
+def test_internal_unit_ranges_take_their_lowest_value():
+    """TMCM-6212 4.1 AP255 = 0 "the internal units of the TMC5130 are used directly", ranges as
+    docs/assumptions.md: AP4 (0 ... VMAX) takes 0 and refuses -1 with status 4, AP2 (signed)
+    takes -VMAX and refuses -VMAX - 1; the tops are taken, one beyond is status 4."""
+    host = Host(VirtualModule("TMCM-6212", address=1))
+    host.ok(5, 255, 0, 0)
+    assert [host(5, 4, 0, v).status for v in (0, -1, INTERNAL_VMAX, INTERNAL_VMAX + 1)] == [100, 4, 100, 4]
+    assert [host(5, 5, 0, v).status for v in (0, -1, INTERNAL_AMAX, INTERNAL_AMAX + 1)] == [100, 4, 100, 4]
+    assert [host(5, 2, 0, v).status for v in (-INTERNAL_VMAX, -INTERNAL_VMAX - 1)] == [100, 4]
+
+
+def test_stored_global_reads_the_eeprom_not_the_ram(tmp_path):
+    """TMCM-6212 5.1: bank-0 parameters 64..127 are "automatically stored in the EEPROM"; the tick
+    timer GP132 is not: `stored_global` shows what the EEPROM holds."""
+    vm = VirtualModule("TMCM-6212", address=1, eeprom=tmp_path / "ee.json")
+    vm.request(9, 75, 0, 15)
+    vm.request(9, 132, 0, 5)
+    assert (vm.stored_global(0, 75), vm.stored_global(0, 132)) == (15, None)

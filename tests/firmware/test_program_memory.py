@@ -7,7 +7,7 @@ import pytest
 from opentmcl import VirtualModule
 from opentmcl.protocol.frame import Request, checksum
 
-from .test_program_support import T, Wire, module
+from .test_program_support import STOP, T, Wire, module
 
 STATUS_LOADED = 101
 
@@ -171,3 +171,66 @@ def test_135_accepts_only_the_types_of_its_table(w):
     type 3 (the last one) answers 100, 4 and 255 are status 3 "Wrong type"."""
     got = {t: w.vm.request(135, t).status for t in (0, 1, 2, 3, 4, 255)}
     assert got == {0: 100, 1: 100, 2: 100, 3: 100, 4: 3, 255: 3}
+
+
+def test_step_with_an_armed_timer_executes_the_next_command():
+    """TMCM-6212 3.7 "130 - step application: execute only the next TMCL command": with timer 0
+    running (SGP 0, 3, 100 - a period of 100 ms, 3.5.6.4) but no interrupt enabled, one step moves
+    the PC by one and the timer does not disturb it."""
+    w = module()
+    w.download([(9, 0, 2, 1), (9, 0, 2, 2), STOP])
+    w.ok(9, 0, 3, 100)
+    w.vm.advance(0.25)
+    assert w(130).status == 100
+    assert (w.pc, w.var(0)) == (1, 1)
+
+
+def test_a_program_erased_by_gp81_stays_erased_after_power_up(tmp_path):
+    """TMCM-6212 5.1 GP81 "TMCL code protection" (switching the protection against disassembling
+    off erases the program) and GP77 "auto start mode ... 1 - start TMCL application after power
+    up": after the erase the EEPROM holds no program, so the next power-up starts nothing."""
+    ee = tmp_path / "ee.json"
+    w = Wire(VirtualModule("TMCM-6212", address=1, eeprom=ee))
+    w.download([(9, 0, 2, 7), STOP])
+    w.ok(9, 77, 0, 1)
+    w.ok(9, 81, 0, 1)
+    w.ok(9, 81, 0, 0)                         # protection off: the program is erased
+    again = Wire(VirtualModule("TMCM-6212", address=1, eeprom=ee))
+    again.vm.advance(0.1)
+    assert again.state == 0 and again.var(0) == 0
+
+
+def test_a_calculation_at_the_last_address_runs_and_then_the_program_stops():
+    """TMCM-6212 1 Features: "program memory (non volatile) for up to 6144 TMCL commands", so the
+    last address is 6143; docs/assumptions.md "Program memory end": the instruction at the last
+    address runs and the program then stops. A pure one (CALC ADD, 3.6.14) there is run ahead of the motors' clock
+    (docs/architecture.md "Time"), and the look-ahead must stop at the end of the memory too.
+    3.6.36: 135 type 2 "return accumulator"; 128 (GGP 128) application status 0 = stopped."""
+    w = module()
+    last = w.vm.program.size - 1
+    assert last == 6143
+    w.download([(19, 0, 0, 5)], start=last)
+    w.run(last)
+    w.vm.advance(10 * T)
+    assert w.a == 5
+    assert w.state == 0
+    assert w.vm.interpreter.executed == 1
+
+
+def test_a_stored_command_answers_status_101_with_value_0(anymod):
+    """TMCM-6212 manual 3.6.36: "132 - enter download mode  All following commands (except control
+    commands) are not executed but stored in the TMCL memory"; 3.2.1 Table 4 "101 Command loaded
+    into TMCL program EEPROM". The manuals give no value for that reply: docs/assumptions.md
+    ("Download mode") reads it as 0, whatever the stored value (1234, the largest and the smallest
+    32-bit value, -1), while the stored instruction keeps its own value (3.6.36 "134 - read
+    program memory", special reply: host address, command, type, motor, value MSB first)."""
+    values = (1234, 2**31 - 1, -2**31, -1)
+    anymod.ok(132, 0, 0, 0)
+    for value in values:
+        reply = anymod(5, 4, 0, value)
+        assert (reply.status, reply.command, reply.value) == (101, 5, 0)
+    anymod.ok(133)
+    for address, value in enumerate(values):
+        raw = anymod.raw(134, 0, 0, address)
+        assert len(raw) == 9 and raw[1:4] == bytes((5, 4, 0))
+        assert int.from_bytes(raw[4:8], "big", signed=True) == value

@@ -9,6 +9,7 @@ from opentmcl.motion import CLOCK_HZ
 from opentmcl.protocol.frame import Reply, Request
 
 T = INSTRUCTION_TICKS / CLOCK_HZ  # seconds per instruction
+STOP = (28, 0, 0, 0)  # STOP (TMCM-6212 3.6.21) as a downloaded instruction
 
 
 class Wire:
@@ -76,6 +77,15 @@ def module(name: str = "TMCM-6212", **kw) -> Wire:
 def run_program(source: str, seconds: float, name: str = "TMCM-6212", **kw) -> Wire:
     w = module(name, **kw)
     w.load(source)
+    w.run()
+    w.vm.advance(seconds)
+    return w
+
+
+def run_raw(name: str, *instructions: tuple[int, int, int, int], seconds: float = 20 * T) -> Wire:
+    """Download `instructions` as they are (no assembler checks), run them, advance `seconds`."""
+    w = module(name)
+    w.download(instructions)
     w.run()
     w.vm.advance(seconds)
     return w

@@ -12,13 +12,20 @@ from __future__ import annotations
 import pytest
 
 from opentmcl import VirtualModule
+from opentmcl.firmware import requests as dispatch
+from opentmcl.modules import load_profile
 from opentmcl.protocol.frame import Reply, Request
+
+from .conftest import Host
 
 MODULES = ["TMCM-6212", "PD86-1180", "PD28-1021"]
 
 
 def frame(command, type_=0, motor=0, value=0, address=1):
     return Request(address, command, type_, motor, value).encode()
+
+
+_frame = frame  # the name the tests of `dispatch.handler` use
 
 
 def general(vm, raw, interface="serial"):
@@ -382,3 +389,57 @@ def test_bound_requests_on_usb_and_rs485_restart_the_serial_heartbeat(interface)
     assert vm.request(6, 3, 0).value != 0
     vm.advance(0.11)
     assert vm.request(6, 3, 0).value == 0
+
+
+# --- dispatch.handler: None for what it does not cover; a bound GGP of 32 bits ----------------
+def test_entry_of_a_motor_the_module_lacks_is_none():
+    """dispatch.py module docstring: "`entry()` answers None for every request it does not cover
+    (a wrong type, a motor the module lacks, ...)". The TMCM-6212 has motors 0...5 (manual 3.6.6
+    GAP "0...5"): GAP of motor 5 has a handler answering what the general path answers, motor 6
+    none."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    assert len(vm.axes) == 6
+    fast = dispatch.handler(vm, 6, 4, 5)
+    assert fast is not None
+    assert fast() == vm.handle(_frame(6, 4, 5))
+    assert dispatch.handler(vm, 6, 4, 6) is None
+    assert Reply.decode(vm.handle(_frame(6, 4, 6))).status == 4
+
+
+def test_entry_of_a_command_without_a_handler_is_none(tmp_path):
+    """dispatch.py: handlers exist for "GAP, GGP and GIO of a valid (type, motor/bank)", and
+    "`entry()` answers None for every request it does not cover": MVP and SAP have none, and a
+    module whose command set lacks GIO (docs/profiles.md `opcodes` replaces the list; status 2,
+    TMCM-6212 3.2.1) has no GIO handler, while GAP keeps one."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    assert dispatch.handler(vm, 4, 0, 0) is None
+    assert dispatch.handler(vm, 5, 4, 0) is None
+    assert dispatch.handler(vm, 15, 0, 0) is not None
+    opcodes = sorted(set(load_profile("TMCM-6212").opcodes) - {15})
+    path = tmp_path / "nogio.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOGIO-6212"\n'
+                    f"opcodes = {opcodes}\n")
+    nogio = VirtualModule(str(path), address=1)
+    assert Reply.decode(nogio.handle(_frame(15, 0, 0))).status == 2
+    assert dispatch.handler(nogio, 15, 0, 0) is None
+    assert dispatch.handler(nogio, 6, 4, 0) is not None
+
+
+@pytest.mark.parametrize(("period", "wire"), [
+    (0x7FFF_FFFF, 0x7FFF_FFFF), (0x8000_0000, -0x8000_0000), (0xFFFF_FFFF, -1)])
+def test_a_prebound_ggp_of_an_unsigned_timer_period_answers_its_32_bits(period, wire):
+    """TMCM-6212 5.4 bank 3 "Timer 0 period ... 0 .. 4294967295 [ms]"; 3.2 the reply value is
+    four bytes, MSB first, with the checksum over the first eight bytes. The second GGP of the
+    same frame is answered by its pre-bound handler (dispatch.py); both replies carry the same
+    32 bits: 2^31 - 1 as it is, 2^31 and 2^32 - 1 as -2^31 and -1 in signed form."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    h = Host(vm)
+    assert h(9, 0, 3, wire).status == 100
+    frame = _frame(10, 0, 3)
+    first = vm.handle(frame)
+    assert vm.is_prebound(frame)
+    second = vm.handle(frame)
+    assert second == first
+    assert second[4:8] == (period & 0xFFFF_FFFF).to_bytes(4, "big")
+    assert second[8] == sum(second[:8]) & 0xFF
+    assert Reply.decode(second).value == wire

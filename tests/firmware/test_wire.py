@@ -254,3 +254,31 @@ def test_eeprom_and_binary_files_get_ordinary_permissions(tmp_path):
     with pytest.raises(FileNotFoundError):
         write_atomic(tmp_path / "no" / "such" / "x.bin", b"z")
     assert not (tmp_path / "no").exists()
+
+
+def test_error_replies_carry_value_0_on_both_paths():
+    """TMCM-6212 3.2 Table 3: a reply is reply address, module address, status, command, value;
+    docs/assumptions.md "Firmware edges where the manuals are silent": an error reply's value is
+    0. A frame with a wrong checksum (3.2.1 Table 4 "1 Wrong checksum") to a module at address 5
+    gets status 1 from module 5 with value 0; a SAP that the pre-bound path refuses (4.1 AP4
+    0...7999774: 7999775 is status 4) answers byte for byte what the general path answers to the
+    same frame."""
+    vm = VirtualModule("TMCM-6212", address=5)
+    good = Request(5, 6, 1, 0, 0).encode()
+    bad = Reply.decode(vm.handle(good[:8] + bytes(((good[8] + 1) & 0xFF,))))
+    assert (bad.module_address, bad.status, bad.command, bad.value) == (5, 1, 6, 0)
+    refused = Request(5, 5, 4, 0, 7999775).encode()
+    general = VirtualModule("TMCM-6212", address=5).handle(refused)
+    assert vm.handle(Request(5, 5, 4, 0, 7999774).encode())[2] == 100
+    assert vm.is_prebound(refused)
+    assert vm.handle(refused) == general
+    assert Reply.decode(general).status == 4 and Reply.decode(general).value == 0
+
+
+def test_138_with_a_type_beyond_1_is_status_3():
+    """TMCM-6212 3.6.35: 138 type 0 "only once", 1 "always"; another type is 3.2.1 Table 4
+    "3 Wrong type" with value 0, and type 1 (the last valid one) is taken."""
+    host = Host(VirtualModule("TMCM-6212", address=1))
+    reply = host(138, 2, 0, 1)
+    assert (reply.status, reply.value) == (3, 0)
+    assert host(138, 1, 0, 1).status == 100

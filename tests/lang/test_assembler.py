@@ -20,6 +20,13 @@ def err(src: str, **kw) -> AsmError:
     return exc.value
 
 
+def _error(src: str, **kw) -> AsmError:
+    """As `err`, with the default file name `<source>`."""
+    with pytest.raises(AsmError) as info:
+        assemble(src, **kw)
+    return info.value
+
+
 def test_trailing_stop_is_appended():
     """docs/tmcl-assembler.md (TMCL-IDE .bin): a STOP follows the last source instruction - even an explicit one."""
     assert ins("ROL 0, 1") == [(2, 0, 0, 1), STOP]
@@ -27,6 +34,13 @@ def test_trailing_stop_is_appended():
     assert ins("") == [STOP]
     assert ins("#nostop\nROL 0, 1") == [(2, 0, 0, 1)]
     assert ins("ROL 0, 1", append_stop=False) == [(2, 0, 0, 1)]
+
+
+def test_nostop_takes_no_argument():
+    """`#nostop` (docs/tmcl-assembler.md): alone it drops the STOP; with an argument it is an error."""
+    assert assemble("MST 0\n#nostop // a comment").instructions == [(3, 0, 0, 0)]
+    e = _error("#nostop 1")
+    assert (e.line, e.column, e.message) == (1, 1, "#nostop takes no argument")
 
 
 def test_case_insensitive_mnemonics_and_symbols():
@@ -118,6 +132,36 @@ def test_errors(src, line, column, text):
     assert text in e.message
 
 
+def test_operand_count_errors_use_singular_and_plural():
+    """TMCM-6212 3.6.2 "Mnemonic: ROL <axis>, <velocity>", 3.6.21 "Mnemonic: STOP": one operand
+    too few or too many is an error at the last operand, "1 operand" / "2 operands"."""
+    assert assemble("ROL 0, 51200").instructions[0] == (2, 0, 0, 51200)
+    e = _error("ROL 0")
+    assert (e.column, e.message) == (5, "ROL does not take 1 operand; expected ROL <motor>, <value>")
+    e = _error("STOP 1, 2")
+    assert (e.column, e.message) == (9, "STOP does not take 2 operands; expected STOP")
+
+
+def test_raw_with_too_few_operands_is_an_error_at_the_last_one():
+    """docs/tmcl-assembler.md: "`RAW command, type, motor, value` emits any record verbatim":
+    four operands; fewer is an error at the last operand given, at the mnemonic when none is."""
+    assert assemble("RAW 136, 1, 0, 0").instructions[0] == (136, 1, 0, 0)
+    for src, col in (("RAW", 1), ("  RAW", 3), ("RAW 1, 2, 3", 11)):
+        e = _error(src)
+        assert (e.column, e.message) == (col, "expected RAW <command>, <type>, <motor>, <value>")
+
+
+@pytest.mark.parametrize(("src", "col", "usage"), [
+    ("MVP ABS, , 1", 10, "MVP ABS|REL|COORD, <motor>, <value>"),
+    ("RAW 1, , 0, 0", 8, "RAW <command>, <type>, <motor>, <value>"),
+])
+def test_an_empty_operand_names_the_usage(src, col, usage):
+    """Operands are separated by commas (docs/tmcl-assembler.md "Source format"); nothing between
+    two commas is an error at the second one's operand, with the command's operand forms."""
+    e = _error(src)
+    assert (e.column, e.message) == (col, f"empty operand; expected {usage}")
+
+
 def test_duplicate_identical_constant_is_allowed():
     """Include files may define the same name twice with the same value."""
     assert assemble("X = 1\nX = 1\nSAP 4, 0, X").constants == {"X": 1}
@@ -143,6 +187,15 @@ def test_unknown_module():
     """Module names are those of the profiles (TMCM-6212, PD86-1180, PD28-1021 and aliases)."""
     with pytest.raises(AsmError, match="unknown module"):
         assemble("STOP", module="TMCM-9999")
+
+
+def test_unknown_module_is_an_error_of_the_options():
+    """A module name that is no profile: one error of `<options>` without a position; nothing more
+    is counted (AsmError.more, warnings_more 0)."""
+    e = _error("MST 0", module="TMCM-9999")
+    assert (e.file, e.line, e.column) == ("<options>", 0, 0)
+    assert e.message.startswith("unknown module 'TMCM-9999'; known: PD28-1021, PD86-1180, TMCM-6212")
+    assert (e.more, e.warnings_more, len(e.errors), e.warnings) == (0, 0, 1, [])
 
 
 def test_includes_search_path_and_once(tmp_path):
@@ -180,6 +233,30 @@ def test_listing_and_symbol_file():
     assert lines[1].startswith("0000  02 00 00 00 00 00 01 03") and lines[1].endswith("1  Loop: ROL 0, 1 // go")
     assert lines[3].startswith("0002  1C 00 00 00 00 00 00 1C") and "appended" in lines[3]
     assert p.symbol_file() == "Loop\t0\n"
+
+
+def test_program_keeps_its_file_name_and_the_listing_shows_bare_line_numbers(tmp_path):
+    """Program.filename is the source's name; in the listing its lines show as numbers only,
+    an include file's as ``file:line``."""
+    (tmp_path / "sub.inc").write_text("MST 1\n")
+    path = tmp_path / "main.tmc"
+    path.write_text("MST 0\n#include sub.inc\n")
+    prog = assemble_file(path)
+    assert prog.filename == str(path)
+    rows = prog.listing().splitlines()
+    assert rows[0] == "0000  03 00 00 00 00 00 00 03       1  MST 0"
+    assert rows[1] == f"0001  03 00 01 00 00 00 00 04  {tmp_path / 'sub.inc'}:1  MST 1"
+    assert assemble("MST 0").filename == "<source>"
+    assert assemble("MST 0").listing().splitlines()[0].endswith("     1  MST 0")
+
+
+@pytest.mark.parametrize("origin", [0, 1, 5])
+def test_listing_shows_a_label_after_the_last_instruction(origin):
+    """A label after the last instruction (the end of a `#nostop` program) is the address after it
+    and ends the listing, at any load address."""
+    prog = assemble("#nostop\nMST 0\nEnd:", origin=origin)
+    assert prog.labels == {"End": origin + 1}
+    assert prog.listing().splitlines()[-1].strip() == "End:"
 
 
 @pytest.mark.parametrize(("src", "text"), [

@@ -28,6 +28,26 @@ def test_decode_checks_length_and_checksums():
     assert binfile.decode(bad, verify=False)[1].command == 28
 
 
+def test_binfile_checksum_error_names_the_byte_offset():
+    """docs/tmcl-assembler.md "Binary file format": 8-byte records; a wrong checksum names the
+    record and its byte offset (8 x record) with both checksums in hex."""
+    from opentmcl.lang import binfile
+    data = bytearray(binfile.encode([binfile.Instruction(3), binfile.Instruction(28)]))
+    data[15] ^= 1
+    with pytest.raises(binfile.BinFileError) as err:
+        binfile.decode(bytes(data))
+    assert str(err.value) == "record 1 (byte offset 8): wrong checksum 1Dh, expected 1Ch"
+
+
+def test_binfile_of_a_partial_record_names_the_record():
+    """8-byte records: 9 bytes are record 0 and one byte of record 1; 16 bytes are two records."""
+    from opentmcl.lang import binfile
+    assert len(binfile.decode(bytes(16))) == 2
+    with pytest.raises(binfile.BinFileError) as err:
+        binfile.decode(bytes(9))
+    assert str(err.value) == "length 9 is not a multiple of 8 bytes (record 1 is incomplete)"
+
+
 def test_field_ranges():
     with pytest.raises(BinFileError, match="type"):
         Instruction(4, 256, 0, 0).encode()

@@ -9,6 +9,12 @@ from opentmcl.lang.assembler import MAX_EXPR_DEPTH, MAX_INCLUDE_DEPTH, AsmError,
 from opentmcl.modules.profile import load_profile
 
 
+def _error(src: str, **kw) -> AsmError:
+    with pytest.raises(AsmError) as err:
+        assemble(src, **kw)
+    return err.value
+
+
 @pytest.mark.parametrize("name", ["TMCM-6212", "PD86-1180"])
 def test_a_program_that_fills_the_memory_exactly_assembles(name):
     """1 Features: the program memory holds `program_memory` commands (6144 / 2048). size - 1
@@ -26,6 +32,40 @@ def test_the_origin_may_be_the_last_address():
     assert prog.instructions == [(28, 0, 0, 0)]
     with pytest.raises(AsmError, match=rf"from address {size}; PD86-1180 program memory holds {size}"):
         assemble("STOP", module="PD86-1180", append_stop=False, origin=size)
+
+
+def test_a_program_too_large_from_an_origin_is_reported_at_the_first_instruction_past_the_end():
+    """TMCM-6212 manual 1 Features: "program memory (non volatile) for up to 6144 TMCL commands";
+    docs/assumptions.md "Load address": with origin N "the size check counts from N". Loaded at
+    6144 - 6, six instructions and the STOP fill the memory exactly; at 6144 - 4 the fifth
+    instruction is the first one at address 6144, beyond the memory, and the error is on its line
+    (docs/tmcl-assembler.md: "the column is that of the token at fault")."""
+    size = load_profile("TMCM-6212").program_memory
+    assert size == 6144
+    src = "".join(f"MST {i}\n" for i in range(6))          # lines 1..6, then the appended STOP
+    fits = assemble(src, module="TMCM-6212", origin=size - 7)
+    assert len(fits.instructions) == 7 and fits.origin + len(fits.instructions) == size
+    origin = size - 4                                    # addresses size-4 .. size+2
+    e = _error(src, module="TMCM-6212", origin=origin)
+    first_outside = size - origin + 1                    # line of the instruction at address `size`
+    assert (e.line, e.column) == (first_outside, 1) == (5, 1)
+    assert e.message == f"program has 7 instructions from address {origin}; TMCM-6212 program memory holds {size}"
+
+
+def test_a_program_without_instructions_beyond_the_memory_is_an_error_without_a_position():
+    """The same rule when the source has no instruction to point at (only comments and constants,
+    or nothing): the appended STOP at the size is an error naming the file, line 0 (docs/
+    tmcl-assembler.md: line 0 is "no position"); at the last address it fits."""
+    size = load_profile("TMCM-6212").program_memory
+    assert assemble("", module="TMCM-6212", origin=size - 1).instructions == [(28, 0, 0, 0)]
+    for source, append_stop in (("", True), ("// a comment\nK = 1\n", True), ("", False)):
+        with pytest.raises(AsmError) as err:
+            assemble(source, filename="empty.tmc", module="TMCM-6212", origin=size + 1 - append_stop,
+                     append_stop=append_stop)
+        count = int(append_stop)
+        assert str(err.value) == (f"empty.tmc: program has {count} instructions from address {size + 1 - append_stop}; "
+                                  f"TMCM-6212 program memory holds {size}")
+        assert (err.value.line, err.value.column) == (0, 0)
 
 
 def test_type_and_motor_take_255_and_refuse_256():

@@ -33,6 +33,12 @@ def value(source: str) -> int:
     return assemble(source).instructions[0].value
 
 
+def _error(src: str, **kw) -> AsmError:
+    with pytest.raises(AsmError) as err:
+        assemble(src, **kw)
+    return err.value
+
+
 def test_the_bounds_are_the_documented_ones():
     assert (MAX_EXPR_TOKENS, MAX_CONSTANT_DEPTH) == (1000, 100)
     assert (MAX_EXPR_DEPTH, MAX_INCLUDE_DEPTH, MAX_INTERMEDIATE) == (100, 32, 2 ** 64)
@@ -95,6 +101,24 @@ def test_longest_expression_is_computed_one_token_more_is_an_error():
     assert value(f"MVP ABS, 0, -{chain(500)}") == 498
     with pytest.raises(AsmError, match="longer than 1000"):
         assemble(f"MVP ABS, 0, {chain(501)}")          # 1001 tokens
+
+
+def test_an_expression_one_token_too_long_is_an_error_at_the_limit_not_before():
+    """docs/assumptions.md "Expression bounds": "1000 tokens per expression"; docs/tmcl-assembler.md:
+    beyond that "the error names the line and column". '1+1+...': the 1000th token is the last
+    one allowed; the error points at the place where the limit is reached (the 1000th or the
+    1001st token), not at an earlier token and not without a column."""
+    assert MAX_EXPR_TOKENS == 1000
+    head = "MVP ABS, 0, "
+    ok = "~" + "+".join(["1"] * 500)                     # 1000 tokens: ~1 + 499 ones
+    assert assemble(head + ok).instructions[0].value == 497
+    text = "+".join(["1"] * 501)                         # 1001 tokens, one character each
+    col_of = {k: len(head) + k for k in (999, 1000, 1001)}   # 1-based column of the k-th token
+    assert text[col_of[1001] - len(head) - 1] == "1" and len(text) == 1001
+    e = _error(f"MST 0\n{head}{text}")
+    assert e.message == "expression longer than 1000 numbers, names and operators"
+    assert e.line == 2
+    assert isinstance(e.column, int) and col_of[999] < e.column <= col_of[1001]
 
 
 def constants(depth: int) -> str:

@@ -74,6 +74,17 @@ def test_help_describes_the_generator(capsys):
     assert out.startswith("usage: python -m opentmcl.lang.gen_includes")
 
 
+def test_help_explains_the_check_option(capsys):
+    """Module docstring: "``--check`` only compares" - `--help` lists `--check` with a description."""
+    with pytest.raises(SystemExit) as ex:
+        gen_includes.main(["--help"])
+    assert ex.value.code == 0
+    lines = capsys.readouterr().out.splitlines()
+    at = next(i for i, line in enumerate(lines) if line.strip().startswith("--check"))
+    described = lines[at].strip()[len("--check"):].strip() or lines[at + 1].strip()
+    assert described and not described.startswith("-")
+
+
 def test_an_interrupt_name_without_ti_prefix_gets_one():
     """The TI_ names of TMCM-6212 3.5.6.4 (TI_TIMER0): a profile name without the prefix is
     written as TI_ + its CamelCase in upper case."""
@@ -94,3 +105,20 @@ def test_global_parameters_are_listed_by_bank_then_number():
     keys = [(int(r.split("// bank ")[1].split(":")[0]), int(r.split("=")[1].split("//")[0])) for r in rows]
     assert keys == sorted(keys)
     assert (1, 0) in keys and keys[0][0] == 0
+
+
+def test_a_global_parameter_name_in_two_banks_gets_the_bank_suffix_on_both():
+    """docs/assumptions.md "Bundled names": "`GP<CamelCaseName>` per global parameter (suffix
+    `_B<bank>` only on a clash)": a name two banks share is written with the bank on both, so each
+    parameter keeps its own name; a name used once keeps none."""
+    prof = load_profile("TMCM-6212")
+    b0 = next(g for (b, _), g in sorted(prof.global_parameters.items()) if b == 0)
+    b3 = next(g for (b, _), g in sorted(prof.global_parameters.items()) if b == 3)
+    other = next(g for (b, _), g in sorted(prof.global_parameters.items()) if b == 0 and g is not b0)
+    shared = {(0, b0.number): dataclasses.replace(b0, name="shared_name"),
+              (3, b3.number): dataclasses.replace(b3, name="shared_name")}
+    text = gen_includes.param_file(dataclasses.replace(prof, global_parameters={**prof.global_parameters, **shared}))
+    consts = assemble(text).constants
+    assert consts["GPSharedName_B0"] == b0.number and consts["GPSharedName_B3"] == b3.number
+    assert "GPSharedName" not in consts
+    assert consts[f"GP{gen_includes.camel(other.name)}"] == other.number

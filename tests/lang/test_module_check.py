@@ -6,16 +6,28 @@ The firmware answers such instructions with status 2 "Invalid command", 3 "Wrong
 """
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pytest
 
 from opentmcl.lang import AsmError, assemble, assemble_file
+from opentmcl.modules.profile import load_profile
 
 
 def warned(source: str, module: str = "TMCM-6212") -> list[tuple[int, int, str]]:
     prog = assemble(source, filename="m.tmc", module=module)
     return [(d.line, d.column, d.message) for d in prog.warnings]
+
+
+def _error(src: str, **kw) -> AsmError:
+    with pytest.raises(AsmError) as err:
+        assemble(src, **kw)
+    return err.value
+
+
+def _warnings(src: str, module) -> list[str]:
+    return [d.message for d in assemble(src, module=module).warnings]
 
 
 def test_motor_beyond_the_axes():
@@ -57,12 +69,45 @@ def test_global_parameter_banks_and_user_variables():
     assert warned("GGP 1, 0") == [(1, 5, "GGP: TMCM-6212 has no global parameter 1 in bank 0")]
 
 
+def test_user_variables_of_a_profile_with_fewer_than_256():
+    """docs/profiles.md: `user_variables` is the size of bank 2 (TMCM-6212 manual 5.3: "Up to 256
+    user variables are available"); a profile of one's own may have fewer. With 100, GGP/SGP 99
+    is the last variable, 100 the first that does not exist (worded as the storable ones are,
+    docs/tmcl-assembler.md: "STGP: TMCM-6212 has 56 storable user variables (0..55), not 56")."""
+    mine = dataclasses.replace(load_profile("TMCM-6212"), user_variables=100)
+    assert _warnings("GGP 99, 2\nSGP 99, 2, 1", mine) == []
+    assert _warnings("GGP 100, 2\nSGP 100, 2, 1", mine) == [
+        "GGP: TMCM-6212 has 100 user variables (0..99), not 100",
+        "SGP: TMCM-6212 has 100 user variables (0..99), not 100"]
+
+
+def test_global_parameter_access_in_the_warning():
+    """TMCM-6212 5.1 (Bank 0): GP128 "TMCL application status ... R" cannot be written (SGP), GP132 "TMCL
+    tick timer ... RW" can, but has no E, so STGP cannot store it (Table 15, the access letters)."""
+    warnings = assemble("SGP 128, 0, 1\nSGP 132, 0, 1\nSTGP 132, 0", module="TMCM-6212").warnings
+    assert [(w.line, w.message) for w in warnings] == [
+        (1, "SGP: global parameter 128 (tmcl_application_status) of TMCM-6212 cannot be written"),
+        (3, "STGP: global parameter 132 (tick_timer) of TMCM-6212 cannot be stored to or restored from EEPROM"),
+    ]
+
+
 def test_ports_and_outputs():
     """TMCM-6212 3.6.12 SIO: outputs are in bank 2; bank 0 holds the inputs."""
     assert warned("SIO 3, 2, 1\nSIO 255, 2, 15\nGIO 0, 0") == []
     assert warned("SIO 0, 0, 1") == [(1, 5, "SIO: port 0 in bank 0 (IN0) of TMCM-6212 is an input")]
     assert warned("GIO 4, 2") == [(1, 5, "GIO: TMCM-6212 has no port 4 in I/O bank 2")]
     assert warned("GIO 0, 5") == [(1, 8, "GIO: TMCM-6212 has no I/O bank 5")]
+
+
+def test_pd86_1180_pullups_port_may_be_set():
+    """PD86-1180 manual 4.6.14 SIO: "SIO is also used to switch the pull-up resistors for all
+    digital inputs ON or OFF. Bank 0 is used for this purpose" (the profile's `pullups` port,
+    bank 0 port 0, docs/assumptions.md "the `pullups` port of `[module]` allowed"); the next
+    port of bank 0 is an input, which SIO cannot set."""
+    prof = load_profile("PD86-1180")
+    assert (prof.extra["pullups"]["bank"], prof.extra["pullups"]["port"]) == (0, 0)
+    assert _warnings("SIO 0, 0, 7", "PD86-1180") == []
+    assert _warnings("SIO 1, 0, 1", "PD86-1180") == ["SIO: port 1 in bank 0 (IN_1) of PD86-1180 is an input"]
 
 
 def test_coordinates_and_interrupts():
@@ -106,6 +151,17 @@ def test_a_bad_profile_file_is_one_error(tmp_path):
     assert str(info.value).startswith(f"{path}: cannot use the module profile") and "\n" not in str(info.value)
 
 
+def test_a_profile_file_that_cannot_be_used_has_no_position(tmp_path):
+    """docs/assumptions.md (Assembler, Diagnostics): "A diagnostic without a position (unreadable
+    file, bad `--module`) prints `file: message`" - line and column 0."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text("not toml [[[\n")
+    e = _error("MST 0", module=str(bad))
+    assert (e.file, e.line, e.column) == (str(bad), 0, 0)
+    assert e.message.startswith(f"cannot use the module profile: {bad}: not TOML")
+    assert str(e).startswith(f"{bad}: cannot use the module profile")
+
+
 def test_the_manuals_own_slips_are_found():
     """TMCM-6212 manual 7.4 prints "AAP MyVariable, 2 //Store contents of accumulator register to
     variable" with MyVariable = 42: a user variable is stored with AGP (3.6.28), and axis
@@ -134,3 +190,62 @@ def test_a_loaded_profile_is_the_target(tmp_path):
     assert prog.module == "TMCM-2212"
     assert [(d.line, d.column, d.message) for d in prog.warnings] == [
         (2, 5, "ROR: motor 2 does not exist on TMCM-2212 (motors 0..1)")]
+
+
+def test_motor_255_copies_coordinates_only_for_sco_and_gco():
+    """TMCM-6212 3.6.22-3.6.23: "SCO 0, 255, 0 copies all coordinates ... from RAM to the EEPROM",
+    GCO 0, 255 back; CCO (3.6.24) and ACO (3.6.25) have no such form: their motor 255 is no motor."""
+    assert warned("SCO 0, 255, 0\nGCO 5, 255") == []
+    assert warned("CCO 0, 255\nACO 1, 255") == [
+        (1, 8, "CCO: motor 255 does not exist on TMCM-6212 (motors 0..5)"),
+        (2, 8, "ACO: motor 255 does not exist on TMCM-6212 (motors 0..5)")]
+
+
+@pytest.mark.parametrize("mnemonic", ["SCO", "GCO"])
+def test_sco_gco_check_their_motor_except_the_eeprom_copy_255(mnemonic):
+    """TMCM-6212 manual 3.6.22 SCO: "<motor number> 0...5"; "SCO <coordinate number>, 255, 0
+    copies the coordinate ... to the EEPROM" (GCO 3.6.23 likewise from the EEPROM). Motor 5 is
+    the last axis, 6 the first that does not exist, 255 the copy."""
+    args = ", 0" if mnemonic == "SCO" else ""
+    assert _warnings(f"{mnemonic} 1, 5{args}\n{mnemonic} 1, 255{args}", "TMCM-6212") == []
+    assert _warnings(f"{mnemonic} 1, 6{args}", "TMCM-6212") == [
+        f"{mnemonic}: motor 6 does not exist on TMCM-6212 (motors 0..5)"]
+    assert _warnings(f"{mnemonic} 1, 254{args}", "TMCM-6212") == [
+        f"{mnemonic}: motor 254 does not exist on TMCM-6212 (motors 0..5)"]
+
+
+@pytest.mark.parametrize("src", ["ROR 255, 100", "MST 255", "SAP 4, 255, 1"])
+def test_motor_255_of_other_axis_commands_does_not_exist(src):
+    """docs/assumptions.md "Module checks": "SCO/GCO motor 255 (copy to/from EEPROM) is allowed" -
+    only there: ROR/MST/SAP take "<motor number> 0...5" (TMCM-6212 3.6.2, 3.6.4, 3.6.6)."""
+    mnemonic = src.split()[0]
+    assert _warnings(src, "TMCM-6212") == [f"{mnemonic}: motor 255 does not exist on TMCM-6212 (motors 0..5)"]
+
+
+def test_the_pd28_and_pd86_commands_on_a_motor():
+    """PD28-1021 3.5 Table 5: MVPA, ROLA and RORA take a <motor number>; PD86-1180 4.4.1: STAP and
+    RSAP take <parameter>, <motor number>. The PD28-1021 and PD86-1180 have one motor (0)."""
+    assert warned("MVPA ABS, 0\nROLA 0\nRORA 0", "PD28-1021") == []
+    assert [m for _, _, m in warned("MVPA ABS, 1\nROLA 1\nRORA 1", "PD28-1021")] == [
+        f"{name}: motor 1 does not exist on PD28-1021 (motor 0 only)" for name in ("MVPA", "ROLA", "RORA")]
+    assert [m for _, _, m in warned("STAP 4, 1\nRSAP 4, 1", "PD86-1180")] == [
+        f"{name}: motor 1 does not exist on PD86-1180 (motor 0 only)" for name in ("STAP", "RSAP")]
+
+
+def test_the_check_reads_what_fields_name_from_the_command_set():
+    """Issue 33: "No bare opcode sets remain outside [the command table]". The check compares no
+    command number with a literal: what each field names is `Command.meanings` (protocol/opcodes.py)."""
+    import ast
+
+    from opentmcl.lang import capabilities_check
+
+    tree = ast.parse(Path(capabilities_check.__file__).read_text(encoding="utf-8"))
+    numbers = [node.lineno for node in ast.walk(tree)
+               if isinstance(node, ast.Compare)
+               and any(isinstance(n, ast.Attribute) and n.attr == "command" for n in (node.left, *node.comparators))
+               and any(isinstance(c, ast.Constant) and isinstance(c.value, int)
+                       or isinstance(c, (ast.Set, ast.Tuple, ast.List)) for c in node.comparators)]
+    sets = [node.lineno for node in ast.walk(tree)
+            if isinstance(node, (ast.Set, ast.Tuple)) and len(node.elts) > 1
+            and all(isinstance(e, ast.Constant) and isinstance(e.value, int) for e in node.elts)]
+    assert numbers == [] and sets == []

@@ -105,6 +105,24 @@ def test_given_labels_name_targets_and_bad_names_fall_back():
     assert disassemble(binfile.encode([]), comments=False) == "#nostop\n"
 
 
+def test_disassembler_takes_the_first_given_label_by_name():
+    """Two names for one address: the first in alphabetical order is used, whatever the order of
+    the mapping."""
+    prog = [(22, 0, 0, 0), (28, 0, 0, 0)]  # JA 0 (3.6.17 "JA <label>"), STOP
+    for labels in ({"b": 0, "a": 0}, {"a": 0, "b": 0}):
+        assert disassemble(prog, labels=labels, comments=False) == "a:\n    JA a\n"
+
+
+def test_generated_label_does_not_repeat_a_given_one():
+    """A jump target without a given name gets ``L<address>``; when a given label already has
+    that name (``L1`` at address 0 here), ``_`` is appended, and the text re-assembles to the same
+    records."""
+    prog = [(22, 0, 0, 1), (3, 0, 0, 0), (28, 0, 0, 0)]  # JA 1, MST 0, STOP
+    text = disassemble(prog, labels={"L1": 0}, comments=False)
+    assert text == "L1:\n    JA L1_\nL1_:\n    MST 0\n"
+    assert assemble(text).instructions == prog
+
+
 def test_module_names_in_disassembly():
     """With a module, parameter, interrupt and motor numbers come out as the bundled names
     (TMCM-6212 7.3 style: SAP APMaxPositioningSpeed, Motor0, ...; 3.5.6.4: EI TI_GLOBAL)."""

@@ -21,7 +21,7 @@ import pytest
 
 from opentmcl import VirtualModule
 from opentmcl.modules import bounds
-from opentmcl.modules.profile import _FILES, builtin_raw, load_profile
+from opentmcl.modules.profile import BUILTIN, builtin_raw, load_profile
 from opentmcl.modules.profile_file import ProfileError, ProfileLimitError, check_bounds
 
 BASE = 'extends = "TMCM-6212"\n[module]\nname = "BIG"\n'
@@ -55,7 +55,7 @@ def refused(done: subprocess.CompletedProcess, *words: str) -> str:
 
 def test_built_in_profiles_are_within_every_bound():
     """The bounds are above the three modules of the manuals: no built-in profile reaches one."""
-    for name in _FILES:
+    for name in BUILTIN:
         raw = builtin_raw(name)
         check_bounds(raw, name)
         assert not bounds.too_deep(raw)

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pytest
 
-from opentmcl.motion import sixpoint
+from opentmcl.motion import sixpoint_plan
 from opentmcl.motion.segments import PSCALE
 from opentmcl.motion.sixpoint import PlanInvariantError, Ramp, plan_position
 
@@ -49,8 +49,8 @@ def test_drive_fails_fast_when_a_band_does_not_raise_the_speed(monkeypatch):
 def test_final_fails_fast_when_holding_does_not_reach_the_braking_curve(monkeypatch):
     """Manual 4.1 AP18: D1 is the "Deceleration between V1 and VSTOP", the last band before the
     target; a hold ahead of the braking curve that lasts no tick never gets there."""
-    monkeypatch.setattr(sixpoint, "ceil_div", lambda a, b: 0)
-    run = sixpoint._Run(0, 0, 1, RAMP.vmax // 2, None, [])     # far ahead of the braking curve
+    monkeypatch.setattr(sixpoint_plan, "ceil_div", lambda a, b: 0)
+    run = sixpoint_plan._Run(0, 0, 1, RAMP.vmax // 2, None, [])     # far ahead of the braking curve
     with pytest.raises(PlanInvariantError, match="_final"):
-        sixpoint._final(RAMP, run, 10**9 * PSCALE)
+        sixpoint_plan._final(RAMP, run, 10**9 * PSCALE)
 

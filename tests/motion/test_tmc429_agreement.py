@@ -21,7 +21,7 @@ from .tmc429_reference import ReferenceRamp
 
 def state(r) -> tuple:
     if isinstance(r, Tmc429Ramp):
-        return (r.now, r.x_actual, r.x_target, r.v_internal, r._acc, r._acc_dir, r.stopping,
+        return (r.now, r.x_actual, r.x_target, r.v_internal, *r.pulse_accumulator, r.stopping,
                 r.v_actual)
     return (r.now, r.x_actual, r.x_target, r.v, r.acc, r.acc_dir, r.stopping, r.v_actual)
 

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from opentmcl.motion import tmc429
+from opentmcl.motion import tmc429, tmc429_arith, tmc429_follow
 from opentmcl.motion.pmulpdiv import registers_for
 from opentmcl.motion.tmc429 import HOLD_MODE, RAMP_MODE, Tmc429Ramp
 
@@ -33,12 +33,15 @@ def counted_isqrt():
         calls[0] += 1
         return math.isqrt(x)
 
-    saved = tmc429.isqrt
-    tmc429.isqrt = counting
+    modules = (tmc429_arith, tmc429_follow)       # the core's only square roots
+    saved = [m.isqrt for m in modules]
+    for m in modules:
+        m.isqrt = counting
     try:
         yield calls
     finally:
-        tmc429.isqrt = saved
+        for m, f in zip(modules, saved, strict=True):
+            m.isqrt = f
 
 
 def level_budget(v: int) -> int:
@@ -77,7 +80,7 @@ def test_long_braking_at_small_a_max_is_exact_and_cheap(m):
     apply((fast, ref), {"mode": RAMP_MODE,
                         "x_target": max(1, int(f * braking_distance(v, pmul, pdiv)))})
     span = v * 256 // a_max * (32 << rd)          # about the length of the braking
-    tmc429._FOLLOW_MEMO.clear()
+    tmc429.clear_memos()
     steps: list = []
     with counted_isqrt() as calls:
         for cut in sorted(cuts):
@@ -106,7 +109,7 @@ def test_first_braking_at_a_max_1_costs_levels_not_ticks():
     fast = Tmc429Ramp(position_bits=32)
     apply((fast,), regs)
     apply((fast,), {"x_target": 3_000_000})
-    tmc429._FOLLOW_MEMO.clear()
+    tmc429.clear_memos()
     with counted_isqrt() as calls:
         while (e := fast.next_event()) is not None:
             fast.advance(e)
@@ -122,7 +125,7 @@ def test_first_braking_at_a_max_1_costs_levels_not_ticks():
     ref = RecordingReference(position_bits=32)
     apply((ref,), regs)
     ref.now, ref.x_actual, ref.x_target = probe.now, probe.x_actual, probe.x_target
-    ref.v, ref.acc, ref.acc_dir = probe.v_internal, probe._acc, probe._acc_dir
+    ref.v, (ref.acc, ref.acc_dir) = probe.v_internal, probe.pulse_accumulator
     ref.advance(fast.now)
     assert state(ref) == state(fast)
 
@@ -144,7 +147,7 @@ def test_braking_at_equal_dividers_evaluates_the_target_on_few_ticks(a_max, v_ma
     apply((fast,), regs)
     target = 10 * v_max
     apply((fast,), {"x_target": target})
-    tmc429._FOLLOW_MEMO.clear()
+    tmc429.clear_memos()
     with counted_isqrt() as calls:
         while (e := fast.next_event()) is not None:
             fast.advance(e)
@@ -173,7 +176,7 @@ def test_first_braking_follows_the_levels_down_without_square_roots(a_max):
     fast, probe = Tmc429Ramp(position_bits=32), Tmc429Ramp(position_bits=32)
     apply((fast, probe), regs)
     apply((fast, probe), {"x_target": 3_000_000})
-    tmc429._FOLLOW_MEMO.clear()
+    tmc429.clear_memos()
     with counted_isqrt() as calls:
         while (e := fast.next_event()) is not None:
             fast.advance(e)
@@ -186,7 +189,7 @@ def test_first_braking_follows_the_levels_down_without_square_roots(a_max):
     ref = RecordingReference(position_bits=32)
     apply((ref,), regs)
     ref.now, ref.x_actual, ref.x_target = probe.now, probe.x_actual, probe.x_target
-    ref.v, ref.acc, ref.acc_dir = probe.v_internal, probe._acc, probe._acc_dir
+    ref.v, (ref.acc, ref.acc_dir) = probe.v_internal, probe.pulse_accumulator
     ref.advance(fast.now - 1)
     assert not (ref.x_actual == 3_000_000 and ref.v == 0)
     ref.advance(fast.now)
@@ -206,7 +209,7 @@ def test_a_repeated_move_is_planned_once():
     fast, sampled = Tmc429Ramp(position_bits=32), Tmc429Ramp(position_bits=32)
     ref = RecordingReference(position_bits=32)
     apply((fast, sampled, ref), regs)
-    tmc429._FOLLOW_MEMO.clear()
+    tmc429.clear_memos()
     for move in range(8):
         target = 0 if move % 2 else 20_000
         apply((fast, sampled, ref), {"x_target": target})

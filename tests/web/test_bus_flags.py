@@ -7,7 +7,7 @@ from opentmcl.host.debugger import describe_flags
 from opentmcl.host.loader import Loader
 from opentmcl.lang.assembler import assemble
 from opentmcl.server.bus import ModuleBus
-from opentmcl.web.bus import BusTransport
+from opentmcl.web.bus_transport import BusTransport
 
 PROGRAM = "CALC LOAD, 5\nCOMP 7\nSTOP\n"
 

@@ -10,7 +10,7 @@ from opentmcl.server.bus import ModuleBus
 from opentmcl.web.app import create_app
 from opentmcl.web.server import bus_dashboards
 
-from .test_bus import FakeClock
+from .test_bus_transport import FakeClock
 
 
 @pytest.fixture

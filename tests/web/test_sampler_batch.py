@@ -1,12 +1,21 @@
 """The dashboard's polling reads with one `request_many` per tick (web/sampler.py, web/service.py):
 the same values as one GAP/GGP/GIO per value (TMCM-6212 manual 3.6.6, 3.6.8, 3.6.15), a refused read
-a gap (None) without losing the others, a lost link all gaps."""
+a gap (None) without losing the others, a lost link all gaps.
+
+A module of any size is read in batches: a profile file may give a module up to 255 axes
+(docs/profiles.md), so the axis cards of `sample_slow` (ten GAPs per axis, TMCM-6212 manual 3.6.6)
+or the charts of `sample_fast` (GAP 1 and GAP 3 per axis) can need more reads than one
+`Client.request_many` takes (`MAX_BATCH`); `Dashboard.read_many` still gives every value (a batch
+too long is the client's argument error, not a lost link)."""
 from __future__ import annotations
 
 import pytest
 
+from opentmcl.host.client import MAX_BATCH
 from opentmcl.host.errors import TmclTimeout
 from opentmcl.web import sampler as S
+
+GAP = 6
 
 
 class Clock:
@@ -76,6 +85,23 @@ def test_a_refused_read_is_a_gap_the_others_stay(dash):
     values = dash.read_many([(6, 4, 0, 0), (10, 250, 0, 0), (6, 4, 0, 0)])
     assert values == [555, None, 555]
     assert dash.connected
+
+
+@pytest.mark.parametrize("count", [MAX_BATCH, MAX_BATCH + 1, 3 * MAX_BATCH + 5])
+def test_read_many_longer_than_one_batch_gives_every_value(dash, count: int) -> None:
+    for motor in range(6):
+        dash.module.request(5, 4, motor, 1000 + motor)  # SAP 4 (max. positioning speed)
+    reads = [(GAP, 4, i % 6, 0) for i in range(count)]
+    assert dash.read_many(reads) == [1000 + i % 6 for i in range(count)]
+    assert dash.connected
+
+
+def test_refused_read_in_a_later_batch_is_a_gap_only(dash) -> None:
+    reads = [(GAP, 4, 0, 0)] * (MAX_BATCH + 1) + [(GAP, 4, 6, 0), (GAP, 4, 1, 0)]  # motor 6: status 4
+    values = dash.read_many(reads)
+    assert values[:MAX_BATCH + 1] == [dash.module.request(GAP, 4, 0).value] * (MAX_BATCH + 1)
+    assert values[MAX_BATCH + 1] is None
+    assert values[MAX_BATCH + 2] == dash.module.request(GAP, 4, 1).value
 
 
 def test_a_lost_link_is_all_gaps_and_marks_it(dash):

@@ -146,11 +146,11 @@ def test_run_to_breakpoint_stops_before_the_line(dash):
     dash.download(src)
     assert dash.set_breakpoints([3]) == [1]
     dash.run()
-    dash._runner.join(timeout=30)
+    dash.runner.join(timeout=30)
     st = dash.program_state()
     assert st["pc"] == 1 and st["line"] == 3 and st["a"] == 1
     dash.run()
-    dash._runner.join(timeout=30)
+    dash.runner.join(timeout=30)
     st = dash.program_state()
     assert st["pc"] == 1 and st["a"] == 2
     dash.stop()

@@ -49,7 +49,7 @@ def test_overview_fits_a_1366x768_screen(shell):
     page.set_viewport_size({"width": 1366, "height": 768})
     page.goto(page.url.split("#")[0] + "#overview")
     page.wait_for_selector("#axis-5", timeout=TIMEOUT_MS)
-    page.wait_for_function("document.getElementById('axis-5-current').textContent.includes('CS')",
+    page.wait_for_function("document.getElementById('axis-5-current').textContent.includes('mA')",
                            timeout=TIMEOUT_MS)
     height, viewport = page.evaluate("[document.documentElement.scrollHeight, window.innerHeight]")
     assert viewport == 768 and height <= viewport
@@ -84,16 +84,17 @@ def test_status_lamps_are_readable(shell):
     assert page.get_attribute("#axis-0-home", "aria-label") == "home switch (AP 9): off"
 
 
-def test_currents_in_the_manuals_terms_with_the_raw_value(shell):
-    """TMCM-6212 manual 4.1: AP6 "255 means 100% of the module's maximum current", AP180 "0..31 =
-    1/32 .. 32/32 of CS". SAP 6, 0, 255 (the last valid value) through the wire: the card shows
-    "100 % (255)"; AP180 is shown as (n+1)/32 CS beside its raw n read with GAP 180."""
+def test_currents_in_ma_with_the_raw_value(shell):
+    """TMCM-6212 manual 4.1: AP6 "255 means 100% of the maximum current of the module" (manual 1: "up
+    to 1.1A RMS"), AP180 "0...31: 1/32, 2/32, ... 32/32". SAP 6, 0, 255 (the last valid value)
+    through the wire: the card shows "1100 mA (255)"; AP180 is shown as (n+1)/32 of 1100 mA beside
+    its raw n read with GAP 180 (issue 31 item 4: currents in mA, no longer "(n+1)/32")."""
     page, six, _, _ = shell
     six.client.request(5, 6, 0, 255)
-    page.wait_for_function("document.getElementById('axis-0-max_current').textContent === '100 % (255)'",
+    page.wait_for_function("document.getElementById('axis-0-max_current').textContent === '1100 mA (255)'",
                            timeout=TIMEOUT_MS)
     n = six.client.reply(6, 180, 1).value
-    page.wait_for_function(f"document.getElementById('axis-1-current').textContent === '{n + 1}/32 CS ({n})'",
+    page.wait_for_function(f"document.getElementById('axis-1-current').textContent === '{round((n + 1) / 32 * 1100)} mA ({n})'",
                            timeout=TIMEOUT_MS)
 
 

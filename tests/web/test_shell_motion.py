@@ -114,27 +114,33 @@ def test_velocity_range_is_the_target_speed_range(motion):
 
 def test_velocity_unit_follows_unit_mode(motion):
     """TMCM-6212 manual 4.1 AP255 "Unit mode": 1 (default) pps, 0 "the internal units of the TMC5130
-    are used directly"; the velocity field's unit follows the value read from the module."""
+    are used directly". The velocity field stays in pps (issue 31: physical units), and the module
+    value beside it says the module now takes internal units (16 MHz / 2^24 pps each, docs/sources.md)."""
     page, six, _ = motion
-    assert page.inner_text("#motion-5-unit") == "pps"
+    assert page.inner_text("#motion-5-unit") == "pps" and page.inner_text("#motion-5-velocity-raw") == ""
     six.client.request(5, 255, 5, 0)
-    page.wait_for_function("document.getElementById('motion-5-unit').textContent === 'internal units'",
+    page.wait_for_function("document.getElementById('motion-5-velocity-raw').textContent.endsWith('internal units')",
                            timeout=TIMEOUT_MS)
-    assert page.inner_text("#motion-0-unit") == "pps"  # per axis
+    assert page.inner_text("#motion-5-unit") == "pps" and page.inner_text("#motion-0-velocity-raw") == ""  # per axis
 
 
 def test_pd86_1180_velocity_is_in_internal_units(browser):
-    """PD86-1180 (TMC429, docs/profiles.md capability velocity_unit = "tmc429"): the velocity is in
-    internal units, range 0…2047 (manual 4.6.1 ROR "0… 2047"); ROR with 2047 turns the motor."""
+    """PD86-1180 (TMC429, docs/profiles.md capability velocity_unit = "tmc429"): the module takes
+    internal units, range 0…2047 (manual 4.6.1 ROR "0… 2047"); the field shows pps from them (manual
+    5: 16 MHz * v / (65536 * 2^pulse_divisor)) with the module value beside it. The slider's right
+    end is 2047: ROR with it turns the motor at 2047."""
     with bench(("PD86-1180", 1)) as b:
         messages: list[str] = []
         page = watched_page(browser, b.handle.module_url(1), messages)
         try:
             open_view(page, "motion")
-            page.wait_for_function("document.getElementById('motion-0-unit').textContent === 'internal units'",
+            page.wait_for_function("document.getElementById('motion-0-velocity-raw').textContent.endsWith('internal units')",
                                    timeout=TIMEOUT_MS)
-            assert page.get_attribute("#motion-0-velocity", "max") == "2047"
-            page.fill("#motion-0-velocity", "2047")
+            assert page.inner_text("#motion-0-unit") == "pps"
+            page.evaluate("(() => { const s = document.getElementById('motion-0-slider'); s.value = s.max;"
+                          " s.dispatchEvent(new Event('input')); })()")
+            assert page.inner_text("#motion-0-velocity-raw") == "= 2047 internal units"
+            assert float(page.input_value("#motion-0-velocity")) == pytest.approx(16e6 * 2047 / (65536 * 8), rel=1e-4)
             page.click("#motion-0-ror")
             one = b.client(1)
             wait_until(lambda: gap(one, ACTUAL_SPEED) == 2047, "PD86-1180 motor at 2047")

@@ -83,6 +83,31 @@ def test_6212_free_wheeling_stage_does_not_reach_its_limit_switch(rig):
     assert r.gap(10) == 0 and r.gap(1) == 76800 and r.phys() == 0
 
 
+def _removing(tmp_path, number: int):
+    path = tmp_path / f"no{number}.toml"
+    path.write_text(f'extends = "TMCM-6212"\n[module]\nname = "NO{number}-6212"\n'
+                    f"[remove]\naxis_parameter = [{number}]\n")
+    return str(path)
+
+
+def test_toff_0_free_wheels_on_a_profile_without_ap168(rig, tmp_path):
+    """TMCM-6212 manual 4.1 AP167 "Setting this parameter to zero completely disables all driver
+    transistors and the motor can free-wheel" - a property of AP167 alone; a profile that removes the
+    smartEnergy parameter AP168 (docs/profiles.md `[remove]`; GAP 168 is status 3) keeps it: with
+    AP167 = 0 the counter moves 20000 and the stage and AP209 stay at 0; with AP167 = 1 (the last
+    value that still drives) the stage follows the next 20000."""
+    r = rig(_removing(tmp_path, 168), {})
+    assert r.vm.request(6, 168, 0).status == 3
+    r.sap(167, 0)
+    r.cmd(4, 1, 0, 20000)
+    r.vm.advance(2.0)
+    assert (r.gap(1), r.phys(), r.gap(209)) == (20000, 0, 0)
+    r.sap(167, 1)
+    r.cmd(4, 1, 0, 20000)
+    r.vm.advance(2.0)
+    assert (r.gap(1), r.phys(), r.gap(209)) == (40000, 20000, 20000)
+
+
 CASES = [(0, 0), (1000, 80), (3187, 254), (3199, 255), (3200, 0), (3200 + 800, 64), (-12, 255)]
 
 

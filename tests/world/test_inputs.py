@@ -1,7 +1,10 @@
-"""Inputs, outputs and error flags driven by the world (item 5)."""
+"""Inputs, outputs and error flags driven by the world (item 5); the scenario's inputs are checked
+against the module's ports at power-up."""
 import pytest
 
+from opentmcl import VirtualModule
 from opentmcl.firmware import flags
+from opentmcl.motion.scenario import ScenarioError
 from opentmcl.motion.stage import Profile
 from tests.firmware.test_program_support import Wire
 
@@ -157,3 +160,32 @@ def test_1180_shutdown_pin(rig):
     r.vm.advance(1)
     assert r.gap(3) == 0
     assert r.vm.flags & flags.ESD
+
+
+def test_set_shutdown_drives_the_shutdown_pin(rig):
+    """docs/scenarios.md: `vm.world.set_shutdown(1)  # SHUTDOWN pin high`; PD86-1180 manual 6 GP80
+    "Shutdown pin functionality: ... 1 - high active": a pin set high from Python stops the moving
+    motor and sets ESD (TMCM-6212 3.6.16 "12 ESD - shutdown error"); set low it does not."""
+    low = rig("TMCM-1180", {})
+    low.cmd(9, 80, 0, 1)
+    low.vm.world.set_shutdown(0)
+    low.cmd(1, 0, 0, 300)
+    low.vm.advance(0.5)
+    assert low.gap(3) != 0 and not low.vm.flags & flags.ESD
+    high = rig("TMCM-1180", {})
+    high.cmd(9, 80, 0, 1)
+    high.cmd(1, 0, 0, 300)
+    high.vm.advance(0.2)
+    high.vm.world.set_shutdown(1)
+    high.vm.advance(0.2)
+    assert high.gap(3) == 0 and high.vm.flags & flags.ESD
+
+
+def test_power_up_names_bank_and_port_of_a_missing_input():
+    """TMCM-6212 manual 3.6.13 GIO: bank 1 holds the analog inputs AIN0..AIN3 (ports 0..3);
+    docs/scenarios.md `[[input]]` `bank`, `port` "the GIO address". Port 3 (the last) is driven,
+    port 4 (the first beyond) is refused with a ScenarioError naming bank and port."""
+    vm = VirtualModule("TMCM-6212", scenario={"input": [{"bank": 1, "port": 3, "value": 1000}]})
+    assert vm.request(15, 3, 1).value == 1000
+    with pytest.raises(ScenarioError, match=r"^input bank 1 port 4: TMCM-6212 has no such port$"):
+        VirtualModule("TMCM-6212", scenario={"input": [{"bank": 1, "port": 4, "value": 1000}]})

@@ -1,14 +1,16 @@
-"""stallGuard2, coolStep, drive currents, encoder and step loss (items 3 and 4), on the
+"""stallGuard2, coolStep, drive currents, step loss and the deviation stop (items 3 and 4), on the
 behavioural model of docs/world.md: capacity C = (CS + 1) / 32 * (1 - |v| / v_falloff) with
 CS = current >> 3, load value SG = clamp(round(1023 (1 - L / C)) + 16 SGT, 0, 1023)."""
 import pytest
 
 from opentmcl.firmware import flags
+from opentmcl.motion import CLOCK_HZ
 from opentmcl.motion.stage import Profile
 from opentmcl.motion.stallguard import load_value
 from tests.firmware.test_program_support import Wire
 
 FALLOFF_6212 = 30 * 200 * 256   # default torque fall-off: 30 rev/s at 256 microsteps (docs/world.md)
+V = 51200                       # pps; the TMCM-6212's default AP5 accelerates to it in one second
 
 
 def speed_share(pps: float, falloff: float = FALLOFF_6212) -> float:
@@ -52,6 +54,49 @@ def test_load_value_depends_on_velocity(rig, falloff):
     assert got[400000] < got[20000]
 
 
+def test_tmc429_speed_unit_in_the_torque_falloff(rig):
+    """PD86-1180 5 AP3 "Actual speed" in units of 16 MHz / 65536 * 2^-AP154 microsteps/s;
+    docs/world.md: capacity C = (CS + 1) / 32 * (1 - |v| / v_falloff) with v in pps, and
+    AP206 = round(1023 * (1 - L / C)). 1000 units at AP154 = 3 are 30517.578125 pps."""
+    falloff = 33908
+    r = rig("PD86-1180", {"axis": {"0": {"load": 0.099, "torque_falloff_speed": falloff}}})
+    r.sap(6, 255)                           # CS 31: full capacity at rest
+    r.sap(154, 3)
+    r.cmd(1, 0, 0, 1000)
+    r.vm.advance(2)
+    assert r.gap(3) == 1000
+    pps = 1000 * 16_000_000 / (65536 * 2**3)
+    assert pps == 30517.578125
+    assert r.gap(206) == load_value(0.099, 1 - pps / falloff, 0)
+
+
+def _expected_load_value(load: float, pps: float, falloff: float) -> int:
+    """docs/world.md "Load, current, stallGuard2": C = (CS + 1) / 32 * (1 - |v| / v_falloff),
+    SG = clamp(round(1023 * (1 - L / C)) + 16 * SGT, 0, 1023), here CS = 31 and SGT = 0."""
+    capacity = max(0.0, 1 - pps / falloff)
+    return max(0, min(1023, round(1023 * (1 - load / capacity))))
+
+
+def test_1180_torque_falloff_reads_the_speed_in_its_velocity_unit(rig):
+    """PD86-1180 manual 5 AP2/AP3/AP4: speeds are in units of "16MHz / 65536" microsteps per second
+    scaled by the pulse divisor (AP154 "The exponent of the scaling factor for the pulse (step)
+    generator"); docs/world.md: the torque falls with speed to 0 at 30 rev/s of a 200-step motor
+    (30 * 200 * 2^AP140 pps, AP140 = 4 here). AP3 = 1000 is 30518 pps with pulse divisor 3 and half
+    of that with 4, so the same load 0.3 reads lower with the smaller divisor."""
+    got = {}
+    for divisor in (3, 4):
+        r = rig("TMCM-1180", {"axis": {"0": {"load": 0.3}}})
+        r.sap(154, divisor)
+        r.sap(6, 255)                  # CS 31: C = 1 at standstill
+        r.cmd(1, 0, 0, 1000)
+        r.vm.advance(1)
+        assert (r.gap(3), r.gap(140)) == (1000, 4)
+        pps = 1000 * CLOCK_HZ / 65536 / 2 ** divisor
+        got[divisor] = (r.gap(206), _expected_load_value(0.3, pps, 30 * 200 * 2 ** 4))
+    assert got[3][0] == got[3][1] and got[4][0] == got[4][1]
+    assert got[3][0] < got[4][0] < 1023 * (1 - 0.3) + 1
+
+
 def test_load_value_depends_on_current_and_threshold():
     """TMCM-6212 manual 4.1 AP174: "A lower value gives a higher sensitivity ... A higher value
     makes stallGuard2 less sensitive and requires more torque to indicate a stall"."""
@@ -92,6 +137,39 @@ def test_no_stall_stop_below_the_stall_speed(rig):
     assert r.gap(3) == 20000
     assert r.gap(1) > 20000
     assert r.phys() == 10000
+
+
+def test_stop_on_stall_speed_in_internal_units(rig):
+    """TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load value
+    reaches zero" and AP255 "0 - the internal units of the TMC5130 are used directly": with
+    AP255 = 0 the stall speed is an internal velocity like the ROR speed (v * 16 MHz / 2^24 pps). ROR
+    20000 (19073 pps) into a load step at 10000 stops there with AP181 = 19500 (18597 pps, below the
+    speed; AP207 bit 0 "stallGuard error"), and runs on with AP181 = 21000 (above it)."""
+    got = {}
+    for limit in (19500, 21000):
+        r = rig("TMCM-6212", {"axis": {"0": {"load": {"steps": [[10000, 0.6]], "before": 0.1}}}})
+        r.sap(255, 0)
+        r.sap(181, limit)
+        r.sap(174, 0)
+        r.cmd(1, 0, 0, 20000)
+        r.vm.advance(2)
+        got[limit] = (r.gap(3) == 0, r.gap(1) == 10000, r.gap(207))
+    assert got == {19500: (True, True, 1), 21000: (False, False, 0)}
+
+
+def test_a_stall_moving_left_stops_at_the_first_position_of_the_heavier_load(rig):
+    """TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load value
+    reaches zero"; docs/world.md "Time: events, never steps": the positions where a load over
+    position steps are events, in both directions. The stage starts at 20000 above a step at 10000
+    whose load below (0.6) the motor cannot hold (C = 17/32): ROL stops it exactly at 9999, the
+    first position of the heavier load, with AP207 bit 0 "stallGuard error" - as moving right over
+    a step up stops at 10000 (tests/world/test_load.py)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"start": 20000, "load": {"steps": [[10000, 0.1]], "before": 0.6}}}})
+    r.sap(181, 1000)
+    r.sap(174, 0)
+    r.cmd(2, 0, 0, 20000)
+    r.vm.advance(2)
+    assert (r.gap(3), r.phys(), r.gap(1), r.gap(207)) == (0, 9999, 9999 - 20000, 1)
 
 
 def test_stall_interrupt_is_raised(rig):
@@ -144,64 +222,21 @@ def test_deviation_present_when_the_motion_starts(rig, command, offset):
         assert r.gap(207) == 0
 
 
-def test_encoder_follows_the_stage_and_is_writable(rig):
-    """TMCM-6212 manual 6.2: with AP202 and AP210 set "the encoder position is the same as the
-    motor position"; AP209 "is also writable, e.g. for setting a new origin"."""
+@pytest.mark.parametrize(("command", "stop_at"), [(1, 1001), (2, -1001)])
+def test_deviation_limit_stops_a_free_wheeling_motor_in_both_directions(rig, command, stop_at):
+    """TMCM-6212 manual 4.1 AP212 "When the actual position (parameter 1) and the encoder position
+    (parameter 209) differ more than set here the motor will be stopped", and AP167 = 0 "completely
+    disables all driver transistors and the motor can free-wheel": the rotor and the encoder stay at
+    0 while the counter runs, so with AP212 = 1000 a deviation of 1000 (the last allowed one) goes
+    on and the motor stops at the first counter beyond it, 1001 steps right (ROR) or left (ROL) of
+    the encoder, with AP207 bit 1 (deviation) set."""
     r = rig("TMCM-6212", {})
-    r.cmd(4, 0, 0, 12345)
-    r.vm.advance(2)
-    assert r.gap(209) == 12345
-    r.sap(209, 100)
-    assert r.gap(209) == 100
-    r.sap(210, 4000)                   # a 1000-line encoder: 4000 counts per round
-    r.cmd(4, 0, 0, 12345 + 1000)
-    r.vm.advance(1)
-    assert abs(r.gap(209) - (100 + 1000)) < 13   # resolution 51200 / 4000 = 12.8 microsteps
-
-
-def test_encoder_matches_the_motor_only_with_the_right_ap210(rig):
-    """TMCM-6212 manual 6.2: "When parameters #202 and #210 are set to the right values the
-    module will automatically convert the encoder resolution to the motor microstep resolution
-    so that the encoder position is the same as the motor position" - a 1000-line encoder
-    (4000 counts per round, scenario) read with the default AP210 = 51200 counts one round of
-    51200 microsteps as 4000; AP210 = 4000 makes it read 51200; the wrong value trips AP212."""
-    sc = {"axis": {"0": {"encoder": {"counts_per_round": 4000}}}}
-    r = rig("TMCM-6212", sc)
-    r.cmd(4, 0, 0, 51200)
-    r.vm.advance(3)
-    assert r.gap(1) == 51200
-    assert r.gap(209) == 4000
-    r.sap(210, 4000)
-    assert r.gap(209) == 51200
-    r = rig("TMCM-6212", sc)
     r.sap(212, 1000)
-    r.cmd(4, 0, 0, 51200)
-    r.vm.advance(3)
-    assert r.gap(3) == 0 and r.gap(1) < 51200
-    assert r.gap(207) == 2
-
-
-def test_1180_encoder_prescaler(rig):
-    """PD86-1180 manual 7.2: prescaler = p / 512 on the 256-count sensOstep encoder; p = 6400
-    (12.5) with 16 microsteps makes the encoder read microsteps; p = 3200 reads half of it."""
-    r = rig("TMCM-1180", {})
-    r.cmd(4, 0, 0, 3200)               # one round at 16 microsteps
-    r.vm.advance(20)
-    assert r.gap(1) == 3200
-    assert r.gap(209) == 3200
-    r.sap(210, 3200)
-    assert r.gap(209) == 1600
-
-
-def test_1180_clear_encoder_on_null_channel(rig):
-    """PD86-1180 manual 7.2: adding 4 to p "Clear encoder with next null channel event" (the
-    null channel comes once per round)."""
-    r = rig("TMCM-1180", {"axis": {"0": {"start": 100}}})
-    r.sap(210, 6400 + 4)
-    r.cmd(4, 0, 0, 5000)
-    r.vm.advance(30)
-    assert r.gap(1) == 5000
-    assert r.gap(209) == 5000 + 100 - 3200   # cleared where the stage passed 3200
+    r.sap(167, 0)
+    r.cmd(command, 0, 0, V)
+    r.vm.advance(2.0)
+    assert (r.gap(1), r.gap(209), r.gap(3), r.phys()) == (stop_at, 0, 0, 0)
+    assert r.gap(207) & 2
 
 
 def test_coolstep_lowers_the_current_at_light_load(rig):
@@ -319,6 +354,40 @@ def test_load_api(rig):
         Profile([(0, 1)], kind="spline")
 
 
+@pytest.mark.parametrize(("load", "sg"), [(0.0, 1023), (0.25, 767), (1.0, 0)])
+def test_set_load_takes_a_plain_number(rig, load, sg):
+    """docs/scenarios.md Python API `aw.set_load(0.4)  # constant load` and docs/world.md: load L
+    as a fraction of the torque at 100 % current, capacity C = (CS + 1) / 32 (CS = AP6 >> 3, 31 at
+    AP6 = 255; no fall-off at rest), AP206 = round(1023 * (1 - L / C)) with SGT = AP174 = 0, read at
+    standstill too: 1023 without load, round(767.25) = 767 at a quarter, 0 at L = C."""
+    r = rig("TMCM-6212", {})
+    r.sap(6, 255)
+    r.sap(174, 0)
+    r.vm.world.axis(0).set_load(load)
+    assert r.gap(206) == sg == round(1023 * (1 - load / ((31 + 1) / 32)))
+
+
+def test_load_now_reads_the_load_and_a_mechanical_end(rig):
+    """docs/scenarios.md: `aw.load_now()  # load torque now (fraction of the torque at 100 %
+    current)`; docs/world.md "Load, current, stallGuard2, coolStep": the load from the scenario or
+    `set_load`, "pushing into a mechanical end adds 100" - only while pushing into it (ROR at the
+    right end), not while standing there nor moving away (ROL)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": 0.25, "ends": [None, 1000]}}})
+    aw = r.vm.world.axis(0)
+    assert aw.load_now() == 0.25
+    aw.set_load(0.4)
+    assert aw.load_now() == 0.4
+    r.cmd(1, 0, 0, 2000)                          # ROR into the end at 1000
+    r.vm.advance(2.0)
+    assert r.phys() == 1000 and aw.load_now() == 100.4
+    r.cmd(3)                                      # MST: standing at the end
+    r.vm.advance(0.5)
+    assert aw.load_now() == 0.4
+    r.cmd(2, 0, 0, 2000)                          # ROL away from it
+    r.vm.advance(0.1)
+    assert r.phys() < 1000 and aw.load_now() == 0.4
+
+
 def test_stallguard_homing_program(rig):
     """TMCM-6212 manual 6.3: "Stall detection can for example be used for finding the reference
     point without the need for reference switches. A short routine written in TMCL is needed"
@@ -359,6 +428,28 @@ def test_load_ramp_over_time_is_followed(rig):
     assert r.gap(206) == load_value(0.25, speed_share(5000), 0)
     r.vm.advance(1.0)
     assert r.gap(206) == load_value(0.75, speed_share(5000), 0)
+
+
+def test_a_stall_under_a_load_ramp_over_time_is_seen_within_a_millisecond(rig):
+    """docs/world.md "Time-dependent ramps of the load are re-evaluated every millisecond" and
+    TMCM-6212 manual 4.1 AP181 "Above this speed motor will stop in case stallGuard2 load value
+    reaches zero". ROR 51200 pps (reached after 1 s, so x(t) = 25600 + 51200 (t - 1)) under a load
+    rising over time as L(t) = 0.2 t: with AP6 = 255 the capacity is (31 + 1) / 32 times the
+    fall-off 1 - 51200 / 1536000 (docs/world.md, 256 microsteps), and AP206 = round(1023 (1 - L/C))
+    first reads 0 where L > C (1 - 0.5 / 1023). One advance over the whole ramp: the motor stops
+    within 1 ms after that instant (AP207 bit 0), not only at the ramp's end (10 s)."""
+    r = rig("TMCM-6212", {"axis": {"0": {"load": {"by": "time", "ramp": [[0, 0.0], [10, 2.0]]}}}})
+    r.sap(6, 255)
+    r.sap(181, 1000)
+    r.sap(174, 0)
+    r.cmd(1, 0, 0, V)
+    r.vm.advance(12)
+    capacity = (1 - V / (30 * 200 * 256)) * (1 - 0.5 / 1023)
+    t0 = capacity / 0.2
+    def x(t):
+        return 25600 + V * (t - 1)
+    assert r.gap(3) == 0 and r.gap(207) & 1
+    assert x(t0) <= r.gap(1) <= x(t0 + 0.001)
 
 
 def test_stall_limit_after_the_driver_was_off(rig):

@@ -9,6 +9,7 @@ switch's inner edge, 29999.5 -> 30000 for the right one, 4499.5 -> 4500 for the 
 """
 import pytest
 
+from opentmcl import VirtualModule
 from tests.firmware.test_program_support import Wire
 
 STAGE = {"axis": {"0": {"left": {"position": -20000, "width": 3000},
@@ -136,6 +137,41 @@ def test_rfs_stop_and_status(rig):
     assert r.cmd(13, 2) == 0
     assert r.gap(3) == 0
     assert -20000 < r.gap(1) < 0
+
+
+def test_a_search_without_a_search_speed_parameter_stands_until_rfs_stop(tmp_path):
+    """TMCM-6212 3.6.11 RFS (START 0, STOP 1, STATUS 2) and 4.1 AP194 "Reference search speed";
+    docs/profiles.md `[remove]`. On a profile without AP194 the speed of the switch search reads
+    as 0 (as a parameter the module lacks reads through `get_raw`): the motor does not leave 0,
+    the search stays active (STATUS 1), and RFS STOP ends it (STATUS 0)."""
+    path = tmp_path / "nospeed.toml"
+    path.write_text('extends = "TMCM-6212"\n[module]\nname = "NOSPEED-6212"\n'
+                    "[remove]\naxis_parameter = [194]\n")
+    vm = VirtualModule(str(path), scenario=STAGE)
+    assert vm.request(6, 194, 0).status == 3
+    assert vm.request(13, 0, 0).status == 100
+    vm.advance(1.0)
+    assert (vm.request(13, 2, 0).value, vm.request(6, 1, 0).value) == (1, 0)
+    assert vm.request(13, 1, 0).status == 100
+    assert vm.request(13, 2, 0).value == 0
+
+
+@pytest.mark.parametrize(("start", "found"), [(-20000, 0), (-19999, -1)])
+def test_search_log_records_a_switch_found_where_the_search_starts(rig, start, found):
+    """reference.py `ReferenceSearch.log` "Phases of the last search: (what, switch, direction or
+    position)" (docs/world.md, docs/scenarios.md `vm.reference_search(vm.axes[0]).log`); TMCM-6212
+    manual 6.1.1 mode 1 "only searches the left end switch". The left switch is active on
+    [-23000, -20000] and the counter starts at 0: starting on its last active position the switch
+    is found at once, at counter 0; starting one step outside it, it is found one step left (-1).
+    Either way the switching point calibration of its inner edge follows (6.1 notes)."""
+    sc = {"axis": {"0": {**STAGE["axis"]["0"], "start": start}}}
+    r = rig("TMCM-6212", sc)
+    r.sap(193, 1)
+    r.search()
+    log = r.vm.reference_search(r.vm.axes[0]).log
+    assert log[:2] == [("seek", "left", -1), ("found", "left", found)]
+    assert log[2:4] == [("leave", "left", found + 1), ("enter", "left", found)]   # inner edge
+    assert log[-1][0] == "zero" and r.gap(1) == 0
 
 
 def test_soft_stop_overshoot_is_calibrated_away(rig):

@@ -123,6 +123,28 @@ def test_forced_inputs(rig):
         aw.force_switch("middle", 1)
 
 
+def test_force_switch_names_the_switches_it_knows(rig):
+    """docs/world.md (Python API): `force_switch` takes left, right or home; another name is a
+    ValueError that names it and the three valid ones."""
+    r = rig("TMCM-6212", {})
+    with pytest.raises(ValueError, match=r"no switch 'middle' \(left, right, home\)"):
+        r.vm.world.axis(0).force_switch("middle", 1)
+
+
+def test_returning_a_switch_that_was_never_forced_is_a_no_op(rig):
+    """docs/scenarios.md: `aw.force_switch("left", 1)  # force an input; None returns it to the
+    stage` - None on a switch that is not forced leaves it with the stage (AP11 left switch state
+    still follows the slider) and raises nothing."""
+    r = rig("TMCM-6212", STAGE)
+    aw = r.vm.world.axis(0)
+    aw.force_switch("left", None)
+    assert aw.switches.forced == {}
+    assert r.gap(11) == 0
+    aw.force_switch("home", 1)
+    aw.force_switch("left", None)    # another switch is forced: it stays forced
+    assert aw.switches.forced == {"home": 1} and r.gap(9) == 1
+
+
 def test_scenario_force_and_normally_closed_switch(rig):
     """docs/scenarios.md: `force` fixes an input; `inverted` models a normally closed switch."""
     r = rig("TMCM-6212", {"axis": {"0": {"force": {"right": 1}},
@@ -149,6 +171,22 @@ def test_1180_end_switch_polarity_gp79_and_soft_stop_ap149(rig):
     r2.cmd(1, 0, 0, 500)
     r2.vm.advance(5)
     assert r2.gap(1) == 3000
+
+
+def test_gp79_polarity_change_stops_a_moving_motor(rig):
+    """PD86-1180 6 GP79 "End switch polarity 1: reverse polarity": an open right switch then
+    reads active (AP10 = 1), and a motor running right into it stops at once (AP149 = 0: "the
+    motor will stop immediately"), not only where the stage's switch is."""
+    r = rig("PD86-1180", {"axis": {"0": {"right": {"position": 10**6}}}})
+    r.cmd(1, 0, 0, 500)
+    r.vm.advance(0.5)
+    assert r.gap(3) == 500
+    r.cmd(9, 79, 0, 1)
+    r.vm.advance(0.01)
+    at = r.gap(1)
+    assert (r.gap(3), r.gap(10)) == (0, 1)
+    r.vm.advance(1)
+    assert r.gap(1) == at < 10**6
 
 
 def test_1180_reference_switch_tolerance(rig):

@@ -7,6 +7,8 @@
 from .decode import Decoder
 from .format import MAX_CAPTURE_BYTES, MAX_LINE_BYTES, Capture, CaptureError, read_capture
 from .replay import Divergence, ReplayError, ReplayReport, Tolerance, assert_replays, replay
+from .snapshot import Snapshot, SnapshotError, snapshot_from_file, snapshot_of
 
 __all__ = ["MAX_CAPTURE_BYTES", "MAX_LINE_BYTES", "Capture", "CaptureError", "Decoder", "Divergence",
-           "ReplayError", "ReplayReport", "Tolerance", "assert_replays", "read_capture", "replay"]
+           "ReplayError", "ReplayReport", "Snapshot", "SnapshotError", "Tolerance", "assert_replays",
+           "read_capture", "replay", "snapshot_from_file", "snapshot_of"]

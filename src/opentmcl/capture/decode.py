@@ -57,6 +57,8 @@ class _Stream:
     def __init__(self) -> None:
         self.buf = bytearray()
         self.last = 0.0
+        self.suspect = 0
+        """Module bytes buffered before a pause: a reply only if the frame they start is whole."""
 
 
 class Decoder:
@@ -71,12 +73,22 @@ class Decoder:
         self.identity: dict | None = None
         self._seq = 0
 
+    def _whole_reply(self, frame: bytes) -> bool:
+        """Is `frame` a reply as the module sends it: a valid checksum, or the version string that
+        a pending 136 type 0 asked for?"""
+        oldest = self._pending[0] if self._pending else None
+        version = oldest is not None and oldest["command"] == GET_FIRMWARE_VERSION and oldest["type"] == 0
+        return checksum_ok(frame) or (version and all(0x20 <= b < 0x7F for b in frame[1:]))
+
     def feed(self, t: float, direction: str, data: bytes) -> list[dict]:
         out: list[dict] = []
         stream = self._streams[direction]
         if stream.buf and t - stream.last > self.gap:
-            out.append(self._record(stream.last, direction, "garbage", bytes(stream.buf)))
-            stream.buf.clear()
+            if direction == MODULE and not self.ascii[direction]:
+                stream.suspect = len(stream.buf)   # decided once the frame is whole
+            else:
+                out.append(self._record(stream.last, direction, "garbage", bytes(stream.buf)))
+                stream.buf.clear()
         pos = 0
         while pos < len(data):
             if self.ascii[direction]:
@@ -88,6 +100,12 @@ class Decoder:
             if len(stream.buf) == FRAME_LEN:
                 frame = bytes(stream.buf)
                 stream.buf.clear()
+                if stream.suspect:
+                    cut, stream.suspect = stream.suspect, 0
+                    if not self._whole_reply(frame):   # the bytes before the pause were garbage
+                        out.append(self._record(stream.last, direction, "garbage", frame[:cut]))
+                        stream.buf += frame[cut:]
+                        continue
                 out.append(self._request(t, frame) if direction == HOST else self._reply(t, frame))
         stream.last = t
         return out
@@ -96,6 +114,7 @@ class Decoder:
         """Records for bytes still buffered at the end of the capture."""
         out = []
         for direction, stream in self._streams.items():
+            stream.suspect = 0
             if stream.buf:
                 kind = "ascii" if self.ascii[direction] else "garbage"
                 rec = self._record(stream.last, direction, kind, bytes(stream.buf))

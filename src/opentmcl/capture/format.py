@@ -31,16 +31,20 @@ class CaptureError(ValueError):
 class CaptureWriter:
     """Appends records to a JSON Lines file; thread-safe; `close()` writes the end record."""
 
-    def __init__(self, path: str | os.PathLike, *, target: str, gap: float, tool: str) -> None:
+    def __init__(self, path: str | os.PathLike, *, target: str, gap: float, tool: str,
+                 link: dict | None = None) -> None:
         self._fh: TextIO | None = open(path, "w", encoding="utf-8")  # noqa: SIM115 - closed by close()
         self._lock = threading.Lock()
         self.frames = 0
         self.size = 0
         self.limit = MAX_CAPTURE_BYTES - 2 * MAX_LINE_BYTES  # room for the end records
         self.truncated = False
-        self.write({"record": "header", "format": FORMAT, "version": VERSION, "tool": tool, "target": target,
-                    "start": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds"),
-                    "gap": gap})
+        header = {"record": "header", "format": FORMAT, "version": VERSION, "tool": tool, "target": target,
+                  "start": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="milliseconds"),
+                  "gap": gap}
+        if link is not None:
+            header["link"] = link
+        self.write(header)
 
     def write(self, record: dict) -> None:
         """Append one record. Every record counts against the size cap (`limit`): past it, records
@@ -86,6 +90,22 @@ class Capture:
     identities: list[dict] = field(default_factory=list)
     truncated: float | None = None
     """When the proxy stopped capturing at the size cap (its `truncated` record), else None."""
+    snapshots: list[dict] = field(default_factory=list)
+    """The `snapshot` records (capture/snapshot.py `snapshot_of` assembles them)."""
+    marks: list[dict] = field(default_factory=list)
+    """The `mark` records: the phases of a conformance run (`opentmcl conform`)."""
+    warnings: list[str] = field(default_factory=list)
+    """What was skipped while reading (a torn last line), one line each."""
+
+    @property
+    def link(self) -> dict:
+        """The link the capture was taken on: interface, baud (None if unknown) and the seconds one
+        9-byte frame takes on the wire (0 when unknown: the timestamps alone then bound each window)."""
+        link = self.header.get("link")
+        out = {"interface": "unknown", "baud": None, "frame_time": 0.0}
+        if isinstance(link, dict):
+            out.update(link)
+        return out
 
     def module_name(self) -> str | None:
         """The built-in module the host identified (command 136), if any."""
@@ -176,16 +196,76 @@ def _check_identity(rec: dict[str, Any], path: str, number: int) -> None:
             raise CaptureError(f"{path}:{number}: identity record: {key!r} is not {what}")
 
 
+def _check_link(rec: dict[str, Any], path: str, number: int) -> None:
+    """The header's `link`: interface, baud rate and wire time per frame, of their types."""
+    link = rec.get("link")
+    if link is None:
+        return
+    frame_time = link.get("frame_time") if isinstance(link, dict) else None
+    if not isinstance(link, dict) or not isinstance(link.get("interface"), str) \
+            or not (link.get("baud") is None or type(link.get("baud")) is int) \
+            or not isinstance(frame_time, (int, float)) or isinstance(frame_time, bool) \
+            or not 0 <= frame_time < 1:
+        raise CaptureError(f"{path}:{number}: header 'link' must give interface, baud and frame_time "
+                           "(seconds, 0 <= frame_time < 1)")
+
+
+def _int_rows(rows: Any, width: int) -> bool:
+    return isinstance(rows, list) and all(
+        isinstance(row, list) and len(row) == width and all(type(x) is int for x in row) for row in rows)
+
+
+_SNAPSHOT_PARTS = {"axis": ("motor", 2), "global": ("bank", 2), "io": ("bank", 2), "program": ("start", 4),
+                   "begin": (None, 0), "done": (None, 0)}
+
+
+def _check_snapshot(rec: dict[str, Any], path: str, number: int) -> None:
+    """A snapshot record: its address, part and rows of integers (capture/snapshot.py)."""
+    part = _SNAPSHOT_PARTS.get(rec.get("part"))  # type: ignore[arg-type]
+    if part is None or type(rec.get("address")) is not int:
+        raise CaptureError(f"{path}:{number}: snapshot record without an integer 'address' and a 'part' "
+                           f"({', '.join(_SNAPSHOT_PARTS)})")
+    key, width = part
+    if key is not None and (type(rec.get(key)) is not int or not _int_rows(rec.get("values"), width)):
+        raise CaptureError(f"{path}:{number}: snapshot {rec['part']} record needs an integer {key!r} "
+                           f"and 'values' rows of {width} integers")
+
+
+def _check_mark(rec: dict[str, Any], path: str, number: int) -> None:
+    t = rec.get("t")
+    if not isinstance(t, (int, float)) or isinstance(t, bool) or not 0 <= t < float("inf") \
+            or not isinstance(rec.get("phase"), str):
+        raise CaptureError(f"{path}:{number}: mark record without a time 't' and a 'phase'")
+
+
+def _torn(line: bytes, path: str, number: int) -> str | None:
+    """The warning for a last line cut before its end (no newline, not a JSON object), else None."""
+    if line.endswith(b"\n"):
+        return None
+    try:
+        json.loads(line)
+    except (ValueError, UnicodeDecodeError, RecursionError):
+        return f"{path}:{number}: torn last line skipped ({len(line)} bytes without an end: the capture was cut off)"
+    return None
+
+
 def read_capture(path: str | os.PathLike[str]) -> Capture:
-    """Read and check a capture file; CaptureError (one line) if it is not one."""
+    """Read and check a capture file; CaptureError (one line) if it is not one. A last line cut
+    before its end (a pulled cable, a full disk) is skipped with a warning (`Capture.warnings`);
+    a broken line anywhere else is an error naming its line."""
     path = os.fspath(path)
     capture: Capture | None = None
+    warning = None
     for number, line in _lines(path):
         if not line.strip():
+            continue
+        warning = _torn(line, path, number)   # only the last line can lack its newline
+        if warning is not None:
             continue
         rec = _record(line, path, number)
         if capture is None:
             _check_header(rec, path, number)
+            _check_link(rec, path, number)
             capture = Capture(path, rec)
         elif rec.get("record") == "frame":
             _check_frame(rec, path, number)
@@ -196,6 +276,15 @@ def read_capture(path: str | os.PathLike[str]) -> Capture:
         elif rec.get("record") == "truncated" and capture.truncated is None:
             t = rec.get("t")
             capture.truncated = float(t) if isinstance(t, (int, float)) and not isinstance(t, bool) else 0.0
+        elif rec.get("record") == "snapshot":
+            _check_snapshot(rec, path, number)
+            capture.snapshots.append(rec)
+        elif rec.get("record") == "mark":
+            _check_mark(rec, path, number)
+            capture.marks.append(rec)
     if capture is None:
-        raise CaptureError(f"{path}: empty, not a capture file")
+        raise CaptureError(f"{path}: empty, not a capture file" if warning is None else
+                           f"{path}:1: not a capture file (its only line is cut off)")
+    if warning is not None:
+        capture.warnings.append(warning)
     return capture

@@ -19,10 +19,50 @@ import time
 import urllib.parse
 
 from .. import __version__
-from ..host.errors import TmclConnectionError, TmclUrlError
+from ..host.errors import TmclConnectionError, TmclError, TmclStatusError, TmclTimeout, TmclUrlError
 from ..server.app import start_all
 from .decode import HOST, MODULE, Decoder
 from .format import CaptureWriter
+from .timing import link_record
+
+
+class ModuleReader:
+    """Reading commands to one module over a transport the relay does not use yet (the snapshot):
+    each request has a time-out and three tries; an error status reads as None."""
+
+    def __init__(self, transport, address: int, timeout: float = 1.0) -> None:
+        from ..host.client import Client
+
+        self.client = Client(transport, address=address, timeout=timeout)
+        self.requests = 0
+
+    def _retry(self, call):
+        for attempt in range(3):
+            try:
+                return call()
+            except TmclStatusError:
+                return None
+            except TmclTimeout:
+                if attempt == 2:
+                    raise
+        return None
+
+    def ask(self, command: int, type_: int, motor: int, value: int = 0) -> int | None:
+        self.requests += 1
+        reply = self._retry(lambda: self.client.reply(command, type_, motor, value))
+        return None if reply is None else reply.value
+
+    def read_memory(self, index: int) -> tuple[int, int, int, int] | None:
+        self.requests += 1
+        m = self._retry(lambda: self.client.read_memory(index))
+        return None if m is None else (m.command, m.type, m.motor, m.value)
+
+    def identity(self) -> tuple[str, int | None]:
+        """The firmware string (136 type 0) and binary version (136 type 1, None if refused)."""
+        reply = self._retry(lambda: self.client.request(136, 0, 0, 0))
+        if reply is None:
+            raise TmclError("the module refuses command 136 (firmware version)")
+        return str(reply.text), self.ask(136, 1, 0)
 
 
 class ProxySession:
@@ -105,6 +145,7 @@ class SimUpstream:
         from ..sim import open_sim
 
         transport = open_sim(urllib.parse.urlsplit(url))  # parses and builds the modules
+        self.transport = transport   # the snapshot reads through it before the server starts
         self.server = Server(transport.modules)
         self.session = SerialSession(self.server.bus, on_bytes)
 
@@ -183,10 +224,29 @@ def open_upstream(url: str, on_bytes):
     return StreamUpstream(open_transport(url), on_bytes)
 
 
-class Proxy:
-    """Relay between host endpoints and the module at `target`; optional capture file `log`."""
+def link_of(target: str, upstream, baud: int | None = None) -> dict:
+    """The header's `link` for the module behind `target`: serial ports at their baud rate, CAN at
+    its bit rate (if the URL gives it), TCP at `baud` when the host says what line is behind it."""
+    scheme = target.partition(":")[0].lower()
+    rate = baud
+    if scheme == "serial" and rate is None:
+        rate = getattr(upstream.transport, "baud", None)
+    elif scheme == "can" and rate is None:
+        query = dict(urllib.parse.parse_qsl(urllib.parse.urlsplit(target).query))
+        rate = int(query["bitrate"]) if query.get("bitrate", "").isdigit() else None
+    return link_record(scheme if scheme in ("serial", "tcp", "can", "sim") else "unknown", rate or None)
 
-    def __init__(self, target: str, *, log: str | None = None, gap: float = 0.1) -> None:
+
+class Proxy:
+    """Relay between host endpoints and the module at `target`; optional capture file `log`.
+
+    `snapshot` ("full" or "state", capture/snapshot.py) reads the module at `address` before the
+    relay starts and writes it to the capture (`snapshot_program`: its program memory too, 134);
+    `baud`: the line speed behind a TCP converter, for the header's `link`."""
+
+    def __init__(self, target: str, *, log: str | None = None, gap: float = 0.1, baud: int | None = None,
+                 snapshot: str | None = None, address: int = 1, snapshot_program: bool = False,
+                 snapshot_module: str | None = None) -> None:
         self.target = target
         self.t0 = time.monotonic()
         self._sessions: list[ProxySession] = []
@@ -196,7 +256,12 @@ class Proxy:
         self.upstream.error = None
         self._profiles: dict[int, object] = {}
         self.decoder = Decoder(self._profile_for, gap)
-        self.writer = CaptureWriter(log, target=target, gap=gap, tool=f"opentmcl {__version__}") if log else None
+        self.link = link_of(target, self.upstream, baud)
+        self.snapshot_scope, self.address = snapshot, address
+        self.snapshot_program, self.snapshot_module = snapshot_program, snapshot_module
+        self.snapshot = None
+        self.writer = CaptureWriter(log, target=target, gap=gap, tool=f"opentmcl {__version__}",
+                                    link=self.link) if log else None
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._writer_thread: threading.Thread | None = None
         self.chunks = 0
@@ -234,6 +299,13 @@ class Proxy:
         return endpoint
 
     def start(self) -> None:
+        """Take the snapshot (if asked; TmclError if the module does not answer), then relay."""
+        if self.snapshot_scope is not None:
+            try:
+                self.take_snapshot()
+            except BaseException:
+                self.stop()
+                raise
         self.upstream.start()
         if self.writer is not None:
             self._writer_thread = threading.Thread(target=self._write_loop, args=(self.writer,),
@@ -263,6 +335,34 @@ class Proxy:
                 self.writer.write({"record": "frame", **rec})
             self.writer.close(t)
             self.writer = None
+
+    def take_snapshot(self):
+        """Read the module's state through the upstream link (before the relay starts)."""
+        from .snapshot import snapshot_records, take_snapshot
+
+        reader = ModuleReader(self.upstream.transport, self.address)
+        version, binary = reader.identity()
+        profile = self._snapshot_profile(version, binary)
+        snap = take_snapshot(reader.ask, profile, self.address, scope=self.snapshot_scope or "full",
+                             program=self.snapshot_program, read_memory=reader.read_memory, version=version)
+        snap.t = time.monotonic() - self.t0
+        if self.writer is not None:
+            for rec in snapshot_records(snap, snap.t):
+                self.writer.write(rec)
+        self.snapshot = snap
+        return snap
+
+    def _snapshot_profile(self, version: str, binary: int | None):
+        from ..host.probe import closest_builtin
+        from ..modules.profile import load_profile
+
+        if self.snapshot_module is not None:
+            return load_profile(self.snapshot_module)
+        profile = self.upstream.profile_for(self.address) or closest_builtin(version, binary)
+        if profile is None:
+            raise TmclError(f"no module profile for firmware {version!r}: give the module for the snapshot "
+                            "(--snapshot-module) or leave it out (--no-snapshot)")
+        return profile
 
     # -- the side channel --------------------------------------------------------------------
     def _profile_for(self, address: int):

@@ -20,7 +20,7 @@ from typing import NoReturn
 from . import exits, verbosity
 
 COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard",
-            "proxy", "log", "replay", "profile"]
+            "proxy", "log", "replay", "profile", "conform"]
 
 
 class CliError(Exception):

@@ -6,8 +6,8 @@
     3  no reply or connection failure: the module did not answer, the link could not be opened or broke
     4  the module answered with an error status (TMCM-6212 manual 3.2.1: 1..6)
 
-Check commands keep the statuses they document: `replay` exits 1 when replies diverge and
-`profile check` 1 when the file has errors (docs/capture.md, docs/profiles.md).
+Check commands keep the statuses they document: `replay` and `conform` exit 1 when replies diverge
+and `profile check` 1 when the file has errors (docs/capture.md, docs/profiles.md).
 """
 from __future__ import annotations
 
@@ -171,6 +171,6 @@ def hint_for(exc: BaseException, args: object) -> str:
 def epilog() -> str:
     """The status table for `opentmcl --help`."""
     rows = "\n".join(f"  {code}  {text}" for code, text in DESCRIPTIONS.items())
-    return ("exit status:\n" + rows + "\n  (replay: 1 when replies diverge; profile check: 1 when the file "
+    return ("exit status:\n" + rows + "\n  (replay, conform: 1 when replies diverge; profile check: 1 when the file "
             "has errors)\n\nlogging: -v INFO, -vv DEBUG (every frame as TMCL text and hex), -q errors only; "
             "before or after the command")

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import argparse
+import logging
 
 from . import CliError
 
@@ -68,8 +69,21 @@ def run_show(args: argparse.Namespace) -> int:
         cap = read_capture(args.file)
     except CaptureError as exc:
         raise CliError(str(exc)) from None
+    for warning in cap.warnings:   # a torn last line (docs/capture.md)
+        logging.getLogger("opentmcl.cli").warning("warning: %s", warning)
     head = cap.header
     print(f"# {head.get('tool', '?')} capture of {head.get('target', '?')} started {head.get('start', '?')}")
+    link = cap.link
+    if "link" in head:
+        print(f"# link {link['interface']}, {link['baud'] or 'speed unknown'} baud, "
+              f"{float(link['frame_time']) * 1000:.3f} ms per frame")
+    from ..capture.snapshot import snapshot_of
+
+    for address in sorted({r["address"] for r in cap.snapshots}):
+        snap = snapshot_of(cap, address)
+        if snap is not None:
+            print(f"# snapshot of address {address} ({snap.module or '?'}) at {snap.t:.3f} s: {snap.count()} values"
+                  + ("" if snap.complete else ", cut off"))
     for ident in cap.identities:
         print(f"# address {ident.get('address')}: firmware {ident.get('firmware_version')!r}"
               + (f" = {ident['module']}" if ident.get("module") else ""))

@@ -1,12 +1,14 @@
 """`opentmcl proxy`: sit between a host program and a module, relay every byte, capture the traffic.
 
     opentmcl proxy --to URL (--pty [--link PATH] | --tcp [HOST:]PORT) [--log FILE] [--idle-timeout 300]
+                   [--snapshot full|state|none] [--snapshot-program] [--address N] [--baud N]
 
 URL is the module: serial:///dev/ttyUSB0?baud=9600, tcp://HOST:PORT, sim://NAME or
 can://INTERFACE/CHANNEL?id=N (a gateway: frames are converted, docs/capture.md). The host
 program opens the pty (or connects to the TCP port) exactly as it would a served module
 (`opentmcl serve`). Bytes pass unchanged; --log writes the decoded traffic as JSON Lines
-(docs/capture.md). Ctrl-C or SIGTERM stops it and closes the capture file.
+(docs/capture.md). Before relaying it reads the module's state with reading commands only (the
+snapshot that `replay` starts the twin from). Ctrl-C or SIGTERM stops it and closes the capture file.
 """
 from __future__ import annotations
 
@@ -40,6 +42,19 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--log", metavar="FILE", help="write the capture (JSON Lines) to FILE")
     p.add_argument("--gap", type=float, default=0.1, metavar="SECONDS",
                    help="silence after which the decoder drops a partial frame as garbage (default 0.1)")
+    p.add_argument("--snapshot", choices=("full", "state", "none"), default="full",
+                   help="read the module before relaying, with reading commands only: every readable "
+                        "parameter and port (full, default), only where it is (state: positions, "
+                        "encoder, timers), or nothing (none)")
+    p.add_argument("--snapshot-program", action="store_true",
+                   help="also read the TMCL program memory into the snapshot (command 134)")
+    p.add_argument("--snapshot-module", metavar="NAME|FILE",
+                   help="the module profile that says what to read (default: from its firmware string)")
+    p.add_argument("--address", "-a", type=int, default=1, metavar="N",
+                   help="address of the module the snapshot reads (default 1)")
+    p.add_argument("--baud", type=int, metavar="N",
+                   help="baud rate of the line behind a tcp:// converter (recorded as the capture's link; "
+                        "serial:// URLs give their own)")
     p.set_defaults(func=run)
 
 
@@ -64,8 +79,14 @@ def build_proxy(args: argparse.Namespace) -> Proxy:
         if not is_loopback(host) and not args.host:
             raise CliError(f"refusing to bind TCP to {host}: give --host {host} to listen beyond loopback")
         tcp = (host, port)
+    if not 0 <= args.address <= 255:
+        raise CliError(f"--address must be 0..255, got {args.address}")
+    if args.baud is not None and not 0 < args.baud <= 10_000_000:
+        raise CliError(f"--baud must be a positive baud rate, got {args.baud}")
     try:
-        proxy = Proxy(args.to, log=args.log, gap=args.gap)
+        proxy = Proxy(args.to, log=args.log, gap=args.gap, baud=args.baud,
+                      snapshot=None if args.snapshot == "none" else args.snapshot, address=args.address,
+                      snapshot_program=args.snapshot_program, snapshot_module=args.snapshot_module)
     except TmclConnectionError as exc:
         raise CliError(str(exc)) from None
     except OSError as exc:
@@ -79,13 +100,19 @@ def build_proxy(args: argparse.Namespace) -> Proxy:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..host.errors import TmclError
     from ..server import PtyServer, TcpServer
 
     proxy = build_proxy(args)
     try:
         proxy.start()
+    except TmclError as exc:   # the snapshot: the module did not answer (exit 3) or is unknown
+        raise CliError(f"the snapshot of the module at address {args.address} failed (--snapshot none "
+                       f"relays without one): {exc}") from exc
     except OSError as exc:
         raise start_error("proxy", exc, args.tcp) from None
+    except (KeyError, ValueError) as exc:   # --snapshot-module names no profile
+        raise CliError(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)) from None
     stop = threading.Event()
     previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
     try:
@@ -98,6 +125,9 @@ def run(args: argparse.Namespace) -> int:
                 print(f"  pty {ep.path}{link}  ->  serial://{ep.path}", flush=True)
         if args.log:
             print(f"  capture {args.log}", flush=True)
+        snap = proxy.snapshot
+        if snap is not None:
+            print(f"  snapshot of {snap.module} at address {snap.address}: {snap.count()} values", flush=True)
         print("Press Ctrl-C to stop.", flush=True)
         warned = False
         while not stop.wait(0.2):

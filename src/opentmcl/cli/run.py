@@ -56,7 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run)
 
 
-def _scenario(path: str | None) -> Scenario | None:
+def scenario_option(path: str | None) -> Scenario | None:
     """The --scenario file, read here so that a bad file is a one-line error (docs/scenarios.md)."""
     if path is None:
         return None
@@ -86,7 +86,7 @@ def open_target(args: argparse.Namespace) -> tuple[Client, str | None]:
     from ..firmware.vm import VirtualModule
 
     check_connection_options(args)
-    scenario = _scenario(args.scenario)
+    scenario = scenario_option(args.scenario)
     name = args.module or getattr(scenario, "module", None) or DEFAULT_MODULE
     try:
         vm = VirtualModule(name, address=args.address, eeprom=args.eeprom, scenario=scenario)
@@ -203,13 +203,13 @@ class _Recorder:
 
     def save(self) -> None:
         if self.path == "-":
-            print(self.trace.to_csv(), end="")
+            print(self.trace.to_csv(layout="table"), end="")
             return
         try:
-            self.trace.to_csv(self.path)
+            self.trace.to_csv(self.path, layout="table")
         except OSError as exc:
             raise CliError(f"cannot write {self.path}: {exc.strerror or exc}") from None
-        print(f"world trace: {len(self.trace.rows)} rows written to {self.path}")
+        print(f"world trace: {len(self.trace)} rows written to {self.path}")
 
 
 def _recorder(client: Client, args: argparse.Namespace) -> _Recorder | None:

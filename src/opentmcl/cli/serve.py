@@ -25,6 +25,7 @@ if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
     from ..motion.scenario import Scenario
     from ..server import Server
+    from ..server.endpoints import EndpointOptions
     from ..web.server import DashboardHandle
 
 DEFAULT_TCP = "127.0.0.1:2323"
@@ -53,6 +54,9 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--can", metavar="INTERFACE:CHANNEL",
                    help="serve on a python-can bus, e.g. virtual:opentmcl (this process), udp_multicast:239.74.163.2 "
                         "(other processes) or socketcan:vcan0")
+    p.add_argument("--endpoint", action="append", default=[], metavar="NAME[:SPEC]",
+                   help="serve on a registered endpoint, e.g. one an installed package adds "
+                        "(--tcp, --pty and --can name the built-in ones; docs/endpoints.md)")
     p.add_argument("--eeprom", action="append", default=[], metavar="FILE",
                    help="EEPROM file of the n-th module (created if missing)")
     p.add_argument("--scenario", action="append", default=[], metavar="FILE",
@@ -194,7 +198,8 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
     if args.interface and not args.pty:
         raise CliError("--interface applies to --pty (TCP stands for a serial line: rs485/rs232)")
     tcp_spec = args.tcp
-    if tcp_spec is None and not args.pty and not args.can:
+    extra = getattr(args, "endpoint", [])
+    if tcp_spec is None and not args.pty and not args.can and not extra:
         tcp_spec = DEFAULT_TCP
     modules = build_modules(args)
     if len(modules) > 1:
@@ -205,8 +210,30 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
     if args.pty:
         _add_pty(server, args, len(modules))
     if args.can:
-        _add_can(server, args.can)
+        _add(server, args, "can", args.can)
+    for item in extra:
+        name, _, spec = item.partition(":")
+        if name in ("tcp", "pty"):
+            raise CliError(f"--endpoint {item}: use --{name}, which checks its options")
+        _add(server, args, name, spec)
     return server
+
+
+def _options(args: argparse.Namespace) -> EndpointOptions:
+    from ..server.endpoints import EndpointOptions
+
+    return EndpointOptions(gap=args.gap, pace_bytes=args.pace, max_clients=args.max_clients,
+                           idle_timeout=args.idle_timeout, interface=args.interface, link=args.link)
+
+
+def _add(server: Server, args: argparse.Namespace, name: str, spec: str) -> None:
+    """An endpoint of the registry (server/endpoints.py); a bad name or spec is one line."""
+    from ..server.endpoints import make
+
+    try:
+        server.add(make(name, server.bus, spec, _options(args)))
+    except ValueError as exc:
+        raise CliError(f"--{'can' if name == 'can' else 'endpoint'}: {exc}") from None
 
 
 def _give_can_ids(modules: list[VirtualModule]) -> None:
@@ -221,7 +248,6 @@ def _give_can_ids(modules: list[VirtualModule]) -> None:
 
 def _add_tcp(server: Server, args: argparse.Namespace, spec: str) -> None:
     """--tcp [HOST:]PORT and --host: loopback unless --host names another address (with a warning)."""
-    from ..server import TcpServer
     from ..server.tcp import is_loopback
 
     host, port = parse_hostport(spec)
@@ -235,14 +261,11 @@ def _add_tcp(server: Server, args: argparse.Namespace, spec: str) -> None:
 
         logging.getLogger("opentmcl.cli").warning("warning: TCP bound to %s is reachable from the network; "
                                                   "anyone who can connect can move the motors", host)
-    server.add(TcpServer(server.bus, host, port, max_clients=args.max_clients, gap=args.gap,
-                         pace_bytes=args.pace, idle_timeout=args.idle_timeout))
+    _add(server, args, "tcp", f"[{host}]:{port}" if ":" in host else f"{host}:{port}")
 
 
 def _add_pty(server: Server, args: argparse.Namespace, module_count: int) -> None:
     """--pty [--link PATH] [--interface]: the interface must suit the modules and --pace."""
-    from ..server import PtyServer
-
     if sys.platform == "win32":
         raise CliError("--pty needs a POSIX system")
     from ..server.bus import interface_error
@@ -250,18 +273,7 @@ def _add_pty(server: Server, args: argparse.Namespace, module_count: int) -> Non
     problem = args.interface and interface_error(args.interface, module_count, args.pace)
     if problem:
         raise CliError(f"--interface {args.interface}: {problem}")
-    server.add(PtyServer(server.bus, link=args.link, gap=args.gap, pace_bytes=args.pace,
-                         interface=args.interface))
-
-
-def _add_can(server: Server, spec: str) -> None:
-    """--can INTERFACE:CHANNEL (python-can)."""
-    from ..server import CanServer
-
-    interface, sep, channel = spec.partition(":")
-    if not sep or not interface or not channel:
-        raise CliError(f"bad --can {spec!r}; use INTERFACE:CHANNEL, e.g. virtual:opentmcl")
-    server.add(CanServer(server.bus, interface, channel))
+    _add(server, args, "pty", "")
 
 
 def describe(server: Server) -> list[str]:
@@ -285,6 +297,8 @@ def describe(server: Server) -> list[str]:
             for vm in server.modules:
                 lines.append(f"can {ep.url}?id={vmapi.global_param(vm, vmapi.GP_CAN_ID)}"
                              f"&reply_id={vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)}")
+        else:  # an endpoint of another package: its url, else its type
+            lines.append(f"endpoint {getattr(ep, 'url', type(ep).__name__)}")
     return lines
 
 

@@ -21,7 +21,7 @@ from .status import TmclStatus
 
 if TYPE_CHECKING:
     from ..modules.profile import Param
-    from .axis import Axis
+    from .motor import Motor
     from .vm import VirtualModule
 
 StatusReply = tuple[int, int]
@@ -42,7 +42,7 @@ class CommandHandler(Protocol):
 OK = int(Status.OK)
 
 
-def _axis(vm: VirtualModule, motor: int) -> Axis:
+def _axis(vm: VirtualModule, motor: int) -> Motor:
     if not 0 <= motor < len(vm.axes):
         raise TmclStatus(4)
     return vm.axes[motor]
@@ -97,7 +97,7 @@ def cmd_gap(vm: VirtualModule, type: int, motor: int, value: int, program: bool)
     return OK, _axis(vm, motor).get(type)
 
 
-def _storable_axis_param(vm: VirtualModule, type: int, motor: int) -> tuple[Axis, Param]:
+def _storable_axis_param(vm: VirtualModule, type: int, motor: int) -> tuple[Motor, Param]:
     ax = _axis(vm, motor)
     p = ax.param(type)
     if not p.storable:

@@ -127,14 +127,10 @@ class Interpreter:
         loads = spec.loads_accumulator(type, motor)
         return kind, effect, steps.direct(self, command, type, motor, value, loads, execute)
 
-    # --- what the steps call -----------------------------------------------------------------
-    def next_after(self, t: int) -> None:
-        """The instruction at tick `t` is done: the next one follows one slot later."""
-        vm = self.vm
-        vm.program_counter += 1
-        self.next_time = t + steps.SLOT if vm.application_status == RUNNING else None
-
-    def jump(self, address: int, t: int) -> None:
+    # --- scheduling -----------------------------------------------------------------------------
+    def go_on(self, address: int, t: int) -> None:
+        """The instruction at tick `t` is done: the one at `address` follows one slot later, if
+        the program runs (single-stepping pauses)."""
         vm = self.vm
         vm.program_counter = address
         self.next_time = t + steps.SLOT if vm.application_status == RUNNING else None
@@ -201,31 +197,12 @@ class Interpreter:
         horizon = sched.horizon
         if horizon is None or self._nested:
             return
-        code = vm.program.code
-        size = len(code)
-        ints = vm.interrupts
-        compiled = self._compiled
         while True:  # what runs ahead changes neither the WAIT nor the status: only a fold can
             t = self.next_time
             if t is None or t >= horizon or self.wait is not None or vm.application_status != RUNNING:
                 return
             limit = sched.ahead_limit(horizon, t)
-            while t is not None and t < limit:
-                pc = vm.program_counter
-                if not 0 <= pc < size or (ints.pending and ints.next_dispatch() is not None):
-                    break
-                ins = code[pc]
-                kind, _effect, step = compiled.get(ins) or self.compiled(ins)
-                if kind:
-                    if kind == EVENT or not sched.world_quiet():
-                        break
-                    if kind == RETURN:
-                        if self.saved is None or self.saved.wait is not None:
-                            break
-                    else:
-                        sched.now = t  # the read's own tick: the engines follow there
-                step(t)
-                t = self.next_time
+            t = self._steps_before(t, limit)
             if t is None:
                 return
             tick = t if t < limit else limit
@@ -236,6 +213,38 @@ class Interpreter:
                 sched.fold(tick)  # (erasing the program, GP81, resets it: the loop ends above)
             finally:
                 self._nested = False
+
+    def _steps_before(self, t: int | None, limit: int) -> int | None:
+        """Run the instructions that may run ahead from tick `t` on, up to `limit`; the tick of the
+        next instruction (None: none is scheduled)."""
+        vm = self.vm
+        sched = vm.scheduler
+        code = vm.program.code
+        size = len(code)
+        ints = vm.interrupts
+        compiled = self._compiled
+        slot = steps.SLOT
+        while t is not None and t < limit:  # the program runs: what runs ahead does not change that
+            pc = vm.program_counter
+            if not 0 <= pc < size or (ints.pending and ints.next_dispatch() is not None):
+                break
+            ins = code[pc]
+            kind, _effect, step = compiled.get(ins) or self.compiled(ins)
+            if kind:
+                if kind == EVENT or not sched.world_quiet():
+                    break
+                if kind == RETURN:
+                    if self.saved is None or self.saved.wait is not None:
+                        break
+                else:
+                    sched.now = t  # the read's own tick: the engines follow there
+            address = step(t)
+            if address is None:
+                t = self.next_time
+            else:
+                vm.program_counter = address
+                t = self.next_time = t + slot
+        return t
 
     def __getstate__(self) -> dict[str, Any]:
         """A copy (copy.deepcopy, pickle) compiles its own steps (they are bound to this module)
@@ -329,7 +338,7 @@ class Interpreter:
         else:
             return
         self.wait = None
-        self.next_after(now)
+        self.go_on(vm.program_counter + 1, now)
 
     def _dispatch_interrupt(self, now: int) -> bool:
         vm = self.vm
@@ -341,7 +350,7 @@ class Interpreter:
         ints.active = number
         self.saved = Context(vm.program_counter, vm.accumulator, vm.x_register, vm.flags, self.wait)
         self.wait = None
-        self.jump(ints.vectors[number], now)
+        self.go_on(ints.vectors[number], now)
         return True
 
     def _execute_next(self, now: int) -> None:
@@ -353,6 +362,8 @@ class Interpreter:
             self.next_time = None
             return
         kind, effect, step = self.compiled(vm.program.code[pc])
-        step(now)
+        address = step(now)
+        if address is not None:
+            self.go_on(address, now)
         if kind == EVENT:
             vm.scheduler.invalidate(effect | Effect.EVENTS)

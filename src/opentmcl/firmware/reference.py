@@ -49,6 +49,11 @@ class ReferenceSearch:
         self._replay: list[object] | None = None   # readings given back while a copy catches up
 
     @property
+    def condition(self) -> Cond | None:
+        """What the search waits for now (None when it waits for nothing)."""
+        return self._cond
+
+    @property
     def active(self) -> bool:
         """The search runs. A motion command from outside (MVP, ROR, ROL, MST, a SHUTDOWN stop)
         ends it: the motor no longer does what the search commanded (docs/world.md)."""
@@ -77,8 +82,8 @@ class ReferenceSearch:
         world = ax.world
         world.vm.sync()
         self.aw = world.axis(ax.index)
-        self.aw._follow()
-        self.aw._update_raw()
+        self.aw.rotor.follow()
+        self.aw.switches.update()
         self.mode = ax.ram.get(193, 1)
         ax.error_flags = 0              # PD86-1180 4.28: RFS start resets the deviation flags
         self.active = True
@@ -171,7 +176,7 @@ class ReferenceSearch:
     # --- inputs and motions ---------------------------------------------------------------------
     def state(self, name: str) -> bool:
         """Logical switch state for the search (AP12/AP13 do not apply, manual 6.1)."""
-        left, right, home = self.aw.logical()
+        left, right, home = self.aw.switches.logical()
         if self.mode & 128:
             if self.aw.caps.reference_input == "REFL":   # PD86-1180 manual 7.1
                 left = not left
@@ -207,7 +212,7 @@ class ReferenceSearch:
     def _halt_after_hit(self) -> Steps:
         """The switch was found at search speed: stop (soft if enabled) and wait for standstill."""
         e = self.axis.engine
-        self._command(e.stop if self.aw.soft_stop_enabled() else e.hard_stop)
+        self._command(e.stop if self.aw.checks.soft_stop_enabled() else e.hard_stop)
         yield self._stopped
         return 0
 
@@ -280,8 +285,8 @@ class ReferenceSearch:
         self.log.append(("zero", None, self.pos))   # after the last yield: never run by `_catch_up`
         if 197 in ax.params:
             ax.ram[197] = self.pos
-        self.aw.relabel(0)
-        self.aw.set_encoder(0)
+        self.aw.rotor.relabel(0)
+        self.aw.encoder.set(0)
         # The origin is set on the target too: AP8 reads 1 ("always set when target position and
         # actual position are equal", TMCM-6212 4.1) and MVP REL counts from 0 (docs/world.md).
         self._command(ax.engine.move_to, 0)

@@ -1,7 +1,7 @@
 """The request path's pre-bound handlers (docs/architecture.md "Request path").
 
 A read that succeeded once on the general path is answered next time by one handler bound to its
-axis, bank or port: the read of the command table's "read" commands (GAP, GGP, GIO: `Axis.reader`,
+axis, bank or port: the read of the command table's "read" commands (GAP, GGP, GIO: `Motor.reader`,
 `GlobalParameters.reader`, `IOBanks.reader`, the same reads the general path makes) packed behind
 the reply's fixed first four bytes (manual 3.2: reply address, module address, status, command;
 value MSB first; checksum). Only pure reads are bound (the table's effect READ or NONE): a GAP of a
@@ -131,7 +131,7 @@ class RequestPath:
                 self.writes[bytes(frame[:4])] = write
 
     def _setter(self, command: int, type_: int, motor: int) -> Setter | None:
-        """The same setter the general path reaches (`Axis.set`, `GlobalParameters.set`, which
+        """The same setter the general path reaches (`Motor.set`, `GlobalParameters.set`, which
         check the value and raise the status), bound to its axis or bank."""
         vm = self.vm
         if command not in vm.opcodes:

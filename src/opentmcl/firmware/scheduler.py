@@ -54,7 +54,8 @@ class Scheduler:
         self._axis_next: list[int | None] = []
         self._engine_next: int | None = None
         self._dirty = True            # an engine plan may have changed: their next events are looked up again
-        self._synced_at = -1          # the tick the engines were last all brought to
+        self.synced_at = -1
+        """The tick the engines were last all brought to (read it, never set it)."""
         self._limit: int | None = None
         self._limit_other: int | None = None  # the part of `_limit` that is not the timers'
         self._limit_ok = False        # `_limit` holds (only inside `advance_to`)
@@ -86,13 +87,13 @@ class Scheduler:
         self._engines = [ax.engine for ax in self.vm.axes]
         self._axis_next = [None] * len(self._engines)
         self._engine_next = None
-        self._synced_at = -1
+        self.synced_at = -1
         self.invalidate(ALL)
 
     def prepare(self, effect: Effect) -> None:
         """Before a command of `effect` acts: the engines are brought to now, and what it may
         change is dropped. A pure read (Effect.READ) leaves the engines' plans and events."""
-        if self._synced_at != self.now:
+        if self.synced_at != self.now:
             self._sync_engines()
         if effect & ~Effect.READ:
             self.invalidate(effect)
@@ -185,7 +186,7 @@ class Scheduler:
         """Bring every engine (or those of `engines`, the ones a program's read looks at) to now
         for a pure read: within its segment an engine keeps its next event. Engines left behind
         follow at the next sync."""
-        if self._synced_at == self.now:
+        if self.synced_at == self.now:
             return
         if engines is None or engines is self._engines:
             self._sync_engines()
@@ -199,7 +200,7 @@ class Scheduler:
         """The engine of `axis` brought to now, for a flag read outside a command (WAIT POS, the
         target-reached interrupt)."""
         engine = self._engines[axis]
-        if self._synced_at != self.now and engine.now < self.now:
+        if self.synced_at != self.now and engine.now < self.now:
             engine.advance(self.now)
         return engine
 
@@ -208,7 +209,7 @@ class Scheduler:
         for engine in self._engines:
             if engine.now < now:
                 engine.advance(now)
-        self._synced_at = now
+        self.synced_at = now
 
     def _engine_event(self) -> int | None:
         if self._dirty:
@@ -307,7 +308,7 @@ class Scheduler:
     def read_at(self, tick: int, engines: list[Any] | None = None) -> None:
         """A read running ahead: time moves to its own tick and its engines follow there."""
         self.now = tick
-        if self._synced_at != tick:
+        if self.synced_at != tick:
             self.sync_for_read(engines)
 
     def fold(self, tick: int) -> None:

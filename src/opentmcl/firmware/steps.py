@@ -2,8 +2,9 @@
 program (TMCM-6212 manual 3.5, 3.6.14-3.6.33; PD28-1021 manual 3.5 Table 5 for 40-57 and CALL).
 
 The interpreter compiles each stored instruction once into a step, a function of the tick `t` at
-which the instruction takes effect: it does the instruction's work, moves the program counter and
-schedules the next instruction one slot later (or none: WAIT, STOP, single-stepping). The same
+which the instruction takes effect: it does the instruction's work and answers the address of the
+next instruction, which the interpreter schedules one slot later; or None when the step has set the
+program counter and the schedule itself (WAIT, STOP, RETI). The same
 step runs whether the instruction is taken as an event of the scheduler or run ahead of it
 (Interpreter.run_ahead); which instructions may run ahead is the command table's business
 (table.py: the effect of each command).
@@ -29,7 +30,7 @@ from .status import TmclStatus
 if TYPE_CHECKING:
     from .interpreter import Interpreter
 
-Step = Callable[[int], None]
+Step = Callable[[int], int | None]
 Compiler = Callable[["Interpreter", int, int, int, int], Step]
 """Makes the step of one instruction from its (command, type, motor, value) fields."""
 SLOT = 1600
@@ -50,10 +51,11 @@ def failing(ip: Interpreter, command: int, status: int) -> Step:
     """The step of an instruction the program cannot execute: it fails with `status`."""
     vm = ip.vm
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
-        ip.last_error = (vm.program_counter, command, status)
-        ip.next_after(t)
+        pc = vm.program_counter
+        ip.last_error = (pc, command, status)
+        return pc + 1
     return step
 
 
@@ -67,30 +69,31 @@ def refused(status: int) -> Compiler:
 
 # --- jumps and subroutines (3.6.16-3.6.19; RST, DJNZ, CALL of the PD28-1021) --------------------
 def _go(ip: Interpreter, command: int, address: int) -> Step:
-    """Jump to `address` at tick t; outside program memory the jump fails (status 4) and the
-    program goes on with the next instruction."""
+    """Jump to `address`; outside program memory the jump fails (status 4) and the program goes on
+    with the next instruction."""
     if 0 <= address < ip.vm.program.size:
-        def go(t: int) -> None:
-            ip.jump(address, t)
+        def go(t: int) -> int:
+            return address
         return go
     return partial(_fail, ip, command, 4)
 
 
-def _fail(ip: Interpreter, command: int, status: int, t: int) -> None:
-    ip.last_error = (ip.vm.program_counter, command, status)
-    ip.next_after(t)
+def _fail(ip: Interpreter, command: int, status: int, t: int) -> int:
+    pc = ip.vm.program_counter
+    ip.last_error = (pc, command, status)
+    return pc + 1
 
 
 def ja(ip: Interpreter, command: int, type: int, motor: int, address: int) -> Step:
     vm = ip.vm
     go = _go(ip, command, address)
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         watch = ip.ja_watch
         if watch is not None:
             watch(vm.program_counter, address)
         ip.executed += 1
-        go(t)
+        return go(t)
     return step
 
 
@@ -102,12 +105,11 @@ def jc(ip: Interpreter, command: int, condition: int, motor: int, address: int) 
     vm = ip.vm
     go = _go(ip, command, address)
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         ip.executed += 1
         if bool(vm.flags & bits) == when_set:
-            go(t)
-        else:
-            ip.next_after(t)
+            return go(t)
+        return vm.program_counter + 1
     return step
 
 
@@ -116,32 +118,31 @@ def csub(ip: Interpreter, command: int, type: int, motor: int, address: int) -> 
     vm = ip.vm
     ok = 0 <= address < vm.program.size
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
+        pc = vm.program_counter
         if len(ip.stack) >= STACK_DEPTH:
-            ip.next_after(t)
-        elif not ok:
-            _fail(ip, command, 4, t)
-        else:
-            ip.stack.append(vm.program_counter + 1)
-            ip.jump(address, t)
+            return pc + 1
+        if not ok:
+            return _fail(ip, command, 4, t)
+        ip.stack.append(pc + 1)
+        return address
     return step
 
 
 def rsub(ip: Interpreter, command: int, type: int, motor: int, value: int) -> Step:
     """RSUB: ignored when the stack is empty (3.6.19)."""
-    size = ip.vm.program.size
+    vm = ip.vm
+    size = vm.program.size
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
         if not ip.stack:
-            ip.next_after(t)
-            return
+            return vm.program_counter + 1
         address = ip.stack.pop()
         if 0 <= address < size:
-            ip.jump(address, t)
-        else:  # back past the end of program memory
-            _fail(ip, command, 4, t)
+            return address
+        return _fail(ip, command, 4, t)  # back past the end of program memory
     return step
 
 
@@ -154,12 +155,11 @@ def call(ip: Interpreter, command: int, condition: int, motor: int, address: int
     sub = csub(ip, command, 0, 0, address)
     vm = ip.vm
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         if bool(vm.flags & bits) == when_set:
-            sub(t)
-        else:
-            ip.executed += 1
-            ip.next_after(t)
+            return sub(t)
+        ip.executed += 1
+        return vm.program_counter + 1
     return step
 
 
@@ -169,12 +169,12 @@ def rst(ip: Interpreter, command: int, type: int, motor: int, address: int) -> S
     if not 0 <= address < vm.program.size:
         return failing(ip, command, 4)
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
         ip.stack.clear()
         ip.saved = None
         vm.interrupts.active = None
-        ip.jump(address, t)
+        return address
     return step
 
 
@@ -186,13 +186,12 @@ def djnz(ip: Interpreter, command: int, var: int, motor: int, address: int) -> S
         return failing(ip, command, 3)
     go = _go(ip, command, address)
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         ip.executed += 1
         v = variables[var] = to_int32(variables[var] - 1)
         if v != 0:
-            go(t)
-        else:
-            ip.next_after(t)
+            return go(t)
+        return vm.program_counter + 1
     return step
 
 
@@ -206,16 +205,16 @@ def calc_(ip: Interpreter, command: int, op: int, motor: int, value: int) -> Ste
     sign = _SIGN.get(op)
     binary = calc.binary
 
-    def add(t: int) -> None:  # ADD and SUB: the accumulator is in 32 bits already
+    def add(t: int) -> int:  # ADD and SUB: the accumulator is in 32 bits already
         ip.executed += 1
         a = vm.accumulator + operand * sign  # type: ignore[operator]
         _load(vm, a if _LOW <= a <= _HIGH else to_int32(a))
-        ip.next_after(t)
+        return vm.program_counter + 1
 
-    def other(t: int) -> None:
+    def other(t: int) -> int:
         ip.executed += 1
         _load(vm, binary(op, vm.accumulator, operand))  # type: ignore[arg-type]
-        ip.next_after(t)
+        return vm.program_counter + 1
     return add if sign is not None else other
 
 
@@ -224,10 +223,10 @@ def comp(ip: Interpreter, command: int, type: int, motor: int, value: int) -> St
     operand = to_int32(value)
     after = flags.after_compare
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
         vm.flags = after(vm.flags, vm.accumulator, operand)
-        ip.next_after(t)
+        return vm.program_counter + 1
     return step
 
 
@@ -242,12 +241,12 @@ def _simple(ip: Interpreter, command: int, work: Callable[[], int | None]) -> St
     """A step whose work answers a failing status or None."""
     vm = ip.vm
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
         status = work()
         if status is not None:
             ip.last_error = (vm.program_counter, command, status)
-        ip.next_after(t)
+        return vm.program_counter + 1
     return step
 
 
@@ -418,19 +417,18 @@ def wait_(ip: Interpreter, command: int, condition: int, motor: int, ticks: int)
     vm = ip.vm
     start, satisfied = wait.start, wait.satisfied
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         ip.executed += 1
         try:
             w = start(vm, condition, motor, ticks)
         except TmclStatus as exc:  # a wrong condition or motor
             ip.last_error = (vm.program_counter, command, exc.status)
-            ip.next_after(t)
-            return
+            return vm.program_counter + 1
+        if (w.condition == wait.TICKS and w.deadline is not None and w.deadline <= vm.now) or satisfied(vm, w):
+            return vm.program_counter + 1  # WAIT TICKS, 0, 0; or the condition holds already
         ip.wait = w
         ip.next_time = None
-        if (w.condition == wait.TICKS and w.deadline is not None and w.deadline <= vm.now) or satisfied(vm, w):
-            ip.wait = None  # WAIT TICKS, 0, 0; or the condition holds already
-            ip.next_after(t)
+        return None
     return step
 
 
@@ -451,18 +449,18 @@ def reti(ip: Interpreter, command: int, type: int, motor: int, value: int) -> St
     vm = ip.vm
     ints = vm.interrupts
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         ip.executed += 1
         ctx = ip.saved
         if ctx is None:
-            ip.next_after(t)
-            return
+            return vm.program_counter + 1
         ip.saved = None
         ints.active = None
         vm.program_counter = ctx.pc
         vm.accumulator, vm.x_register, vm.flags = ctx.accumulator, ctx.x_register, ctx.flags
         ip.wait = ctx.wait
         ip.next_time = t + SLOT if vm.application_status == RUNNING and ip.wait is None else None
+        return None
     return step
 
 
@@ -473,11 +471,12 @@ def bound_read(ip: Interpreter, read: Callable[[], int], engines: list[Any] | No
     vm = ip.vm
     sync = vm.scheduler.sync_for_read
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         sync(engines)
         ip.executed += 1
-        _load(vm, read())
-        ip.next_after(t)
+        value = read()
+        _load(vm, int(value) if value.__class__ is bool else value)  # AP8, a flag: 1 or 0
+        return vm.program_counter + 1
     return step
 
 
@@ -485,10 +484,10 @@ def bound_store(ip: Interpreter, store: Callable[[int], None]) -> Step:
     """AGP to a user variable (bank 2): the accumulator is copied there."""
     vm = ip.vm
 
-    def step(t: int) -> None:
+    def step(t: int) -> int:
         ip.executed += 1
         store(vm.accumulator)
-        ip.next_after(t)
+        return vm.program_counter + 1
     return step
 
 
@@ -500,7 +499,7 @@ def direct(ip: Interpreter, command: int, type: int, motor: int, value: int, loa
     vm = ip.vm
     ok = int(Status.OK)
 
-    def step(t: int) -> None:
+    def step(t: int) -> int | None:
         ip.executed += 1
         pc = vm.program_counter
         out = execute(vm, command, type, motor, value, program=True)
@@ -512,9 +511,8 @@ def direct(ip: Interpreter, command: int, type: int, motor: int, value: int, loa
                 _load(vm, result)
         if vm.application_status == RESET:  # the instruction erased the program (GP81): PC 0 stays
             ip.next_time = None
-            return
-        vm.program_counter = pc + 1
-        ip.next_time = t + SLOT if vm.application_status == RUNNING else None
+            return None
+        return pc + 1
     return step
 
 
@@ -525,11 +523,11 @@ def with_accumulator(command: int, type_of: Callable[[int], int]) -> Callable[..
         ok = int(Status.OK)
         t_ = type_of(type)
 
-        def step(t: int) -> None:
+        def step(t: int) -> int:
             ip.executed += 1
             out = execute(vm, command, t_, motor, vm.accumulator, program=True)
             if out.__class__ is tuple and out[0] != ok:
                 ip.last_error = (vm.program_counter, own, out[0])
-            ip.next_after(t)
+            return vm.program_counter + 1
         return step
     return compile_

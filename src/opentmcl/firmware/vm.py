@@ -18,15 +18,15 @@ from ..modules.profile import ModuleProfile, load_profile
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
 from ..protocol.status import Status
 from .ascii import AsciiInterface
-from .axis import Axis
 from .commands import StatusReply
-from .effects import ALL, Effect
 from .eeprom import Eeprom
+from .effects import Effect
 from .globals import GlobalParameters
 from .heartbeat import OF_INTERFACE, Heartbeats
 from .interpreter import Interpreter
 from .interrupts import Interrupts
 from .io import IOBanks
+from .motor import Motor
 from .program import ProgramMemory, program_control, store_instruction
 from .reference import ReferenceSearch
 from .requests import RequestPath, Setter, reply_bytes
@@ -87,13 +87,13 @@ class VirtualModule:
         self.globals = GlobalParameters(self)
         if self._address_override is not None:
             self.globals.ram[_ADDRESS] = self._address_override
-        self.axes: list[Axis] = []
+        self.axes: list[Motor] = []
         for i in range(prof.axes):
             ram = {}
             for num, p in prof.axis_parameters.items():
                 stored = ee.get_axis(i, num) if p.storable else None
                 ram[num] = p.default if stored is None else stored
-            self.axes.append(Axis(i, prof, ram))
+            self.axes.append(Motor(i, prof, ram))
         restore = self.globals.get_raw(0, 85) == 0
         self.user_vars = [0] * prof.user_variables
         for n in range(prof.storable_user_variables):
@@ -178,13 +178,17 @@ class VirtualModule:
             fast = self._reads.get(frame)
         except TypeError:  # a mutable buffer: the general path reads it
             fast = None
-        heartbeat = OF_INTERFACE.get(interface)
-        if fast is not None and heartbeat is not None:
-            hb = self.heartbeats
-            hb.last[heartbeat] = self.scheduler.now  # restart the heartbeat
-            hb.fired = False
-            self.scheduler.sync_for_read()
-            return fast()
+        if fast is not None:
+            heartbeat = OF_INTERFACE.get(interface)
+            if heartbeat is not None:
+                sched = self.scheduler
+                now = sched.now
+                hb = self.heartbeats
+                hb.last[heartbeat] = now  # restart the heartbeat
+                hb.fired = False
+                if sched.synced_at != now:
+                    sched.sync_for_read()
+                return fast()
         return self._handle_general(frame, interface)
 
     def _handle_general(self, frame: bytes, interface: str) -> bytes:
@@ -329,7 +333,7 @@ class VirtualModule:
                                      138, 1 << i).encode())
 
     # --- services used by the command handlers ---------------------------------------
-    def reference_search(self, axis: Axis) -> ReferenceSearch:
+    def reference_search(self, axis: Motor) -> ReferenceSearch:
         return self._searches[axis.index]
 
     def clear_error_flags(self, which: int) -> None:

@@ -13,7 +13,7 @@ from ..motion import CLOCK_HZ
 from .status import TmclStatus
 
 if TYPE_CHECKING:
-    from .axis import Axis
+    from .motor import Motor
     from .vm import VirtualModule
 
 TICK = CLOCK_HZ // 100  # one WAIT tick, 10 ms
@@ -41,7 +41,7 @@ def start(vm: VirtualModule, condition: int, motor: int, ticks: int) -> Wait:
     return Wait(condition, motor, deadline)
 
 
-def _param(axis: Axis, number: int) -> int:
+def _param(axis: Motor, number: int) -> int:
     try:
         return axis.get(number)
     except TmclStatus:

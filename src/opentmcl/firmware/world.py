@@ -11,7 +11,8 @@ Hooks the VirtualModule calls:
   AP167 = 0 (TOFF) lets the rotor free-wheel.
 
 The world persists across power cycles (`power_up` rebinds it to the new axes). Python API:
-`vm.world.axis(n)` -> AxisWorld (force_switch, set_load, physical_position, ...),
+`vm.world.axis(n)` -> AxisWorld (force_switch, set_load, physical_position, load_now; its rooms
+rotor, switches, encoder, drive, checks, events: firmware/axis_world.py),
 `vm.world.set_input(bank, port, value)`.
 """
 from __future__ import annotations
@@ -23,12 +24,12 @@ from ..motion import CLOCK_HZ
 from ..motion.scenario import Scenario, ScenarioError, load_scenario
 from ..motion.stage import Profile, ceil_ticks
 from . import flags as fl
-from .effects import Effect
 from .axis_world import AxisWorld
+from .effects import Effect
 from .io import threshold
 
 if TYPE_CHECKING:
-    from .axis import Axis
+    from .motor import Motor
     from .vm import VirtualModule
 
 __all__ = ["AxisWorld", "ScenarioSource", "World"]
@@ -41,7 +42,7 @@ class World:
     """All axes' worlds plus the module's inputs, driven by a scenario."""
 
     axis_numbers: frozenset[int] = frozenset({9, 10, 11, 29, 180, 206, 208, 209, 215})
-    """Axis parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
+    """Motor parameter numbers `read_axis` serves (the hot GAP path skips the world for others)."""
 
     def __init__(self, vm: VirtualModule, scenario: ScenarioSource = None) -> None:
         self.vm = vm
@@ -123,14 +124,14 @@ class World:
 
     def next_event(self, same_axes: bool = False) -> int | None:
         """Absolute tick of the next world event. `same_axes`: nothing was written since the last
-        call that can make an axis need events or not (`AxisWorld.interesting`)."""
+        call that can make an axis need events or not (`EventLookup.interesting`)."""
         best = None
         if same_axes:
             watched = self._watched
         else:
-            self._watched = watched = [aw for aw in self.axes_world if aw.interesting()]
+            self._watched = watched = [aw for aw in self.axes_world if aw.events.interesting()]
         for aw in watched:
-            t = aw.next_event()
+            t = aw.events.next_event()
             if t is not None and (best is None or t < best):
                 best = t
         if self.inputs or self.shutdown is not None:
@@ -169,12 +170,12 @@ class World:
         now = vm.now
         # the axes that need events, as found by the last look-up while that still holds
         # (Scheduler.limit_held: no write since that can make an axis need them)
-        watched = self._watched if vm.scheduler.limit_held() else [aw for aw in self.axes_world if aw.interesting()]
+        watched = self._watched if vm.scheduler.limit_held() else [aw for aw in self.axes_world if aw.events.interesting()]
         for aw in watched:
-            if aw.needs_check(now):
+            if aw.events.needs_check(now):
                 if aw.engine.now < now:
                     vm.sync()
-                aw.check()
+                aw.checks.run()
                 acted = True
         return acted
 
@@ -184,8 +185,8 @@ class World:
         events (checked at every tick too)."""
         if self.shutdown is not None:
             return False
-        watched = self._watched if self.vm.scheduler.limit_held() else [aw for aw in self.axes_world if aw.interesting()]
-        return not any(aw.load.by == "time" for aw in watched)
+        watched = self._watched if self.vm.scheduler.limit_held() else [aw for aw in self.axes_world if aw.events.interesting()]
+        return not any(aw.drive.load.by == "time" for aw in watched)
 
     _watched: list[AxisWorld] = []
     """The axes found interesting by the last `next_event`."""
@@ -204,43 +205,44 @@ class World:
                     ax.engine.hard_stop()
             self.vm.interpreter.set_error_flag(fl.ESD)
 
-    def read_axis(self, axis: Axis, number: int) -> int | None:
+    def read_axis(self, axis: Motor, number: int) -> int | None:
         aw = self.axes_world[axis.index]
         self.vm.sync()
-        aw._follow()
-        aw._update_raw()
+        aw.rotor.follow()
+        aw.switches.update()
         if number in (9, 10, 11):
-            left, right, home = aw.logical()
+            left, right, home = aw.switches.logical()
             return int({9: home, 10: right, 11: left}[number])
+        drive = aw.drive
         if number == 180:
-            aw.current.update(aw)
-            return aw.current.actual_scale(aw)
+            drive.current.update(aw)
+            return drive.current.actual_scale(aw)
         if number == 206:
-            aw.current.update(aw)
-            return aw.load_value()
+            drive.current.update(aw)
+            return drive.load_value()
         if number == 208:
-            return aw.current.driver_status(aw)
+            return drive.current.driver_status(aw)
         if number == 209:
-            return aw.encoder()
+            return aw.encoder.position()
         if number == 29:
-            return aw.speed()
+            return aw.rotor.speed()
         if number == 215:
-            return aw.absolute_encoder(axis.params[215].max)
+            return aw.encoder.absolute(axis.params[215].max)
         return None
 
-    def write_axis(self, axis: Axis, number: int, value: int) -> bool:
+    def write_axis(self, axis: Motor, number: int, value: int) -> bool:
         aw = self.axes_world[axis.index]
         if number == 209:
             self.vm.sync()
-            aw._follow()
-            aw.set_encoder(value)
+            aw.rotor.follow()
+            aw.encoder.set(value)
             return True
         if number == 1:
             self.vm.sync()
-            aw.relabel(value)
+            aw.rotor.relabel(value)
             return True
         if number == 167:
             self.vm.sync()
-            aw.set_toff(value)
+            aw.rotor.set_toff(value)
             return True
         return False

@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING
 
 from ..modules.profile import STORABLE_USER_VARIABLES, load_profile
+from ..modules.state import SNAPSHOT_TABLES, is_state
 from .client import Client, VersionReply
 from .errors import TmclError, TmclStatusError, TmclTimeout
 
@@ -128,15 +129,25 @@ def probe(client: Client, *, max_seconds: float = 300.0, progress: Progress = _n
     return result
 
 
-def closest_builtin(version: str) -> ModuleProfile | None:
+def closest_builtin(version: str | None, binary: int | None = None) -> ModuleProfile | None:
     """The built-in profile with this firmware string, else one with the same module number
-    (the characters before 'V', e.g. 6212 of 6212V105), else None (`profile_for_version`)."""
+    (the characters before 'V', e.g. 6212 of 6212V105; `profile_for_version`), else one whose
+    binary version (command 136 type 1) has the same module number in its upper 16 bits
+    (0x1844 = 6212 of 0x18440105), else None."""
+    from ..modules.profile import module_names
     from .module import profile_for_version
 
-    try:
-        return profile_for_version(version)
-    except TmclError:
-        return None
+    if version is not None:
+        try:
+            return profile_for_version(version)
+        except TmclError:
+            pass
+    if binary is not None:
+        for name in module_names():
+            prof = load_profile(name)
+            if prof.firmware_binary >> 16 == (binary & 0xFFFF_FFFF) >> 16:
+                return prof
+    return None
 
 
 def _toml(value: TomlValue) -> str:
@@ -167,10 +178,28 @@ class _Known:
 
 @dataclass
 class _Skeleton:
-    """The profile file being written: `[[...]]` tables, and comments for values the base already has."""
+    """The profile file being written: `[[...]]` tables, comments for values the base already has,
+    and the rows of the `[snapshot]` section (state values: modules/state.py)."""
 
     body: list[str] = field(default_factory=list)
     comments: list[str] = field(default_factory=list)
+    snapshot: dict[str, list[list[int]]] = field(default_factory=lambda: {k: [] for k in SNAPSHOT_TABLES})
+
+
+def _state_numbers() -> tuple[set[int], set[tuple[int, int]]]:
+    """Axis numbers and (bank, number) keys that are state in every built-in profile naming them:
+    what a parameter of a new module with the same number most likely is."""
+    from ..modules.profile import module_names
+
+    axis: dict[int, bool] = {}
+    glob: dict[tuple[int, int], bool] = {}
+    for name in module_names():
+        prof = load_profile(name)
+        for n, p in prof.axis_parameters.items():
+            axis[n] = axis.get(n, True) and is_state(p.name)
+        for k, p in prof.global_parameters.items():
+            glob[k] = glob.get(k, True) and is_state(p.name)
+    return {n for n, v in axis.items() if v}, {k for k, v in glob.items() if v}
 
 
 def _header(url: str) -> list[str]:
@@ -178,8 +207,9 @@ def _header(url: str) -> list[str]:
     return [f"# Profile skeleton probed from {url} on {when} by opentmcl profile probe.",
             "# UNVERIFIED: only reading commands were used; ranges, access letters and units of parameters",
             "# the base profile does not know are placeholders. Check them against the module's manual.",
-            "# Writable parameters whose probed value differs from the base default override it; every other",
-            "# probed value is listed as a comment at the end (read-only values are measurements, not defaults)."]
+            "# Writable parameters whose probed value differs from the base default override it; state values",
+            "# (positions, encoder, timers, random number, I/O) go to [snapshot], never to the defaults; every",
+            "# other probed value is listed as a comment at the end (read-only values are measurements)."]
 
 
 def _extending_module(result: ProbeResult, base: ModuleProfile) -> list[str]:
@@ -208,10 +238,19 @@ def _overrides_default(p: Param, value: int) -> bool:
     return p.writable and p.default != value and p.min <= value <= p.max
 
 
-def _axis_parameters(out: _Skeleton, axis0: dict[int, int], known: dict[int, Param]) -> None:
-    """Axis parameters of motor 0 (GAP n, 0): new ones, changed defaults, the rest as comments."""
-    for number, value in sorted(axis0.items()):
+def _axis_parameters(out: _Skeleton, axes: dict[int, dict[int, int]], known: dict[int, Param],
+                     state: set[int]) -> None:
+    """Axis parameters of motor 0 (GAP n, 0): new ones, changed defaults, the rest as comments;
+    state values of every axis go to the snapshot section, never to the defaults."""
+    for motor, values in sorted(axes.items()):
+        for number, value in sorted(values.items()):
+            p = known.get(number)
+            if (is_state(p.name) if p is not None else number in state):
+                out.snapshot["axis_parameter"].append([motor, number, value])
+    for number, value in sorted(axes.get(0, {}).items()):
         p = known.get(number)
+        if (is_state(p.name) if p is not None else number in state):
+            continue
         if p is None:
             out.body += _table("axis_parameter", {"number": number, "name": f"axis_parameter_{number}",
                                                   **_UNKNOWN, "default": value})
@@ -222,12 +261,16 @@ def _axis_parameters(out: _Skeleton, axis0: dict[int, int], known: dict[int, Par
 
 
 def _global_parameters(out: _Skeleton, probed: dict[tuple[int, int], int],
-                       known: dict[tuple[int, int], Param]) -> None:
-    """Global parameters (GGP n, bank); user variables (bank 2) the base does not name are skipped."""
+                       known: dict[tuple[int, int], Param], state: set[tuple[int, int]]) -> None:
+    """Global parameters (GGP n, bank); user variables (bank 2) the base does not name are skipped;
+    state values (tick timer, random number, program status) go to the snapshot section."""
     for (bank, number), value in sorted(probed.items()):
         if bank == USER_VARIABLE_BANK and (bank, number) not in known:
             continue  # user variables (bank 2) are counted, not listed
         p = known.get((bank, number))
+        if (is_state(p.name) if p is not None else (bank, number) in state):
+            out.snapshot["global_parameter"].append([bank, number, value])
+            continue
         if p is None:
             out.body += _table("global_parameter", {"bank": bank, "number": number,
                                                     "name": f"global_parameter_{bank}_{number}", **_UNKNOWN,
@@ -239,14 +282,14 @@ def _global_parameters(out: _Skeleton, probed: dict[tuple[int, int], int],
 
 
 def _io_ports(out: _Skeleton, probed: dict[tuple[int, int], int], known: dict[tuple[int, int], IOPort]) -> None:
-    """Ports (GIO port, bank) the base does not know become [[io]] tables; the rest comments."""
+    """Ports (GIO port, bank) the base does not know become [[io]] tables; every value read goes to
+    the snapshot section (inputs and outputs are state)."""
     for (bank, port), value in sorted(probed.items()):
         if (bank, port) not in known:
             out.body += _table("io", {"bank": bank, "port": port, "name": f"IO_{bank}_{port}",
                                       "kind": _IO_KINDS[bank], "access": "R" if bank < 2 else "RW",
                                       "min": 0, "max": max(1, value)})
-        else:
-            out.comments.append(f"# GIO {port}, {bank} = {value}  ({known[(bank, port)].name})")
+        out.snapshot["io"].append([bank, port, value])
 
 
 def _removed(result: ProbeResult, known: _Known) -> list[str]:
@@ -271,7 +314,7 @@ def _linear_capabilities() -> list[str]:
 def skeleton(result: ProbeResult, url: str) -> str:
     """A profile file for the probed module: `extends` the closest built-in profile and overrides
     what differs, or a standalone profile when none matches. Marked unverified."""
-    base = closest_builtin(result.firmware_version)
+    base = closest_builtin(result.firmware_version, result.firmware_binary)
     lines = _header(url)
     if base is not None:
         lines += _extending_module(result, base)
@@ -280,8 +323,9 @@ def skeleton(result: ProbeResult, url: str) -> str:
         lines += _standalone_module(result)
         known = _Known()
     out = _Skeleton()
-    _axis_parameters(out, result.axis.get(0, {}), known.axis)
-    _global_parameters(out, result.globals, known.globals)
+    state_axis, state_globals = _state_numbers()
+    _axis_parameters(out, result.axis, known.axis, state_axis)
+    _global_parameters(out, result.globals, known.globals, state_globals)
     _io_ports(out, result.io, known.io)
     user_vars = sum(1 for bank, _ in result.globals if bank == USER_VARIABLE_BANK)
     if base is None or user_vars != base.user_variables:
@@ -289,5 +333,18 @@ def skeleton(result: ProbeResult, url: str) -> str:
         storable = STORABLE_USER_VARIABLES if base is None else base.storable_user_variables
         if user_vars < storable:   # no more storable variables than variables (docs/profiles.md)
             lines.insert(lines.index("[module]") + 2, f"storable_user_variables = {user_vars}")
-    body = out.body + _removed(result, known)
+    body = out.body + _removed(result, known) + _snapshot_section(out, result)
     return "\n".join(lines + body + ["", "# Probed values equal to the base profile:", *out.comments]) + "\n"
+
+
+def _snapshot_section(out: _Skeleton, result: ProbeResult) -> list[str]:
+    """`[snapshot]`: where the module was when probed (positions, encoder, timers, random number,
+    I/O): never defaults; `replay --initial-state FILE` starts a twin from it (docs/capture.md)."""
+    lines = ["", "# Where the module was when probed: state, not defaults (opentmcl replay --initial-state).",
+             "[snapshot]", f"firmware_version = {_toml(result.firmware_version)}"]
+    for key, rows in out.snapshot.items():
+        if rows:
+            lines.append(f"{key} = [")
+            lines += [f"  {_toml(row)}," for row in rows]
+            lines.append("]")
+    return lines

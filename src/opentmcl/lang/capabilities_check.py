@@ -3,10 +3,11 @@
 
 Everything module-specific comes from the profile: its opcodes, number of axes, axis and global
 parameter tables (with their access letters), user variables, I/O ports, coordinates and
-interrupts. What is fixed here is the meaning of each command's fields, the same on every module
-(TMCM-6212 manual 3.6.1-3.6.33, PD86-1180 manual 4.6): e.g. SAP's type is an axis parameter number
-and its motor field an axis; SGP's motor field is a bank; SIO's type is a port and its motor field
-a bank. A finding names the field at fault, so the assembler can point at that operand.
+interrupts. What each command's fields name is the same on every module and is data of the
+command set (`Command.meanings` in protocol/opcodes.py, from TMCM-6212 manual 3.6.1-3.6.33,
+PD86-1180 manual 4.6): e.g. SAP's type is an axis parameter and its motor field an axis; SGP's
+type is a global parameter of the bank in its motor field; SIO's type is a port. A finding names
+the field at fault, so the assembler can point at that operand.
 """
 from __future__ import annotations
 
@@ -15,19 +16,23 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from ..protocol import opcodes
+from ..protocol.opcodes import (
+    AXIS,
+    AXIS_PARAMETER,
+    COORDINATE,
+    GLOBAL_PARAMETER,
+    INTERRUPT,
+    MOTOR,
+    PORT,
+    Meaning,
+)
 from .binfile import Instruction
 
 if TYPE_CHECKING:
     from ..modules.profile import ModuleProfile
 
 USER_BANK = 2          # SGP/GGP bank 2: the user variables (TMCM-6212 3.6.7)
-ALL = 255              # SIO/GIO 255: all ports; EI/DI 255: interrupt processing as a whole;
-                       # SCO/GCO motor 255: copy coordinates RAM <-> EEPROM (TMCM-6212 3.6.22-3.6.23)
-_AXIS_MOTOR = frozenset({1, 2, 3, 4, 5, 6, 7, 8, 13, 30, 31, 32, 34, 39, 46, 50, 51})
-_AXIS_PARAM = {5: "W", 34: "W", 6: "R", 7: "E", 8: "E"}   # SAP AAP write, GAP read, STAP RSAP store
-_GLOBAL_PARAM = {9: "W", 35: "W", 10: "R", 11: "E", 12: "E"}
-_COORDINATE = frozenset({30, 31, 32, 39})                 # SCO GCO CCO ACO: type = coordinate
-_WAIT_ON_MOTOR = frozenset({1, 2, 3, 4})                  # WAIT POS, REFSW, LIMSW, RFS
+ALL = 255              # EI/DI 255: interrupt processing as a whole (TMCM-6212 3.6.30-3.6.31)
 _ACCESS_WORD = {"W": "written", "R": "read", "E": "stored to or restored from EEPROM"}
 
 
@@ -46,102 +51,107 @@ def check(ins: Instruction, profile: ModuleProfile) -> list[Finding]:
     if ins.command not in profile.opcodes:
         return [Finding("command", f"{name} (command {ins.command}) is not available on {profile.name}")]
     out: list[Finding] = []
-    for rule in _RULES:
-        rule(ins, name, profile, out)
+    for names, rule in _RULES:
+        meaning = cmd.naming(names, ins.type) if cmd is not None else None
+        if meaning is not None:
+            rule(ins, meaning, name, profile, out)
     return out
+
+
+def _number(ins: Instruction, meaning: Meaning) -> int:
+    """The field of `ins` that `meaning` is about."""
+    value: int = getattr(ins, meaning.field)
+    return value
 
 
 def _axes(profile: ModuleProfile) -> str:
     return "motor 0 only" if profile.axes == 1 else f"motors 0..{profile.axes - 1}"
 
 
-def _motor(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
-    on_motor = ins.command in _AXIS_MOTOR or (ins.command == 27 and ins.type in _WAIT_ON_MOTOR)
-    if ins.command in (30, 31) and ins.motor == ALL:
-        return
-    if on_motor and ins.motor >= profile.axes:
-        out.append(Finding("motor", f"{name}: motor {ins.motor} does not exist on {profile.name} "
-                                    f"({_axes(profile)})"))
+def _motor(ins: Instruction, meaning: Meaning, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
+    motor = _number(ins, meaning)
+    if motor != meaning.special and motor >= profile.axes:
+        out.append(Finding(meaning.field, f"{name}: motor {motor} does not exist on {profile.name} "
+                                          f"({_axes(profile)})"))
 
 
 def _access(p_access: str, need: str) -> bool:
     return need in p_access or (need == "E" and "A" in p_access)
 
 
-def _axis_param(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
-    need = _AXIS_PARAM.get(ins.command)
-    if need is None:
-        return
-    p = profile.axis_parameters.get(ins.type)
+def _axis_param(ins: Instruction, meaning: Meaning, name: str, profile: ModuleProfile,
+                out: list[Finding]) -> None:
+    number, need = _number(ins, meaning), meaning.access
+    p = profile.axis_parameters.get(number)
     if p is None:
-        out.append(Finding("type", f"{name}: {profile.name} has no axis parameter {ins.type}"))
+        out.append(Finding(meaning.field, f"{name}: {profile.name} has no axis parameter {number}"))
     elif not _access(p.access, need):
-        out.append(Finding("type", f"{name}: axis parameter {ins.type} ({p.name}) of {profile.name} "
-                                   f"cannot be {_ACCESS_WORD[need]}"))
+        out.append(Finding(meaning.field, f"{name}: axis parameter {number} ({p.name}) of {profile.name} "
+                                          f"cannot be {_ACCESS_WORD[need]}"))
 
 
-def _global_param(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
-    need = _GLOBAL_PARAM.get(ins.command)
-    if need is None:
-        return
-    bank, number = ins.motor, ins.type
+def _global_param(ins: Instruction, meaning: Meaning, name: str, profile: ModuleProfile,
+                  out: list[Finding]) -> None:
+    bank, number, need = ins.motor, _number(ins, meaning), meaning.access
     if bank == USER_BANK:
         size = profile.storable_user_variables if need == "E" else profile.user_variables
         if number >= size:
             what = "storable user variables" if need == "E" else "user variables"
-            out.append(Finding("type", f"{name}: {profile.name} has {size} {what} (0..{size - 1}), "
-                                       f"not {number}"))
+            out.append(Finding(meaning.field, f"{name}: {profile.name} has {size} {what} (0..{size - 1}), "
+                                              f"not {number}"))
         return
     if bank not in profile.global_banks:  # bank 2 returned above
         banks = sorted(profile.global_banks)
-        out.append(Finding("motor", f"{name}: {profile.name} has no global parameter bank {bank} "
-                                    f"(banks {', '.join(map(str, banks))})"))
+        out.append(Finding(MOTOR, f"{name}: {profile.name} has no global parameter bank {bank} "
+                                  f"(banks {', '.join(map(str, banks))})"))
         return
     p = profile.global_parameters.get((bank, number))
     if p is None:
-        out.append(Finding("type", f"{name}: {profile.name} has no global parameter {number} in bank {bank}"))
+        out.append(Finding(meaning.field, f"{name}: {profile.name} has no global parameter {number} "
+                                          f"in bank {bank}"))
     elif not _access(p.access, need):
-        out.append(Finding("type", f"{name}: global parameter {number} ({p.name}) of {profile.name} "
-                                   f"cannot be {_ACCESS_WORD[need]}"))
+        out.append(Finding(meaning.field, f"{name}: global parameter {number} ({p.name}) of {profile.name} "
+                                          f"cannot be {_ACCESS_WORD[need]}"))
 
 
-def _io(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
-    if ins.command not in (14, 15):
-        return
-    port, bank = ins.type, ins.motor
+def _io(ins: Instruction, meaning: Meaning, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
+    port, bank = _number(ins, meaning), ins.motor
     if not any(b == bank for b, _ in profile.io):
-        out.append(Finding("motor", f"{name}: {profile.name} has no I/O bank {bank}"))
+        out.append(Finding(MOTOR, f"{name}: {profile.name} has no I/O bank {bank}"))
         return
     pullups = profile.extra.get("pullups")
-    if port == ALL or (pullups and (bank, port) == (pullups["bank"], pullups["port"])):
+    if port == meaning.special or (pullups and (bank, port) == (pullups["bank"], pullups["port"])):
         return
     p = profile.io.get((bank, port))
     if p is None:
-        out.append(Finding("type", f"{name}: {profile.name} has no port {port} in I/O bank {bank}"))
-    elif ins.command == 14 and "W" not in p.access:
-        out.append(Finding("type", f"{name}: port {port} in bank {bank} ({p.name}) of {profile.name} "
-                                   "is an input"))
+        out.append(Finding(meaning.field, f"{name}: {profile.name} has no port {port} in I/O bank {bank}"))
+    elif meaning.access == "W" and "W" not in p.access:
+        out.append(Finding(meaning.field, f"{name}: port {port} in bank {bank} ({p.name}) of {profile.name} "
+                                          "is an input"))
 
 
-def _coordinate(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
-    if ins.command in _COORDINATE and ins.type > profile.coordinates:
-        out.append(Finding("type", f"{name}: {profile.name} has coordinates 0..{profile.coordinates}, "
-                                   f"not {ins.type}"))
-    if ins.command == 4 and ins.type == opcodes.MvpType.COORD and not 0 <= ins.value <= profile.coordinates:
-        out.append(Finding("value", f"{name}: {profile.name} has coordinates 0..{profile.coordinates}, "
-                                    f"not {ins.value}"))
+def _coordinate(ins: Instruction, meaning: Meaning, name: str, profile: ModuleProfile,
+                out: list[Finding]) -> None:
+    number = _number(ins, meaning)
+    if not 0 <= number <= profile.coordinates:
+        out.append(Finding(meaning.field, f"{name}: {profile.name} has coordinates 0..{profile.coordinates}, "
+                                          f"not {number}"))
 
 
-def _interrupt(ins: Instruction, name: str, profile: ModuleProfile, out: list[Finding]) -> None:
-    if ins.command not in (25, 26, 37):
+def _interrupt(ins: Instruction, meaning: Meaning, name: str, profile: ModuleProfile,
+               out: list[Finding]) -> None:
+    number = _number(ins, meaning)
+    if number == meaning.special:  # EI/DI 255: all interrupts
         return
-    if ins.type == ALL:  # EI/DI 255: all interrupts; VECT 255 names no vector (TMCM-6212 3.6.30-3.6.32)
-        if ins.command == 37:
-            out.append(Finding("type", f"{name}: 255 is not an interrupt vector (it switches all interrupts)"))
-        return
-    if ins.type not in profile.interrupts:
-        out.append(Finding("type", f"{name}: {profile.name} has no interrupt {ins.type}"))
+    if number == ALL:  # VECT 255 names no vector (3.6.32)
+        out.append(Finding(meaning.field, f"{name}: 255 is not an interrupt vector (it switches all interrupts)"))
+    elif number not in profile.interrupts:
+        out.append(Finding(meaning.field, f"{name}: {profile.name} has no interrupt {number}"))
 
 
-_Rule = Callable[[Instruction, str, "ModuleProfile", list[Finding]], None]
-_RULES: tuple[_Rule, ...] = (_motor, _axis_param, _global_param, _io, _coordinate, _interrupt)
+_Rule = Callable[[Instruction, Meaning, str, "ModuleProfile", list[Finding]], None]
+_RULES: tuple[tuple[str, _Rule], ...] = (
+    (AXIS, _motor), (AXIS_PARAMETER, _axis_param), (GLOBAL_PARAMETER, _global_param), (PORT, _io),
+    (COORDINATE, _coordinate), (INTERRUPT, _interrupt),
+)
+"""What each kind of field is checked against, in the order findings are listed."""

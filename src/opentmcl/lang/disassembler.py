@@ -25,10 +25,6 @@ from .binfile import BinFileError, Instruction, decode
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _RESERVED = {RAW}
 
-AXIS_COMMANDS = {5, 6, 7, 8, 34}          # SAP GAP STAP RSAP AAP: type = axis parameter
-GLOBAL_COMMANDS = {9, 10, 11, 12, 35}     # SGP GGP STGP RSGP AGP: type = parameter, motor = bank
-INTERRUPT_COMMANDS = {25, 26, 37}         # EI DI VECT: type = interrupt number
-MOTOR_COMMANDS = {1, 2, 3, 4, 5, 6, 7, 8, 13, 30, 31, 32, 34, 39, 46, 50, 51}
 
 
 @dataclass
@@ -76,13 +72,24 @@ def _module_names(module: str) -> _Names:
 def _type_name(cmd: opcodes.Command, ins: Instruction, names: _Names) -> str | None:
     """The type operand as a symbol: the command's own names, then the module's parameter names."""
     text = opcodes.symbol_name(cmd, ins.type)
-    if text is None and cmd.number in AXIS_COMMANDS:
+    if text is None and _names(cmd, opcodes.AXIS_PARAMETER, TYPE, ins.type):
         text = names.axis.get(ins.type)
-    elif text is None and cmd.number in GLOBAL_COMMANDS:
+    elif text is None and _names(cmd, opcodes.GLOBAL_PARAMETER, TYPE, ins.type):
         text = names.globals.get((ins.motor, ins.type))
-    elif text is None and cmd.number in INTERRUPT_COMMANDS:
+    elif text is None and _names(cmd, opcodes.INTERRUPT, TYPE, ins.type):
         text = names.interrupts.get(ins.type)
     return text
+
+
+def _always_an_axis(cmd: opcodes.Command) -> bool:
+    """Does the motor field name an axis whatever the type (not WAIT's, 3.6.20)?"""
+    return any(m.names == opcodes.AXIS and m.field == MOTOR and m.types is None for m in cmd.meanings)
+
+
+def _names(cmd: opcodes.Command, what: str, fld: str, type: int) -> bool:
+    """Does field `fld` of `cmd` name a `what` (opcodes.Meaning) with this type field?"""
+    meaning = cmd.naming(what, type)
+    return meaning is not None and meaning.field == fld
 
 
 def _operand_text(cmd: opcodes.Command, fld: str, ins: Instruction, labels: Mapping[int, str],
@@ -91,7 +98,7 @@ def _operand_text(cmd: opcodes.Command, fld: str, ins: Instruction, labels: Mapp
     text = None
     if fld == TYPE:
         text = _type_name(cmd, ins, names)
-    elif fld == MOTOR and cmd.number in MOTOR_COMMANDS:
+    elif fld == MOTOR and _always_an_axis(cmd):
         text = names.motors.get(num)
     elif fld == VALUE and cmd.label:
         text = labels.get(num)

@@ -66,6 +66,7 @@ from dataclasses import dataclass, field, fields
 from functools import cache, cached_property
 from typing import Any
 
+from .. import registry
 from .names import NameIndex
 
 
@@ -268,7 +269,25 @@ def parse_profile(data: RawProfile) -> ModuleProfile:
     )
 
 
-_FILES = {"TMCM-6212": "tmcm6212.toml", "PD86-1180": "pd86_1180.toml", "PD28-1021": "pd28_1021.toml"}
+BUILTIN = {"TMCM-6212": "tmcm6212.toml", "PD86-1180": "pd86_1180.toml", "PD28-1021": "pd28_1021.toml"}
+"""The profiles this package carries (modules/data/); registered under their names."""
+
+
+class _DataFile:
+    """A profile this package carries: called, the path of its file in modules/data/."""
+
+    def __init__(self, fname: str) -> None:
+        self.fname = fname
+
+    def __call__(self) -> object:
+        from importlib import resources
+
+        return resources.files("opentmcl.modules").joinpath("data", self.fname)
+
+
+_PROFILES = registry.of(registry.PROFILES)
+for _name, _file in BUILTIN.items():
+    _PROFILES.register(_name, _DataFile(_file))
 
 
 def _normalise(name: str) -> str:
@@ -285,20 +304,47 @@ def _builtin_raw(fname: str) -> RawProfile:
     return tomllib.loads(text)  # a TOML document is a table
 
 
+def _registered_raw(name: str) -> RawProfile:
+    """The raw dict of the profile registered as `name`: a built-in data file, or the file an
+    installed distribution names (its `extends` resolved against the registered profiles)."""
+    target = _PROFILES.find(name)
+    if target is None:
+        raise KeyError(name)
+    if isinstance(target, _DataFile):
+        return _builtin_raw(target.fname)
+    path = target() if callable(target) else target
+    if not isinstance(path, (str, os.PathLike)):
+        raise ValueError(f"profile {name!r}: its entry point names no file path but {path!r}")
+    return raw_profile(os.fspath(path))
+
+
 @cache
 def _all() -> dict[str, ModuleProfile]:
     out: dict[str, ModuleProfile] = {}
-    for fname in _FILES.values():
-        prof = parse_profile(_builtin_raw(fname))
-        for key in (prof.name, *prof.aliases):
-            out[_normalise(key)] = prof
+    for key in _PROFILES.available():
+        prof = parse_profile(_registered_raw(key))
+        for alias in (prof.name, *prof.aliases):
+            out.setdefault(_normalise(alias), prof)
     return out
 
 
+def refresh() -> None:
+    """Look the registered profiles up again (after a profile was registered at run time)."""
+    _all.cache_clear()
+
+
 def builtin_raw(name: str) -> RawProfile:
-    """The raw TOML dict of a built-in profile by name or alias (KeyError if unknown)."""
-    prof = load_profile(name)
-    return _builtin_raw(_FILES[prof.name])
+    """The raw TOML dict of a registered profile by name or alias (KeyError if unknown)."""
+    wanted = _normalise(name)
+    try:
+        return _registered_raw(wanted.lower())
+    except (KeyError, ValueError):
+        pass
+    for key in _PROFILES.available():
+        module = _registered_raw(key).get("module", {})
+        if wanted in {_normalise(str(n)) for n in (module.get("name", ""), *module.get("aliases", ()))}:
+            return _registered_raw(key)
+    raise KeyError(f"unknown module {name!r}; known: {', '.join(module_names())} or a profile file NAME.toml")
 
 
 def raw_profile(name_or_path: str) -> RawProfile:
@@ -327,9 +373,10 @@ def load_profile(name: str | os.PathLike[str]) -> ModuleProfile:
     try:
         return _all()[_normalise(name)]
     except KeyError:
-        raise KeyError(f"unknown module {name!r}; known: {', '.join(sorted(_FILES))} "
+        raise KeyError(f"unknown module {name!r}; known: {', '.join(module_names())} "
                        "or a profile file NAME.toml") from None
 
 
 def module_names() -> list[str]:
-    return sorted(_FILES)
+    """The names of the registered profiles (built-in and from installed distributions)."""
+    return sorted({prof.name for prof in _all().values()})

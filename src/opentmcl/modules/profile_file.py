@@ -20,15 +20,17 @@ import tomllib
 from collections.abc import Callable
 from pathlib import Path
 
+from .. import registry
 from ..limits import InputTooLarge, read_bytes, size_text
 from .bounds import AXES_MAX, NESTING_MAX, excess, too_deep
 from .names import compact
 from .profile import CAPABILITY_VALUES, STORABLE_USER_VARIABLES, USER_VARIABLES, RawProfile
+from .state import snapshot_errors
 
 MAX_FILE_BYTES = 1024 * 1024
 """Largest profile file read (the built-in ones are about 60 kB)."""
 MAX_DEPTH = 8
-ENGINES = ("sixpoint", "linear", "tmc429")
+
 _TABLES = {"axis_parameter": ("number",), "global_parameter": ("bank", "number"), "io": ("bank", "port"),
            "interrupt": ("number",)}
 _MODULE_INT = ("axes", "firmware_binary", "program_memory", "coordinates", "user_variables",
@@ -40,7 +42,8 @@ _INT_FIELDS = ("number", "bank", "port", "min", "max", "default")
 _VALUE_FIELDS = ("min", "max", "default")   # a 32-bit value of a reply, signed or unsigned
 INT32_MIN, UINT32 = -(1 << 31), (1 << 32) - 1
 _STR_FIELDS = ("name", "kind", "access", "title", "unit", "description", "engine")
-_TOP = {"extends", "module", "remove", *_TABLES}
+_TOP = {"extends", "module", "remove", "snapshot", *_TABLES}
+"""`snapshot`: state values read by `profile probe` (modules/state.py); not inherited, no effect on the module."""
 _FILE_INDEX = "_file_index"  # of a keyless entry after merging: its index in the user's file
 
 
@@ -145,6 +148,8 @@ def merge(base: RawProfile, child: RawProfile, where: str = "") -> tuple[RawProf
 def validate(data: RawProfile) -> list[str]:
     """Schema errors of a resolved profile dict, one line each with its key path."""
     errors = [f"{key}: unknown key (a profile has {', '.join(sorted(_TOP))})" for key in data if key not in _TOP]
+    if "snapshot" in data:
+        errors += snapshot_errors(data["snapshot"])
     m = data.get("module")
     if not isinstance(m, dict):
         return errors + ["module: missing table [module]"]
@@ -217,14 +222,38 @@ def _check_extras(m: RawProfile) -> list[str]:
                                                                             ("max", UINT32)))):
         errors.append("module.pullups: expected a table {bank = 0..255, port = 0..255, max = 0.."
                       f"{UINT32}}}, got {pullups!r}"[:200])
+    return errors + _check_dashboard_extras(m)
+
+
+def _check_dashboard_extras(m: RawProfile) -> list[str]:
+    """The [module] keys the dashboard reads (docs/profiles.md "For the dashboard"): `current_scale`,
+    `reference_modes`, `analog_full_scale_volts`."""
+    errors = []
+    scale = m.get("current_scale")
+    if scale is not None:
+        ok = isinstance(scale, dict) and _is_int(scale.get("rms_ma")) and 0 < scale["rms_ma"] <= 1_000_000 \
+            and _is_int(scale.get("peak_ma", 1)) and 0 < scale.get("peak_ma", 1) <= 1_000_000 \
+            and scale.get("steps", 0) in (0, 32) and isinstance(scale.get("source", ""), str) \
+            and set(scale) <= {"rms_ma", "peak_ma", "steps", "source"}
+        if not ok:
+            errors.append("module.current_scale: expected a table {rms_ma = 1..1000000, peak_ma = 1..1000000, "
+                          f"steps = 0 or 32, source = text}}, got {scale!r}"[:200])
+    modes = m.get("reference_modes")
+    if modes is not None and not (isinstance(modes, list) and 0 < len(modes) <= 63
+                                  and all(isinstance(t, str) and 0 < len(t) <= 200 for t in modes)):
+        errors.append(f"module.reference_modes: expected a list of 1..63 texts (mode 1 first), got {modes!r}"[:200])
+    volts = m.get("analog_full_scale_volts")
+    if volts is not None and not (type(volts) in (int, float) and 0 < volts <= 1000):
+        errors.append(f"module.analog_full_scale_volts: expected a number of volts 0 < v <= 1000, got {volts!r}")
     return errors
 
 
 def _check_module_choices(m: RawProfile) -> list[str]:
     """The engine name and the lists of [module]."""
     errors = []
-    if m.get("engine") not in ENGINES:
-        errors.append(f"module.engine: must be one of {', '.join(ENGINES)}, got {m.get('engine')!r}")
+    engines = registry.of(registry.ENGINES).available()
+    if m.get("engine") not in engines:
+        errors.append(f"module.engine: must be one of {', '.join(engines)}, got {m.get('engine')!r}")
     ops = m.get("opcodes")
     if not isinstance(ops, list) or not all(_is_int(o) and 0 <= o <= 255 for o in ops):
         errors.append("module.opcodes: expected a list of command numbers 0..255")
@@ -378,6 +407,8 @@ def resolve(path: str | Path, builtin: Callable[[str], RawProfile], _depth: int 
     for key in data:
         if key not in _TOP:
             errors.append(f"{path}: {key}: unknown key (a profile has {', '.join(sorted(_TOP))})")
+    if "snapshot" in data:   # the file's own state values: not merged into the module
+        errors += [f"{path}: {line}" for line in snapshot_errors(data["snapshot"])]
     if errors:  # with the schema errors of the rest: every error at once, not in rounds
         raise ProfileError(errors + [f"{path}: {line}" for line in validate(merged)])
     if not data.get("module", {}).get("aliases"):

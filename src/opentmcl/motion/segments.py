@@ -166,12 +166,21 @@ class Segment(NamedTuple):
     def standing(self) -> bool:
         return self.v0 == 0 and self.a == 0
 
+    def state(self, k: int) -> tuple[int, int]:
+        """(step counter, velocity) at tick k: the last whole microstep passed in the direction of
+        motion, and the velocity in 1/DEN microsteps per tick. The one evaluation of a piece at a
+        tick that the engines' reads use."""
+        p0, v0, a = self.p0, self.v0, self.a
+        if v0 == 0 and a == 0:
+            return p0 // PSCALE, 0
+        dt = k - self.k0
+        p = p0 + (2 * v0 + a * dt) * dt
+        backwards = v0 < 0 if v0 else a < 0
+        return (-((-p) // PSCALE) if backwards else p // PSCALE), v0 + a * dt
+
     def step(self, k: int) -> int:
         """The integer step counter at tick k (last whole microstep passed)."""
-        if self.standing:
-            return self.p0 // PSCALE
-        p = self.p_at(k)
-        return -((-p) // PSCALE) if self.direction < 0 else p // PSCALE
+        return self.state(k)[0]
 
     def shifted(self, steps: int) -> Segment:
         """The same motion relabelled by `steps` microsteps (AP1 overwrite)."""

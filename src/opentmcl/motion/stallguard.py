@@ -9,8 +9,9 @@ Not the chip's physics: a linear model with the properties the manuals state
 L is the load torque as a fraction of the torque at 100 % current, SGT the
 threshold AP174. SG falls linearly with load, rises with current and reaches
 0 at L = C (SGT = 0); a lower SGT reaches 0 at a lower load (more sensitive).
-The objects here read the axis through an `AxisWorld`-like object `aw` (`aw.p(n)`,
-`aw.has(n)`, `aw.engine`, `aw.vm.now`, `aw.load_now()`).
+The objects here read the axis through the firmware's axis world `aw` (firmware/axis_world.py):
+`aw.p(n)`, `aw.has(n)`, `aw.engine`, `aw.axis`, `aw.vm`, `aw.spec`, and its drive `aw.drive`
+(`load_now()`, `falloff()`, `load_value()`).
 """
 from __future__ import annotations
 
@@ -79,9 +80,9 @@ class CurrentModel:
         lower, upper = semin * 32, (semin + semax + 1) * 32
         up, down = SEUP[aw.p(171) & 3], SEDN[aw.p(169) & 3]
         cs_min = max(0, (cs + 1) // (4 if aw.p(168) else 2) - 1)
-        load = aw.load_now()
+        load = aw.drive.load_now()
         while n > 0:
-            sg = load_value(load, (cs_act + 1) / 32 * aw.falloff(), aw.p(174))
+            sg = load_value(load, (cs_act + 1) / 32 * aw.drive.falloff(), aw.p(174))
             if sg < lower and cs_act < cs:
                 cs_act = min(cs, cs_act + up)
                 self._down = 0
@@ -129,7 +130,7 @@ class CurrentModel:
         """AP208 (PD86-1180 manual 5, TMC262 flags): bit 0 stallGuard2 threshold reached,
         bit 7 standstill; bits 1-6 from the scenario's `driver_flags`."""
         bits = 0
-        if aw.engine.moving and aw.load_value() == 0:
+        if aw.engine.moving and aw.drive.load_value() == 0:
             bits |= 0x01
         if not aw.engine.moving:
             bits |= 0x80

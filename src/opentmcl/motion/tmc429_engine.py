@@ -41,8 +41,25 @@ _RANGES = {
 }
 
 
+_DIRECT = {"max_acceleration": "a_max", "minimum_speed": "v_min", "ramp_divisor": "ramp_div",
+           "pulse_divisor": "pulse_div"}
+"""Parameters written to one register as they are (AP5, AP130, AP153, AP154)."""
+
+
 class Tmc429ConfigError(ValueError):
     """An unknown engine parameter or a value outside the manual's range."""
+
+
+def _checked(name: str, value: object) -> int:
+    """`value` of the parameter `name` as an integer within the manual's range."""
+    if name not in _RANGES:
+        raise Tmc429ConfigError(f"unknown TMC429 engine parameter {name!r}")
+    lo, hi = _RANGES[name]
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value):
+        raise Tmc429ConfigError(f"{name} must be an integer, not {value!r}")
+    if not lo <= int(value) <= hi:
+        raise Tmc429ConfigError(f"{name}={value} out of range {lo}..{hi}")
+    return int(value)
 
 
 def _s32(x: int) -> int:
@@ -213,29 +230,23 @@ class Tmc429Engine(RampEngine):
     def configure(self, **params: object) -> None:
         """Set AP4, AP5, AP130, AP138, AP153, AP154 by name (see module doc).
         A change of AP5, AP153 or AP154 recomputes PMUL/PDIV (datasheet 6.1.9.2)."""
-        checked = {}
-        for name, value in params.items():
-            if name not in _RANGES:
-                raise Tmc429ConfigError(f"unknown TMC429 engine parameter {name!r}")
-            lo, hi = _RANGES[name]
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or value != int(value):
-                raise Tmc429ConfigError(f"{name} must be an integer, not {value!r}")
-            if not lo <= int(value) <= hi:
-                raise Tmc429ConfigError(f"{name}={value} out of range {lo}..{hi}")
-            checked[name] = int(value)
+        checked = {name: _checked(name, value) for name, value in params.items()}
         self._params.update(checked)
+        regs = self._registers(checked)
+        if regs:
+            self.ramp.set(**regs)
+        if {"max_acceleration", "ramp_divisor", "pulse_divisor"} & checked.keys():
+            self._recompute_p()
+
+    def _registers(self, checked: dict[str, int]) -> dict[str, int]:
+        """The TMC429 registers the checked parameters write (module doc)."""
         r = self.ramp
         regs: dict[str, int] = {}
         if "max_positioning_speed" in checked and r.mode in (RAMP_MODE, SOFT_MODE):
             regs["v_max"] = checked["max_positioning_speed"]
-        if "max_acceleration" in checked:
-            regs["a_max"] = checked["max_acceleration"]
-        if "minimum_speed" in checked:
-            regs["v_min"] = checked["minimum_speed"]
-        if "ramp_divisor" in checked:
-            regs["ramp_div"] = checked["ramp_divisor"]
-        if "pulse_divisor" in checked:
-            regs["pulse_div"] = checked["pulse_divisor"]
+        for name, register in _DIRECT.items():
+            if name in checked:
+                regs[register] = checked[name]
         if "ramp_mode" in checked:
             mode = AP138_MODES[checked["ramp_mode"]]
             if mode != r.mode:
@@ -243,10 +254,7 @@ class Tmc429Engine(RampEngine):
                 regs["v_max"] = V_LIMIT if mode == VELOCITY_MODE else self._params["max_positioning_speed"]
                 if mode == VELOCITY_MODE:       # keep the present speed (docs/assumptions.md)
                     regs["v_target"] = r.v_actual
-        if regs:
-            r.set(**regs)
-        if {"max_acceleration", "ramp_divisor", "pulse_divisor"} & checked.keys():
-            self._recompute_p()
+        return regs
 
     def _recompute_p(self) -> None:
         pmul, pdiv = registers_for(self._params["max_acceleration"], self._params["ramp_divisor"],

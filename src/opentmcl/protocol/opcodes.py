@@ -112,6 +112,48 @@ SYMBOL_TABLES: Mapping[str, Mapping[str, int]] = MappingProxyType({
 })
 
 
+# --- what a field names --------------------------------------------------------------------------
+
+AXIS = "motor number"
+"""The field selects a motor (an axis): TMCM-6212 3.4.1 "<motor number>"."""
+AXIS_PARAMETER = "axis parameter"
+"""The field numbers an axis parameter of the motor the motor field selects (3.6.5-3.6.6)."""
+GLOBAL_PARAMETER = "global parameter"
+"""The field numbers a global parameter in the bank the motor field gives (3.6.7-3.6.10);
+bank 2 holds the user variables."""
+PORT = "port number"
+"""The field numbers an I/O port in the bank the motor field gives (3.6.12-3.6.13)."""
+COORDINATE = "coordinate number"
+"""The field numbers a coordinate (3.6.4 MVP COORD, 3.6.22-3.6.25)."""
+INTERRUPT = "interrupt number"
+"""The field numbers an interrupt (3.6.30 EI, 3.6.31 DI, 3.6.32 VECT)."""
+
+
+@dataclass(frozen=True)
+class Meaning:
+    """What one field of a command names, from the command's description in the manuals.
+
+    `field` is TYPE, MOTOR or VALUE; `names` is AXIS, AXIS_PARAMETER, GLOBAL_PARAMETER, PORT,
+    COORDINATE or INTERRUPT. `access` is what the command does to the parameter or port it names:
+    "W" writes it, "R" reads it, "E" stores it to or restores it from EEPROM ("": not checked).
+    `types` limits the meaning to these values of the type field (WAIT waits on a motor only for
+    POS, REFSW, LIMSW and RFS, 3.6.20; MVP's value is a coordinate only with COORD, 3.6.4); None:
+    with every type. `special` is a value of the field that names none of them: 255 for all ports
+    (SIO/GIO, PD86-1180 4.6.14-4.6.15), all interrupts (EI/DI, 3.6.30-3.6.31) or, in SCO/GCO's
+    motor field, the copy of coordinates between RAM and EEPROM (3.6.22-3.6.23).
+    """
+
+    field: str
+    names: str
+    access: str = ""
+    types: frozenset[int] | None = None
+    special: int | None = None
+
+    def applies(self, type: int) -> bool:
+        """Does the field have this meaning when the type field is `type`?"""
+        return self.types is None or type in self.types
+
+
 # --- commands ----------------------------------------------------------------------------------
 
 @dataclass(frozen=True)
@@ -142,6 +184,9 @@ class Command:
     replies: bool = True
     """False for the one command the module answers with no reply (137, 3.6.36)."""
     notes: str = field(default="", compare=False)
+    meanings: tuple[Meaning, ...] = ()
+    """What its fields name (motors, parameters, ports, coordinates, interrupts), for checks
+    against a module (lang/capabilities_check.py)."""
 
     @property
     def operands(self) -> tuple[str, ...]:
@@ -150,6 +195,14 @@ class Command:
 
     def symbol_table(self) -> Mapping[str, int]:
         return SYMBOL_TABLES.get(self.symbols, MappingProxyType({}))
+
+    def naming(self, names: str, type: int) -> Meaning | None:
+        """The meaning by which one of its fields names `names` (AXIS, COORDINATE, ...) when the
+        type field is `type`, or None."""
+        for meaning in self.meanings:
+            if meaning.names == names and meaning.applies(type):
+                return meaning
+        return None
 
     def form_for(self, count: int) -> tuple[str, ...] | None:
         """The accepted form with `count` operands, or None."""
@@ -175,24 +228,45 @@ class Command:
 
 
 T, M, V = TYPE, MOTOR, VALUE
+_ON_AXIS = (Meaning(M, AXIS),)
+_COORDINATE_ON_AXIS = (Meaning(T, COORDINATE), Meaning(M, AXIS))
+_COPY_OR_COORDINATE_ON_AXIS = (Meaning(T, COORDINATE), Meaning(M, AXIS, special=255))
+
+
+def _axis_parameter(access: str) -> tuple[Meaning, ...]:
+    return Meaning(T, AXIS_PARAMETER, access), Meaning(M, AXIS)
+
+
+def _global_parameter(access: str) -> tuple[Meaning, ...]:
+    return (Meaning(T, GLOBAL_PARAMETER, access),)
+
 
 _COMMANDS: tuple[Command, ...] = (
     # Motion, parameter and I/O commands (TMCM-6212 3.6.1-3.6.13, PD86-1180 4.6.1-4.6.15).
-    Command(1, "ROR", "Rotate right", ((M, V),), keeps_address=True),
-    Command(2, "ROL", "Rotate left", ((M, V),), keeps_address=True),
-    Command(3, "MST", "Motor stop", ((M,), (M, V)), keeps_address=True),
-    Command(4, "MVP", "Move to position", ((T, M, V),), symbols="mvp", keeps_address=True),
-    Command(5, "SAP", "Set axis parameter", ((T, M, V),), keeps_address=True),
-    Command(6, "GAP", "Get axis parameter", ((T, M), (T, M, V)), keeps_address=True),
-    Command(7, "STAP", "Store axis parameter", ((T, M), (T, M, V)), source="PD86-1180", keeps_address=True),
-    Command(8, "RSAP", "Restore axis parameter", ((T, M), (T, M, V)), source="PD86-1180", keeps_address=True),
-    Command(9, "SGP", "Set global parameter", ((T, M, V),), keeps_address=True),
-    Command(10, "GGP", "Get global parameter", ((T, M), (T, M, V)), keeps_address=True),
-    Command(11, "STGP", "Store global parameter", ((T, M), (T, M, V)), keeps_address=True),
-    Command(12, "RSGP", "Restore global parameter", ((T, M), (T, M, V))),
-    Command(13, "RFS", "Reference search", ((T, M), (T,)), symbols="rfs", keeps_address=True),
-    Command(14, "SIO", "Set output", ((T, M, V),), keeps_address=True),
-    Command(15, "GIO", "Get input", ((T, M), (T, M, V)), keeps_address=True),
+    Command(1, "ROR", "Rotate right", ((M, V),), keeps_address=True, meanings=_ON_AXIS),
+    Command(2, "ROL", "Rotate left", ((M, V),), keeps_address=True, meanings=_ON_AXIS),
+    Command(3, "MST", "Motor stop", ((M,), (M, V)), keeps_address=True, meanings=_ON_AXIS),
+    Command(4, "MVP", "Move to position", ((T, M, V),), symbols="mvp", keeps_address=True,
+            meanings=(Meaning(M, AXIS), Meaning(V, COORDINATE, types=frozenset({MvpType.COORD})))),
+    Command(5, "SAP", "Set axis parameter", ((T, M, V),), keeps_address=True, meanings=_axis_parameter("W")),
+    Command(6, "GAP", "Get axis parameter", ((T, M), (T, M, V)), keeps_address=True,
+            meanings=_axis_parameter("R")),
+    Command(7, "STAP", "Store axis parameter", ((T, M), (T, M, V)), source="PD86-1180", keeps_address=True,
+            meanings=_axis_parameter("E")),
+    Command(8, "RSAP", "Restore axis parameter", ((T, M), (T, M, V)), source="PD86-1180", keeps_address=True,
+            meanings=_axis_parameter("E")),
+    Command(9, "SGP", "Set global parameter", ((T, M, V),), keeps_address=True, meanings=_global_parameter("W")),
+    Command(10, "GGP", "Get global parameter", ((T, M), (T, M, V)), keeps_address=True,
+            meanings=_global_parameter("R")),
+    Command(11, "STGP", "Store global parameter", ((T, M), (T, M, V)), keeps_address=True,
+            meanings=_global_parameter("E")),
+    Command(12, "RSGP", "Restore global parameter", ((T, M), (T, M, V)), meanings=_global_parameter("E")),
+    Command(13, "RFS", "Reference search", ((T, M), (T,)), symbols="rfs", keeps_address=True,
+            meanings=_ON_AXIS),
+    Command(14, "SIO", "Set output", ((T, M, V),), keeps_address=True,
+            meanings=(Meaning(T, PORT, "W", special=255),)),
+    Command(15, "GIO", "Get input", ((T, M), (T, M, V)), keeps_address=True,
+            meanings=(Meaning(T, PORT, special=255),)),
     # Calculation and branch commands (3.6.14-3.6.21).
     Command(19, "CALC", "Calculate", ((T, V), (T,)), symbols="calc"),
     Command(20, "COMP", "Compare", ((V,),), direct=False),
@@ -200,21 +274,26 @@ _COMMANDS: tuple[Command, ...] = (
     Command(22, "JA", "Jump always", ((V,),), label=True, direct=False),
     Command(23, "CSUB", "Call subroutine", ((V,),), label=True, direct=False),
     Command(24, "RSUB", "Return from subroutine", ((),), direct=False),
-    Command(25, "EI", "Enable interrupt", ((T,),)),
-    Command(26, "DI", "Disable interrupt", ((T,),)),
-    Command(27, "WAIT", "Wait for an event", ((T, M, V),), symbols="wait", direct=False),
+    Command(25, "EI", "Enable interrupt", ((T,),), meanings=(Meaning(T, INTERRUPT, special=255),)),
+    Command(26, "DI", "Disable interrupt", ((T,),), meanings=(Meaning(T, INTERRUPT, special=255),)),
+    Command(27, "WAIT", "Wait for an event", ((T, M, V),), symbols="wait", direct=False,
+            meanings=(Meaning(M, AXIS, types=frozenset(WaitCondition) - {WaitCondition.TICKS}),)),
     Command(28, "STOP", "Stop TMCL program execution", ((),), direct=False),
     # Coordinates, X register, accumulator transfers, interrupts (3.6.22-3.6.33).
-    Command(30, "SCO", "Set coordinate", ((T, M, V),), keeps_address=True),
-    Command(31, "GCO", "Get coordinate", ((T, M), (T, M, V)), keeps_address=True),
-    Command(32, "CCO", "Capture coordinate", ((T, M), (T, M, V)), keeps_address=True),
+    Command(30, "SCO", "Set coordinate", ((T, M, V),), keeps_address=True,
+            meanings=_COPY_OR_COORDINATE_ON_AXIS),
+    Command(31, "GCO", "Get coordinate", ((T, M), (T, M, V)), keeps_address=True,
+            meanings=_COPY_OR_COORDINATE_ON_AXIS),
+    Command(32, "CCO", "Capture coordinate", ((T, M), (T, M, V)), keeps_address=True,
+            meanings=_COORDINATE_ON_AXIS),
     Command(33, "CALCX", "Calculate using the X register", ((T,),), symbols="calcx"),
-    Command(34, "AAP", "Accu to axis parameter", ((T, M), (T, M, V))),
-    Command(35, "AGP", "Accu to global parameter", ((T, M), (T, M, V))),
+    Command(34, "AAP", "Accu to axis parameter", ((T, M), (T, M, V)), meanings=_axis_parameter("W")),
+    Command(35, "AGP", "Accu to global parameter", ((T, M), (T, M, V)), meanings=_global_parameter("W")),
     Command(36, "CLE", "Clear error flags", ((T,),), symbols="cle"),
-    Command(37, "VECT", "Define interrupt vector", ((T, V),), label=True, direct=False),
+    Command(37, "VECT", "Define interrupt vector", ((T, V),), label=True, direct=False,
+            meanings=(Meaning(T, INTERRUPT),)),
     Command(38, "RETI", "Return from interrupt", ((),), direct=False),
-    Command(39, "ACO", "Accu to coordinate", ((T, M), (T, M, V))),
+    Command(39, "ACO", "Accu to coordinate", ((T, M), (T, M, V)), meanings=_COORDINATE_ON_AXIS),
     # PD28-1021 extended command set (PD28-1021 manual 3.5, Table 5).
     Command(40, "CALCVV", "Calculate using two user variables", ((T, M, V),), symbols="calcx",
             source="PD28-1021"),
@@ -229,12 +308,14 @@ _COMMANDS: tuple[Command, ...] = (
     Command(45, "CALCV", "Calculate using a user variable and a direct value", ((T, M, V), (T, V)),
             symbols="calcx", source="PD28-1021"),
     Command(46, "MVPA", "Move to position specified by the accumulator", ((T, M),), symbols="mvp",
-            source="PD28-1021"),
+            source="PD28-1021", meanings=_ON_AXIS),
     Command(48, "RST", "Restart", ((V,),), label=True, direct=False, source="PD28-1021"),
     Command(49, "DJNZ", "Decrement and jump if not zero", ((T, V),), label=True, direct=False,
             source="PD28-1021"),
-    Command(50, "ROLA", "Rotate left using the accumulator", ((M,),), source="PD28-1021"),
-    Command(51, "RORA", "Rotate right using the accumulator", ((M,),), source="PD28-1021"),
+    Command(50, "ROLA", "Rotate left using the accumulator", ((M,),), source="PD28-1021",
+            meanings=_ON_AXIS),
+    Command(51, "RORA", "Rotate right using the accumulator", ((M,),), source="PD28-1021",
+            meanings=_ON_AXIS),
     Command(55, "SIV", "Set indexed variable", ((V,),), source="PD28-1021"),
     Command(56, "GIV", "Get indexed variable", ((),), source="PD28-1021"),
     Command(57, "AIV", "Accumulator to indexed variable", ((),), source="PD28-1021"),

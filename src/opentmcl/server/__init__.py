@@ -6,6 +6,7 @@
     tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0))
     server.start(); print(tcp.url); ...; server.stop()
 """
+from . import endpoints  # noqa: F401  (registers the built-in endpoints)
 from .app import Server
 from .bus import ModuleBus, RealTimeRunner
 from .can import CanServer

@@ -12,8 +12,8 @@ addressed to another module); to spare that call to every module, a serial
 frame goes only to the modules an address map names for its address byte
 (RS485 address GP66 and secondary address GP87, TMCM-6212 manual 5.1), the
 modules in ASCII mode left out. The map is built again after anything that
-may change it: a command other than those in `KEEPS_MAP` or an SGP to bank 0
-(SGP 66/87, RSGP, command 137, 139, program control), time passing (a TMCL
+may change it: a command that `protocol.opcodes.keeps_addressing` does not keep
+(SGP to bank 0, RSGP, command 137, 139, program control), time passing (a TMCL
 program may SGP 66), ASCII input, a frame to an address the map does not
 know, and a mapped module that stays silent and no longer has the address.
 A link that stands for USB (the address byte is ignored) and modules
@@ -42,7 +42,7 @@ from functools import partial
 from typing import NamedTuple, Protocol
 
 from ..handover import BACKGROUND, REQUEST, STOP, HandoverLock
-from ..protocol.opcodes import STOP_COMMANDS
+from ..protocol.opcodes import STOP_COMMANDS, keeps_addressing
 from . import canmap, vmapi
 from .pacing import REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
 
@@ -99,16 +99,9 @@ RUNNING = 1
 """`application_status` of a module whose TMCL program runs (firmware/program.py; TMCM-6212
 manual 3.6.36, command 135): only a running program can change an address while time passes."""
 
-KEEPS_MAP = frozenset({1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 13, 14, 15, 30, 31, 32, 135, 136, 138})
-"""Commands that cannot change a module's addresses or mode (motion, axis parameters, GGP, STGP,
-I/O, coordinates, status and version, command 138); SGP (9) only to banks other than 0."""
-SGP = 9
-
-
 def _changes_map(frame: bytes) -> bool:
     """Can the module that handled `frame` have changed its address (GP66/GP87) or mode?"""
-    command = frame[1]
-    return command not in KEEPS_MAP and not (command == SGP and frame[3] != 0)
+    return not keeps_addressing(frame[1], frame[3])
 
 
 def urgency(data: bytes) -> int:

@@ -27,7 +27,7 @@ from logging import DEBUG
 from typing import NamedTuple
 
 from ..protocol.frame import FRAME_LEN
-from .bus import KEEPS_MAP
+from ..protocol.opcodes import keeps_addressing
 from .framer import DEFAULT_GAP, SerialFramer
 
 log = logging.getLogger("opentmcl.server.stream")  # every frame at DEBUG (docs/host.md "Logging")
@@ -137,7 +137,7 @@ class SerialStream:
             if log.isEnabledFor(DEBUG):
                 _log_frames(frame, out)
             outputs += out
-            if frame[1] not in KEEPS_MAP and any(in_ascii_mode(vm) for vm in bus.modules):
+            if not keeps_addressing(frame[1], frame[3]) and any(in_ascii_mode(vm) for vm in bus.modules):
                 break
         if pos < size:
             outputs += self._feed_each(data[pos:], now, channel)

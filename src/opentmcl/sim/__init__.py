@@ -15,7 +15,7 @@ from ..firmware.vm import VirtualModule
 from ..host.connect import register_transport
 from ..host.errors import TmclUrlError
 from ..host.transport import url_query
-from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, _parse_modules, make_clock
+from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, make_clock, parse_modules
 
 __all__ = ["open_sim"]
 
@@ -30,7 +30,7 @@ def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
     # A profile file is a path: sim:///abs/module.toml or sim://relative/module.toml (docs/profiles.md).
     spec = url.netloc + url.path if ".toml" in url.path.lower() else (url.netloc or url.path.lstrip("/"))
     modules = []
-    for name, address in _parse_modules(spec, default_address):
+    for name, address in parse_modules(spec, default_address):
         try:
             modules.append(VirtualModule(name, address=address))
         except (KeyError, ValueError) as exc:  # ValueError: a bad profile file

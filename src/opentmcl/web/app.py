@@ -30,9 +30,8 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
-from collections.abc import Awaitable, Callable, Sequence
+from collections.abc import Callable, Sequence
 from functools import partial
 from importlib import resources
 
@@ -49,109 +48,28 @@ from starlette.websockets import WebSocket, WebSocketDisconnect
 from ..host import TmclError
 from . import motion
 from . import params as data_views
+from .api import BadRequest, Json, json_api
+from .api import body as _body
+from .api import int_field as _int
+from .api import line_numbers as _line_numbers
+from .api import number_field as _number
+from .api import optional_int as _optional_int
+from .api import str_field as _str
 from .connlimits import STOP_ALL_PATH
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
-from .lanes import Busy, Lanes
+from .lanes import Lanes
 from .scan import TIMEOUT_DEFAULT, TIMEOUT_MAX, Scanner
 from .service import FAST_HZ, Dashboard, DashboardError, Poller, is_stop
+from .tools import ToolsApi
 
 log = logging.getLogger("opentmcl.web")
 
-Json = dict[str, object]
-ApiHandler = Callable[[Request], Awaitable[object]]   # returns the JSON answer, None for {"ok": true}
-Endpoint = Callable[[Request], Awaitable[Response]]
 # A WebSocket that ends, however it ends: the browser left, the server closes, the socket broke.
 CLOSED = (WebSocketDisconnect, RuntimeError, ConnectionError)
 
 
 def static_dir() -> str:
     return str(resources.files("opentmcl.web").joinpath("static"))
-
-
-class BadRequest(ValueError):
-    pass
-
-
-# --- the request body ------------------------------------------------------------------------
-
-async def _body(request: Request) -> Json:
-    # Only JSON: a cross-site page cannot send it without a CORS preflight, which is never granted,
-    # so another web site open in the same browser cannot drive the motors (CSRF).
-    if request.headers.get("content-type", "").split(";")[0].strip().lower() != "application/json":
-        raise BadRequest("requests must be JSON (Content-Type: application/json)")
-    try:
-        data = await request.json()
-    except (json.JSONDecodeError, UnicodeDecodeError):
-        raise BadRequest("request body is not JSON") from None
-    if not isinstance(data, dict):
-        raise BadRequest("request body must be a JSON object")
-    return data
-
-
-def _one_line(text: str, limit: int = 200) -> str:
-    text = " ".join(text.split())
-    return text if len(text) <= limit else text[:limit] + "..."
-
-
-def _int(data: Json, key: str) -> int:
-    """`data[key]` as an integer: a JSON number or a string in Python's literal syntax (0x10)."""
-    value = data.get(key)
-    if isinstance(value, str):
-        try:
-            value = int(value.strip(), 0)
-        except ValueError:
-            raise BadRequest(f"{key} must be an integer, got {value!r}") from None
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise BadRequest(f"{key} must be an integer, got {value!r}")
-    return value
-
-
-def _optional_int(data: Json, key: str) -> int | None:
-    """Like `_int`, but a missing key or null is None."""
-    return None if data.get(key) is None else _int(data, key)
-
-
-def _number(data: Json, key: str, default: float) -> float:
-    """`data[key]` as a finite number of seconds (a JSON number), `default` when missing."""
-    value = data.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or value != value:
-        raise BadRequest(f"{key} must be a number, got {value!r}")
-    return float(value)
-
-
-def _str(data: Json, key: str) -> str:
-    value = data.get(key)
-    if not isinstance(value, str):
-        raise BadRequest(f"{key} must be a string")
-    return value
-
-
-def _line_numbers(data: Json, key: str) -> list[int]:
-    value = data.get(key)
-    if not isinstance(value, list) or not all(isinstance(x, int) and not isinstance(x, bool) for x in value):
-        raise BadRequest(f"{key} must be a list of line numbers")
-    return value
-
-
-# --- answers ---------------------------------------------------------------------------------
-
-def json_api(handler: ApiHandler) -> Endpoint:
-    """An endpoint answering `handler`'s result as JSON; the caller's mistakes are a 400 with
-    {"error": "<one line>"}, too many long requests at once a 503 (web/lanes.py)."""
-    async def endpoint(request: Request) -> Response:
-        try:
-            result = await handler(request)
-        except Busy as exc:
-            return JSONResponse({"error": str(exc)}, status_code=503, headers={"Retry-After": "1"})
-        except (BadRequest, DashboardError) as exc:
-            return JSONResponse({"error": str(exc)}, status_code=400)
-        except ValueError as exc:  # e.g. a number literal too long to convert: still the input's fault
-            return JSONResponse({"error": _one_line(f"bad request: {exc}")}, status_code=400)
-        except RecursionError:
-            return JSONResponse({"error": "bad request: input nested too deeply"}, status_code=400)
-        return JSONResponse(result if result is not None else {"ok": True})
-    endpoint.__name__ = getattr(handler, "__name__", "endpoint")  # the route's name
-    return endpoint
 
 
 # --- the app -----------------------------------------------------------------------------------
@@ -176,6 +94,7 @@ def create_app(dashboards: Dashboard | Sequence[Dashboard], *, allowed_hosts: Se
         Route("/api/scan", json_api(index.scan_start), methods=post),
         Route("/api/scan/cancel", json_api(index.scan_cancel), methods=post),
         Route("/api/scan/open", json_api(index.scan_open), methods=post),
+        Route("/api/bus", json_api(index.bus)),
         Mount("/m/{address:int}", app=index.dispatch),
         Route("/m/{address}/{rest:path}", index.unknown, methods=["GET", "POST", "PUT", "DELETE", "PATCH"]),
         Mount("/static", app=StaticFiles(directory=static_dir()), name="static"),
@@ -293,6 +212,22 @@ class ModuleIndex:
             self.add(d)
         return self.by_address[address]
 
+    async def bus(self, request: Request) -> object:
+        """Every module on the link side by side: those served with their axes' last polled state
+        (no request of its own), and those the scan found that are not served (yet)."""
+        root = request.scope.get("root_path", "")
+        served = []
+        for a, d in list(self.by_address.items()):
+            state = d.state or {}
+            program = state.get("program") or {}
+            served.append({"address": a, "module": d.profile.name, "version": d.version, "url": f"{root}/m/{a}/",
+                           "served": True, "connected": d.connected, "axes": state.get("axes", []),
+                           "program": program.get("mode_name")})
+        found = [{"address": f["address"], "module": f["module"], "version": f["version"], "served": False,
+                  "url": None, "axes": [], "baud": f["baud"]}
+                 for f in self.scanner.status()["found"] if f["address"] not in self.by_address]  # type: ignore[attr-defined]
+        return {"modules": sorted(served + found, key=lambda m: m["address"])}
+
     def listing(self, request: Request) -> list[Json]:
         root = request.scope.get("root_path", "")
         return [{"address": a, "module": d.profile.name, "url": f"{root}/m/{a}/"}
@@ -345,6 +280,7 @@ class ModuleApi:
             Route("/api/program/reset", json_api(self.reset), methods=post),
             WebSocketRoute("/ws", self.live),
             *data_views.routes(self.d, self.lanes),  # parameter sets and chart samples (web/params.py)
+            *ToolsApi(self.d, self.lanes).routes(),   # units, wizards, world load, read-back (web/tools.py)
         ]
 
     async def index(self, _request: Request) -> Response:

@@ -14,10 +14,11 @@ from collections.abc import Iterable, Sequence
 from ..handover import STOP
 from ..host import Client, TmclError
 from ..host.module import profile_for_version
+from ..protocol.opcodes import STOP_APPLICATION, by_mnemonic
 from .link import link_gate
 from .service import Dashboard, DashboardError
 
-MST, RFS, STOP_APPLICATION = 3, 13, 128
+MST, RFS = by_mnemonic("MST").number, by_mnemonic("RFS").number
 RFS_STATUS = 2
 TARGET_SPEED, MAX_POSITIONING_SPEED, UNIT_MODE = 2, 4, 255
 POSITION_KEYS = {"target_position": 0, "position": 1, "actual_speed": 3}

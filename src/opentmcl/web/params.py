@@ -23,6 +23,7 @@ from starlette.responses import JSONResponse, Response
 from starlette.routing import BaseRoute, Route
 
 from ..host import TmclError, paramset
+from . import units
 from .lanes import Busy, Lanes
 from .sampler import Sampler
 from .service import Dashboard, DashboardError
@@ -123,6 +124,7 @@ class ParamsApi:
         ps = await self.lanes.read(self._guarded, lambda: paramset.export_set(self.d.module))
         assert isinstance(ps, paramset.ParamSet)
         text = paramset.to_json(ps) if fmt == "json" else paramset.to_toml(ps)
+        text = units.attach(text, fmt, self.d.units)  # each axis's unit setting goes with it
         name = f"{ps.module}-address{self.d.module.address}.{fmt}"
         media = "application/json" if fmt == "json" else "application/toml"
         return Response(text, media_type=media, headers={
@@ -135,7 +137,8 @@ class ParamsApi:
         if ps.firmware and ps.firmware != self.d.version:
             warnings.append(f"the file was exported from firmware {ps.firmware}, the module has {self.d.version}")
         return {"module": ps.module, "firmware": ps.firmware, "entries": len(ps.entries),
-                "changes": [_change(c) for c in changes], "warnings": warnings}
+                "changes": [_change(c) for c in changes], "warnings": warnings,
+                "units": units.settings_in(text, self.d.profile.axes)}
 
     async def diff(self, request: Request) -> object:
         async with self.lanes.cpu.admitted():
@@ -146,7 +149,9 @@ class ParamsApi:
         ps = paramset.parse(text)
         changes = paramset.diff(self.d.module, ps)
         applied = paramset.apply(self.d.module, changes)
-        return {"applied": applied, "changes": [_change(c) for c in changes]}
+        settings = units.settings_in(text, self.d.profile.axes)
+        self.d.units.update(settings)
+        return {"applied": applied, "changes": [_change(c) for c in changes], "units": settings}
 
     async def apply(self, request: Request) -> object:
         async with self.lanes.cpu.admitted():

@@ -264,7 +264,7 @@ def bus_dashboards(bus: ModuleBus, *, address: int | None = None,
     their clients."""
     from ..host import Client
     from ..server import vmapi
-    from .bus import BusTransport
+    from .bus_transport import BusTransport
 
     with bus.lock:
         vms = {vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS): vm for vm in bus.modules}
@@ -283,7 +283,7 @@ def bus_dashboards(bus: ModuleBus, *, address: int | None = None,
         for addr, vm in vms.items():
             client = Client(BusTransport(bus), address=addr, timeout=timeout)
             clients.append(client)
-            module = client.module(addr, getattr(getattr(vm, "profile", None), "name", None))
+            module = client.module(addr, getattr(vm, "profile", None))  # the profile itself: a user profile file too
             dashboards.append(Dashboard(module, vm=vm, vm_lock=bus.lock, url=f"serve (address {addr})"))
     except BaseException:
         close()

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from ..handover import STOP
 from ..host import Module, TmclError, TmclStatusError, VersionReply
 from ..protocol.frame import Reply
-from ..protocol.opcodes import STOP_COMMANDS
+from ..protocol.opcodes import COMMANDS, GLOBAL_PARAMETER, STOP_COMMANDS
 from ..protocol.status import message
 from .link import TURN_REQUESTS, LinkLoader, LinkModule, link_gate
 
@@ -41,7 +41,12 @@ CARD_PARAMS = {"target_position": 0, "position": 1, "velocity": 3, "target_reach
                "right": 10, "left": 11, "load": 206, "current": 180, "max_current": 6}
 STAP, RSAP, STGP, RSGP = 7, 8, 11, 12
 USER_BANK = 2
-VARIABLE_COMMANDS = {9, 10, 11, 12, 35}  # SGP, GGP, STGP, RSGP, AGP with bank 2 name a user variable
+
+
+def _names_a_global(command: int, type: int) -> bool:
+    """SGP, GGP, STGP, RSGP, AGP: with bank 2 they name a user variable (protocol meanings)."""
+    cmd = COMMANDS.get(command)
+    return cmd is not None and cmd.naming(GLOBAL_PARAMETER, type) is not None
 
 
 def _short(text: str, limit: int = 200) -> str:
@@ -129,6 +134,7 @@ class Dashboard:
         self.downloading: tuple[int, int] | None = None  # (instructions sent, of) while a download runs
         self.stops = 0  # STOP ALLs so far: a Run or Step that arrived before the last one is refused
         self.closed = threading.Event()  # set by stop(): live connections end
+        self.units: dict[int, dict] = {}  # unit setting per axis (web/units.py), kept with the export
         self.profile = self.module.profile
         self.version = self.attempt(self.module.firmware_version, "?")
 
@@ -206,6 +212,8 @@ class Dashboard:
 
     # --- overview ------------------------------------------------------------------------
     def overview(self) -> dict:
+        from .setup import reference_modes
+
         p = self.profile
         ports = [{"bank": io.bank, "port": io.port, "name": io.name, "kind": io.kind, "access": io.access,
                   "min": io.min, "max": io.max} for io in sorted(p.io.values(), key=lambda i: (i.bank, i.port))]
@@ -214,8 +222,11 @@ class Dashboard:
                 "virtual": self.vm is not None, "io": ports, "fast_hz": FAST_HZ,
                 "history_seconds": HISTORY_SECONDS,
                 "velocity_unit": getattr(p.axis_parameters.get(3), "unit", "") or "pps",
-                "has_stap": STAP in p.opcodes, "has_rsap": RSAP in p.opcodes,
-                "program_memory": p.program_memory}
+                "has_stap": STAP in p.opcodes, "has_rsap": RSAP in p.opcodes, "has_stgp": STGP in p.opcodes,
+                "program_memory": p.program_memory, "reference_modes": reference_modes(p),
+                "capabilities": {"encoder": p.capabilities.encoder, "encoder_counts": p.capabilities.encoder_counts,
+                                 "null_channel": p.capabilities.null_channel,
+                                 "reference_input": p.capabilities.reference_input}}
 
     # --- sampling --------------------------------------------------------------------------
     def sample_fast(self) -> Sample:
@@ -419,7 +430,7 @@ class Dashboard:
                 raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
             if self.lock.stops_waiting:
                 raise DashboardError("download cancelled by a stop command (download mode left with 133)")
-        loader = self._loader()
+        loader = self.loader()
         try:
             # One turn from 132 to 133: a command sent meanwhile would be stored, not executed
             # (manual 3.6.36). A stop ends it between two instructions; verifying (134) takes turns.
@@ -437,7 +448,7 @@ class Dashboard:
         self.breakpoints = {b for b in self.breakpoints if b < len(prog.instructions)}
         return result
 
-    def _loader(self) -> LinkLoader:
+    def loader(self) -> LinkLoader:
         return LinkLoader(self.module)
 
     def set_breakpoints(self, lines: list[int]) -> list[int]:
@@ -460,7 +471,7 @@ class Dashboard:
         `stops` when the request arrived (a STOP ALL after it refuses the Run)."""
         self.cancel_run()
         if not self.breakpoints:
-            self._unless_stopped(since, lambda: self._loader().run())
+            self._unless_stopped(since, lambda: self.loader().run())
             return
         self._unless_stopped(since, self._start_runner)
 
@@ -473,7 +484,7 @@ class Dashboard:
     def _run_to_breakpoint(self) -> None:
         from ..host.debugger import Debugger
 
-        dbg = Debugger(self._loader())
+        dbg = Debugger(self.loader())
         while not self._cancel.is_set():
             try:
                 # Each request its own turn: a stepped WAIT takes a while and the charts go on meanwhile.
@@ -483,6 +494,11 @@ class Dashboard:
                 return
             if st.mode in (0, 3) or st.pc in self.breakpoints:
                 return
+
+    @property
+    def runner(self) -> threading.Thread | None:
+        """The host-side stepping thread of a Run to a breakpoint (None when none was started)."""
+        return self._runner
 
     def halt_stepping(self) -> bool:
         """End the host-side stepping to a breakpoint after its current step; True when it ran."""
@@ -501,7 +517,7 @@ class Dashboard:
         """128, then the program state, both as a stop: ahead of other requests on the link."""
         self.cancel_run()
         with self.lock.hold(STOP):
-            self.act(lambda: self._loader().stop())
+            self.act(lambda: self.loader().stop())
             return self.program_state()
 
     def step(self, since: int | None = None) -> dict:
@@ -509,7 +525,7 @@ class Dashboard:
         from ..host.debugger import Debugger
 
         self.cancel_run()
-        loader = self._loader()
+        loader = self.loader()
         self._unless_stopped(since, loader.step)
         with self._user_action():
             Debugger(loader).after_step()  # requests in turns, see _run_to_breakpoint
@@ -519,7 +535,7 @@ class Dashboard:
         """131, then the program state, both as a stop (see `stop`)."""
         self.cancel_run()
         with self.lock.hold(STOP):
-            self.act(lambda: self._loader().reset())
+            self.act(lambda: self.loader().reset())
             return self.program_state()
 
     def program_state(self) -> dict:
@@ -527,7 +543,7 @@ class Dashboard:
         from ..host.debugger import describe_flags
 
         seq = next(self._state_seq)   # taken before the read: a later state has a larger number
-        st = self.attempt(lambda: self._loader().status())
+        st = self.attempt(lambda: self.loader().status())
         if st is None:
             return {"mode": None}
         line = None
@@ -547,7 +563,7 @@ class Dashboard:
         shown = set(range(min(USER_VARIABLES_SHOWN, self.profile.user_variables)))
         if self.program is not None:
             for ins in self.program.instructions:
-                if ins.command in VARIABLE_COMMANDS and ins.motor == USER_BANK:
+                if ins.motor == USER_BANK and _names_a_global(ins.command, ins.type):
                     if 0 <= ins.type < self.profile.user_variables:
                         shown.add(ins.type)
         return sorted(shown)

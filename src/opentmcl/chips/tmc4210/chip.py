@@ -23,7 +23,7 @@ from collections.abc import Callable
 
 from ...motion.tmc429 import Tmc429Ramp
 from . import registers as R
-from .events import HOLD_MODE, POS_BITS, ChipEvents, _s24
+from .events import HOLD_MODE, POS_BITS, ChipEvents, s24
 from .stepdir import Edge, StepDirOutput
 from .units import check_f_clk, step_pulse_cycles
 
@@ -314,11 +314,11 @@ class TMC4210(ChipEvents):
     # motion state shortcuts
     @property
     def x_actual(self) -> int:
-        return _s24(self._ramp.x_actual)
+        return s24(self._ramp.x_actual)
 
     @property
     def x_target(self) -> int:
-        return _s24(self._ramp.x_target)
+        return s24(self._ramp.x_target)
 
     @property
     def v_actual(self) -> int:
@@ -414,11 +414,11 @@ class TMC4210(ChipEvents):
         """Axis parameter registers, IDX %0000 - %1111 (6.1)."""
         r = self._ramp
         if a == 0x00:
-            r.set(x_target=_s24(data))
+            r.set(x_target=s24(data))
         elif a == 0x01:
             self._ustep_base = self.ustep_count
-            self._axis_offset += self.x_actual - _s24(data)  # the motor does not move
-            r.set(x_actual=_s24(data))
+            self._axis_offset += self.x_actual - s24(data)  # the motor does not move
+            r.set(x_actual=s24(data))
             self._ustep_x = r.x_actual
         elif a == 0x02:
             r.set(v_min=data & 0x7FF)
@@ -459,7 +459,7 @@ class TMC4210(ChipEvents):
             self.if_conf = data & 0x1FF
             self._apply_stepdir()
         elif a == 0x35:
-            self.pos_comp = _s24(data)
+            self.pos_comp = s24(data)
         elif a == 0x36:
             self.pos_comp_m = data >> 8 & 1
             if data & 1 or not self.pos_comp_m:

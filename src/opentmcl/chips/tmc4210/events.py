@@ -26,7 +26,7 @@ Observation = dict[str, int]
 event ("xeq", "comp", "zero", "ref_active", "ref_out", "tol", "ref_l", "ref_r": 0/1 or bool)."""
 
 
-def _s24(value: int) -> int:
+def s24(value: int) -> int:
     return R.to_signed(value, POS_BITS)
 
 
@@ -111,7 +111,7 @@ class ChipEvents:
         if r.v_internal:  # moving, or a velocity below one (6.1.6) still ramping
             return 1 if r.v_internal > 0 else -1
         if r.mode in (0, 1):
-            dx = _s24(r.x_target - r.x_actual)
+            dx = s24(r.x_target - r.x_actual)
             return (dx > 0) - (dx < 0)
         if r.mode == VELOCITY_MODE:
             return (r.v_target > 0) - (r.v_target < 0)
@@ -195,9 +195,9 @@ class ChipEvents:
         x = self.x_actual
         out: list[int] = []
         for p in pts:
-            p = _s24(p)
+            p = s24(p)
             if p == x:  # look again when the motor leaves this position
-                out.extend((_s24(p + 1), _s24(p - 1)))
+                out.extend((s24(p + 1), s24(p - 1)))
             else:
                 out.append(p)
         return out

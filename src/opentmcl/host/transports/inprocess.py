@@ -327,7 +327,7 @@ class InProcessTransport(Transport, Generic[M]):
         self._only = None
 
 
-def _parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
+def parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
     """``TMCM-6212`` or ``TMCM-6212@1,PD86-1180@2`` -> [(name, address), ...]."""
     out = []
     names = [p for p in urllib.parse.unquote(netloc).split(",") if p.strip()]

@@ -36,7 +36,7 @@ async function api(path, body, {keep = false} = {}) {
   } finally { PENDING.delete(ctl); }
 }
 
-const VIEWS = ["overview", "motion", "parameters", "charts", "program", "io"];
+const VIEWS = ["overview", "motion", "tuning", "setup", "parameters", "charts", "program", "io", "bus"];
 const D = {overview: null, charts: {}, wsOpen: false, connected: true, history: [], historyPos: 0,
            views: {}, current: null, stateSubs: [], sampleSubs: []};
 window.dashboard = D;  // for the browser tests and the curious
@@ -104,9 +104,11 @@ function showOverview(ov) {
       el("span", {}, label), el("span", {id: `axis-${i}-${key}`}, "-"));
     cards.append(el("div", {class: "axis-card", id: `axis-${i}`},
       el("h3", {}, `Axis ${i}`),
-      row("position", "position"), row("target", "target"), row(`velocity [${ov.velocity_unit}]`, "velocity"),
-      row("load value", "load"), row("run current", "max_current", "AP 6 maximum current: % of the module's maximum (raw value)"),
-      row("current", "current", "AP 180 actual current: (n+1)/32 of CS (raw value n)"),
+      row(el("span", {}, "position ", el("span", {class: "unit", id: `axis-${i}-position-unit`}, "")), "position"),
+      row("target", "target"),
+      row(el("span", {}, "velocity ", el("span", {class: "unit", id: `axis-${i}-velocity-unit`}, `[${ov.velocity_unit}]`)), "velocity"),
+      row("load value", "load"), row("run current", "max_current", "AP 6 maximum current in mA RMS from the module's current scale (raw value 0..255)"),
+      row("current", "current", "AP 180 actual current: (n+1)/32 of the full scale, in mA RMS (raw value n)"),
       el("div", {class: "lamps"},
         el("span", {class: "lamp reached", id: `axis-${i}-reached`, title: "target position reached (AP 8)"}, "reached"),
         el("span", {class: "lamp", id: `axis-${i}-home`, title: "home switch (AP 9)"}, "home"),
@@ -127,8 +129,13 @@ function onSamples(samples) {
   notify(D.sampleSubs, samples);
   const last = samples[samples.length - 1];
   if (!last) return;
-  last.p.forEach((v, i) => { const e = $(`axis-${i}-position`); if (e) e.textContent = v ?? "-"; });
-  last.v.forEach((v, i) => { const e = $(`axis-${i}-velocity`); if (e) e.textContent = v ?? "-"; });
+  last.p.forEach((v, i) => { const e = $(`axis-${i}-position`); if (e) e.textContent = shown("position", i, v); });
+  last.v.forEach((v, i) => { const e = $(`axis-${i}-velocity`); if (e) e.textContent = shown("velocity", i, v); });
+  // the chip of the last STOP ALL goes once an axis moves again after every axis stood still
+  if (D.stopped) {
+    if (last.v.every(v => !v)) D.stopped.still = true;
+    else if (D.stopped.still) clearStopChip("an axis moves again");
+  }
 }
 
 function lamp(id, on) {
@@ -138,10 +145,33 @@ function lamp(id, on) {
   e.setAttribute("aria-label", `${e.title}: ${on ? "on" : "off"}`);
 }
 
-// Currents in the manuals' terms, the raw value beside: AP 6 "255 means 100% of the module's maximum
-// current", AP 180 "0..31 = 1/32 .. 32/32 of CS" (TMCM-6212 manual 4.1).
+// Positions and velocities in the axis's units (static/units.js); raw while those are not known.
+function shown(kind, axis, v) {
+  const u = window.OpenTMCL.units;
+  if (v === null || v === undefined) return "-";
+  if (!u || !u.info) return String(v);
+  const x = kind === "position" ? u.position(axis, v) : u.velocity(axis, v);
+  return x === null ? String(v) : u.fmt(x, 6);
+}
+
+function unitLabels() {
+  const u = window.OpenTMCL.units;
+  if (!D.overview || !u || !u.info) return;
+  for (let i = 0; i < D.overview.axes; i++) {
+    const p = $(`axis-${i}-position-unit`), v = $(`axis-${i}-velocity-unit`);
+    if (p) p.textContent = `[${u.positionUnit(i)}]`;
+    if (v) v.textContent = `[${u.velocityUnit(i)}]`;
+  }
+}
+
+// Currents in mA RMS from the module's documented current scale (web/units.py, the profile's
+// current_scale), the raw value beside: AP 6 "255 means 100% of the maximum current of the module",
+// AP 180 "0...31: 1/32, 2/32, ... 32/32" (TMCM-6212 manual 4.1). Without a scale: the manual's terms.
 function currentText(key, v) {
   if (v === null || v === undefined) return "n/a";
+  const u = window.OpenTMCL.units;
+  const ma = u && u.currentScale() ? (key === "max_current" ? u.currentMa(v) : u.scaleMa(v)) : null;
+  if (ma !== null) return `${Math.round(ma)} mA (${v})`;
   if (key === "max_current") return `${Math.round(v * 100 / 255)} % (${v})`;
   return `${v + 1}/32 CS (${v})`;
 }
@@ -151,12 +181,16 @@ function onState(st) {
   setConnection();
   st.axes.forEach((a, i) => {
     const set = (k, v) => { const e = $(`axis-${i}-${k}`); if (e) e.textContent = v ?? "n/a"; };
-    set("target", a.target_position); set("load", a.load);
+    set("target", shown("position", i, a.target_position)); set("load", a.load);
     set("max_current", currentText("max_current", a.max_current)); set("current", currentText("current", a.current));
     lamp(`axis-${i}-reached`, a.target_reached); lamp(`axis-${i}-home`, a.home);
     lamp(`axis-${i}-left`, a.left); lamp(`axis-${i}-right`, a.right);
   });
   updateIo(st.io);
+  if (D.stopped && st.program) {  // ... or once the program runs again after it was seen stopped
+    if (st.program.mode !== 1) D.stopped.program = true;
+    else if (D.stopped.program) clearStopChip("the program runs again");
+  }
   notify(D.stateSubs, st);
 }
 
@@ -233,8 +267,12 @@ function buildIo(ov) {
     if (p.kind === "output") {
       control = el("input", {type: "checkbox", id: `io-out-${key}`, title: `SIO ${p.port}, ${p.bank}, 0/1`,
         onchange: async e => {
-          try { await api("api/io/output", {bank: p.bank, port: p.port, value: e.target.checked ? 1 : 0}); }
-          catch (err) { log(err.message, "err"); }
+          const value = e.target.checked ? 1 : 0;
+          log(`> SIO ${p.port}, ${p.bank}, ${value}`, "req");
+          try {
+            const r = await api("api/io/output", {bank: p.bank, port: p.port, value});
+            log(`  ${p.name} = ${r.value}`, "ok");
+          } catch (err) { log(`  ${err.message}`, "err"); }
         }});
     } else if (ov.virtual) {
       const input = el("input", {type: "number", id: `io-force-${key}`, min: p.min, max: p.max,
@@ -247,21 +285,35 @@ function buildIo(ov) {
     rows.push(el("tr", {}, el("td", {}, p.name), el("td", {}, `${p.kind} (bank ${p.bank})`),
                  el("td", {id: `io-val-${key}`}, "-"), el("td", {}, control)));
   }
+  const analog = ov.io.some(p => p.kind === "analog");
   $("io-panel").replaceChildren(el("table", {}, ...rows),
-    el("p", {class: "hint"}, ov.virtual ? "Virtual module: inputs can be forced." :
-                                           "Inputs of a real module follow its wiring."));
+    el("p", {class: "hint"}, ov.virtual ? "Virtual module: inputs can be forced; each action is logged in the console." :
+                                           "Inputs of a real module follow its wiring."),
+    ...(analog ? [el("p", {class: "hint", id: "io-analog-scale"}, "")] : []));
 }
 
 async function force(p, value) {
-  try { await api("api/io/force", {bank: p.bank, port: p.port, value}); }
-  catch (err) { log(err.message, "err"); }
+  log(value === null ? `> release ${p.name} (bank ${p.bank}, port ${p.port}; virtual module)`
+                     : `> force ${p.name} (bank ${p.bank}, port ${p.port}) to ${value} (virtual module)`, "req");
+  try { await api("api/io/force", {bank: p.bank, port: p.port, value}); log(`  ${value === null ? "released" : "forced"}`, "ok"); }
+  catch (err) { log(`  ${err.message}`, "err"); }
+}
+
+// Analog inputs in volts where the profile carries a manual's scale; otherwise ADC counts, and the
+// page says that no manual gives the scale (docs/assumptions.md).
+function ioText(p) {
+  if (p.value === null || p.value === undefined) return "n/a";
+  const u = window.OpenTMCL.units, port = D.overview && D.overview.io.find(q => q.bank === p.bank && q.port === p.port);
+  if (p.kind !== "analog" || !u || !port) return String(p.value);
+  const v = u.volts(p.value, port.max);
+  return v === null ? `${p.value} counts` : `${u.fmt(v, 3)} V (${p.value})`;
 }
 
 function updateIo(io) {
   for (const p of io || []) {
     const key = `${p.bank}-${p.port}`;
     const v = $(`io-val-${key}`);
-    if (v) v.textContent = (p.value ?? "n/a") + (p.forced !== null && p.forced !== undefined ? " (forced)" : "");
+    if (v) v.textContent = ioText(p) + (p.forced !== null && p.forced !== undefined ? " (forced)" : "");
     const cb = $(`io-out-${key}`);
     if (cb && document.activeElement !== cb) cb.checked = !!p.value;
   }
@@ -269,8 +321,16 @@ function updateIo(io) {
 
 // ---------------------------------------------------------------- stop all
 // MST to every axis of every module on the bus and the program stopped (POST ../../api/stop-all).
+// The result chips of the last STOP ALL, cleared once the machine runs again (issue 31 item 6).
+function clearStopChip(why) {
+  D.stopped = null;
+  const out = $("stop-all-result");
+  out.replaceChildren(); out.className = ""; out.title = why || "";
+}
+
 async function stopAll() {
   const out = $("stop-all-result");
+  D.stopped = null;
   out.className = "busy"; out.textContent = "stopping…";
   log("> STOP ALL: program stop (128) and MST on every axis of every module (served or found by the scan)", "req");
   for (const ctl of PENDING) ctl.abort();
@@ -280,6 +340,7 @@ async function stopAll() {
     out.replaceChildren(...r.modules.map(m => el("span", {class: m.ok ? "ok" : "err", title: m.errors.join("; ")},
       `${m.module} @${m.address}: ${m.ok ? "stopped" : "error"}`)));
     out.className = r.ok ? "ok" : "err";
+    D.stopped = {still: false, program: false};
     if (r.scan_cancelled) log("  the module scan was cancelled", "req");
     for (const m of r.modules) {
       log(`  ${m.module} (address ${m.address}): ${m.ok ? `MST ${m.axes_stopped.join(", ")}` : m.error}`, m.ok ? "ok" : "err");
@@ -297,6 +358,8 @@ function setupStopAll() {
   }, true);
 }
 
+window.OpenTMCL.stopAll = () => stopAll();
+
 // ---------------------------------------------------------------- start
 async function main() {
   setupStopAll();
@@ -307,5 +370,17 @@ async function main() {
   window.addEventListener("hashchange", () => showView(viewFromHash()));
   try { await setupModules(); } catch (e) { log(e.message, "err"); }
   connect();
+  const u = window.OpenTMCL.units;
+  if (u) {
+    u.onChange(() => { unitLabels(); if (D.overview) updateAnalogNote(); });
+    u.ready.then(() => { unitLabels(); updateAnalogNote(); });
+  }
+}
+
+function updateAnalogNote() {
+  const note = $("io-analog-scale"), u = window.OpenTMCL.units;
+  if (!note || !u || !u.info) return;
+  note.textContent = u.info.analog_volts ? `Analog inputs in volts: full scale ${u.info.analog_volts} V (module profile).`
+    : `Analog inputs in ADC counts: the ${D.overview.module} manual gives no voltage scale for them.`;
 }
 document.addEventListener("DOMContentLoaded", main);

@@ -11,7 +11,8 @@ const D = window.dashboard;  // D.charts[id]: {t: [...], series: [{label, y: [..
 const COLORS = ["#1565c0", "#c62828", "#2e7d32", "#ef6c00", "#6a1b9a", "#00838f", "#5d4037", "#ad1457"];
 const POLL_MS = 250;          // sampler rows are fetched 4 times a second (sampled at the live rate)
 const WINDOWS = [10, 30, 60, 120, 300];
-const HEIGHT = 190;
+// Chart height: 190 px, taller on a tall screen (two charts fill a 1080-line screen, issue 31 item 6).
+const height = () => Math.max(190, Math.min(420, Math.round((window.innerHeight - 300) / 2)));
 const C = {ctx: null, catalogue: null, seconds: 60, next: 1, client: null, keys: [], lastSeq: 0,
            polling: null, subscribing: null, maxSeries: 16, storeKey: `opentmcl-charts ${location.pathname}`};
 
@@ -20,9 +21,12 @@ const C = {ctx: null, catalogue: null, seconds: 60, next: 1, client: null, keys:
 function sourceInfo(source) {
   const ov = C.ctx.overview, cat = C.catalogue || {axis: [], global: [], io: []};
   const [kind, a, b] = source.split(":");
-  if (kind === "ws") {
+  if (kind === "ws") {  // in the axes' units (static/units.js) once they are known
+    const u = window.OpenTMCL.units, axes = [...Array(ov.axes).keys()];
+    const unitOf = i => (a === "position" ? u.positionUnit(i) : u.velocityUnit(i));
+    const known = u && u.info, same = known && axes.every(i => unitOf(i) === unitOf(0));
     return {kind, title: a === "position" ? "actual position (AP 1)" : "actual speed (AP 3)",
-            unit: a === "position" ? "µsteps" : ov.velocity_unit, perAxis: true};
+            unit: known ? (same ? unitOf(0) : "each axis in its unit") : a === "position" ? "µsteps" : ov.velocity_unit, perAxis: true};
   }
   if (kind === "axis") {
     const p = cat.axis.find(q => q.number === Number(a));
@@ -62,7 +66,7 @@ function sourceOptions() {
 function plotOptions(chart, width) {
   const info = sourceInfo(chart.cfg.source) || {title: chart.cfg.source, unit: ""};
   return {
-    width, height: HEIGHT,
+    width, height: height(),
     scales: {x: {time: false}},
     legend: {live: true},
     cursor: {drag: {x: true, y: false}},
@@ -221,8 +225,9 @@ function onSamples(samples) {  // the WebSocket: position (p) and velocity (v) o
   for (const chart of Object.values(D.charts)) {
     const [kind, which] = chart.cfg.source.split(":");
     if (kind !== "ws") continue;
-    const field = which === "position" ? "p" : "v";
-    for (const s of samples) push(chart, s.t, chart.series.map(x => s[field][x.axis]));
+    const field = which === "position" ? "p" : "v", u = window.OpenTMCL.units;
+    const conv = !u || !u.info ? (_axis, v) => v : which === "position" ? u.position : u.velocity;
+    for (const s of samples) push(chart, s.t, chart.series.map(x => conv(x.axis, s[field][x.axis])));
   }
 }
 
@@ -288,7 +293,7 @@ function draw() {
 
 function resize() {
   const w = plotWidth();
-  for (const chart of Object.values(D.charts)) if (chart.plot) { chart.plot.setSize({width: w, height: HEIGHT}); chart.dirty = true; }
+  for (const chart of Object.values(D.charts)) if (chart.plot) { chart.plot.setSize({width: w, height: height()}); chart.dirty = true; }
 }
 
 // ---------------------------------------------------------------- configuration kept per module page
@@ -343,9 +348,16 @@ async function mountCharts(root, ctx) {
                                              : i === 1 && cfg.source === "ws:velocity" ? "velocity" : undefined));
     $("btn-chart-add").addEventListener("click", () => {
       const first = sourceInfo("axis:206") ? "axis:206" : "ws:position";  // the load value when the module has it
-      if (addChart({source: first, axes: [0]}) || addChart({source: "ws:position", axes: [0]})) { save(); resubscribe(); }
+      const chart = addChart({source: first, axes: [0]}) || addChart({source: "ws:position", axes: [0]});
+      if (chart) {
+        save(); resubscribe();
+        // a new chart below the fold comes into view (issue 31 item 6), once uPlot has laid out its legend
+        requestAnimationFrame(() => requestAnimationFrame(() => chart.node.scrollIntoView({block: "nearest"})));
+      }
     });
     ctx.onSamples(onSamples);
+    const u = window.OpenTMCL.units;  // a new unit: the live charts start again in it
+    if (u) u.onChange(() => { for (const chart of Object.values(D.charts)) if (chart.cfg.source.startsWith("ws:")) build(chart); });
     window.addEventListener("resize", resize);
     resubscribe();
     requestAnimationFrame(draw);

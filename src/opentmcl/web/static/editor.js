@@ -68,8 +68,13 @@ const MARKUP = `
       <button id="btn-stop">Stop</button>
       <button id="btn-step">Step</button>
       <button id="btn-reset">Reset</button>
+      <span class="sep"></span>
+      <button id="btn-readback" title="read the module's program memory (command 134), disassembled, and compare it with the editor">Read back</button>
+      <label class="file-button" title="open a .tmc file from this computer into the editor">Open .tmc… <input type="file" id="prog-open" accept=".tmc,.TMC,text/plain"></label>
+      <button id="btn-save" title="save the editor's text as a .tmc file on this computer">Save .tmc</button>
       <span id="prog-message"></span>
     </div>
+    <div id="readback-panel" hidden></div>
     <div class="columns">
       <div id="program-editor"></div>
       <div id="prog-state">
@@ -248,6 +253,59 @@ function showProgramState(p) {
   setCurrentLine(D.downloaded ? p.line : null);
 }
 
+// ------------------------------------------------------------------ read-back, open and save
+const MAX_FILE = 1 << 20;   // the dashboard's body limit (docs/dashboard.md "Threat model")
+
+function panel(...kids) {
+  const box = $("readback-panel");
+  box.replaceChildren(...kids);
+  box.hidden = kids.length === 0;
+}
+
+async function readBack() {
+  message("reading the program memory (134)…");
+  log("> 134, 0, 0, <address> for each program memory location until the empty ones", "req");
+  try {
+    const r = await api("api/program/readback", {source: D.cm.getValue()});
+    D.readback = r;
+    log(`  ${r.count} instructions read`, "ok");
+    const summary = r.same ? `The module holds ${r.count} instructions, the same as the editor's program.`
+      : !r.editor_ok ? `The module holds ${r.count} instructions; the editor's program does not assemble, so all of it is shown as different.`
+      : `The module holds ${r.count} instructions; ${r.differences.length} address(es) differ from the editor's program.`;
+    const rows = r.differences.slice(0, 50).map(d => el("tr", {}, el("td", {class: "num"}, d.address), el("td", {class: "num"}, d.line ?? "-"),
+      el("td", {}, d.editor ?? "(none)"), el("td", {}, d.module ?? "(none)")));
+    panel(el("div", {id: "readback-summary", class: r.same ? "ok" : ""}, summary),
+      ...(rows.length ? [el("table", {class: "params", id: "readback-differences"},
+        el("tr", {}, ...["address", "editor line", "editor", "module"].map(h => el("th", {}, h))), ...rows)] : []),
+      ...(r.diff.length ? [el("pre", {id: "readback-diff", class: "diff"}, ...r.diff.map(line =>
+        el("div", {class: line.startsWith("+") ? "add" : line.startsWith("-") ? "del" : ""}, line)))] : []),
+      el("div", {class: "toolbar"},
+        el("button", {id: "btn-readback-open", class: "primary", onclick: () => {
+          D.cm.setValue(r.source); panel(); message(`read back: ${r.count} instructions in the editor`);
+          log(`  the module's program (${r.count} instructions) is in the editor`, "ok");
+        }}, "Open in editor"),
+        el("button", {id: "btn-readback-close", onclick: () => panel()}, "Close")));
+    message(`read back ${r.count} instructions`);
+  } catch (e) { message(e.message, true); log(`  ${e.message}`, "err"); }
+}
+
+async function openFile(file) {
+  if (!file) return;
+  if (file.size > MAX_FILE) { message(`${file.name}: larger than ${MAX_FILE} bytes`, true); return; }
+  const text = await file.text();
+  D.cm.setValue(text);
+  message(`opened ${file.name}`);
+  log(`opened ${file.name} (${text.split("\n").length} lines) from this computer into the editor`, "ok");
+}
+
+function saveFile() {
+  const name = `${(D.ov && D.ov.module) || "program"}.tmc`;
+  const a = el("a", {href: URL.createObjectURL(new Blob([D.cm.getValue()], {type: "text/plain"})), download: name});
+  document.body.append(a); a.click(); a.remove();
+  setTimeout(() => URL.revokeObjectURL(a.href), 10000);
+  log(`saved the editor's program as ${name} (a download of this browser)`, "ok");
+}
+
 // ------------------------------------------------------------------ setup
 function setupEditor(root, ov) {
   CodeMirror.defineMode("tmcl", tmclMode);
@@ -270,6 +328,9 @@ function setupEditor(root, ov) {
   $("btn-stop").addEventListener("click", () => programAction("stop"));
   $("btn-step").addEventListener("click", () => programAction("step"));
   $("btn-reset").addEventListener("click", () => programAction("reset"));
+  $("btn-readback").addEventListener("click", () => readBack());
+  $("btn-save").addEventListener("click", () => saveFile());
+  $("prog-open").addEventListener("change", ev => { openFile(ev.target.files[0]); ev.target.value = ""; });
   renderBreakpoints();
 }
 
@@ -298,6 +359,7 @@ window.OpenTMCL.programEditor = {
 OpenTMCL.registerView("program", {
   mount(root, ctx) {
     root.innerHTML = MARKUP;
+    D.ov = ctx.overview;
     setupEditor(root, ctx.overview);
     ctx.onState(st => showProgramState(st.program));
     loadProgram();

@@ -1,32 +1,55 @@
 // The "motion" view: per axis rotate left/right with a velocity, stop, move absolute/relative and
 // the reference search (docs/dashboard.md "Motion"). Every command goes through the console, so the
 // console log shows the TMCL instruction sent (and its reply) for the user to learn from.
+// Velocities and positions are in the axis's units (static/units.js, chosen here per axis); the
+// jog slider is logarithmic, so slow speeds and full speed are both within reach.
 "use strict";
 (() => {
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
-const M = {axes: 0, timer: null, info: {}, busy: false};
+const M = {axes: 0, timer: null, info: {}, busy: false, raw: {}};
 
 const UNIT_TEXT = {pps: "pps", internal: "internal units"};
+const SLIDER = 1000;   // slider steps: 0 is standstill, 1..1000 spread logarithmically from 1 to the maximum
 
 function clamp(v, lo, hi) { return Math.max(lo, Math.min(hi, v)); }
+const U = () => window.OpenTMCL.units;
+const physical = () => U() && U().info;
 
-function velocity(i) {
+// The jog slider: position s (1..SLIDER) -> max^(s/SLIDER) module units (0 at s = 0), and back.
+function fromSlider(s, max) { return s <= 0 || max < 1 ? 0 : Math.round(Math.exp(Math.log(max) * s / SLIDER)); }
+function toSlider(v, max) { return v < 1 || max < 1 ? 0 : clamp(Math.round(Math.log(v) / Math.log(max) * SLIDER), 1, SLIDER); }
+
+// The velocity field shows the axis's unit; M.raw[i] is the module value it stands for.
+function showVelocity(i, raw) {
+  M.raw[i] = raw;
+  const u = U();
+  $(`motion-${i}-velocity`).value = physical() ? u.fmt(u.velocity(i, raw), 6) : raw;
+  const internal = M.info[i] && M.info[i].unit === "internal";
+  $(`motion-${i}-velocity-raw`).textContent = !physical() ? "" : internal ? `= ${raw} internal units`
+    : u.setting(i).kind !== "pps" ? `= ${raw} pps` : "";
+}
+
+function velocity(i, quiet = false) {
   const info = M.info[i] || {velocity_min: 0, velocity_max: 0};
-  const raw = $(`motion-${i}-velocity`).value.trim();
-  const v = Number(raw);
-  if (raw === "" || !Number.isInteger(v) || v < info.velocity_min || v > info.velocity_max) {
-    log(`axis ${i}: velocity must be a whole number ${info.velocity_min}…${info.velocity_max}, not "${raw}"`, "err");
+  const text = $(`motion-${i}-velocity`).value.trim();
+  const x = Number(text);
+  const v = text === "" || !Number.isFinite(x) ? NaN : physical() ? U().velocityRaw(i, x) : x;
+  if (!Number.isInteger(v) || v < info.velocity_min || v > info.velocity_max) {
+    const whole = !physical() || U().setting(i).kind === "pps" && info.unit === "pps" ? "a whole number " : "";
+    const top = physical() ? `${U().fmt(U().velocity(i, info.velocity_max), 6)} ${U().velocityUnit(i)}` : info.velocity_max;
+    if (!quiet) log(`axis ${i}: velocity must be ${whole}0…${top}, not "${text}"`, "err");
     return null;
   }
   return v;
 }
 
 function target(i) {
-  const raw = $(`motion-${i}-target`).value.trim();
-  const v = Number(raw);
-  if (raw === "" || !Number.isInteger(v) || v < -2147483648 || v > 2147483647) {
-    log(`axis ${i}: the target must be a whole number of microsteps, not "${raw}"`, "err");
+  const text = $(`motion-${i}-target`).value.trim();
+  const x = Number(text);
+  const v = text === "" || !Number.isFinite(x) ? NaN : physical() ? U().positionRaw(i, x) : x;
+  if (!Number.isInteger(v) || v < -2147483648 || v > 2147483647) {
+    log(`axis ${i}: the target must be a position of -2147483648…2147483647 microsteps, not "${text}"`, "err");
     return null;
   }
   return v;
@@ -38,11 +61,15 @@ async function send(line) {
 }
 
 function tools(i, ov) {
-  const vel = el("input", {type: "number", id: `motion-${i}-velocity`, step: 1, class: "velocity"});
-  const slider = el("input", {type: "range", id: `motion-${i}-slider`, class: "slider",
-                              title: "velocity", "aria-label": `axis ${i} velocity`});
-  vel.addEventListener("input", () => { slider.value = vel.value; });
-  slider.addEventListener("input", () => { vel.value = slider.value; });
+  const vel = el("input", {type: "number", id: `motion-${i}-velocity`, step: "any", class: "velocity"});
+  const slider = el("input", {type: "range", id: `motion-${i}-slider`, class: "slider", min: 0, max: SLIDER, step: 1,
+                              title: "velocity (logarithmic: slow speeds on the left, full speed at the right end)",
+                              "aria-label": `axis ${i} velocity`});
+  vel.addEventListener("input", () => {
+    const v = velocity(i, true);
+    if (v !== null) { M.raw[i] = v; slider.value = toSlider(v, (M.info[i] || {}).velocity_max || 0); }
+  });
+  slider.addEventListener("input", () => showVelocity(i, fromSlider(Number(slider.value), (M.info[i] || {}).velocity_max || 0)));
   const withVelocity = mnemonic => () => { const v = velocity(i); if (v !== null) send(`${mnemonic} ${i}, ${v}`); };
   const withTarget = mode => () => { const t = target(i); if (t !== null) send(`MVP ${mode}, ${i}, ${t}`); };
   const ro = (key, label) => el("span", {class: "ro"}, el("span", {}, label), el("b", {id: `motion-${i}-${key}`}, "-"));
@@ -52,11 +79,12 @@ function tools(i, ov) {
       el("button", {id: `motion-${i}-rol`, title: `ROL ${i}, <velocity> (rotate left)`, onclick: withVelocity("ROL")}, "◀ ROL"),
       el("button", {id: `motion-${i}-mst`, class: "mst", title: `MST ${i} (motor stop)`, onclick: () => send(`MST ${i}`)}, "■ MST"),
       el("button", {id: `motion-${i}-ror`, title: `ROR ${i}, <velocity> (rotate right)`, onclick: withVelocity("ROR")}, "ROR ▶"),
-      el("label", {}, "velocity ", vel, " ", el("span", {id: `motion-${i}-unit`, class: "unit"}, ov.velocity_unit)),
+      el("label", {}, "velocity ", vel, " ", el("span", {id: `motion-${i}-unit`, class: "unit"}, ov.velocity_unit),
+         " ", el("span", {id: `motion-${i}-velocity-raw`, class: "unit"}, "")),
       slider),
     el("div", {class: "motion-row"},
-      el("label", {}, "target ", el("input", {type: "number", id: `motion-${i}-target`, value: 0, step: 1, class: "target"}),
-         " µsteps"),
+      el("label", {}, "target ", el("input", {type: "number", id: `motion-${i}-target`, value: 0, step: "any", class: "target"}),
+         " ", el("span", {id: `motion-${i}-target-unit`, class: "unit"}, "µsteps")),
       el("button", {id: `motion-${i}-abs`, title: `MVP ABS, ${i}, <target>`, onclick: withTarget("ABS")}, "MVP ABS"),
       el("button", {id: `motion-${i}-rel`, title: `MVP REL, ${i}, <target>`, onclick: withTarget("REL")}, "MVP REL"),
       el("span", {class: "sep"}),
@@ -64,22 +92,42 @@ function tools(i, ov) {
       el("button", {id: `motion-${i}-rfs-stop`, title: `RFS STOP, ${i}`, onclick: () => send(`RFS STOP, ${i}`)}, "RFS STOP"),
       el("span", {class: "ro"}, el("span", {}, "reference search"), el("b", {id: `motion-${i}-rfs`}, "-"))),
     el("div", {class: "motion-row readout"},
-      ro("position", "position"), ro("target_position", "target"), ro("actual_speed", "actual speed")));
+      ro("position", "position"), ro("target_position", "target"), ro("actual_speed", "actual speed"),
+      el("span", {id: `motion-${i}-units`, class: "units-box"})));
+}
+
+function unitTexts(i) {
+  const info = M.info[i];
+  if (!info) return;
+  const u = U(), unit = $(`motion-${i}-unit`);
+  unit.textContent = physical() ? u.velocityUnit(i) : UNIT_TEXT[info.unit] || info.unit;
+  unit.title = physical() ? `${u.describe(i)}; the module takes ${UNIT_TEXT[info.unit] || info.unit}` :
+    info.unit === "internal" ? "internal units of the motion controller (AP255 = 0, or a TMC429 module)" : "microsteps per second (AP255 = 1)";
+  $(`motion-${i}-target-unit`).textContent = physical() ? u.positionUnit(i) : "µsteps";
+  if (M.raw[i] !== undefined) showVelocity(i, M.raw[i]);
 }
 
 function showInfo(i, info) {
   const first = !M.info[i];
   M.info[i] = info;
-  $(`motion-${i}-unit`).textContent = UNIT_TEXT[info.unit] || info.unit;
-  $(`motion-${i}-unit`).title = info.unit === "internal" ?
-    "internal units of the motion controller (AP255 = 0, or a TMC429 module)" : "microsteps per second (AP255 = 1)";
-  const vel = $(`motion-${i}-velocity`), slider = $(`motion-${i}-slider`);
-  for (const e of [vel, slider]) { e.min = info.velocity_min; e.max = info.velocity_max; }
-  if (first) {
-    const start = info.max_positioning_speed ?? Math.round(info.velocity_max / 10);
-    vel.value = slider.value = clamp(start, info.velocity_min, info.velocity_max);
+  const known = physical() && U().axis(i);
+  if (known && known.velocity_unit !== info.unit && !M.reloading) {  // AP255 changed: new factors
+    M.reloading = true;
+    U().reload().catch(e => log(e.message, "err")).finally(() => { M.reloading = false; });
   }
-  for (const k of ["position", "target_position", "actual_speed"]) $(`motion-${i}-${k}`).textContent = info[k] ?? "n/a";
+  const slider = $(`motion-${i}-slider`);
+  if (first) {
+    const start = clamp(info.max_positioning_speed ?? Math.round(info.velocity_max / 10), info.velocity_min, info.velocity_max);
+    showVelocity(i, start);
+    slider.value = toSlider(start, info.velocity_max);
+    $(`motion-${i}-units`).replaceChildren(U() ? U().chooser(i) : "");
+  }
+  unitTexts(i);
+  const u = U(), pos = v => (physical() && v !== null && v !== undefined ? `${u.fmt(u.position(i, v), 6)} ${u.positionUnit(i)}` : v);
+  $(`motion-${i}-position`).textContent = pos(info.position) ?? "n/a";
+  $(`motion-${i}-target_position`).textContent = pos(info.target_position) ?? "n/a";
+  $(`motion-${i}-actual_speed`).textContent = physical() && info.actual_speed !== null ?
+    `${u.fmt(u.velocity(i, info.actual_speed), 6)} ${u.velocityUnit(i)}` : info.actual_speed ?? "n/a";
   const rfs = $(`motion-${i}-rfs`);
   rfs.textContent = info.rfs_status === null ? "n/a" : info.rfs_status === 0 ? "not active" : `active (${info.rfs_status})`;
   rfs.className = info.rfs_status ? "active" : "";
@@ -102,7 +150,10 @@ OpenTMCL.registerView("motion", {
       el("p", {class: "hint"}, "Each button sends the TMCL command shown on hover; the console logs it with the reply."),
       ...Array.from({length: M.axes}, (_, i) => tools(i, ov)));
   },
-  show() { refresh(); M.timer = setInterval(refresh, 500); },
+  show() {
+    refresh(); M.timer = setInterval(refresh, 500);
+    if (U() && !M.subscribed) { M.subscribed = true; U().onChange(() => { for (let i = 0; i < M.axes; i++) unitTexts(i); }); }
+  },
   hide() { clearInterval(M.timer); M.timer = null; },
 });
 })();

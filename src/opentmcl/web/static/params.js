@@ -52,6 +52,22 @@ function checkValue(p, text) {
   return {value: v};
 }
 
+// A value in the axis's physical units (static/units.js): velocities, accelerations and positions in
+// the unit chosen for the axis, currents in mA RMS; "" for everything else.
+const VELOCITY_UNITS = new Set(["pps", "int_velocity"]), ACCEL_UNITS = new Set(["pps^2", "int_acceleration"]);
+const CURRENTS = new Set([6, 7, 183]);
+function physical(kind, p, index, value) {
+  const u = window.OpenTMCL.units;
+  if (kind !== "axis" || !u || !u.info || value === null || value === undefined) return "";
+  const f = x => (x === null || x === undefined ? "" : u.fmt(x, 5));
+  if (VELOCITY_UNITS.has(p.unit)) return `${f(u.velocity(index, value))} ${u.velocityUnit(index)}`;
+  if (ACCEL_UNITS.has(p.unit)) return `${f(u.accel(index, value))} ${u.accelUnit(index)}`;
+  if (p.unit === "µsteps" && p.number !== 209) return `${f(u.position(index, value))} ${u.positionUnit(index)}`;
+  if (u.currentScale() && CURRENTS.has(p.number)) return `${Math.round(u.currentMa(value))} mA`;
+  if (u.currentScale() && p.number === 180) return `${Math.round(u.scaleMa(value))} mA`;
+  return "";
+}
+
 function cellId(kind, p) { return kind === "axis" ? `param-axis-${p.number}` : `param-global-${p.bank}-${p.number}`; }
 
 function valueCell(kind, p, index, module) {
@@ -100,6 +116,9 @@ async function writeValue(kind, p, input) {
     delete input.dataset.dirty;
     input.value = r.value; input.classList.add("saved"); input.title = `${rangeText(p)} ${p.unit}`.trim();
     remember(kind, p, index, r.value);
+    if (kind === "axis") showPhysical(p.number, r.value);
+    const u = window.OpenTMCL.units;  // the factors of the units depend on these (web/units.py)
+    if (kind === "axis" && u && [140, 153, 154, 202, 255].includes(p.number)) u.reload().catch(e => log(e.message, "err"));
     log(`  ${p.name} = ${r.value}`, "ok");
   } catch (e) { input.classList.add("failed"); input.title = e.message; log(`  ${e.message}`, "err"); }
 }
@@ -115,7 +134,7 @@ function paramRows(table, params, kind, index) {
   table.dataset.kind = kind; table.dataset.index = index; table.dataset.module = module;
   const filter = $("param-filter").value.trim().toLowerCase();
   const writableOnly = $("param-filter-writable").checked;
-  const rows = [el("tr", {}, ...["#", "name", "value", "unit", "range", "access", "EEPROM"].map(h => el("th", {}, h)))];
+  const rows = [el("tr", {}, ...["#", "name", "value", "unit", "physical", "range", "access", "EEPROM"].map(h => el("th", {}, h)))];
   for (const p of params) {
     if (writableOnly && !p.writable) continue;
     if (filter && !p.name.includes(filter) && !p.title.toLowerCase().includes(filter) && String(p.number) !== filter) continue;
@@ -129,6 +148,7 @@ function paramRows(table, params, kind, index) {
     rows.push(el("tr", {class: p.writable ? "" : "ro", "data-kind": kind, "data-index": where, "data-module": module},
       el("td", {class: "num"}, `${p.number}`),
       el("td", {title: p.description || p.title}, p.title), valueCell(kind, p, where, module), el("td", {}, p.unit),
+      el("td", {class: "num phys", id: `${cellId(kind, p)}-phys`}, physical(kind, p, where, valueOf(kind, p, where))),
       el("td", {}, rangeText(p)), el("td", {}, p.access), buttons));
   }
   table.replaceChildren(...rows);
@@ -196,6 +216,16 @@ function flash(node) {
   node._flash = setTimeout(() => node.classList.remove("changed"), FLASH_MS);
 }
 
+function valueOf(kind, p, index) {
+  if (!P.values) return p.value;
+  return kind === "axis" ? P.values.axis[String(p.number)] : P.values.global[`${index}:${p.number}`];
+}
+
+function showPhysical(number, value) {
+  const node = $(`param-axis-${number}-phys`), p = (P.axisParams || []).find(q => q.number === Number(number));
+  if (node && p) node.textContent = physical("axis", p, P.axis, value);
+}
+
 function showValue(id, value) {
   const node = $(id);
   if (!node) return;
@@ -213,7 +243,7 @@ async function refresh() {
   try {
     const r = await api(`api/params/values/${axis}`);
     if (r.axis !== P.axis || P.loading) return;  // another axis is being read meanwhile
-    for (const [n, v] of Object.entries(r.values.axis)) showValue(`param-axis-${n}`, v);
+    for (const [n, v] of Object.entries(r.values.axis)) { showValue(`param-axis-${n}`, v); showPhysical(n, v); }
     for (const [k, v] of Object.entries(r.values.global)) showValue(`param-global-${k.replace(":", "-")}`, v);
     P.values = r.values;
   } catch (e) { log(e.message, "err"); }
@@ -293,6 +323,9 @@ async function applyFile() {
   for (const c of r.data.changes) {
     log(`> ${mnemonic(c.kind)} ${c.number}, ${c.index}, ${c.value}`, "req");
   }
+  const u = window.OpenTMCL.units, kept = Object.keys(r.data.units || {});
+  if (kept.length) log(`  unit settings of axis ${kept.join(", ")} taken from the file`, "ok");
+  if (u) u.reload().catch(e => log(e.message, "err"));
   showPanel(el("div", {id: "param-import-summary", class: "ok"}, `applied ${r.data.applied} change(s)`),
             el("button", {id: "btn-import-close", onclick: () => showPanel()}, "Close"));
   log(`  applied ${r.data.applied} change(s)`, "ok");
@@ -314,6 +347,8 @@ OpenTMCL.registerView("parameters", {
     $("btn-params-export-toml").addEventListener("click", () => download("toml"));
     $("param-import").addEventListener("change", ev => { importFile(ev.target.files[0]); ev.target.value = ""; });
     loadParams(true);
+    const u = window.OpenTMCL.units;
+    if (u) u.onChange(() => renderParams());
   },
   show() { if (P.axisParams) refresh(); startLive(); },
   hide() { stopLive(); },

@@ -1,0 +1,402 @@
+"""One twin's run through a capture, in virtual time (docs/capture.md "Replay").
+
+The module acted on each request somewhere inside its window (capture/timing.py), and which
+instant matters: an MST 2 ms later stops an axis 100 steps further on. Four twins bracket it. The
+"hi" twin acts on each request at the instant that leaves its axis further on later (an MST as late
+as it can, a start as early as it can; the sign is that of the axis speed before the request minus
+the speed the request asks for), the "lo" twin at the other end of the window: they bound the
+positions. The "early" twin acts on every request at the start of its window and the "late" twin at
+the end: they bound the speeds while a ramp follows a request. A read is answered
+at the start of its window, and the twin's value is followed over the whole sampling interval
+[window start - time tolerance, window end + time tolerance]: at its ends, at every event of the
+twin in between (a ramp phase change, an arrival, a switch edge: between two events a position is
+quadratic and a speed linear in time) and at a turning point, so the range is the true range of
+the value over the interval. Requests act in capture order.
+"""
+from __future__ import annotations
+
+import heapq
+from dataclasses import dataclass, field
+
+from ..modules.state import READ_CLEARS
+from ..motion import CLOCK_HZ
+from ..protocol.frame import FRAME_LEN
+from .decode import parameter_name
+from .timing import Slot
+
+GAP, GGP, GIO, GCO, RFS, APP_STATUS = 6, 10, 15, 31, 13, 135
+ROR, ROL, MST, MVP, SAP, RSAP, SGP, SIO = 1, 2, 3, 4, 5, 8, 9, 14
+READS_OF = {SAP: GAP, RSAP: GAP, SGP: GGP, SIO: GIO}
+FACTORY_RESET = 137
+"""A setting written and the command that reads it back (same type and motor or bank)."""
+APPLICATION_STATUS = 128
+"""GGP 128: 1 while a TMCL program runs."""
+MAX_STEPS = 400
+"""Most twin events stepped through between two points of the timeline; beyond, the twin jumps."""
+MAX_TRACE = 20000
+"""Most (time, position, speed) points kept per axis for the plots."""
+
+
+def windowed(rec: dict, profile) -> bool:
+    """A read whose answer is followed over its sampling interval (GAP, GGP, GIO, GCO, 135, RFS
+    STATUS), except a value its reading changes (AP207)."""
+    command = rec.get("command")
+    if command == RFS:
+        return rec.get("type") == 2
+    if command not in (GAP, GGP, GIO, GCO, APP_STATUS):
+        return False
+    return parameter_name(profile, command, rec["type"], rec["motor"]) not in READ_CLEARS
+
+
+def _sign(x: int) -> int:
+    return (x > 0) - (x < 0)
+
+
+@dataclass
+class Result:
+    """What the twin answered to one request, and the range of the value over its interval."""
+
+    raw: bytes
+    t: float
+    lo: int | None = None
+    hi: int | None = None
+    running: bool = False
+    """A TMCL program was running when the request acted."""
+
+    def include(self, value: int) -> None:
+        self.lo = value if self.lo is None or value < self.lo else self.lo
+        self.hi = value if self.hi is None or value > self.hi else self.hi
+
+
+@dataclass
+class _Window:
+    n: int
+    command: int
+    type: int
+    motor: int
+    position: bool
+    result: Result
+    open: bool = True
+    last: tuple[float, int, int] | None = None   # (t, value, speed) for a position: the turning point
+
+
+@dataclass
+class _Watch:
+    n: int
+    motor: int
+    kind: str     # position | speed | search
+    value: int = 0
+
+
+@dataclass
+class TwinRun:
+    """A twin's answers (`results` by request number), events, and motion timing."""
+
+    policy: str
+    results: dict[int, Result] = field(default_factory=dict)
+    skipped: set[int] = field(default_factory=set)
+    events: list[tuple[float, bytes]] = field(default_factory=list)
+    done: dict[int, float] = field(default_factory=dict)
+    """request n of a motion command -> when the twin's axis got there (arrival, speed, search end)."""
+    trace: dict[int, list[tuple[float, int, int]]] = field(default_factory=dict)
+
+
+class Twin:
+    """Runs one `VirtualModule` through the slots of a capture (see the module doc)."""
+
+    def __init__(self, vm, policy: str, tau: float, trace_axes: set[int], idle: float = 0.0) -> None:
+        from ..firmware.table import execute  # the firmware loads when a replay runs, not on import
+
+        self.execute = execute
+        self.vm, self.policy, self.tau, self.idle = vm, policy, tau, idle
+        self.run = TwinRun(policy)
+        self.windows: dict[int, _Window] = {}
+        self.watches: dict[int, _Watch] = {}
+        self.trace_axes = sorted(m for m in trace_axes if m < vm.profile.axes)
+        self.last_action = 0
+
+    # -- reading the twin (pure reads) -------------------------------------------------------
+    def read(self, command: int, type_: int, motor: int) -> int | None:
+        if self.vm.download_mode:
+            return None
+        out = self.execute(self.vm, command, type_, motor, 0, program=False)
+        if isinstance(out, tuple) and out[0] == 100:
+            return int(out[1])
+        return None
+
+    def now(self) -> float:
+        """Capture time."""
+        return self.vm.now / CLOCK_HZ - self.idle
+
+    # -- time ----------------------------------------------------------------------------------
+    def advance(self, tick: int) -> None:
+        """Step to `tick` event by event, sampling the open windows and watching motions."""
+        steps = 0
+        while self.vm.now < tick:
+            nxt = tick
+            if steps < MAX_STEPS:
+                dt = self.vm.next_event_in()
+                if dt is not None:
+                    nxt = min(tick, self.vm.now + max(1, round(dt * CLOCK_HZ)))
+            self.vm.advance_to(nxt)
+            steps += 1
+            self.after_step()
+
+    def after_step(self) -> None:
+        t = self.now()
+        for raw in self.vm.drain_events():
+            self.run.events.append((t, raw))
+        for w in self.windows.values():
+            if w.open:
+                self.sample(w)
+        if self.watches:
+            self.check_watches()
+        self.trace()
+
+    def sample(self, w: _Window) -> None:
+        value = self.read(w.command, w.type, w.motor)
+        if value is None:
+            return
+        w.result.include(value)
+        if w.position:
+            speed = self.read(GAP, 3, w.motor)
+            if speed is None:
+                return
+            t = self.now()
+            if w.last is not None and _sign(w.last[2]) * _sign(speed) < 0:
+                # the speed crossed zero between two samples: the position turned there
+                t0, x0, v0 = w.last
+                t_turn = t0 + (t - t0) * v0 / (v0 - speed)
+                w.result.include(round(x0 + v0 * (t_turn - t0) / 2))
+            w.last = (t, value, speed)
+
+    def trace(self) -> None:
+        t = self.now()
+        for motor in self.trace_axes:
+            points = self.run.trace.setdefault(motor, [])
+            if len(points) >= MAX_TRACE:
+                continue
+            x, v = self.read(GAP, 1, motor), self.read(GAP, 3, motor)
+            if x is not None and v is not None and (not points or points[-1][0] != t):
+                points.append((t, x, v))
+
+    # -- motions and their end -----------------------------------------------------------------
+    def check_watches(self) -> None:
+        for n, w in list(self.watches.items()):
+            if w.kind == "position":
+                done = self.read(GAP, 8, w.motor) == 1
+            elif w.kind == "speed":
+                done = self.read(GAP, 3, w.motor) == w.value
+            else:
+                done = self.read(RFS, 2, w.motor) == 0
+            if done:
+                self.run.done[n] = self.now()
+                del self.watches[n]
+
+    def watch(self, rec: dict) -> None:
+        """After a motion request that succeeded: watch for its end (superseding the axis's last)."""
+        command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
+        kind = None
+        if command == MVP or (command == SAP and type_ == 0):
+            kind, target = "position", 0
+        elif command in (ROR, ROL):
+            kind, target = "speed", value if command == ROR else -value
+        elif command == MST:
+            kind, target = "speed", 0
+        elif command == SAP and type_ == 2:
+            kind, target = "speed", value
+        elif command == RFS and type_ == 0:
+            kind, target = "search", 0
+        if kind is None or motor >= self.vm.profile.axes:
+            return
+        for n in [n for n, w in self.watches.items() if w.motor == motor]:
+            del self.watches[n]
+        self.watches[rec["n"]] = _Watch(rec["n"], motor, kind, target)
+        self.check_watches()
+
+    # -- the sign of an action's timing ----------------------------------------------------------
+    def effect(self, rec: dict) -> int | None:
+        """The sign of d(later position)/d(delay) for the request's axis: +1 or -1 for a motion
+        command, 0 for a request that does not change where any axis goes (a setting of an axis
+        at rest, a global parameter, an output), None when it is not known (a program started, a
+        reference search, a ramp setting changed while the axis moves)."""
+        command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
+        prof = self.vm.profile
+        if command in (SGP, SIO, 138, 7, 11, 134, 136) or command in (GAP, GGP, GIO, GCO, APP_STATUS):
+            return None if command == SGP and self.read(GGP, APPLICATION_STATUS, 0) == 1 else 0
+        motion = command in (ROR, ROL, MST, MVP, RFS) or command in (SAP, RSAP)
+        if not motion or motor >= prof.axes:
+            return None
+        v0 = self.read(GAP, 3, motor)
+        x0 = self.read(GAP, 1, motor)
+        if v0 is None or x0 is None:
+            return None
+        if command in (SAP, RSAP) and type_ not in (0, 1, 2, 4):
+            p = prof.axis_parameters.get(type_)
+            return None if v0 and p is not None and p.engine else 0   # a ramp setting while moving
+        if command == RSAP:
+            return None if v0 else 0
+        if command == SAP and type_ == 1:
+            return -_sign(v0)   # a position overwritten later keeps the distance run until then
+        if command == MST or (command == RFS and type_ == 1):
+            v1 = 0
+        elif command in (ROR, ROL):
+            v1 = value if command == ROR else -value
+        elif command == SAP and type_ == 2:
+            v1 = value
+        elif command == SAP and type_ == 4:
+            v1 = _sign(v0) * value
+        elif command == MVP and type_ in (0, 1) or command == SAP and type_ == 0:
+            target = value if type_ == 0 or command == SAP else x0 + value
+            vmax = self.read(GAP, 4, motor) or 0
+            v1 = _sign(target - x0) * vmax
+        else:
+            return None
+        return _sign(v0 - v1)
+
+    def late(self, sign: int | None) -> bool:
+        """Does this twin act at the end of the request's window? The "early" and "late" twins
+        always at their end; the others by the sign of its effect on the axis's later positions;
+        when the effect is not known, the "lo" twin acts late and the "hi" twin early, so that each
+        end of the window is played by one of them; a request that changes where no axis goes acts
+        at the start in both."""
+        if self.policy in ("early", "late"):
+            return self.policy == "late" and sign != 0
+        if sign is None:
+            return self.policy == "lo"
+        return sign > 0 if self.policy == "hi" else sign < 0
+
+    # -- acting ---------------------------------------------------------------------------------
+    def act(self, slot: Slot) -> None:
+        rec = slot.rec
+        if rec["kind"] == "ascii":
+            if getattr(self.vm, "ascii_mode", False):
+                self.vm.feed_ascii(rec["bytes"])
+            return
+        if not self.vm.accepts_address(rec["address"]):
+            self.run.skipped.add(rec["n"])   # another module's request (the twin follows GP66/GP87)
+            return
+        running = self.read(GGP, APPLICATION_STATUS, 0) == 1
+        raw = self.vm.handle(rec["bytes"]) if len(rec["bytes"]) == FRAME_LEN else b""
+        result = self.run.results.setdefault(rec["n"], Result(raw, self.now()))
+        result.raw, result.t, result.running = raw, self.now(), running
+        for ev in self.vm.drain_events():
+            self.run.events.append((self.now(), ev))
+        if len(raw) == FRAME_LEN and raw[2] == 100 and windowed(rec, self.vm.profile):
+            result.include(int.from_bytes(raw[4:8], "big", signed=True))
+        if len(raw) == FRAME_LEN and raw[2] == 100:
+            self.watch(rec)
+        self.trace()
+
+    @staticmethod
+    def writes(rec: dict, read: dict) -> bool:
+        """Does `rec` write what `read` reads (SAP/RSAP and GAP, SGP and GGP, SIO and GIO of the
+        same type and motor or bank; 137 everything)? Only such a write bounds the read's sampling
+        interval: a motion command changes moving values anyway, and a twin out of phase with the
+        module by a window would cut the interval where the module still sampled."""
+        if rec["kind"] != "request":
+            return False
+        if rec["command"] == FACTORY_RESET:
+            return True
+        return READS_OF.get(rec["command"]) == read["command"] and rec["type"] == read["type"] \
+            and rec["motor"] == read["motor"]
+
+    def open(self, slot: Slot) -> None:
+        rec = slot.rec
+        n = rec["n"]
+        result = self.run.results.setdefault(n, Result(b"", self.now()))
+        position = rec["command"] == GAP and rec["type"] in (1, 209)
+        w = self.windows[n] = _Window(n, rec["command"], rec["type"], rec["motor"], position, result)
+        if self.vm.accepts_address(rec["address"]):
+            self.sample(w)
+
+    def close(self, slot: Slot) -> None:
+        closing = self.windows.pop(slot.rec["n"], None)
+        if closing is not None and self.vm.accepts_address(slot.rec["address"]):
+            self.sample(closing)
+
+    def start(self, t: float) -> None:
+        """Stand idle until capture time `t` (the twin's clock starts `idle` seconds before 0)."""
+        self.advance(self._tick(t))
+
+    def go(self, slots: list[Slot]) -> TwinRun:
+        """Run every slot; see the module doc. A module handles requests one after the other, so a
+        read's sampling interval starts no earlier than the last request before it that writes
+        what it reads acts, and ends no later than the next such request acts (whatever the time
+        tolerance)."""
+        points: list[tuple[int, int, int, str]] = []
+        profile = self.vm.profile
+        reads = [s.rec["kind"] == "request" and windowed(s.rec, profile) for s in slots]
+        last_write = []   # for each read: the last slot before it that writes what it reads (-1: none)
+        written: dict[tuple, int] = {}
+        for i, slot in enumerate(slots):
+            rec = slot.rec
+            if reads[i]:
+                key = (rec["command"], rec["type"], rec["motor"])
+                last_write.append(max(written.get(key, -1), written.get(("all",), -1)))
+            else:
+                last_write.append(-1)
+                if rec["kind"] == "request" and rec["command"] == FACTORY_RESET:
+                    written[("all",)] = i
+                elif rec["kind"] == "request" and rec["command"] in READS_OF:
+                    written[(READS_OF[rec["command"]], rec["type"], rec["motor"])] = i
+            if reads[i]:
+                heapq.heappush(points, (self._tick(slot.e - self.tau), 0, i, "open"))
+                heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close"))
+        index = 0   # slots acted on so far
+        pending: tuple[int, Slot, bool] | None = None   # the next action: (tick, slot, decided)
+        sign: int | None = None   # the effect of the pending action, once decided
+        waiting: dict[int, int] = {}   # window -> the slot that must act before it opens
+        opened: set[int] = set()
+        closed: set[int] = set()
+        while index < len(slots) or points or pending is not None:
+            if pending is None and index < len(slots):
+                slot = slots[index]
+                pending = (max(self._tick(slot.e), self.last_action), slot, False)
+            head = points[0][0] if points else None
+            if pending is not None and (head is None or pending[0] < head or
+                                        (pending[0] == head and points[0][1] > 0)):
+                tick, slot, decided = pending
+                self.advance(tick)
+                if not decided and not reads[index]:
+                    sign = self.effect(slot.rec) if slot.rec["kind"] == "request" else None
+                    if slot.s > slot.e and self.late(sign):
+                        pending = (max(self._tick(slot.s), tick), slot, True)
+                        continue
+                if not reads[index]:
+                    for j in [j for j in opened if j < index and self.writes(slot.rec, slots[j].rec)]:
+                        self.close(slots[j])   # sampled before this request acted
+                        opened.discard(j)
+                        closed.add(j)
+                self.act(slot)
+                self.last_action = self.vm.now
+                pending = None
+                index += 1
+                for j in [j for j, after in waiting.items() if after < index]:
+                    del waiting[j]
+                    self.open(slots[j])
+                    if j in closed:
+                        self.close(slots[j])
+                    else:
+                        opened.add(j)
+                continue
+            tick, _, i, kind = heapq.heappop(points)
+            if kind == "open":
+                if index <= last_write[i]:   # the request that changed something before it has not acted
+                    waiting[i] = last_write[i]
+                    continue
+                self.advance(tick)
+                self.open(slots[i])
+                opened.add(i)
+            elif i in opened:
+                self.advance(tick)
+                self.close(slots[i])
+                opened.discard(i)
+                closed.add(i)
+            else:
+                closed.add(i)   # closed before it could open: only its own answer counts
+        return self.run
+
+    def _tick(self, t: float) -> int:
+        """The twin's tick of capture time `t` (the twin may have stood `idle` seconds before)."""
+        return max(0, round((t + self.idle) * CLOCK_HZ))

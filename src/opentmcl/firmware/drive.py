@@ -1,0 +1,84 @@
+"""The load on one axis and the torque the drive makes against it (docs/world.md "Load, current,
+stallGuard2, coolStep"): load torque, the current in use (motion/stallguard.py `CurrentModel`),
+the torque fall-off with speed and the load value AP206."""
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..motion import CLOCK_HZ
+from ..motion.stage import Load, Profile
+from ..motion.stallguard import CurrentModel, load_value
+
+if TYPE_CHECKING:
+    from .axis_world import AxisWorld
+
+END_LOAD = 100.0                     # a mechanical end: far more than any current can hold
+DEFAULT_FALLOFF_RPS = 30
+"""Speed (full-step revolutions per second) at which the torque has fallen to 0 unless the
+scenario sets `torque_falloff_speed`: about half the torque at 15 rev/s, as a typical stepper."""
+FULLSTEPS = 200
+
+
+def check_by(by: str) -> None:
+    if by not in ("position", "time"):
+        raise ValueError(f"a load is given by 'position' or 'time', not {by!r}")
+
+
+def as_load(load: float | Load | Profile, by: str) -> Load:
+    """A load torque given as a Load, a Profile over `by` ("position" or "time") or a constant."""
+    if isinstance(load, Load):
+        return load
+    if isinstance(load, Profile):
+        return Load(load, by)
+    return Load(Profile.constant(float(load)), "position")
+
+
+class Drive:
+    """Load torque and motor torque of one axis."""
+
+    def __init__(self, aw: AxisWorld) -> None:
+        self.aw = aw
+        self.load: Load = aw.spec.load
+        self.current = CurrentModel()
+
+    def bind(self) -> None:
+        """Power-up: the current model starts afresh."""
+        self.current = CurrentModel()
+
+    def load_now(self) -> float:
+        """Load torque now; pushing into a mechanical end adds END_LOAD."""
+        aw = self.aw
+        rotor = aw.rotor
+        load = self.load.at(rotor.phys, aw.vm.now / CLOCK_HZ)
+        d = rotor.slipping or rotor.heading()
+        if d and rotor.blocked(d):
+            load += END_LOAD
+        return load
+
+    def pps(self, v) -> float:
+        """A velocity of the engine in microsteps per second."""
+        aw = self.aw
+        if aw.caps.velocity_unit == "tmc429":
+            div = aw.p(154)  # AP154 pulse divisor (PD86-1180 manual 5)
+            return float(v) * CLOCK_HZ / ((1 << div) * 2048 * 32)
+        return float(v)
+
+    def falloff(self) -> float:
+        """Share of the torque left at the present speed: falls linearly to 0 at the scenario's
+        `torque_falloff_speed` (pps), by default DEFAULT_FALLOFF_RPS of a 200-step motor."""
+        aw = self.aw
+        fall = aw.spec.torque_falloff_speed
+        if not fall:
+            fall = DEFAULT_FALLOFF_RPS * FULLSTEPS * (1 << aw.p(140, 8))
+        return max(0.0, 1.0 - abs(self.pps(aw.engine.velocity)) / fall)
+
+    def capacity(self) -> float:
+        """Torque the motor can make now, as a fraction of the torque at 100 % current."""
+        return self.current.fraction(self.aw) * self.falloff()
+
+    def load_value(self) -> int:
+        """AP206 (docs/world.md, stallGuard2 model)."""
+        return load_value(self.load_now(), self.capacity(), self.aw.p(174))
+
+    def overloaded(self) -> bool:
+        return self.load_now() > self.capacity()
