@@ -126,6 +126,14 @@ def test_profile_polling_prints_the_top_functions_by_tottime():
     assert len([line for line in out.splitlines()[header + 1:] if line.strip()]) == 5
 
 
+def test_profile_polling_through_the_host_library():
+    """Issue 33: `--host` profiles the same polling through `connect("sim://")` and `Module.request`,
+    so the host library's request path shows among the top functions."""
+    out = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "50", "--top", "40",
+                          "--host"], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert "client.py" in out and "inprocess.py" in out and "(handle)" in out
+
+
 def test_profile_polling_refuses_a_count_that_is_not_positive():
     done = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "0"],
                           capture_output=True, text=True, timeout=60)
