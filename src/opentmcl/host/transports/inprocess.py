@@ -41,6 +41,9 @@ class SimulatedModule(Protocol):
 
     def drain_events(self) -> list[bytes]: ...
 
+    # Optional: ``events``, the list `drain_events` empties (kept the same object): looked at to
+    # skip the call when nothing waits.
+
     def advance(self, seconds: float, /) -> object: ...
 
 
@@ -177,6 +180,8 @@ class InProcessTransport(Transport, Generic[M]):
         self._closed = False
         self._lock = threading.RLock()  # `lock`: the modules are not thread-safe; one caller at a time
         self._only: M | None = self.modules[0] if len(self.modules) == 1 else None  # `exchange`; None once closed
+        pending = getattr(self._only, "events", None)
+        self._pending: list[bytes] | None = pending if isinstance(pending, list) else None
 
     def __init_subclass__(cls, **kwargs: object) -> None:
         """A subclass that watches `send` or `recv` sees every frame there: its `send_many`,
@@ -201,6 +206,9 @@ class InProcessTransport(Transport, Generic[M]):
         return next((m for m in self.modules if _answers(m, address)), None)
 
     def _collect_events(self) -> None:
+        pending = self._pending
+        if pending is not None and not pending:  # the one module has no events waiting
+            return
         for m in self.modules:
             for event in m.drain_events():
                 self._rx += event
@@ -240,14 +248,15 @@ class InProcessTransport(Transport, Generic[M]):
         clock = self.clock
         if clock.syncs:
             clock.sync(self)
-        events = module.drain_events()
+        pending = self._pending
+        events = module.drain_events() if pending is None or pending else ()
         if events or rx:  # an event (or one collected by the sync) goes before the reply
             for event in events:
                 rx += event
             self._deliver(frame)
             return None
         reply = module.handle(frame)
-        events = module.drain_events()
+        events = module.drain_events() if pending is None or pending else ()
         if events or len(reply) != FRAME_LEN:
             rx += reply
             for event in events:
