@@ -182,7 +182,8 @@ class ScriptedModule:
         return reply
 
     def drain_events(self) -> list[bytes]:
-        out, self.events = self.events, []
+        out = self.events[:]   # the same list stays (the transport looks at it: SimulatedModule)
+        self.events.clear()
         return out
 
     def advance(self, seconds: float) -> None:

@@ -92,6 +92,15 @@ class AxisWorld:
         self.events.update_static()
         self.checks.run()
 
+    def set_driver_flags(self, bits: int) -> None:
+        """AP208 driver error flags 1-6 (TMC262 layout, PD86-1180 manual 5) set by a fault, e.g.
+        overtemperature (2 | 4) or its pre-warning (4); overtemperature and a short shut the
+        driver down: the motor makes no torque, the counter runs on and the stage stands."""
+        self.vm.sync()
+        self.rotor.set_driver_flags(bits)
+        self.events.update_static()
+        self.checks.run()
+
     @property
     def physical_position(self) -> int:
         """Where the stage really is (microsteps)."""

@@ -17,6 +17,11 @@ DEFAULT_FALLOFF_RPS = 30
 """Speed (full-step revolutions per second) at which the torque has fallen to 0 unless the
 scenario sets `torque_falloff_speed`: about half the torque at 15 rev/s, as a typical stepper."""
 FULLSTEPS = 200
+OVERTEMPERATURE, PREWARNING, SHORT_A, SHORT_B = 0x02, 0x04, 0x08, 0x10
+"""AP208 bits (PD86-1180 manual 5, TMC262 driver error flags): "1: driver is shut down due to
+overtemperature", "1: [pre-warning] threshold is exceeded", "1: short condition detected, driver
+currently shut down" (coil A, B)."""
+SHUTS_DOWN = OVERTEMPERATURE | SHORT_A | SHORT_B
 
 
 def check_by(by: str) -> None:
@@ -40,10 +45,18 @@ class Drive:
         self.aw = aw
         self.load: Load = aw.spec.load
         self.current = CurrentModel()
+        self.fault_flags = 0
+        """AP208 bits 1-6 a fault sets (firmware/faults.py); they persist across power cycles."""
+        self.shut_down = False
+        """The driver is off because of them: the motor makes no torque (docs/world.md)."""
 
     def bind(self) -> None:
         """Power-up: the current model starts afresh."""
         self.current = CurrentModel()
+
+    def set_fault_flags(self, bits: int) -> None:
+        self.fault_flags = bits & 0x7E
+        self.shut_down = bool(self.fault_flags & SHUTS_DOWN)
 
     def load_now(self) -> float:
         """Load torque now; pushing into a mechanical end adds END_LOAD."""

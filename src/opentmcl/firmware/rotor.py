@@ -36,9 +36,10 @@ class Rotor:
 
     def driver_off(self) -> bool:
         """AP167 (TOFF) = 0: "completely disables all driver transistors and the motor can
-        free-wheel" (TMCM-6212 4.1): the step counter runs on, the rotor does not follow it."""
+        free-wheel" (TMCM-6212 4.1), or the driver shut down by overtemperature or a short (AP208
+        bits 1, 3, 4): the step counter runs on, the rotor does not follow it."""
         aw = self.aw
-        return aw.has(167) and aw.p(167, 1) == 0
+        return aw.drive.shut_down or (aw.has(167) and aw.p(167, 1) == 0)
 
     def follow(self) -> None:
         """Bring the physical position up to the counter (unless steps are being lost or the
@@ -91,6 +92,13 @@ class Rotor:
         continues from where it stands."""
         self.follow()
         self.axis.ram[167] = value
+        self.follow()
+
+    def set_driver_flags(self, bits: int) -> None:
+        """The driver's error flags change (a fault): as `set_toff`, the stage follows up to now
+        under the old state and continues from where it stands."""
+        self.follow()
+        self.aw.drive.set_fault_flags(bits)
         self.follow()
 
     def speed(self) -> int:

@@ -108,9 +108,13 @@ class Scheduler:
         return self.now / CLOCK_HZ
 
     def advance(self, seconds: float) -> None:
+        self.advance_to(self.tick_after(seconds))
+
+    def tick_after(self, seconds: float) -> int:
+        """The tick `seconds` (finite, >= 0) from now; ValueError otherwise."""
         if not seconds >= 0 or seconds == _INF:  # also NaN
             raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
-        self.advance_to(self.now + round(seconds * CLOCK_HZ))
+        return self.now + round(seconds * CLOCK_HZ)
 
     def advance_to(self, until: int) -> None:
         """Advance to absolute tick `until`, stopping at every event on the way. A call starts

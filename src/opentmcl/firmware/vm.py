@@ -21,6 +21,7 @@ from .ascii import AsciiInterface
 from .commands import StatusReply
 from .eeprom import Eeprom
 from .effects import Effect
+from .faults import ModuleFaults
 from .globals import GlobalParameters
 from .heartbeat import OF_INTERFACE, Heartbeats
 from .interpreter import Interpreter
@@ -34,12 +35,14 @@ from .scheduler import Scheduler
 from .status import TmclStatus
 from .table import execute, suppressible
 from .world import ScenarioSource, World
+from ..faults import load_plan
 
 _REQUEST = struct.Struct(">BBBBiB")
 _REPLY = struct.Struct(">BBBBi")
 _ADDRESS, _HOST, _SECONDARY, _SUPPRESS = (0, 66), (0, 76), (0, 87), (0, 255)
 EEPROM_MAGIC, MAGIC_VALUE = (0, 64), 0xE4
 _OK, _WRONG_CHECKSUM = int(Status.OK), int(Status.WRONG_CHECKSUM)
+_NO_READS: dict = {}  # the request path's table while faults watch every frame: never written
 
 
 def _check_address(profile: ModuleProfile, address: int) -> None:
@@ -57,9 +60,12 @@ class VirtualModule:
     scheduler_class: type[Scheduler] = Scheduler
     interpreter_class: type[Interpreter] = Interpreter
     """The parts a subclass may replace (the test suite's oracle: one event per instruction)."""
+    _hook: ModuleFaults | None = None   # faults that see every frame and every advance (faults.py)
+    _faults: ModuleFaults | None = None
 
     def __init__(self, name: str = "TMCM-6212", address: int | None = None,
-                 eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None) -> None:
+                 eeprom: str | os.PathLike[str] | None = None, scenario: ScenarioSource = None,
+                 faults: object = None) -> None:
         self.profile: ModuleProfile = load_profile(name)
         if address is not None:
             _check_address(self.profile, address)
@@ -76,6 +82,9 @@ class VirtualModule:
         self._download_mode = False
         self.world = World(self, scenario)
         self.power_up()
+        plan = self.world.scenario.faults
+        if plan or faults is not None:  # the scenario's [[fault]] tables and `faults` (docs/faults.md)
+            self.faults.load(plan.merged(load_plan(faults)) if faults is not None else plan)
 
     # --- power-up / reset ---------------------------------------------------------------
     def power_up(self) -> None:
@@ -189,6 +198,9 @@ class VirtualModule:
                 if sched.synced_at != now:
                     sched.sync_for_read()
                 return fast()
+        hook = self._hook
+        if hook is not None:  # faults decide first (firmware/faults.py)
+            return hook.handle(frame, interface, self._handle_general)
         return self._handle_general(frame, interface)
 
     def _handle_general(self, frame: bytes, interface: str) -> bytes:
@@ -241,8 +253,23 @@ class VirtualModule:
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
-        self._reads = self.requests.reads
+        self._reads = self.requests.reads if self._hook is None else _NO_READS
         self._writes = self.requests.writes
+
+    # --- faults (docs/faults.md) ----------------------------------------------------------------
+    @property
+    def faults(self) -> ModuleFaults:
+        """The module's faults: power loss, a firmware that hangs, overtemperature, switches,
+        lost steps, by name, at a time or on a request (firmware/faults.py)."""
+        if self._faults is None:
+            self._faults = ModuleFaults(self)
+        return self._faults
+
+    def watch(self, hook: ModuleFaults | None) -> None:
+        """From now on `hook` sees every frame (`handle(frame, interface, general)`) and every
+        advance (`advance_to(until)`); None: no longer. No pre-bound read answers while it does."""
+        self._hook = hook
+        self._reads = self.requests.reads if hook is None else _NO_READS
 
     def is_prebound(self, frame: bytes) -> bool:
         """Whether `frame` is answered by a pre-bound handler (tests, benchmarks)."""
@@ -300,15 +327,25 @@ class VirtualModule:
         return self.scheduler.time
 
     def advance(self, seconds: float) -> None:
-        self.scheduler.advance(seconds)
+        hook = self._hook
+        if hook is None:
+            self.scheduler.advance(seconds)
+        else:
+            hook.advance_to(self.scheduler.tick_after(seconds))
 
     def advance_to(self, until: int) -> None:
         """Advance to absolute tick `until`, stopping at every event on the way (scheduler.py)."""
-        self.scheduler.advance_to(until)
+        hook = self._hook
+        if hook is None:
+            self.scheduler.advance_to(until)
+        else:
+            hook.advance_to(until)
 
     def next_event_in(self) -> float | None:
-        """Seconds until the next internal event (engine, heartbeat, program, world), or None."""
-        return self.scheduler.next_event_in()
+        """Seconds until the next internal event (engine, heartbeat, program, world, a fault's
+        action), or None."""
+        hook = self._hook
+        return self.scheduler.next_event_in() if hook is None else hook.next_event_in()
 
     def sync(self) -> None:
         """Bring every axis engine to now before the module's state is changed from outside a

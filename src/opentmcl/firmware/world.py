@@ -240,7 +240,7 @@ class World:
             drive.current.update(aw)
             return drive.load_value()
         if number == 208:
-            return drive.current.driver_status(aw)
+            return drive.current.driver_status(aw) | drive.fault_flags
         if number == 209:
             return aw.encoder.position()
         if number == 29:

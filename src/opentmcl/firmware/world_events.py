@@ -67,7 +67,7 @@ class EventLookup:
         search = aw.vm.reference_search(self.axis)
         gp79 = aw.vm.globals.ram.get((0, 79), 0)
         return (eng, rotor.offset, rotor.slipping, tuple(switches.raw.values()),
-                tuple(sorted(switches.forced.items())), aw.watch, aw.drive.load,
+                tuple(sorted(switches.forced.items())), aw.watch, aw.drive.load, aw.drive.shut_down,
                 tuple(ram.get(n, 0) for n in self.SIGNATURE_PARAMS), gp79, search.active, search.condition)
 
     def next_event(self) -> int | None:

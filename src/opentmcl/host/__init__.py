@@ -19,6 +19,7 @@ from .errors import (
     TmclAddressError,
     TmclArgumentError,
     TmclBatchError,
+    TmclChecksumError,
     TmclConnectionError,
     TmclError,
     TmclProtocolError,
@@ -34,7 +35,7 @@ from .transport import Transport
 
 __all__ = [
     "SCHEMES", "Axis", "AxisNumberError", "Client", "Module", "TmclArgumentError", "TmclBatchError",
-    "TmclConnectionError",
+    "TmclChecksumError", "TmclConnectionError",
     "TmclError", "TmclAddressError", "TmclProtocolError", "TmclStatusError", "TmclTimeout", "TmclTypeError",
     "TmclValueError", "Transport", "UnknownAttributeError", "UnknownParameterError", "VersionReply", "connect",
     "open_bus", "open_transport", "profile_for_version", "register_transport", "transport_schemes",

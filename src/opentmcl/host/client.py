@@ -11,6 +11,14 @@ One path for every link: a request checked once is kept ready to send; the trans
 sends it (`Transport.exchange`, which in process may hand the reply over at once);
 the first frame, when it is the plain reply asked for, is decoded at once, and
 anything else is read by the general rule (`_read_plain`, `_read_reply`).
+
+Replies carry no sequence number, so after a reply was lost, late or garbled the client brings
+the link back in step before its next request to that module: it sends a read whose reply no
+late reply can be mistaken for (`FENCES`) and discards everything before that reply. While the
+module suppresses replies (GP255 = 1, "the reply will not be suppressed for GAP, GGP and GIO",
+TMCM-6212 manual 5.1) a request whose reply may be suppressed is followed by GGP 255, which is
+always answered: a reply before it belongs to the request (docs/host.md "Lost, late and garbled
+replies").
 """
 from __future__ import annotations
 
@@ -25,6 +33,7 @@ from ..protocol.status import Status, is_success
 from .errors import (
     TmclAddressError,
     TmclBatchError,
+    TmclChecksumError,
     TmclProtocolError,
     TmclStatusError,
     TmclTimeout,
@@ -42,11 +51,20 @@ if TYPE_CHECKING:
     from .module import Module
 
 READ_PROGRAM_MEMORY = 134  # control command with a special reply format (manual 3.6.36)
+GET_APPLICATION_STATUS = 135  # control command (manual 3.6.36)
 GET_FIRMWARE_VERSION = 136  # control command, type 0 = string, 1 = binary (manual 3.6.36)
 RESTORE_FACTORY_SETTINGS = 137  # "This command does not send a reply."
 REQUEST_TARGET_POSITION_REACHED_EVENT = 138  # manual 3.6.35
 
 NO_REPLY = frozenset({RESTORE_FACTORY_SETTINGS})
+GAP, SGP, GGP, GIO = 6, 9, 10, 15
+SUPPRESS_REPLY = 255  # GP255 "Suppress reply" (TMCM-6212 manual 5.1)
+ANSWERED_ALWAYS = frozenset({GAP, GGP, GIO})
+"""Commands whose reply GP255 never suppresses ("not for GAP, GGP and GIO commands")."""
+FENCES = ((GGP, 66, 0), (GAP, 1, 0), (GET_FIRMWARE_VERSION, 1, 0), (GIO, 0, 0), (GET_APPLICATION_STATUS, 0, 0))
+"""Reads every module answers (serial address GP66, actual position AP1, binary version, input 0,
+program status): the first whose command no lost request to that module had brings the link back
+in step."""
 CAN_REPLY_LEN = 7  # module address, status, command, value (PD86-1180 manual 4.2)
 CAN_VERSION_LEN = 8  # the eight characters of the version string (PD86-1180 manual 4.6.39)
 _WAIT_SLICE = 0.05  # seconds the lock is held at a time while waiting for an event
@@ -112,7 +130,7 @@ def check_address(value: int) -> int:
 class _Plain:
     """A checked request answered in the reply format of manual 3.2, ready to send."""
 
-    __slots__ = ("frame", "head", "request", "last")
+    __slots__ = ("frame", "head", "request", "last", "silent", "quiets")
 
     def __init__(self, frame: bytes, head: bytes, request: Request) -> None:
         self.frame = frame
@@ -123,6 +141,11 @@ class _Plain:
         self.request = request
         self.last: tuple[bytes, Reply] = (b"", _NO_REPLY)
         """The last plain reply read, as received and decoded: the same bytes again decode alike."""
+        self.silent = request.command not in ANSWERED_ALWAYS
+        """GP255 = 1 suppresses its reply when it succeeds."""
+        self.quiets = request.command == SGP and request.type == SUPPRESS_REPLY and request.motor == 0 \
+            and request.value == 1
+        """SGP 255, 0, 1: its own reply is suppressed already."""
 
 
 _Key = tuple[int, int, int, int, int]
@@ -150,6 +173,8 @@ class Client:
         self._dirty = False  # a reply was lost or garbled: discard pending input before the next request
         self._held = bytearray()  # reply bytes taken from the transport, not read yet (empty between requests)
         self._plain: dict[_Key, _Plain] = {}  # checked requests, ready to send (`_check`)
+        self._lost: dict[int, set[int]] = {}  # module address -> commands whose reply may still come
+        self._quiet: set[int] = set()  # module addresses that suppress replies (GP255 = 1, as last seen)
         self._can = transport.frame_format == "can"
         self._exchange = transport.exchange
 
@@ -171,7 +196,7 @@ class Client:
         if isinstance(checked, _Plain):
             return self._ask(checked, wait)
         with self._lock:
-            self._send(checked)
+            self._send(checked, wait)
             return self._read_answer(checked, wait)
 
     def reply(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
@@ -211,11 +236,79 @@ class Client:
         lock = self._lock
         lock.acquire()
         try:
-            if self._dirty:
-                self._reset_input()
+            if self._dirty or self._lost:
+                self._in_step(plain.request, wait)
+            if plain.silent and (self._quiet or plain.quiets):
+                return self._ask_quiet(plain, wait)
             return self._read_plain(plain, wait, self._exchange(plain.frame))
         finally:
             lock.release()
+
+    # ------------------------------------------------------------------ keeping in step
+
+    def _in_step(self, req: Request, timeout: float) -> None:
+        """Before `req`: discard what is left of a lost or garbled reply; after a reply of its
+        module was lost, late or garbled, send a fence and read up to its reply (`FENCES`)."""
+        self._reset_input()
+        late = self._lost.get(req.address)
+        if not late:
+            return
+        free = [f for f in FENCES if f[0] not in late]
+        if not free:  # every read a fence could be was lost too: the link is beyond telling
+            del self._lost[req.address]
+            return
+        command, type_, motor = free[0]
+        fence = Request(req.address, command, type_, motor, 0)
+        self.transport.send(self._wire(fence))
+        deadline = self.transport.monotonic() + timeout
+        try:
+            while True:
+                reply = self._next_frame(fence, deadline, timeout)
+                if self._same_module(reply, fence) and reply.command == command:
+                    break
+                self.stray_replies += 1
+        except TmclTimeout as exc:
+            raise TmclTimeout(f"{exc}; it was sent to bring the link back in step after a lost reply, "
+                              f"and {describe_request(req)} was not sent") from None
+        self._lost.pop(req.address, None)
+
+    def _mark_lost(self, req: Request) -> None:
+        """The reply to `req` may still come (it timed out or came garbled)."""
+        self._lost.setdefault(req.address, set()).add(req.command)
+        self._dirty = True
+
+    def _ask_quiet(self, plain: _Plain, timeout: float) -> Reply:
+        """A request whose reply GP255 may suppress, followed by GGP 255 (always answered): a reply
+        of the request before the fence's is its reply, none means it succeeded silently (a
+        `Reply` with status 100 and value 0 is returned). The fence's value is the module's GP255."""
+        req = plain.request
+        fence = Request(req.address, GGP, SUPPRESS_REPLY, 0, 0)
+        self.transport.send_many([plain.frame, self._wire(fence)])
+        deadline = self.transport.monotonic() + timeout
+        answer: Reply | None = None
+        while True:
+            try:
+                reply = self._next_frame(req, deadline, timeout)
+            except (TmclTimeout, TmclProtocolError):
+                self._mark_lost(fence)
+                raise
+            if not self._same_module(reply, req):
+                self.stray_replies += 1
+            elif reply.command == req.command and answer is None:
+                answer = reply
+            elif reply.command == GGP:
+                break
+            else:
+                self.stray_replies += 1
+        if is_success(reply.status) and reply.value == 1:
+            self._quiet.add(req.address)
+        else:
+            self._quiet.discard(req.address)
+        if answer is None:
+            return Reply(self.host_address, req.address, Status.OK, req.command, 0)
+        if not is_success(answer.status):
+            raise TmclStatusError(answer.status, req, answer)
+        return answer
 
     def _read_plain(self, plain: _Plain, timeout: float, raw: bytes | None) -> Reply:
         """The reply to `plain`, sent; the caller holds the lock.
@@ -257,7 +350,7 @@ class Client:
         """Command 134: the instruction stored at program memory `index` (manual 3.6.36)."""
         req, timeout = self._prepare(READ_PROGRAM_MEMORY, 0, 0, index, address, timeout)
         with self._lock:
-            self._send(req)
+            self._send(req, timeout)
             return self._read_memory(req, timeout)
 
     def request_many(self, requests: Sequence[tuple[int, int, int, int]], *, address: int | None = None,
@@ -278,31 +371,48 @@ class Client:
         answers: list[Answer] = []
         first: TmclStatusError | None = None
         with self._lock:
-            window = max(1, self.transport.window)
+            quiet = any(isinstance(i, _Plain) and i.silent and (i.quiets or i.request.address in self._quiet)
+                        for i in batch)
+            window = 1 if quiet else max(1, self.transport.window)  # suppressed replies: one at a time
             for start in range(0, len(batch), window):
                 chunk = batch[start:start + window]
-                self._send_window(chunk)
-                for item in chunk:
+                if not quiet:
+                    self._send_window(chunk, timeout)
+                for n, item in enumerate(chunk):
                     try:
-                        if isinstance(item, _Plain):
-                            answers.append(self._read_plain(item, timeout, None))
-                        else:
-                            answers.append(self._read_answer(item, timeout))
+                        answers.append(self._batch_answer(item, timeout, quiet))
                     except TmclStatusError as exc:
                         if first is None:
                             first, exc.index = exc, len(answers)
                         answers.append(None)
+                    except (TmclTimeout, TmclProtocolError):
+                        for rest in chunk[n + 1:]:  # sent, their replies still on the way
+                            self._mark_lost(rest.request if isinstance(rest, _Plain) else rest)
+                        raise
         if first is not None:
             first.answers = list(answers)
             raise first
         return answers
 
-    def _send_window(self, chunk: list[_Plain | Request]) -> None:
+    def _batch_answer(self, item: _Plain | Request, timeout: float, alone: bool) -> Answer:
+        """The answer to a request of a batch: sent with its window, or now when `alone`."""
+        if alone:
+            return self._ask(item, timeout) if isinstance(item, _Plain) else self._request_alone(item, timeout)
+        if isinstance(item, _Plain):
+            return self._read_plain(item, timeout, None)
+        return self._read_answer(item, timeout)
+
+    def _request_alone(self, req: Request, timeout: float) -> Answer:
+        self._send(req, timeout)
+        return self._read_answer(req, timeout)
+
+    def _send_window(self, chunk: list[_Plain | Request], timeout: float) -> None:
         """Send a window of requests. Replies the transport has at hand at once
         (`Transport.exchange_many`; never for a window with a special reply) are held, in order,
         in front of the bytes still to receive."""
-        if self._dirty:
-            self._reset_input()
+        if self._dirty or self._lost:
+            head = chunk[0]
+            self._in_step(head.request if isinstance(head, _Plain) else head, timeout)
         frames = [item.frame if isinstance(item, _Plain) else self._wire(item) for item in chunk]
         if all(isinstance(item, _Plain) for item in chunk):
             replies = self.transport.exchange_many(frames)
@@ -392,9 +502,9 @@ class Client:
         data = req.encode()
         return data[1:] if self._can else data
 
-    def _send(self, req: Request) -> None:
-        if self._dirty:
-            self._reset_input()
+    def _send(self, req: Request, timeout: float) -> None:
+        if self._dirty or self._lost:
+            self._in_step(req, timeout)
         self.transport.send(self._wire(req))
 
     def _remaining(self, deadline: float) -> float:
@@ -417,8 +527,9 @@ class Client:
             self._dirty = True
             raise
 
-    def _read_frame(self, deadline: float) -> Reply:
-        """Read one reply frame, re-synchronising byte by byte past garbage on serial links."""
+    def _read_frame(self, deadline: float, req: Request | None = None) -> Reply:
+        """Read one reply frame, re-synchronising byte by byte past garbage on serial links; a
+        garbled frame is a TmclChecksumError naming `req` (TmclProtocolError without one)."""
         if self._can:
             b = self._recv(CAN_REPLY_LEN, deadline)
             return Reply(self.host_address, b[0], b[1], b[2], _VALUE.unpack_from(b, 3)[0])
@@ -429,10 +540,13 @@ class Client:
             try:
                 buf = buf[1:] + self._recv(1, deadline)
             except TmclTimeout:
+                if req is not None:
+                    raise TmclChecksumError(req, first_bad) from None
                 raise TmclProtocolError(f"reply with wrong checksum: {first_bad.hex(' ')}") from None
         return _new_tuple(Reply, _BODY.unpack_from(buf))
 
     def _no_reply(self, req: Request, timeout: float) -> TmclTimeout:
+        self._mark_lost(req)
         return TmclTimeout(f"no reply from module {req.address} to {describe_request(req)} "
                            f"within {timeout:g} s")
 
@@ -440,9 +554,12 @@ class Client:
         """The next frame that is not a command-138 event, or TmclTimeout naming the request."""
         while True:
             try:
-                reply = self._read_frame(deadline)
+                reply = self._read_frame(deadline, req)
             except TmclTimeout:
                 raise self._no_reply(req, timeout) from None
+            except TmclChecksumError:
+                self._mark_lost(req)
+                raise
             if not self._take_event(reply):
                 return reply
 
@@ -481,8 +598,7 @@ class Client:
             try:
                 buf = self._recv(CAN_VERSION_LEN if can else FRAME_LEN, deadline)
             except TmclTimeout:
-                raise TmclTimeout(f"no reply from module {req.address} to "
-                                  f"{describe_request(req)} within {timeout:g} s") from None
+                raise self._no_reply(req, timeout) from None
             if not can and checksum_ok(buf) and buf[3] & 0x80:
                 # A normal frame (command byte >= 128 is never an ASCII character).
                 reply = Reply.decode(buf)
@@ -495,7 +611,7 @@ class Client:
                 continue
             text = buf if can else buf[1:]
             if not all(32 <= c < 127 for c in text):
-                self._dirty = True
+                self._mark_lost(req)
                 raise TmclProtocolError(f"not a version string reply: {buf.hex(' ')}")
             return VersionReply(self.host_address if can else buf[0], req.address, text.decode("ascii"))
 

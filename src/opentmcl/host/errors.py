@@ -84,6 +84,18 @@ class TmclProtocolError(TmclError):
     """Bytes were received that are not a valid reply (e.g. wrong checksum)."""
 
 
+class TmclChecksumError(TmclProtocolError):
+    """The reply to `request` came with a wrong checksum (manual 3.1.1): a garbled reply. The
+    link is brought back in step before the next request (docs/host.md "Lost, late and garbled
+    replies")."""
+
+    def __init__(self, request: Request, raw: bytes):
+        self.request = request
+        self.raw = bytes(raw)
+        super().__init__(f"reply to {describe_request(request)} from module {request.address} with a wrong "
+                         f"checksum: {self.raw.hex(' ')}")
+
+
 class TmclArgumentError(TmclError):
     """An argument refused by the library before anything was sent."""
 

@@ -9,11 +9,10 @@ from __future__ import annotations
 
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 
-from ..limits import TEXT_MAX, InputTooLarge, read_bytes
+from ..datafile import DocumentError, read_document
+from ..faults import FaultError, FaultPlan, parse_faults, parse_seed
 from .stage import Load, Profile, Stage, Switch, home_switch, left_switch, right_switch
 
 SWITCH_NAMES = ("left", "right", "home")
@@ -47,6 +46,8 @@ class Scenario:
     axes: dict[int, AxisSpec] = field(default_factory=dict)
     inputs: list[InputSpec] = field(default_factory=list)
     shutdown: Profile | None = None
+    faults: FaultPlan = field(default_factory=FaultPlan)
+    """The scenario's [[fault]] tables and seed (docs/faults.md)."""
 
     def axis(self, index: int) -> AxisSpec:
         return self.axes.get(index) or AxisSpec()
@@ -223,7 +224,7 @@ def parse_axis(d, where: str) -> AxisSpec:
 
 def parse_scenario(data: dict) -> Scenario:
     d = _table(data, "scenario")
-    _known(d, {"module", "axis", "input", "shutdown", "description"}, "scenario")
+    _known(d, {"module", "axis", "input", "shutdown", "description", "fault", "seed"}, "scenario")
     sc = Scenario(module=d.get("module"))
     axes = d.get("axis", {})
     if isinstance(axes, list):
@@ -254,6 +255,10 @@ def parse_scenario(data: dict) -> Scenario:
                                    parse_profile(sig, where)))
     if "shutdown" in d:
         sc.shutdown = parse_profile(d["shutdown"], "shutdown")
+    try:
+        sc.faults = FaultPlan(parse_faults(d.get("fault", []), "fault"), parse_seed(d.get("seed")))
+    except FaultError as exc:
+        raise ScenarioError(str(exc)) from None
     return sc
 
 
@@ -267,27 +272,8 @@ def load_scenario(source) -> Scenario:
         return parse_scenario(source)
     if not isinstance(source, (str, os.PathLike)):
         raise ScenarioError(f"a scenario is a file path or a dict, not {type(source).__name__}")
-    path = Path(source)
     try:
-        text = read_bytes(path, TEXT_MAX, "scenario file")
-    except InputTooLarge as exc:
-        raise ScenarioError(f"cannot read scenario {path}: {exc}") from None
-    except OSError as exc:
-        raise ScenarioError(f"cannot read scenario {path}: {exc.strerror or exc}") from None
-    if path.suffix.lower() in (".yaml", ".yml"):
-        import yaml  # type: ignore[import-untyped]  # imported here: most scenarios are TOML
-
-        try:
-            data = yaml.safe_load(text)
-        except (yaml.YAMLError, ValueError) as exc:   # PyYAML's message spans lines: one line here
-            raise ScenarioError(f"{path}: {' '.join(str(exc).split())}") from None
-        except RecursionError:
-            raise ScenarioError(f"{path}: nested too deeply") from None
-    else:
-        try:
-            data = tomllib.loads(text.decode("utf-8"))
-        except ValueError as exc:   # TOMLDecodeError, UnicodeDecodeError, an integer of over 4300 digits
-            raise ScenarioError(f"{path}: {exc}") from None
-        except RecursionError:
-            raise ScenarioError(f"{path}: nested too deeply") from None
+        data = read_document(source, "scenario")
+    except DocumentError as exc:
+        raise ScenarioError(str(exc)) from None
     return parse_scenario(data if data is not None else {})
