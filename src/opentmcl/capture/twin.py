@@ -245,7 +245,7 @@ class Twin:
 
     def asked_speed(self, rec: dict, v0: int, x0: int) -> int | None:
         """The speed a motion request sends its axis to (signed; a move to a position at its
-        maximum speed AP4), from speed `v0` at position `x0`; None when not known (RFS START)."""
+        maximum speed AP4), from speed `v0` at position `x0`; None when not known (RFS START, MVP COORD)."""
         command, type_, value = rec["command"], rec["type"], rec["value"]
         if command == MST or (command == RFS and type_ == 1):
             return 0
