@@ -220,6 +220,13 @@ class StreamTransport(Transport):
                 log_frame("->", frame, self.frame_format)
         self._write(b"".join(frames))
 
+    def read_some(self, timeout: float) -> bytes:
+        """The bytes the link delivers within `timeout` seconds, unframed and unlogged (b"" if
+        none); TmclConnectionError if the link broke or is closed. For a relay that takes the link
+        over (the capture proxy): it reads past `recv`'s buffer, so do not mix the two."""
+        self._check_open()
+        return self._read_some(timeout)
+
     def recv(self, n: int, timeout: float) -> bytes:
         self._check_open()
         deadline = time.monotonic() + max(0.0, timeout)
