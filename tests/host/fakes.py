@@ -48,3 +48,23 @@ class ScriptedTransport(Transport):
 
     def close(self) -> None:
         self.closed = True
+
+
+class FencedScript(ScriptedTransport):
+    """`ScriptedTransport` that answers the client's fence itself (GGP 66, sent to bring the link
+    back in step after a lost reply, opentmcl.host.client.FENCES): the scripted answers are left to
+    the requests of the test. `fences` counts them."""
+
+    def __init__(self, *answers: bytes, frame_format: str = "serial"):
+        super().__init__(*answers, frame_format=frame_format)
+        self.fences = 0
+
+    def send(self, data: bytes) -> None:
+        body = data if self.frame_format == "can" else data[1:]
+        if body[0] == 10 and body[1] == 66:  # GGP 66, bank 0
+            self.sent.append(bytes(data))
+            self.fences += 1
+            self.rx += bytes([1, 100, 10, 0, 0, 0, 1]) if self.frame_format == "can" else \
+                bytes([2, 1, 100, 10, 0, 0, 0, 1]) + bytes([(2 + 1 + 100 + 10 + 1) % 256])
+            return
+        super().send(data)

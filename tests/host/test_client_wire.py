@@ -8,6 +8,7 @@ from hypothesis import strategies as st
 
 from opentmcl.host import (
     Client,
+    TmclChecksumError,
     TmclError,
     TmclProtocolError,
     TmclStatusError,
@@ -15,7 +16,7 @@ from opentmcl.host import (
     UnknownParameterError,
     VersionReply,
 )
-from opentmcl.protocol.frame import Reply
+from opentmcl.protocol.frame import Reply, Request
 
 from .fakes import ScriptedTransport
 
@@ -88,13 +89,57 @@ def test_leading_garbage_is_skipped_by_resynchronising():
 
 
 def test_stale_reply_after_timeout_is_discarded_before_next_request():
-    """After a timeout, a late reply must not be taken for the answer to the next request."""
-    t = ScriptedTransport(b"", reply(value=99))
+    """After a timeout, a late reply must not be taken for the answer to the next request: what
+    arrived meanwhile is discarded, and a fence (GGP 66: no late GAP reply can be its reply) is
+    read before the next request goes out (issue 34)."""
+    t = ScriptedTransport(b"", reply(command=10, value=1), reply(value=99))
     c = Client(t)
     with pytest.raises(TmclTimeout):
         c.request(6, 1, 0)
     t.feed(reply(value=-1))  # the late answer to the first request
     assert c.request(6, 1, 0).value == 99
+    assert t.sent[1] == Request(1, 10, 66, 0, 0).encode()
+
+
+def test_a_reply_later_still_is_read_past_by_the_fence():
+    """Issue 34, "a reply that arrives after its request timed out is never taken as the reply to
+    a later request": the late reply of the same command arrives after the next request went out
+    (while the fence waits): it is counted as a stray reply, the next request gets its own."""
+    t = ScriptedTransport(b"", reply(value=-1) + reply(command=10, value=1), reply(value=99))
+    c = Client(t)
+    with pytest.raises(TmclTimeout):
+        c.request(6, 1, 0)
+    assert c.request(6, 1, 0).value == 99
+    assert c.stray_replies == 1
+
+
+def test_the_fence_is_a_command_no_lost_request_had():
+    """The fence is the first of GGP 66, GAP 1, 136 type 1 (TMCM-6212 manual 3.6.36: binary
+    version) whose command no lost request to that module had: after a lost GGP, GAP 1; when that
+    fence is lost too, the next request is not sent (TmclTimeout naming both) and the next fence is
+    136 type 1, which the late GGP and GAP replies cannot be."""
+    late = reply(command=10, value=-1) + reply(command=6, value=-2)
+    t = ScriptedTransport(b"", b"", late + reply(command=136, value=0x10), reply(command=10, value=7))
+    c = Client(t)
+    with pytest.raises(TmclTimeout):
+        c.request(10, 66, 0)
+    with pytest.raises(TmclTimeout, match=r"to GAP 1, 0 .* and GGP 66, 0 was not sent"):
+        c.request(10, 66, 0)
+    assert c.request(10, 66, 0).value == 7
+    assert [(f[1], f[2]) for f in t.sent] == [(10, 66), (6, 1), (136, 1), (10, 66)]
+    assert c.stray_replies == 2
+
+
+def test_a_garbled_reply_is_a_typed_error_naming_the_request():
+    """A reply with a wrong checksum (manual 3.1.1) is a TmclChecksumError (a TmclProtocolError)
+    that names the request and keeps the bytes; the next request is brought back in step."""
+    bad = reply(value=5)[:8] + bytes([(reply(value=5)[8] + 1) % 256])
+    t = ScriptedTransport(bad, reply(command=10, value=1), reply(value=6))
+    c = Client(t)
+    with pytest.raises(TmclChecksumError, match=r"GAP 1, 0 from module 1") as info:
+        c.request(6, 1, 0)
+    assert info.value.request == Request(1, 6, 1, 0, 0) and info.value.raw == bad
+    assert c.request(6, 1, 0).value == 6
 
 
 def test_replies_from_other_modules_or_commands_are_skipped():

@@ -166,23 +166,44 @@ def test_event_from_a_moving_axis_in_process():
     assert m.wait_position_reached(1, timeout=0.5) == 1
 
 
-def test_timeout_in_the_middle_and_what_is_left():
-    """No reply to the second request (GP255 = 1 suppresses the SAP reply; GAP and GGP are never
-    suppressed): TmclTimeout names that request; the third reply was read past as a stray reply,
-    and the next request gets its own reply."""
+def test_suppressed_replies_do_not_shift_the_pairing():
+    """GP255 = 1: "The reply in direct mode will be suppressed ... The reply will not be suppressed
+    for GAP, GGP and GIO commands" (TMCM-6212 manual 5.1). The client knows it from its own SGP
+    255 and reads each write with GGP 255 behind it: a write that succeeded silently answers status
+    100, value 0; an error reply is paired with its own request (index 2 here, not 1); reads keep
+    their replies (issue 34: "Replies suppressed by GP255 inside a batch do not shift the pairing")."""
     m = sim()
-    with pytest.raises(TmclTimeout):
-        m.request(SGP, 255, 0, 1, timeout=0.1)  # suppressed from now on, its own reply too
+    assert m.request(SGP, 255, 0, 1).status == 100       # its own reply is suppressed already
+    answers = m.request_many([(GAP, 4, 0, 0), (SAP, 4, 0, 99), (GGP, 66, 0, 0)])
+    assert [(a.command, a.status) for a in answers] == [(GAP, 100), (SAP, 100), (GGP, 100)]
+    assert answers[2].value == 1 and m.client.stray_replies == 0
+    with pytest.raises(TmclStatusError) as info:
+        m.request_many([(SAP, 4, 0, 5), (SAP, 4, 1, 6), (SAP, 4, 0, -1), (GAP, 4, 1, 0)])
+    assert info.value.index == 2 and info.value.status == 4
+    assert info.value.answers[3].value == 6 and m.request(GAP, 4, 0).value == 5
+    assert m.request(SGP, 255, 0, 0).status == 100       # replies again from here on
+    assert m.request_many([(SAP, 4, 0, 7)])[0] == Reply(2, 1, 100, SAP, 7 * 0)
+
+
+def test_timeout_in_the_middle_and_what_is_left():
+    """No reply to the second request (the module suppresses it while this client does not know:
+    another host set GP255): TmclTimeout names that request; the third reply was read past as a
+    stray reply, and the next request gets its own reply after the fence."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    vm.request(SGP, 255, 0, 1)
+    m = Client(InProcessTransport(vm))
     with pytest.raises(TmclTimeout, match="SAP"):
         m.request_many([(GAP, 4, 0, 0), (SAP, 4, 0, 99), (GGP, 66, 0, 0)], timeout=0.2)
-    assert m.client.stray_replies == 1
+    assert m.stray_replies == 1
     assert m.request(GAP, 4, 0) == Reply(2, 1, 100, GAP, 99)
 
 
 def test_timeout_stops_the_batch_and_late_replies_are_discarded():
     """Window 2 over a stream: a timeout on the second reply stops the batch (requests 3 and 4 are
-    never sent); a late reply that arrives afterwards is dropped before the next request."""
+    never sent); a late reply that arrives afterwards, before or while the fence is read, is
+    never taken for the next request's reply."""
     r = Reply(2, 1, 100, GAP, 1).encode()
+    fence = Reply(2, 1, 100, GGP, 1).encode()
     t = ScriptedTransport(r, b"", r, r)
     t.window = 2
     c = Client(t)
@@ -190,8 +211,9 @@ def test_timeout_stops_the_batch_and_late_replies_are_discarded():
         c.request_many([(GAP, 1, 0, 0)] * 4, timeout=0.1)
     assert len(t.sent) == 2
     t.feed(Reply(2, 1, 100, GAP, 77).encode())  # the lost reply, late
-    t.answers = [Reply(2, 1, 100, GAP, 3).encode()]
+    t.answers = [Reply(2, 1, 100, GAP, 78).encode() + fence, Reply(2, 1, 100, GAP, 3).encode()]
     assert c.request(GAP, 1, 0).value == 3
+    assert c.stray_replies == 1
 
 
 def test_window_groups_the_sends():
