@@ -131,6 +131,21 @@ class Mark:
     text: str = ""
 
 
+@dataclass(frozen=True)
+class FaultMark:
+    """A fault that fired at `time` (trace seconds): its kind, its name ("" if it has none) and
+    what it did (docs/faults.md "Seeing what fired")."""
+
+    time: float
+    kind: str
+    name: str = ""
+    detail: str = ""
+
+    @property
+    def label(self) -> str:
+        return self.name or self.kind
+
+
 def _num(v: float | None) -> str:
     if v is None:
         return ""
@@ -146,6 +161,7 @@ def meta_lines(trace: Trace) -> list[str]:
         lines += [f"# event={e.time:.6f},{e.axis},{e.kind},{_num(e.before)},{_num(e.after)}"
                   for e in trace.events]
     lines += [f"# mark={m.time:.6f},{m.pc},{m.text}" for m in trace.marks]
+    lines += [f"# fault={f.time:.6f},{f.kind},{f.name},{' '.join(f.detail.split())}" for f in trace.faults]
     return lines
 
 
@@ -159,6 +175,14 @@ def parse_event(value: str) -> Event:
     if kind not in KINDS:
         raise ValueError(kind)
     return Event(float(t), int(axis), kind, _opt(before), _opt(after))
+
+
+def parse_fault(value: str) -> FaultMark:
+    """ValueError unless `value` is ``time,kind,name,detail`` (the detail may hold commas)."""
+    t, kind, name, detail = value.split(",", 3)
+    if not kind:
+        raise ValueError(value)
+    return FaultMark(float(t), kind, name, detail)
 
 
 def parse_mark(value: str) -> Mark:
@@ -274,6 +298,8 @@ class Trace:
         # renderer guesses origin writes from the samples (plot/events.py).
         self.events = events
         self.marks = list(marks or [])      # program counter changes of a program run
+        self.faults: list[FaultMark] = []   # faults that fired (docs/faults.md), read by `sample`
+        self._faults_seen = 0
         self.channels: tuple[str, ...] | None = None if channels is None else _known(channels)
         self.max_rows = max_rows
         self.time: array[float] = array("d")
@@ -344,6 +370,10 @@ class Trace:
         values = reads.read()
         self.time.append(round(vm.now / CLOCK_HZ, 9))
         self._keep(values)
+        log = vm.faults.log
+        if log.count != self._faults_seen:
+            self.faults += [FaultMark(f.t, f.kind, f.name or "", f.detail) for f in log.since(self._faults_seen)]
+            self._faults_seen = log.count
 
     def _bind(self, vm: VirtualModule) -> WorldReads:
         """The reads of `vm`; at the first sample the axes, channels and units of the module."""
@@ -619,6 +649,8 @@ def _read_events(trace: Trace, lines: list[tuple[str, str]]) -> None:
                 trace.events = []
             elif key == "mark":
                 trace.marks.append(parse_mark(value))
+            elif key == "fault":
+                trace.faults.append(parse_fault(value))
             elif key == "event":
                 if trace.events is None:
                     raise TraceError("a trace's '# event=' lines need '# events=recorded' before them")

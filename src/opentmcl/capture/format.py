@@ -24,6 +24,23 @@ MAX_LINE_BYTES = 4096
 """Longest record line read (a frame record is about 300 bytes)."""
 
 
+FAULT = "fault"
+"""The record kind of a fault that fired (docs/faults.md "Seeing what fired")."""
+
+
+def fault_record(t: float, fired: Any) -> dict:
+    """The capture record of a fault that fired `t` seconds after the capture started (`fired`:
+    an opentmcl.faults `Fired`)."""
+    return {"record": FAULT, "t": round(t, 6), "kind": fired.kind, "name": fired.name, "detail": fired.detail}
+
+
+def fault_notes(capture: Capture) -> list[str]:
+    """One line per fault the capture records (a replay report lists them: a reply the link lost
+    or a module that lost its power is no divergence of the twin)."""
+    return [f"fault at {f['t']:.3f} s: {f.get('name') or f['kind']} ({f['kind']}): {f['detail']}"
+            for f in capture.faults]
+
+
 class CaptureError(ValueError):
     """A capture file that cannot be read: one line, with the file and line number."""
 
@@ -94,6 +111,8 @@ class Capture:
     """The `snapshot` records (capture/snapshot.py `snapshot_of` assembles them)."""
     marks: list[dict] = field(default_factory=list)
     """The `mark` records: the phases of a conformance run (`opentmcl conform`)."""
+    faults: list[dict] = field(default_factory=list)
+    """The `fault` records: faults that fired while the capture ran (docs/faults.md)."""
     warnings: list[str] = field(default_factory=list)
     """What was skipped while reading (a torn last line), one line each."""
 
@@ -238,6 +257,14 @@ def _check_mark(rec: dict[str, Any], path: str, number: int) -> None:
         raise CaptureError(f"{path}:{number}: mark record without a time 't' and a 'phase'")
 
 
+def _check_fault(rec: dict[str, Any], path: str, number: int) -> None:
+    t = rec.get("t")
+    if not isinstance(t, (int, float)) or isinstance(t, bool) or not 0 <= t < float("inf") \
+            or not isinstance(rec.get("kind"), str) or not isinstance(rec.get("detail"), str) \
+            or not (rec.get("name") is None or isinstance(rec.get("name"), str)):
+        raise CaptureError(f"{path}:{number}: fault record without a time 't', a 'kind' and a 'detail'")
+
+
 def _torn(line: bytes, path: str, number: int) -> str | None:
     """The warning for a last line cut before its end (no newline, not a JSON object), else None."""
     if line.endswith(b"\n"):
@@ -282,6 +309,9 @@ def read_capture(path: str | os.PathLike[str]) -> Capture:
         elif rec.get("record") == "mark":
             _check_mark(rec, path, number)
             capture.marks.append(rec)
+        elif rec.get("record") == FAULT:
+            _check_fault(rec, path, number)
+            capture.faults.append(rec)
     if capture is None:
         raise CaptureError(f"{path}: empty, not a capture file" if warning is None else
                            f"{path}:1: not a capture file (its only line is cut off)")

@@ -22,7 +22,7 @@ from .. import __version__
 from ..host.errors import TmclConnectionError, TmclError, TmclStatusError, TmclTimeout, TmclUrlError
 from ..server.app import start_all
 from .decode import HOST, MODULE, Decoder
-from .format import CaptureWriter
+from .format import FAULT, CaptureWriter, fault_record
 from .timing import link_record
 
 
@@ -141,12 +141,17 @@ class SimUpstream:
     """Virtual modules of a sim:// URL served in real time in this process (as `opentmcl serve`)."""
 
     def __init__(self, url: str, on_bytes) -> None:
+        from ..host.transports.inprocess import InProcessTransport
         from ..server import SerialSession, Server
         from ..sim import open_sim
 
         transport = open_sim(urllib.parse.urlsplit(url))  # parses and builds the modules
-        self.transport = transport   # the snapshot reads through it before the server starts
         self.server = Server(transport.modules)
+        self.faults = transport.faults  # ?faults=FILE (docs/faults.md): on the served link and modules
+        if self.faults is not None:
+            self.server.faults = self.server.bus.faults = self.faults
+            transport = InProcessTransport(transport.modules)  # the snapshot reads past the link faults
+        self.transport = transport   # the snapshot reads through it before the server starts
         self.session = SerialSession(self.server.bus, on_bytes)
 
     def start(self) -> None:
@@ -265,6 +270,9 @@ class Proxy:
         self._queue: queue.SimpleQueue = queue.SimpleQueue()
         self._writer_thread: threading.Thread | None = None
         self.chunks = 0
+        faults = getattr(self.upstream, "faults", None)
+        if faults is not None and self.writer is not None:  # recorded as they fire (docs/faults.md)
+            faults.log.listeners.append(lambda fired: self._queue.put((time.monotonic(), FAULT, fired)))
 
     # -- the relay path: no decoding here ---------------------------------------------------
     def from_host(self, data: bytes) -> None:
@@ -374,6 +382,9 @@ class Proxy:
             if item is None:
                 return
             t, direction, data = item
+            if direction == FAULT:  # a fault that fired (docs/faults.md)
+                writer.write(fault_record(t - self.t0, data))
+                continue
             self.chunks += 1
             try:
                 for rec in self.decoder.feed(t - self.t0, direction, data):

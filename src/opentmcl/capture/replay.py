@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 from .causes import Divergence, group
 from .compare import Comparer
-from .format import Capture, read_capture
+from .format import Capture, fault_notes, read_capture
 from .identify import captured_module, first_address, virtual_module
 from .initial import idle_time, starting_state
 from .moves import acceleration_estimates, events_of, find_moves
@@ -61,7 +61,7 @@ def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | Non
     Raises ReplayError (bad module, address, initial state or tolerance) or CaptureError (bad file)."""
     cap = capture if isinstance(capture, Capture) else read_capture(capture)
     tol = as_tolerance(tolerance)
-    notes: list[str] = list(cap.warnings)
+    notes: list[str] = list(cap.warnings) + fault_notes(cap)
     if module is None:
         module = captured_module(cap, address, notes)
     address = _address(cap, address)

@@ -19,7 +19,7 @@ from typing import NoReturn
 
 from . import exits, verbosity
 
-COMMANDS = ["demo", "serve", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard",
+COMMANDS = ["demo", "serve", "fault", "tmc4210", "send", "asm", "disasm", "load", "run", "debug", "plot", "dashboard",
             "proxy", "log", "replay", "profile", "conform"]
 
 

@@ -3,6 +3,7 @@
     opentmcl serve --module TMCM-6212 [--address 1] [--tcp 127.0.0.1:2323] [--idle-timeout 300]
                    [--pty [--link PATH] [--interface usb|rs485|rs232]]
                    [--can virtual:CH | udp_multicast:GROUP | socketcan:vcan0] [--eeprom FILE] [--scenario FILE]
+                   [--faults FILE [--fault-seed N] [--fault-control PATH]]
 
 Several --module options put several modules on one bus; the n-th --address,
 --eeprom and --scenario belong to the n-th --module (a module without
@@ -19,12 +20,14 @@ import threading
 from types import FrameType
 from typing import TYPE_CHECKING, TextIO
 
-from . import CliError, about_file, start_error
+from . import CliError, about_file, int_arg, start_error
 
 if TYPE_CHECKING:
+    from ..faults import FaultPlan
     from ..firmware.vm import VirtualModule
     from ..motion.scenario import Scenario
     from ..server import Server
+    from ..server.control import FaultControl
     from ..server.endpoints import EndpointOptions
     from ..web.server import DashboardHandle
 
@@ -61,6 +64,14 @@ def register(subparsers: argparse._SubParsersAction) -> None:
                    help="EEPROM file of the n-th module (created if missing)")
     p.add_argument("--scenario", action="append", default=[], metavar="FILE",
                    help="scenario file of the n-th module")
+    p.add_argument("--faults", metavar="FILE",
+                   help="serve with the faults of this fault plan (docs/faults.md): dropped, garbled, delayed or "
+                        "cut frames, a link down, power loss, a hung firmware, overtemperature, switches, lost steps")
+    p.add_argument("--fault-seed", type=int_arg, metavar="N",
+                   help="with --faults: the seed of the plan's random decisions (default: the file's, else a new one, printed)")
+    p.add_argument("--fault-control", metavar="PATH",
+                   help="with --faults: a socket (owner only) through which `opentmcl fault NAME --control PATH` "
+                        "triggers a named fault")
     p.add_argument("--gap", type=float, default=0.1, metavar="SECONDS",
                    help="silence after which a partial serial frame is discarded (default 0.1)")
     p.add_argument("--pace", action="store_true",
@@ -201,10 +212,13 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
     extra = getattr(args, "endpoint", [])
     if tcp_spec is None and not args.pty and not args.can and not extra:
         tcp_spec = DEFAULT_TCP
+    plan = load_faults(args)
     modules = build_modules(args)
     if len(modules) > 1:
         _give_can_ids(modules)
     server = Server(modules)
+    if plan is not None or any(vm.world.scenario.faults for vm in modules):
+        _arm(server, plan)
     if tcp_spec is not None or args.host:
         _add_tcp(server, args, tcp_spec or DEFAULT_TCP)
     if args.pty:
@@ -217,6 +231,30 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
             raise CliError(f"--endpoint {item}: use --{name}, which checks its options")
         _add(server, args, name, spec)
     return server
+
+
+def load_faults(args: argparse.Namespace) -> FaultPlan | None:
+    """The plan of --faults (with --fault-seed); a bad file or fault is one line (exit 2)."""
+    from ..faults import FaultError, load_plan, seed_of
+
+    if getattr(args, "faults", None) is None:
+        if getattr(args, "fault_seed", None) is not None or getattr(args, "fault_control", None) is not None:
+            raise CliError("--fault-seed and --fault-control belong to --faults FILE")
+        return None
+    try:
+        plan = load_plan(args.faults)
+        return plan if args.fault_seed is None else plan.with_seed(seed_of(args.fault_seed, "--fault-seed"))
+    except FaultError as exc:
+        raise CliError(about_file(args.faults, exc, "fault plan")) from None
+
+
+def _arm(server: Server, plan: FaultPlan | None) -> None:
+    from ..faults import FaultError, FaultPlan
+
+    try:
+        server.arm(plan if plan is not None else FaultPlan())
+    except FaultError as exc:
+        raise CliError(str(exc)) from None
 
 
 def _options(args: argparse.Namespace) -> EndpointOptions:
@@ -299,6 +337,10 @@ def describe(server: Server) -> list[str]:
                              f"&reply_id={vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)}")
         else:  # an endpoint of another package: its url, else its type
             lines.append(f"endpoint {getattr(ep, 'url', type(ep).__name__)}")
+    if server.faults is not None:
+        names = server.faults.names()
+        lines.append(f"faults: {len(server.faults.plan.faults)} armed, seed {server.faults.seed}"
+                     + (f"; by name: {', '.join(names)}" if names else ""))
     return lines
 
 
@@ -338,10 +380,11 @@ def _run(args: argparse.Namespace) -> int:
     previous = {}
     for signum in (signal.SIGINT, signal.SIGTERM):
         previous[signum] = signal.signal(signum, on_signal)
-    web = None
+    web = control = None
     try:
         if getattr(args, "web", None):
             web = _start_web(server, args.web, getattr(args, "allow_host", []))
+        control = _start_control(server, getattr(args, "fault_control", None))
         print("OpenTMCL serving in real time:", flush=True)
         for line in describe(server):
             print(f"  {line}", flush=True)
@@ -362,6 +405,8 @@ def _run(args: argparse.Namespace) -> int:
             signal.signal(signum, handler)
         if web is not None:
             web.stop()
+        if control is not None:
+            control.stop()
         server.stop()
     from ..server.pacing import REPORT_LAG
 
@@ -371,6 +416,20 @@ def _run(args: argparse.Namespace) -> int:
               f"{report.dropped:.1f} s were dropped (docs/endpoints.md)", flush=True)
     print("stopped; EEPROM flushed", flush=True)
     return 0
+
+
+def _start_control(server: Server, path: str | None) -> FaultControl | None:
+    """--fault-control PATH: the socket that triggers named faults (server/control.py)."""
+    if path is None or server.faults is None:
+        return None
+    from ..server.control import FaultControl
+
+    control = FaultControl(server.faults, path)
+    try:
+        control.start()
+    except OSError as exc:
+        raise CliError(f"--fault-control {path}: {exc.strerror or exc}") from None
+    return control
 
 
 def _start_web(server: Server, spec: str, allow_host: list[str]) -> DashboardHandle:

@@ -26,10 +26,11 @@ from .spec import (
     parse_faults,
     parse_plan,
     parse_seed,
+    seed_of,
 )
 from .trigger import Trigger, stream
 
 __all__ = ["KINDS", "LINK_KINDS", "MODULE_KINDS", "Fate", "Fault", "FaultBoard", "FaultError", "FaultLog",
            "FaultPlan", "Fired", "LinkFaults", "Trigger", "command_number", "corrupt", "cut", "describe",
-           "load_plan", "new_seed", "parse_fault", "parse_faults", "parse_plan", "parse_seed", "stream",
+           "load_plan", "new_seed", "parse_fault", "parse_faults", "parse_plan", "parse_seed", "seed_of", "stream",
            "survives"]

@@ -11,9 +11,10 @@ import random
 import threading
 import weakref
 from collections.abc import Callable
+from contextlib import AbstractContextManager
 from typing import Protocol
 
-from .link import LinkFaults
+from .link import LinkFaults, Pending
 from .log import FaultLog
 from .spec import Fault, FaultError, FaultPlan
 from .trigger import stream
@@ -41,16 +42,19 @@ class FaultBoard:
         self.plan = plan if plan.seed is not None else plan.with_seed(new_seed())
         self.seed: int = self.plan.seed if self.plan.seed is not None else 0
         self.log = FaultLog(clock)
-        self.lock = threading.RLock()
+        self.lock: AbstractContextManager[object] = threading.RLock()
         """Held while a fault is triggered by name (a server passes its bus lock)."""
-        self._targets: weakref.WeakSet[Triggerable] = weakref.WeakSet()  # type: ignore[type-var]
-        self._links = 0
+        self._targets: weakref.WeakSet[Triggerable] = weakref.WeakSet()
+        self._links: weakref.WeakSet[LinkFaults] = weakref.WeakSet()
+        self.pending = Pending()
+        """Named link faults triggered and not fired yet: the next matching request of any link."""
+        self._opened = 0
         log.info("fault plan: %d fault(s), seed %d", len(plan.faults), self.seed)
 
     def names(self) -> list[str]:
         """The named faults: the plan's and those of the modules and links attached (a scenario's)."""
         out = self.plan.names()
-        for target in list(self._targets):
+        for target in list(self._targets):  # modules (their scenario's faults too)
             out += [n for n in target.names() if n not in out]
         return out
 
@@ -59,10 +63,10 @@ class FaultBoard:
         faults = self.plan.link_faults
         if not faults:
             return None
-        self._links += 1
-        number = self._links
-        link = LinkFaults(faults, lambda i, f: stream(self.seed, scope, number, i, f.kind), self.log)
-        self.attach(link)
+        self._opened += 1
+        number = self._opened
+        link = LinkFaults(faults, lambda i, f: stream(self.seed, scope, number, i, f.kind), self.log, self.pending)
+        self._links.add(link)
         return link
 
     def module_faults(self, address: int) -> list[tuple[Fault, random.Random]]:
@@ -83,7 +87,20 @@ class FaultBoard:
             raise FaultError(f"no fault named {name!r} (named faults: {known})")
         with self.lock:
             t = self.log.clock()
-            hits = [type(target).__name__ for target in list(self._targets) if target.trigger(name, t)]
+            hits = [f"module {getattr(target, 'address', '?')}" for target in list(self._targets)
+                    if target.trigger(name, t)]
+            hits += self._trigger_link(name, t)
         if not hits:
-            raise FaultError(f"fault {name!r} has nowhere to act yet (no link or module of its kind is open)")
+            raise FaultError(f"fault {name!r} has nowhere to act (no module it belongs to)")
         return hits
+
+    def _trigger_link(self, name: str, t: float) -> list[str]:
+        fault = next((f for f in self.plan.link_faults if f.name == name), None)
+        if fault is None:
+            return []
+        if fault.kind == "link_down":
+            for link in list(self._links):
+                link.go_down(fault, t, "triggered by name")
+            return ["every link: down now"]
+        self.pending.add(name)
+        return ["the next matching request on a link"]

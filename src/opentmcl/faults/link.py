@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import random
+import threading
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
@@ -81,13 +82,34 @@ def survives(pieces: Pieces, frame_gap: float) -> bool:
     return all(gap <= frame_gap for _length, gap in pieces[1:])
 
 
+class Pending:
+    """Link faults triggered by name that have not fired yet, shared by the links of one set-up:
+    the first matching request on any of its links takes one."""
+
+    def __init__(self) -> None:
+        self.counts: dict[str, int] = {}
+        self._lock = threading.Lock()
+
+    def add(self, name: str) -> None:
+        with self._lock:
+            self.counts[name] = self.counts.get(name, 0) + 1
+
+    def take(self, name: str) -> bool:
+        with self._lock:
+            n = self.counts.get(name, 0)
+            if n:
+                self.counts[name] = n - 1
+            return bool(n)
+
+
 class LinkFaults:
     """The link faults of one link (a pty, a TCP client, a CAN bus, an in-process transport)."""
 
     def __init__(self, faults: Iterable[Fault], rng_for: Callable[[int, Fault], random.Random],
-                 log: FaultLog) -> None:
+                 log: FaultLog, pending: Pending | None = None) -> None:
         self.triggers = [Trigger(f, rng_for(i, f)) for i, f in enumerate(faults) if f.link]
         self.log = log
+        self.pending = pending if pending is not None else Pending()
         self.down_until = -math.inf
         """The link passes nothing before this time (link_down)."""
 
@@ -98,17 +120,29 @@ class LinkFaults:
         return [t.fault.name for t in self.triggers if t.fault.name]
 
     def trigger(self, name: str, t: float) -> bool:
-        """Fire the named fault: a link that goes down goes down now, the others act on the next
-        matching request. False when this link has no fault of that name."""
+        """Fire the named fault on this link alone: a link that goes down goes down now, the others
+        act on its next matching request. False when this link has no fault of that name. (A
+        `FaultBoard` fires a named fault once, on the first of its links: `Pending`.)"""
         found = False
         for trig in self.triggers:
             if trig.fault.name == name:
                 found = True
                 if trig.fault.kind == "link_down":
-                    self._down(trig.fault, t, "triggered by name")
+                    self.go_down(trig.fault, t, "triggered by name")
                 else:
                     trig.armed += 1
         return found
+
+    def go_down(self, fault: Fault, t: float, why: str) -> None:
+        """The link goes down now for the fault's duration."""
+        self._down(fault, t, why)
+
+    def _fires(self, trig: Trigger, fields: Fields, t: float) -> bool:
+        f = trig.fault
+        if f.name is not None and self.pending.counts.get(f.name) and f.matches(fields[0], fields[1], fields[2]) \
+                and self.pending.take(f.name):
+            return True
+        return trig.fires(fields[0], fields[1], fields[2], t)
 
     def down(self, t: float) -> bool:
         """Is the link down at `t` (a reply sent then is lost)?"""
@@ -129,7 +163,7 @@ class LinkFaults:
             return fate
         text = ""
         for trig in self.triggers:
-            if trig.fires(fields[0], fields[1], fields[2], t):
+            if self._fires(trig, fields, t):
                 text = text or describe(fields)
                 self._apply(trig, fate, text, t)
                 if fate.drop_request:

@@ -281,8 +281,14 @@ def parse_faults(items: object, where: str = "fault") -> tuple[Fault, ...]:
 
 
 def parse_seed(value: object, where: str = "seed") -> int | None:
+    """A plan's seed: an integer 0..2**63-1, or None (one is chosen when the plan is armed)."""
     if value is None:
         return None
+    return _int(value, where, 0, 2**63 - 1)
+
+
+def seed_of(value: object, where: str = "seed") -> int:
+    """A seed given explicitly (a CLI option, a URL): an integer 0..2**63-1."""
     return _int(value, where, 0, 2**63 - 1)
 
 

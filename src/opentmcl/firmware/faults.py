@@ -26,6 +26,7 @@ from __future__ import annotations
 import heapq
 import random
 from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING
 
 from ..faults import Fault, FaultError, FaultLog, Trigger, load_plan, new_seed, parse_fault, stream
@@ -96,6 +97,10 @@ class ModuleFaults:
             self.triggers.append(trig)
         self.vm.watch(self)
         return f
+
+    @property
+    def address(self) -> int:
+        return self.vm.address
 
     def names(self) -> list[str]:
         return list(self.named)
@@ -279,7 +284,7 @@ class ModuleFaults:
                      f"{period:g} s apart ({why})")
         aw.force_switch(switch, level)
         for i in range(1, bounces):
-            self._after(i * period, lambda lv=(level + i) % 2: aw.force_switch(switch, lv))
+            self._after(i * period, partial(aw.force_switch, switch, (level + i) % 2))
         self._after(bounces * period, lambda: self._release(aw, axis, switch, before, fault, "bouncing_switch"))
 
     def step_loss(self, axis: int = 0, load: float = 2.0, duration: float | None = None, *,

@@ -14,6 +14,7 @@ import os
 import struct
 from typing import Any
 
+from ..faults import load_plan
 from ..modules.profile import ModuleProfile, load_profile
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
 from ..protocol.status import Status
@@ -35,7 +36,6 @@ from .scheduler import Scheduler
 from .status import TmclStatus
 from .table import execute, suppressible
 from .world import ScenarioSource, World
-from ..faults import load_plan
 
 _REQUEST = struct.Struct(">BBBBiB")
 _REPLY = struct.Struct(">BBBBi")

@@ -18,7 +18,7 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
-from ..trace import CHANNELS, HARD_STOP, ORIGIN, SWITCHES, Event, Mark, Trace, TraceError
+from ..trace import CHANNELS, HARD_STOP, ORIGIN, SWITCHES, Event, FaultMark, Mark, Trace, TraceError
 from .events import guess_origins
 
 DEFAULT_CHANNELS = ("position", "velocity", "acceleration", "load", "current", "switches")
@@ -88,6 +88,7 @@ class Figure:
     panels: list[Panel]
     marks: list[Mark] = field(default_factory=list)   # instruction marks, on every panel
     labels: list[int] = field(default_factory=list)  # the marks (indices) drawn with their text
+    faults: list[FaultMark] = field(default_factory=list)  # faults that fired, on every panel
     xlim: tuple[float, float] = (0.0, 1.0)            # first and last sample time
     xlabel: str = "time [s]"
 
@@ -121,7 +122,8 @@ def plan(trace: Trace, channels: Iterable[str] = DEFAULT_CHANNELS, *, rpm: bool 
     duration = trace.time[-1] - trace.time[0]
     shown = thin_marks(trace.marks, duration)[:MAX_DRAWN] if marks else []
     return Figure(title or f"{trace.module or 'module'}: {which}", panels, shown,
-                  labels=mark_labels(shown, duration), xlim=(trace.time[0], trace.time[-1]))
+                  labels=mark_labels(shown, duration), xlim=(trace.time[0], trace.time[-1]),
+                  faults=list(trace.faults[:MAX_DRAWN]))
 
 
 def thin_marks(marks: list[Mark], duration: float) -> list[Mark]:

@@ -50,6 +50,7 @@ def draw(figure: Figure, fmt: str = "png", *, width: float = 9.0) -> bytes:
     for n, (ax, panel) in enumerate(zip(axs, panels, strict=True)):
         _panel(ax, panel, figure)
         _marks(ax, figure, label=n == 0)
+        _faults(ax, figure, label=n == 0)
     axs[-1].set_xlabel(figure.xlabel)
     fig.suptitle(figure.title)
     image = io.BytesIO()
@@ -118,3 +119,13 @@ def _marks(ax: Axes, figure: Figure, *, label: bool) -> None:
             ax.annotate(f"{m.pc}: {m.text}".rstrip(": "), (m.time, 1.0), xycoords=("data", "axes fraction"),
                         xytext=(1, 3), textcoords="offset points", rotation=90, va="bottom",
                         fontsize="xx-small", color="tab:olive")
+
+
+def _faults(ax: Axes, figure: Figure, *, label: bool) -> None:
+    """The faults that fired (docs/faults.md): red dashed lines, named on the top panel."""
+    for f in figure.faults:
+        ax.axvline(f.time, color="tab:red", linestyle="--", linewidth=0.8, alpha=0.9)
+        if label:
+            ax.annotate(f.label, (f.time, 1.0), xycoords=("data", "axes fraction"), xytext=(1, 3),
+                        textcoords="offset points", rotation=90, va="bottom", fontsize="xx-small",
+                        color="tab:red")

@@ -12,6 +12,10 @@ from dataclasses import dataclass
 from typing import NamedTuple
 
 FRAME_LEN = 9
+FRAME_GAP = 0.1
+"""Seconds of silence after which a receiver drops a partial frame: a 9-byte frame has no start
+marker (manual 3.1), so a served module finds frames by counting and starts afresh after such a
+gap (server/framer.py; docs/assumptions.md)."""
 _BODY = struct.Struct(">BBBBi")
 
 Fields = tuple[int, int, int, int, int]

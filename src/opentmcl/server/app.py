@@ -10,6 +10,9 @@
 """
 from __future__ import annotations
 
+import time
+
+from ..faults import FaultBoard, FaultError, FaultPlan, load_plan
 from .bus import ModuleBus, RealTimeRunner
 
 
@@ -27,12 +30,40 @@ def start_all(endpoints) -> None:
 
 
 class Server:
-    def __init__(self, modules, *, tick: float = 0.01) -> None:
+    def __init__(self, modules, *, tick: float = 0.01, faults: object = None) -> None:
         self.bus = ModuleBus(modules)
         self.runner = RealTimeRunner(self.bus, tick=tick)
         self.endpoints: list = []
         self._started = False
         self._stopped = False
+        self.faults: FaultBoard | None = None
+        """The armed fault plan (docs/faults.md): `faults.trigger(name)`, `faults.log`."""
+        if faults is not None:
+            self.arm(load_plan(faults))
+
+    def arm(self, plan: FaultPlan) -> FaultBoard:
+        """Serve with the faults of `plan` and those of the modules' scenarios: link faults on every
+        link opened from now on, module faults on their modules; one seed, one log, time in
+        seconds since now. FaultError for a fault a module cannot take."""
+        start = time.monotonic()
+        for vm in self.bus.modules:  # a scenario's link faults act on the links
+            scenario = getattr(getattr(vm, "world", None), "scenario", None)
+            own = getattr(scenario, "faults", None)
+            if own:
+                plan = plan.merged(FaultPlan(own.link_faults, own.seed))
+        addresses = sorted(getattr(vm, "address", 1) for vm in self.bus.modules)
+        for f in plan.module_faults:
+            if f.address is not None and f.address not in addresses:
+                raise FaultError(f"fault {f.label}: no module at address {f.address} "
+                                 f"(served: {', '.join(map(str, addresses))})")
+        board = FaultBoard(plan, clock=lambda: time.monotonic() - start)
+        board.lock = self.bus.lock
+        for vm in self.bus.modules:
+            faults = getattr(vm, "faults", None)
+            if faults is not None:
+                faults.load(None, board=board)
+        self.faults = self.bus.faults = board
+        return board
 
     @property
     def modules(self) -> list:

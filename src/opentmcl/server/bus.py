@@ -41,6 +41,7 @@ from collections.abc import Callable, Iterable
 from functools import partial
 from typing import NamedTuple, Protocol
 
+from ..faults import FaultBoard
 from ..handover import BACKGROUND, REQUEST, STOP, HandoverLock
 from ..protocol.opcodes import STOP_COMMANDS, keeps_addressing
 from . import canmap, vmapi
@@ -139,6 +140,10 @@ def _bound_handle(vm, takes: bool, interface: str):
 
 class ModuleBus:
     """Virtual modules sharing one bus; thread-safe; time paced to `clock`."""
+
+    faults: FaultBoard | None = None
+    """The fault plan the bus is served with (`Server(faults=...)`): its links take their link
+    faults from it (server/linkfaults.py)."""
 
     def __init__(self, modules: Iterable, *, clock: Callable[[], float] = time.monotonic,
                  min_step: float = MIN_STEP, pacer: Pacer | None = None) -> None:

@@ -16,7 +16,9 @@ import logging
 import threading
 from typing import TYPE_CHECKING
 
+from ..faults import LinkFaults
 from . import canmap, vmapi
+from .linkfaults import can_fate, can_reply_passes, can_request_lost, link_faults
 
 if TYPE_CHECKING:
     from can import BusABC
@@ -48,12 +50,14 @@ class CanServer:
         self._thread: threading.Thread | None = None
         self._send_lock = threading.Lock()
         self.send_errors = 0
+        self.faults: LinkFaults | None = None
 
     @property
     def url(self) -> str:
         return f"can://{self.can_interface}/{self.channel}"
 
     def start(self) -> None:
+        self.faults = link_faults(self.bus, "can")  # `opentmcl serve --faults` (server/linkfaults.py)
         self.canbus = open_can_bus(self.can_interface, self.channel, **self.can_kwargs)
         self._thread = threading.Thread(target=self._loop, name="opentmcl-can", daemon=True)
         self._thread.start()
@@ -73,6 +77,10 @@ class CanServer:
                 continue
             if msg is None or msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id:
                 continue
+            faults = self.faults
+            fate = None if faults is None else can_fate(faults, bytes(msg.data))
+            if fate is not None and can_request_lost(fate):
+                continue
             try:
                 replies = self.bus.can_request(msg.arbitration_id, bytes(msg.data), self)
             except Exception:  # a module bug must not stop the endpoint
@@ -81,7 +89,8 @@ class CanServer:
             if log.isEnabledFor(logging.DEBUG):
                 _log_exchange(msg.arbitration_id, bytes(msg.data), replies)
             for _vm, reply_id, payload in replies:
-                self._send(reply_id, payload)
+                if fate is None or can_reply_passes(fate, self.faults, self._stop.wait):
+                    self._send(reply_id, payload)
 
     def _send(self, reply_id: int, payload: bytes) -> None:
         import can
@@ -98,7 +107,8 @@ class CanServer:
 
     def deliver(self, vm, reply: bytes) -> None:
         """An unsolicited 9-byte reply (command 138 event) sent as a CAN reply."""
-        if self.canbus is None or self._stop.is_set():
+        if self.canbus is None or self._stop.is_set() or (self.faults is not None and
+                                                          self.faults.down(self.faults.log.clock())):
             return
         with self.bus.lock:
             reply_id = vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID)

@@ -13,9 +13,9 @@ is tested without clocks or sockets.
 """
 from __future__ import annotations
 
-from ..protocol.frame import FRAME_LEN
+from ..protocol.frame import FRAME_GAP, FRAME_LEN
 
-DEFAULT_GAP = 0.1
+DEFAULT_GAP = FRAME_GAP
 """Seconds of silence after which a partial frame is discarded."""
 
 

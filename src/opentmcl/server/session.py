@@ -15,6 +15,8 @@ and writes the replies back, as a module on an RS-485 line does:
   round trip takes at least the wire time of request and reply, plus GP75;
 - unsolicited replies (command 138) arrive through `deliver` and are written
   the same way;
+- link faults (`opentmcl serve --faults`, docs/faults.md) act between the received bytes and the
+  stream, and on the replies (server/linkfaults.py);
 - ASCII echo and reply text (PD28-1021 manual 3.4) is written at once, with
   pacing but without the telegram pause: a terminal user expects the echo of
   a key at once, and the manual ties GP75 to replies "via RS485" only
@@ -35,6 +37,7 @@ from collections.abc import Callable
 from . import vmapi
 from .bus import USB
 from .framer import DEFAULT_GAP
+from .linkfaults import FaultyLine, link_faults
 from .stream import BINARY, SerialStream
 
 BITS_PER_BYTE = 10
@@ -73,6 +76,9 @@ class SerialSession:
         self.closed = False
         self._busy = 0.0  # seconds spent inside `receive`, left out of the line clock
         self._rx_free = float("-inf")  # with pacing: when the last received byte is off the line
+        faults = link_faults(bus, interface)
+        self.line = None if faults is None else FaultyLine(faults, bus, self._feed, self.send_reply, sleep, gap)
+        """The link's faults (`opentmcl serve --faults`), or None."""
 
     @property
     def framer(self):
@@ -89,16 +95,24 @@ class SerialSession:
         start = self._clock()
         if self.pace_bytes and data:
             self._wait_on_the_line(len(data), start)
-        outputs = self.stream.feed(data, self._clock() - self._busy if now is None else now, self)
-        if len(outputs) == 1:
-            vm, out, kind = outputs[0]
-            self.send_reply(vm, out, pause=kind == BINARY)
-        elif outputs:
-            self._send_together(outputs)
+        line_now = self._clock() - self._busy if now is None else now
+        waited = 0.0
+        if self.line is not None:  # link faults (server/linkfaults.py)
+            waited = self.line.receive(data, line_now)
+        else:
+            outputs = self.stream.feed(data, line_now, self)
+            if len(outputs) == 1:
+                vm, out, kind = outputs[0]
+                self.send_reply(vm, out, pause=kind == BINARY)
+            elif outputs:
+                self._send_together(outputs)
         self.bytes_received += len(data)
         if now is None:
-            self._busy += self._clock() - start
+            self._busy += self._clock() - start - waited
         return self.stream.frames - before
+
+    def _feed(self, data: bytes, now: float) -> list:
+        return self.stream.feed(data, now, self)
 
     def _wait_on_the_line(self, count: int, now: float) -> None:
         """Pacing: sleep until `count` bytes read at `now` have crossed the line (they follow
@@ -143,8 +157,9 @@ class SerialSession:
             return vmapi.global_param(vm, vmapi.GP_TELEGRAM_PAUSE) / 1000.0
 
     def deliver(self, vm, reply: bytes) -> None:
-        """An unsolicited reply (command 138 event) for the host on this link."""
-        if not self.closed:
+        """An unsolicited reply (command 138 event) for the host on this link (lost while the link
+        is down)."""
+        if not self.closed and (self.line is None or not self.line.down()):
             self.send_reply(vm, reply)
 
     def send_reply(self, vm, reply: bytes, *, pause: bool = True) -> None:

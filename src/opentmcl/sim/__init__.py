@@ -5,24 +5,30 @@ from a ``sim://`` URL and puts them behind the host's `InProcessTransport`, so t
 never imports the firmware. The root package registers ``sim`` as the lazy reference
 ``opentmcl.sim:open_sim``; importing this package registers the function itself.
 
-    sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S]
+    sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S&faults=FILE&seed=N]
+
+With ``faults=FILE`` (a fault plan, docs/faults.md) the link and the modules fail as the plan says,
+reproducibly from its seed (``seed=N`` overrides it); the transport's `faults` triggers a named
+fault and lists what fired.
 """
 from __future__ import annotations
 
 import urllib.parse
 
+from ..faults import FaultBoard, FaultError, FaultPlan, load_plan, seed_of
 from ..firmware.vm import VirtualModule
 from ..host.connect import register_transport
 from ..host.errors import TmclUrlError
 from ..host.transport import url_query
+from ..host.transports.faulty import FaultyTransport
 from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, make_clock, parse_modules
 
 __all__ = ["open_sim"]
 
 
 def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
-    """Factory for ``sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S]``."""
-    query = url_query(url, ("address", "clock", "step"))
+    """Factory for ``sim://NAME[@ADDR][,NAME@ADDR...][?address=N&clock=virtual|real|none&step=S&faults=FILE&seed=N]``."""
+    query = url_query(url, ("address", "clock", "step", "faults", "seed"))
     try:
         default_address = int(query.get("address", "1"), 0)
     except ValueError:
@@ -35,7 +41,42 @@ def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
             modules.append(VirtualModule(name, address=address))
         except (KeyError, ValueError) as exc:  # ValueError: a bad profile file
             raise TmclUrlError(f"sim://: {exc.args[0] if exc.args else exc}") from None
-    return InProcessTransport(modules, clock=_clock(query))
+    try:
+        return with_faults(modules, _plan(query), _clock(query))
+    except FaultError as exc:
+        raise TmclUrlError(f"sim://: {exc}") from None
+
+
+def with_faults(modules: list[VirtualModule], plan: FaultPlan, clock: str | Clock = "virtual") -> InProcessTransport:
+    """The in-process link to `modules`; with a plan, its faults armed on the link and on the
+    modules, all drawing on the plan's seed and recording in one log (`transport.faults`).
+    FaultError for a fault a module cannot take (an axis it lacks)."""
+    if not plan:
+        return InProcessTransport(modules, clock=clock)
+    first = modules[0]
+    board = FaultBoard(plan, clock=lambda: first.time)
+    for vm in modules:
+        vm.faults.load(None, board=board)
+    link = board.link("sim")
+    transport: InProcessTransport = InProcessTransport(modules, clock=clock) if link is None else \
+        FaultyTransport(modules, link, clock=clock)
+    transport.faults = board
+    return transport
+
+
+def _plan(query: dict[str, str]) -> FaultPlan:
+    """The fault plan of ``?faults=FILE`` and ``?seed=N``."""
+    try:
+        plan = load_plan(query["faults"]) if query.get("faults") else FaultPlan()
+        if "seed" in query:
+            try:
+                seed = int(query["seed"], 0)
+            except ValueError:
+                raise FaultError(f"seed: expected an integer, got {query['seed']!r}") from None
+            plan = plan.with_seed(seed_of(seed))
+    except FaultError as exc:
+        raise TmclUrlError(f"sim://: {exc}") from None
+    return plan
 
 
 def _clock(query: dict[str, str]) -> Clock:

@@ -21,6 +21,7 @@ so one page serves every module). An unknown address is a 404 with {"error": ...
     POST /api/console              one direct-mode instruction -> reply with status text
     POST /api/io/output, /api/io/force
     POST /api/program/{assemble,download,run,stop,step,reset,breakpoints}; GET /api/program
+    GET  /api/faults; POST /api/faults/trigger {name}   named faults of the served plan (web/faults.py)
     WS   /ws                       {"type": "samples"} 25 times a second, {"type": "state"} on change
 
 Every request passes `guard.Guard` first (Host allow-list, token, Origin, X-OpenTMCL header, body limit).
@@ -56,6 +57,7 @@ from .api import number_field as _number
 from .api import optional_int as _optional_int
 from .api import str_field as _str
 from .connlimits import STOP_ALL_PATH
+from .faults import FaultsApi
 from .guard import BODY_TIMEOUT, MAX_BODY, SUBPROTOCOL, Guard
 from .lanes import Lanes
 from .scan import TIMEOUT_DEFAULT, TIMEOUT_MAX, Scanner
@@ -281,6 +283,7 @@ class ModuleApi:
             WebSocketRoute("/ws", self.live),
             *data_views.routes(self.d, self.lanes),  # parameter sets and chart samples (web/params.py)
             *ToolsApi(self.d, self.lanes).routes(),   # units, wizards, world load, read-back (web/tools.py)
+            *FaultsApi(self.d).routes(),               # trigger a named fault (web/faults.py)
         ]
 
     async def index(self, _request: Request) -> Response:

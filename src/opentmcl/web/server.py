@@ -284,7 +284,9 @@ def bus_dashboards(bus: ModuleBus, *, address: int | None = None,
             client = Client(BusTransport(bus), address=addr, timeout=timeout)
             clients.append(client)
             module = client.module(addr, getattr(vm, "profile", None))  # the profile itself: a user profile file too
-            dashboards.append(Dashboard(module, vm=vm, vm_lock=bus.lock, url=f"serve (address {addr})"))
+            dashboard = Dashboard(module, vm=vm, vm_lock=bus.lock, url=f"serve (address {addr})")
+            dashboard.faults = getattr(bus, "faults", None)  # the served fault plan (web/faults.py)
+            dashboards.append(dashboard)
     except BaseException:
         close()
         raise

@@ -115,6 +115,8 @@ class Dashboard:
         self.lock = link_gate(module.client)
         self.module = LinkModule(module, self.lock)  # the same client; requests take turns
         self.vm = vm
+        self.faults = getattr(module.client.transport, "faults", None)
+        """The armed faults of the link (`opentmcl serve --faults`, sim://...?faults=): web/faults.py."""
         self.vm_lock = vm_lock if vm_lock is not None else threading.RLock()
         self.url = url
         self.clock = clock

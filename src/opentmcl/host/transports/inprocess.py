@@ -27,6 +27,7 @@ import urllib.parse
 from collections.abc import Callable, Iterable
 from typing import ClassVar, Generic, Protocol, TypeVar
 
+from ...faults import FaultBoard
 from ...modules.addresses import address_error
 from ...protocol.frame import FRAME_LEN
 from ..errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError, check_timeout
@@ -93,7 +94,7 @@ class VirtualClock(Clock):
     def _jump(self, transport: InProcessTransport[SimulatedModule]) -> float:
         """Seconds to advance next: up to the modules' next internal event when every module
         tells it (optional ``next_event_in() -> float | None``), else one `step`."""
-        nearest: float | None = None
+        nearest = transport.next_arrival_in()
         for m in transport.modules:
             probe: Callable[[], float | None] | None = getattr(m, "next_event_in", None)
             if probe is None:
@@ -201,6 +202,14 @@ class InProcessTransport(Transport, Generic[M]):
     def _check_open(self) -> None:
         if self._closed:
             raise TmclConnectionError("in-process transport is closed")
+
+    faults: FaultBoard | None = None
+    """The faults of a ``sim://...?faults=FILE`` link (docs/faults.md): trigger one by name with
+    ``faults.trigger(name)``; ``faults.log`` lists what fired. None without faults."""
+
+    def next_arrival_in(self) -> float | None:
+        """Seconds until bytes on their way arrive (a link with faults delays them), or None."""
+        return None
 
     def local_module(self, address: int) -> M | None:
         return next((m for m in self.modules if _answers(m, address)), None)
