@@ -15,7 +15,7 @@ DEFAULT_AP4 = 51200   # TMCM-6212 AP4 default (maximum positioning speed), modul
 
 def test_a_dropped_request_never_reaches_the_module(tmp_path):
     """drop_request on the first SAP: no reply (timeout), and GAP reads the value of before."""
-    m = sim(tmp_path, [{"kind": "drop_request", "on": "SAP", "count": 1}])
+    m = sim(tmp_path, [{"kind": "drop_request", "command": "SAP", "count": 1}])
     with pytest.raises(TmclTimeout, match="SAP 4, 0, 777"):
         m.request(SAP, 4, 0, 777)
     assert m.request(GAP, 4, 0).value == DEFAULT_AP4
@@ -25,7 +25,7 @@ def test_a_dropped_request_never_reaches_the_module(tmp_path):
 
 def test_a_dropped_reply_leaves_the_request_done(tmp_path):
     """drop_reply on the first SAP: no reply, but the module did it (GAP reads the new value)."""
-    m = sim(tmp_path, [{"kind": "drop_reply", "on": "SAP", "count": 1}])
+    m = sim(tmp_path, [{"kind": "drop_reply", "command": "SAP", "count": 1}])
     with pytest.raises(TmclTimeout):
         m.request(SAP, 4, 0, 777)
     assert m.request(GAP, 4, 0).value == 777
@@ -33,7 +33,7 @@ def test_a_dropped_reply_leaves_the_request_done(tmp_path):
 
 def test_the_reply_to_the_third_mvp_is_dropped(tmp_path):
     """The issue's example, "drop the reply to the third MVP": the first two and the fourth answer."""
-    m = sim(tmp_path, [{"kind": "drop_reply", "on": "MVP", "count": 3}])
+    m = sim(tmp_path, [{"kind": "drop_reply", "command": "MVP", "count": 3}])
     outcomes = []
     for target in (100, 200, 300, 400):
         try:
@@ -46,7 +46,7 @@ def test_the_reply_to_the_third_mvp_is_dropped(tmp_path):
 def test_a_garbled_request_is_answered_with_status_1(tmp_path):
     """corrupt_request, the value's last byte flipped: the module answers status 1 ("wrong
     checksum", manual 3.2.1) and does nothing."""
-    m = sim(tmp_path, [{"kind": "corrupt_request", "on": "SAP", "count": 1, "byte": 7}])
+    m = sim(tmp_path, [{"kind": "corrupt_request", "command": "SAP", "count": 1, "byte": 7}])
     with pytest.raises(TmclStatusError) as info:
         m.request(SAP, 4, 0, 777)
     assert info.value.status == 1 and info.value.request.value == 777
@@ -56,7 +56,7 @@ def test_a_garbled_request_is_answered_with_status_1(tmp_path):
 def test_a_garbled_reply_is_a_checksum_error_naming_the_request(tmp_path):
     """corrupt_reply: the host sees a bad checksum (manual 3.1.1) and raises TmclChecksumError for
     that request; the next request gets its own reply."""
-    m = sim(tmp_path, [{"kind": "corrupt_reply", "on": "GAP", "count": 1}])
+    m = sim(tmp_path, [{"kind": "corrupt_reply", "command": "GAP", "count": 1}])
     m.request(SAP, 4, 0, 4321)
     with pytest.raises(TmclChecksumError, match="GAP 4, 0"):
         m.request(GAP, 4, 0)
@@ -66,8 +66,8 @@ def test_a_garbled_reply_is_a_checksum_error_naming_the_request(tmp_path):
 def test_a_delayed_reply_arrives_late(tmp_path):
     """delay 0.2 s with jitter 0.05 s: the reply comes, 0.15..0.25 virtual seconds later; a
     delay beyond the timeout is a timeout, and the late reply is not taken for the next request."""
-    m = sim(tmp_path, [{"kind": "delay", "on": "GAP", "count": 1, "delay": 0.2, "jitter": 0.05},
-                       {"kind": "delay", "on": "GGP", "count": 1, "delay": 2.0}])
+    m = sim(tmp_path, [{"kind": "delay", "command": "GAP", "count": 1, "delay": 0.2, "jitter": 0.05},
+                       {"kind": "delay", "command": "GGP", "count": 1, "delay": 2.0}])
     t0 = now(m)
     assert m.request(GAP, 4, 0).value == DEFAULT_AP4
     assert 0.15 <= now(m) - t0 <= 0.25
@@ -85,7 +85,7 @@ def test_a_delayed_reply_arrives_late(tmp_path):
 def test_a_request_in_pieces_meets_the_frame_gap_rule(tmp_path, gap, arrives):
     """split_request into 3 pieces: with gaps up to the frame gap (0.1 s, server/framer.py) the
     module assembles the frame; a longer gap drops the partial frame: no reply, nothing done."""
-    m = sim(tmp_path, [{"kind": "split_request", "on": "SAP", "count": 1, "pieces": 3, "gap": gap}])
+    m = sim(tmp_path, [{"kind": "split_request", "command": "SAP", "count": 1, "pieces": 3, "gap": gap}])
     if arrives:
         t0 = now(m)
         assert m.request(SAP, 4, 0, 999).status == 100
@@ -99,7 +99,7 @@ def test_a_request_in_pieces_meets_the_frame_gap_rule(tmp_path, gap, arrives):
 
 def test_a_reply_in_pieces_is_read_whole(tmp_path):
     """split_reply into 4 pieces 0.03 s apart: the host reads the reply when its last piece came."""
-    m = sim(tmp_path, [{"kind": "split_reply", "on": "GAP", "count": 1, "pieces": 4, "gap": 0.03}])
+    m = sim(tmp_path, [{"kind": "split_reply", "command": "GAP", "count": 1, "pieces": 4, "gap": 0.03}])
     t0 = now(m)
     assert m.request(GAP, 4, 0).value == DEFAULT_AP4
     assert now(m) - t0 >= 0.09 - 1e-9
@@ -108,7 +108,7 @@ def test_a_reply_in_pieces_is_read_whole(tmp_path):
 def test_a_link_down_for_a_time(tmp_path):
     """link_down for 1 s from the first GGP: that request, and a SAP 0.5 s later, are lost; after
     the second the link carries again."""
-    m = sim(tmp_path, [{"kind": "link_down", "on": "GGP", "count": 1, "duration": 1.0}])
+    m = sim(tmp_path, [{"kind": "link_down", "command": "GGP", "count": 1, "duration": 1.0}])
     with pytest.raises(TmclTimeout):
         m.request(10, 66, 0)
     with pytest.raises(TmclTimeout):

@@ -42,7 +42,7 @@ def test_power_loss_restores_ram_from_the_eeprom_and_starts_the_program(tmp_path
 @pytest.mark.parametrize(("store", "stored"), [("complete", 222), ("absent", 111)])
 def test_power_loss_during_a_store(tmp_path, store, stored):
     """Power lost during the second STAP: the store is complete or absent, never torn; no reply."""
-    m = sim(tmp_path, [{"kind": "power_loss", "on": "STAP", "count": 2, "store": store, "duration": 0.1}],
+    m = sim(tmp_path, [{"kind": "power_loss", "command": "STAP", "count": 2, "store": store, "duration": 0.1}],
             module="PD86-1180")
     m.request(SAP, 5, 0, 111)
     m.request(STAP, 5, 0)
@@ -67,7 +67,7 @@ def test_power_loss_at_a_time_stops_the_motor(tmp_path):
 def test_a_hung_firmware_answers_nothing_for_a_time(tmp_path):
     """hang for 1 s on the first GIO: that request and every one for 1 s go unanswered; the motion
     already running goes on (the motion controller runs the ramp on its own)."""
-    m = sim(tmp_path, [{"kind": "hang", "on": "GIO", "count": 1, "duration": 1.0}])
+    m = sim(tmp_path, [{"kind": "hang", "command": "GIO", "count": 1, "duration": 1.0}])
     m.request(MVP, 0, 0, 10_000_000)
     with pytest.raises(TmclTimeout):
         m.request(15, 0, 0)
@@ -132,7 +132,7 @@ def test_a_bouncing_switch(tmp_path):
 def test_lost_steps_under_load_seen_by_encoder_and_deviation_check(tmp_path):
     """step_loss (a load of 3x the torque at full current) while moving: the encoder (AP209) falls
     behind the counter (AP1) and the deviation check (AP212) stops the motor (AP207 bit 2)."""
-    m = sim(tmp_path, [{"kind": "step_loss", "on": "MVP", "count": 1, "load": 3.0, "duration": 2.0}])
+    m = sim(tmp_path, [{"kind": "step_loss", "command": "MVP", "count": 1, "load": 3.0, "duration": 2.0}])
     m.request(SAP, 212, 0, 5000)
     m.request(MVP, 0, 0, 400000)
     m.client.sleep(1.0)

@@ -68,7 +68,7 @@ def test_late_replies_do_not_shift_a_batch(tmp_path):
     """request_many after a batch whose window timed out: the late replies of the first batch are
     never taken for the second batch's (issue 34: "Today a late reply after a timed-out batch
     window shifts the next batch")."""
-    m = sim(tmp_path, [{"kind": "delay", "on": "GAP", "motor": 1, "count": 1, "delay": 0.7}], timeout=0.5)
+    m = sim(tmp_path, [{"kind": "delay", "command": "GAP", "motor": 1, "count": 1, "delay": 0.7}], timeout=0.5)
     for axis in range(6):
         m.request(SAP, 4, axis, 1000 + axis)
     try:
@@ -113,8 +113,8 @@ def test_a_power_loss_during_a_stream_of_stores_loses_no_acknowledged_store(tmp_
     """"A power loss during a stream of STAP/STGP loses no acknowledged store": power lost during
     10 % of the STAPs and STGPs (the store complete or absent, by chance); at the end the EEPROM
     holds, for every parameter, its last acknowledged value or a value stored after it."""
-    faults = [{"kind": "power_loss", "on": "STAP", "probability": 0.1, "duration": 0.1},
-              {"kind": "power_loss", "on": "STGP", "probability": 0.1, "duration": 0.1}]
+    faults = [{"kind": "power_loss", "command": "STAP", "probability": 0.1, "duration": 0.1},
+              {"kind": "power_loss", "command": "STGP", "probability": 0.1, "duration": 0.1}]
     m = sim(tmp_path, faults, module="PD86-1180", seed=5, timeout=0.3)
     acked, tried = _store_stream(m, random.Random(5), 300)
     losses = [f for f in m.client.transport.faults.log.fired if f.detail.startswith("power lost")]

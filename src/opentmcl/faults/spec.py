@@ -5,7 +5,7 @@ table with a `kind`, what triggers it and the kind's own settings.
     [[fault]]
     name = "third-move"          # optional: trigger it by name (CLI, dashboard, Python)
     kind = "drop_reply"
-    on = "MVP"                   # matching requests: a mnemonic or a command number
+    command = "MVP"              # matching requests: a mnemonic or a command number
     count = 3                    # the third of them (once)
 
 The same tables appear in a scenario file, a fault file (`opentmcl serve --faults FILE`), a
@@ -31,7 +31,7 @@ MODULE_KINDS = ("power_loss", "hang", "overtemperature", "stuck_switch", "bounci
 """Faults of the module and its world: applied by the virtual module (firmware/faults.py)."""
 KINDS = LINK_KINDS + MODULE_KINDS
 
-TRIGGER_KEYS = ("probability", "at", "on", "type", "motor", "count")
+TRIGGER_KEYS = ("probability", "at", "command", "type", "motor", "count")
 COMMON_KEYS = ("kind", "name", "description", *TRIGGER_KEYS)
 KIND_KEYS: dict[str, tuple[str, ...]] = {
     "drop_request": (), "drop_reply": (),
@@ -70,7 +70,7 @@ class Fault:
     """Fire on each matching request with this probability (0..1), from `at` on."""
     at: float | None = None
     """Seconds: alone, fire once at this time; with the others, armed from this time on."""
-    on: int | None = None
+    command: int | None = None
     """The command number of the requests that count (None: every request)."""
     type: int | None = None
     motor: int | None = None
@@ -100,10 +100,10 @@ class Fault:
     @property
     def timed(self) -> bool:
         """Fires once at `at`, not on a request: a module fault with `at` and no other trigger."""
-        return self.at is not None and self.on is None and self.probability is None and self.count is None
+        return self.at is not None and self.command is None and self.probability is None and self.count is None
 
     def matches(self, command: int, type_: int, motor: int) -> bool:
-        return (self.on is None or command == self.on) and (self.type is None or type_ == self.type) \
+        return (self.command is None or command == self.command) and (self.type is None or type_ == self.type) \
             and (self.motor is None or motor == self.motor)
 
     @property
@@ -200,7 +200,7 @@ _READERS: dict[str, Any] = {
     "bounces": lambda v, w: _int(v, w, 1, 1000),
     "load": lambda v, w: _number(v, w, 0.0, 1000.0),
     "switch": lambda v, w: _choice(v, w, SWITCHES), "store": lambda v, w: _choice(v, w, STORES),
-    "on": command_number,
+    "command": command_number,
 }
 
 
@@ -212,8 +212,8 @@ def _duration(value: object, where: str) -> float:
 
 
 def _check_trigger(kind: str, d: Mapping[str, Any], where: str) -> None:
-    if ("type" in d or "motor" in d or "count" in d) and "on" not in d:
-        raise FaultError(f"{where}: 'type', 'motor' and 'count' narrow 'on': give the command too")
+    if ("type" in d or "motor" in d or "count" in d) and "command" not in d:
+        raise FaultError(f"{where}: 'type', 'motor' and 'count' narrow 'command': give the command too")
     if "count" in d and "probability" in d:
         raise FaultError(f"{where}: give 'count' or 'probability', not both")
     if not any(k in d for k in ("probability", "at", "count", "name")):

@@ -17,13 +17,15 @@ import urllib.parse
 
 from ..faults import FaultBoard, FaultError, FaultPlan, load_plan, seed_of
 from ..firmware.vm import VirtualModule
+from ..host.client import Client
 from ..host.connect import register_transport
+from ..host.module import Module
 from ..host.errors import TmclUrlError
 from ..host.transport import url_query
 from ..host.transports.faulty import FaultyTransport
 from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, make_clock, parse_modules
 
-__all__ = ["open_sim"]
+__all__ = ["connect", "open_sim", "with_faults"]
 
 
 def open_sim(url: urllib.parse.SplitResult) -> InProcessTransport:
@@ -91,3 +93,20 @@ def _clock(query: dict[str, str]) -> Clock:
 
 
 register_transport("sim", open_sim)
+
+
+def connect(spec: str = "TMCM-6212", *, faults: object = None, timeout: float = 5.0, clock: str | Clock = "virtual",
+            address: int | None = None) -> Module:
+    """`opentmcl.connect("sim://SPEC")` with `faults` armed on the link and the modules: a fault plan,
+    a fault file, one fault table or a list of them (docs/faults.md), e.g.
+
+        m = opentmcl.sim.connect("TMCM-6212", faults=[{"kind": "drop_reply", "probability": 0.05}])
+
+    The plan's seed, when it has one, makes every run the same; `m.client.transport.faults` triggers
+    named faults and lists what fired. TmclUrlError for a bad spec, FaultError for a bad fault."""
+    plain = open_sim(urllib.parse.urlsplit(f"sim://{spec}"))
+    transport = with_faults(plain.modules, load_plan(faults), clock)
+    target = plain.modules[0].address if address is None else address
+    module = next((vm for vm in plain.modules if vm.accepts_address(target)), plain.modules[0])
+    return Module(Client(transport, address=target, timeout=timeout), target, module.profile)
+

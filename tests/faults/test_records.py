@@ -1,0 +1,113 @@
+"""Faults that fired are recorded (issue 34, "faults that fired are recorded in traces and captures,
+so a replay or a plot shows them"), and triggered by name from the dashboard (issue 34, "a control
+that triggers a named fault while serving, from the CLI and from the dashboard"; docs/dashboard.md
+"Threat model": every POST needs the X-OpenTMCL header and the page's own Origin)."""
+from __future__ import annotations
+
+import io
+
+import pytest
+
+import opentmcl
+import opentmcl.sim
+from opentmcl import VirtualModule
+from opentmcl.capture import read_capture, replay
+from opentmcl.capture.proxy import Proxy, ProxySession
+from opentmcl.host import TmclTimeout
+from opentmcl.server import TcpServer
+from opentmcl.trace import Trace
+
+from .helpers import GAP, plan_file
+
+
+def test_a_trace_records_the_faults_and_its_file_keeps_them():
+    """Trace.sample picks up what fired (module time); the trace file keeps it ('# fault=' lines);
+    the plot draws it."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    vm.faults.add({"kind": "step_loss", "at": 0.2, "duration": 0.2, "load": 3.0})
+    vm.request(4, 0, 0, 50000)
+    trace = Trace(axes=[0])
+    trace.record(vm, 0.6, 0.05)
+    assert [(f.time, f.kind) for f in trace.faults] == [(0.2, "step_loss"), (0.4, "step_loss")]
+    stage = trace.column(0, "stage")
+    assert stage[4] == stage[8] < trace.column(0, "position")[8]      # 0.2..0.4 s: the stage stood
+    again = Trace.from_csv(io.StringIO(trace.to_csv()))
+    assert again.faults == trace.faults
+    from opentmcl.plot.figure import plan
+    assert [f.time for f in plan(again, ["position"]).faults] == [0.2, 0.4]
+
+
+def test_a_capture_records_the_faults_and_a_replay_names_them(tmp_path):
+    """`opentmcl proxy --to sim://...?faults=FILE --log` writes a 'fault' record when one fires; the
+    replay report lists it among its notes."""
+    plan = plan_file(tmp_path, [{"name": "lost", "kind": "drop_reply"}])
+    proxy = Proxy(f"sim://TMCM-6212?faults={plan}", log=str(tmp_path / "run.jsonl"))
+    tcp = proxy.listen(TcpServer(proxy, "127.0.0.1", 0, session=ProxySession))
+    proxy.start()
+    try:
+        m = opentmcl.connect(tcp.url, timeout=0.3, profile="TMCM-6212")
+        assert m.request(GAP, 4, 0).status == 100
+        proxy.upstream.faults.trigger("lost")
+        with pytest.raises(TmclTimeout):
+            m.request(GAP, 4, 0)
+        assert m.request(GAP, 4, 0).status == 100
+        m.close()
+    finally:
+        proxy.stop()
+    cap = read_capture(tmp_path / "run.jsonl")
+    assert [(f["kind"], f["name"], f["detail"]) for f in cap.faults] == [("drop_reply", "lost", "reply to GAP 4, 0 dropped")]
+    report = replay(cap, "TMCM-6212")
+    assert any(note.startswith("fault at ") and "lost (drop_reply): reply to GAP 4, 0 dropped" in note
+               for note in report.notes)
+
+
+@pytest.fixture
+def web():
+    pytest.importorskip("starlette")
+    from starlette.testclient import TestClient
+
+    from opentmcl.web.app import create_app
+    from opentmcl.web.service import Dashboard
+
+    m = opentmcl.sim.connect("TMCM-6212", faults=[{"name": "cut", "kind": "power_loss", "duration": 0.1}],
+                             timeout=0.3)
+    dash = Dashboard(m)
+    with TestClient(create_app(dash), base_url="http://127.0.0.1") as client:
+        yield client, m
+    dash.closed.set()
+    m.close()
+
+
+def test_the_dashboard_lists_and_triggers_named_faults(web):
+    client, m = web
+    assert client.get("/m/1/api/faults").json() == {"names": ["cut"], "seed": m.client.transport.faults.seed,
+                                                     "fired": []}
+    out = client.post("/m/1/api/faults/trigger", json={"name": "cut"}, headers={"X-OpenTMCL": "1"})
+    assert out.status_code == 200 and "cut (power_loss): power lost for 0.1 s" in out.json()["fired"][0]
+    with pytest.raises(TmclTimeout):
+        m.request(GAP, 4, 0)
+    bad = client.post("/m/1/api/faults/trigger", json={"name": "melt"}, headers={"X-OpenTMCL": "1"})
+    assert bad.status_code == 400 and "no fault named 'melt'" in bad.json()["error"]
+
+
+def test_the_dashboards_guard_keeps_other_sites_from_triggering(web):
+    """No X-OpenTMCL header (a cross-site form) or another Origin: refused before the route runs."""
+    client, m = web
+    assert client.post("/m/1/api/faults/trigger", json={"name": "cut"}).status_code == 403
+    foreign = client.post("/m/1/api/faults/trigger", json={"name": "cut"},
+                          headers={"X-OpenTMCL": "1", "Origin": "http://evil.example"})
+    assert foreign.status_code == 403
+    assert m.client.transport.faults.log.count == 0
+
+
+def test_a_served_bus_gives_its_dashboards_the_plan():
+    pytest.importorskip("starlette")
+    from opentmcl.server import Server
+    from opentmcl.web.server import bus_dashboards
+
+    server = Server([VirtualModule("TMCM-6212", address=1)], faults=[{"name": "hot", "kind": "overtemperature"}])
+    dashboards, close = bus_dashboards(server.bus)
+    try:
+        assert dashboards[0].faults is server.faults and server.faults.names() == ["hot"]
+    finally:
+        close()
