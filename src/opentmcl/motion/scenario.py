@@ -34,6 +34,11 @@ class AxisSpec:
     driver_flags: Profile | None = None       # AP208 bits over time (seconds)
 
 
+MEASURE_DEFAULTS = {"supply_voltage": 24.0, "temperature": 25.0}
+"""The world's supply voltage (V) and board temperature (°C) when the scenario does not give them:
+a 24 V supply, the nominal voltage of the three modules' manuals, at room temperature."""
+
+
 @dataclass
 class InputSpec:
     bank: int
@@ -47,6 +52,12 @@ class Scenario:
     axes: dict[int, AxisSpec] = field(default_factory=dict)
     inputs: list[InputSpec] = field(default_factory=list)
     shutdown: Profile | None = None
+    measures: dict[str, Profile] = field(default_factory=dict)
+    """`supply_voltage` (V) and `temperature` (°C) over time, where the scenario gives them."""
+
+    def measure(self, name: str) -> Profile:
+        """The quantity `name` of MEASURE_DEFAULTS over time: the scenario's, else its default."""
+        return self.measures.get(name) or Profile.constant(MEASURE_DEFAULTS[name])
 
     def axis(self, index: int) -> AxisSpec:
         return self.axes.get(index) or AxisSpec()
@@ -223,7 +234,7 @@ def parse_axis(d, where: str) -> AxisSpec:
 
 def parse_scenario(data: dict) -> Scenario:
     d = _table(data, "scenario")
-    _known(d, {"module", "axis", "input", "shutdown", "description"}, "scenario")
+    _known(d, {"module", "axis", "input", "shutdown", "description", *MEASURE_DEFAULTS}, "scenario")
     sc = Scenario(module=d.get("module"))
     axes = d.get("axis", {})
     if isinstance(axes, list):
@@ -254,6 +265,9 @@ def parse_scenario(data: dict) -> Scenario:
                                    parse_profile(sig, where)))
     if "shutdown" in d:
         sc.shutdown = parse_profile(d["shutdown"], "shutdown")
+    for name in MEASURE_DEFAULTS:
+        if name in d:
+            sc.measures[name] = parse_profile(d[name], name)
     return sc
 
 
