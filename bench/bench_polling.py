@@ -11,7 +11,8 @@
   s through `vm.advance` + `vm.handle`, through `Module.sleep` + `Module.request`, and through
   `Module.request_many` (one call per poll; "n/a" where the client lacks it). The reference of the
   `vm.handle` host is the same loop with the floor function answering and no time advance: what a
-  host would get if every request cost only the floor.
+  host would get if every request cost only the floor. Goal (issue 33): six axes every 10 ms
+  through `Module.request` at >= 0.5 of the `vm.handle` host.
 """
 from __future__ import annotations
 
@@ -25,6 +26,7 @@ from opentmcl.protocol.frame import Request
 FAR = 2_000_000_000  # MVP ABS target no axis reaches within a run
 CHUNK = 20           # polls between two looks at the wall clock
 HALF_THE_FLOOR = Goal(">=", 0.5, on_ratio=True, text=">= 0.5 of the floor")  # vm.handle (issue 16)
+HALF_OF_HANDLE = Goal(">=", 0.5, on_ratio=True, text=">= 0.5 of vm.handle")  # connect("sim://") (issue 33)
 
 _R = struct.Struct(">BBBBiB")
 _P = struct.Struct(">BBBBi")
@@ -173,14 +175,15 @@ def polling(quick: bool = False) -> list[Figure]:
                 lambda n=axes, t=dt: poll_module(n, t, budget, batched=False),
                 lambda n=axes, t=dt: poll_module(n, t, budget, batched=True)])
             what = f"polling {axes} {'axes' if axes > 1 else 'axis'} every {dt * 1000:g} ms"
+            six = (axes, dt) == (6, 0.01)
             # issue 33: "six-axis polling requests per second ... the goal of 0.5" of the same host
             # answered by the minimal handler, measured in the same run
-            goal = Goal(">=", 0.5, on_ratio=True, text=">= 0.5 of the floor host") if (axes, dt) == (6, 0.01) else ""
+            goal = Goal(">=", 0.5, on_ratio=True, text=">= 0.5 of the floor host") if six else ""
             out += [
                 Figure(f"{what}: vm.handle, virtual s/wall s", handle, floor_host, goal,
                        "the same host answered by the floor"),
-                Figure(f"{what}: Module.request, virtual s/wall s", single, handle, "",
-                       "vm.handle host"),
+                Figure(f"{what}: Module.request, virtual s/wall s", single, handle,
+                       HALF_OF_HANDLE if six else "", "vm.handle host"),
                 Figure(f"{what}: Module.request_many, virtual s/wall s", batched, single, "",
                        "Module.request host")]
     return out

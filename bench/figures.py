@@ -113,10 +113,17 @@ def best_of(rounds: int, measures: list[Callable[[], float | None]]) -> list[flo
 
 
 def print_figures(measure: Callable[[bool], list[Figure]], description: str) -> None:
-    """The command line of a bench_*.py of its own: `[--quick]`, one figure per line."""
+    """The command line of a bench_*.py of its own: `[--quick] [--cpu]`, one figure per line with
+    its ratio and verdict."""
     import argparse
 
     ap = argparse.ArgumentParser(description=description.splitlines()[0])
     ap.add_argument("--quick", action="store_true")
-    for f in measure(ap.parse_args().quick):
-        print(f)
+    ap.add_argument("--cpu", action="store_true", help="time the in-process scenarios in CPU time (`use_cpu_time`)")
+    args = ap.parse_args()
+    if args.cpu:
+        use_cpu_time()
+    for f in measure(args.quick):
+        ratio = "-" if f.ratio is None else f"{f.ratio:.3f}"
+        value = "n/a" if f.value is None else f"{f.value:,.0f}"
+        print(f"{f.name}: {value}  ratio {ratio} ({f.reference_name or '-'})  goal {f.goal or '-'}  {f.verdict()}")

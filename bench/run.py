@@ -25,6 +25,9 @@ with a summary line at the end:
 - round trips through TCP and the pseudo-terminal next to a bare echo server on the same transport,
   each server in a process of its own (target: ours >= 50 % of echo), and our client against
   PyTrinamic on the same module (target >= 1) (bench_endpoints.py);
+- `Trace.sample` of six moving axes next to the 54 GAP reads it stands for (goal: >= 8x as many
+  samples as groups of 54 reads per second, 4x the former 2x) and next to the former sample (goal:
+  >= 4x), and a run traced at 10 ms next to the same run untraced (bench_trace.py `speed`);
 - memory of the world and plot traces in MB per hour of recording at 10 ms, compact columns next to
   the old dict-per-row / list-per-channel layouts (target < 100 MB; bench_trace.py).
 - the round-trip time `opentmcl proxy` adds on loopback, next to a direct connection to the same served
@@ -148,6 +151,7 @@ def pair(figures: list[Figure]) -> None:
 def measure(quick: bool) -> list[Figure]:
     scale = 0.1 if quick else 1.0
     out = bench_polling.measure(quick) + bench_bus.measure(quick) + bench_interp.measure(quick)
+    out += bench_trace.speed(quick)
     out += [Figure("6212 six axes, 10-revolution moves, virtual s per wall s (target >= 3600)",
                    bench_6212(3600 * scale), goal=Goal(">=", 3600)),
             Figure("6212 six axes, short fast moves, virtual s per wall s", bench_6212_short(300 * scale)),

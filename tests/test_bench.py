@@ -27,6 +27,10 @@ ISSUE_16 = ("floor: vm.handle GAP round trips/s", "sim:// Module.request GAP rou
             "polling 6 axes every 10 ms: Module.request_many",
             "served bus of 1 TMCM-6212", "served bus of 8 TMCM-6212",
             "interpreter GAP loop, standing axis, instructions", "interpreter GAP loop, moving axis, 1 ms timer")
+# issue 33: "`Trace.sample` of six axes ... Measure it against the 54 GAP reads it stands for (`vm.request`)
+# in the same run"
+ISSUE_33 = ("trace Trace.sample of 6 moving axes, samples/s", "trace Trace.sample of 6 moving axes against the former",
+            "trace run of 6 moving axes sampled every 10 ms")
 OLDER = ("6212 six axes, 10-revolution moves", "PD86-1180 pulse_div=ramp_div=0", "TMC429 fast vs per-tick speed-up",
          "in-process round trips per s", "memory world trace MB per hour at 10 ms",
          "memory plot trace MB per hour at 10 ms", "proxy added by the proxy, ms", "endpoints TCP round trips/s: ours",
@@ -60,7 +64,7 @@ def test_bench_quick_runs_and_reports_every_figure(tmp_path):
     assert doc["python"] == f"{sys.version_info.major}.{sys.version_info.minor}.{sys.version_info.micro}"
     assert doc["commit"] and doc["quick"] is True
     figures = doc["figures"]
-    for label in ISSUE_16 + OLDER:
+    for label in ISSUE_16 + ISSUE_33 + OLDER:
         matching = [name for name in figures if name.startswith(label)]
         assert matching, label
         assert label in out  # the table shows it too
@@ -73,7 +77,7 @@ def test_bench_quick_runs_and_reports_every_figure(tmp_path):
         assert f["value"] > 0, name
         if f["reference"] is not None:
             assert f["reference"] > 0 and f["ratio"] == f["value"] / f["reference"], name
-    for label in ISSUE_16:  # every issue-16 figure stands next to a reference
+    for label in ISSUE_16 + ISSUE_33:  # every issue-16 and -33 figure stands next to a reference
         for name in (n for n in figures if n.startswith(label)):
             assert figures[name]["reference"] is not None, name
     for name, (at_least, bound) in ABSOLUTE_GOALS.items():
@@ -120,6 +124,14 @@ def test_profile_polling_prints_the_top_functions_by_tottime():
     assert "Ordered by: internal time" in out and "due to restriction <5>" in out
     header = next(i for i, line in enumerate(out.splitlines()) if line.split()[:2] == ["ncalls", "tottime"])
     assert len([line for line in out.splitlines()[header + 1:] if line.strip()]) == 5
+
+
+def test_profile_polling_through_the_host_library():
+    """Issue 33: `--host` profiles the same polling through `connect("sim://")` and `Module.request`,
+    so the host library's request path shows among the top functions."""
+    out = subprocess.run([sys.executable, str(ROOT / "bench" / "profile_polling.py"), "--polls", "50", "--top", "40",
+                          "--host"], capture_output=True, text=True, timeout=120, check=True).stdout
+    assert "client.py" in out and "inprocess.py" in out and "(handle)" in out
 
 
 def test_profile_polling_refuses_a_count_that_is_not_positive():

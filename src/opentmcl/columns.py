@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import math
 from array import array
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Sequence
+from typing import cast
 
 _INTS = ("b", "h", "i", "q")
 _LIMITS = {code: 1 << (array(code).itemsize * 8 - 1) for code in _INTS}   # 2**(bits-1)
@@ -56,6 +57,26 @@ class Column:
                 while not self._fits(v):
                     self._widen(_INTS[_INTS.index(self._a.typecode) + 1])
         self._a.append(v)
+
+    def extend(self, values: Sequence[float | int | None]) -> None:
+        """Append `values`. A run of 64-bit integers (no None, no float) widens the column at most
+        once, to the narrowest type that holds all of them, and is copied in one go."""
+        try:
+            ints: array[int] = array("q", cast("Sequence[int]", values))
+        except (TypeError, OverflowError):     # None, a float, or an integer beyond 64 bits
+            for v in values:
+                self.append(v)
+            return
+        if not ints:
+            return
+        lo, hi = min(ints), max(ints)
+        while self._a.typecode != "d" and not (self._fits(lo) and self._fits(hi)):
+            code = self._a.typecode
+            self._widen("d" if code == "q" else _INTS[_INTS.index(code) + 1])
+        if self._a.typecode == "q":
+            self._a.extend(ints)
+        else:
+            self._a.extend(_array(self._a.typecode, ints))
 
     def _get(self, x: float) -> float | int | None:
         if self._a.typecode == "d":

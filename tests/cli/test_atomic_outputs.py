@@ -106,7 +106,7 @@ def test_a_link_to_a_device_is_written_through(tmp_path):
 def test_a_failed_write_keeps_the_old_file(tmp_path):
     """The library level: an exception while the plot trace streams its rows leaves the old CSV
     as it was and no temporary file (plain open() truncated it first)."""
-    from opentmcl.plot.trace import Trace
+    from opentmcl.trace import Trace
 
     out = tmp_path / "t.csv"
     out.write_text("old content\n")

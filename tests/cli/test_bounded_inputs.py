@@ -153,7 +153,7 @@ def test_eeprom_cap_edge(tmp_path):
 
 def test_csv_line_edge(tmp_path):
     """A CSV line of LINE_MAX characters (newline included) reads; one more character is refused."""
-    from opentmcl.plot.trace import Trace, TraceError
+    from opentmcl.trace import Trace, TraceError
 
     head = "time_s,position_0\n"
     path = tmp_path / "t.csv"

@@ -11,7 +11,7 @@ import pytest
 from opentmcl.lang import assemble
 from opentmcl.plot import Event, Mark, Trace, TraceError, run_virtual
 from opentmcl.plot.program import AUTO_SECONDS, DEFAULT_SECONDS, auto_seconds
-from opentmcl.plot.trace import MAX_SAMPLES
+from opentmcl.plot.recording import MAX_SAMPLES
 
 ORIGIN_PROGRAM = """
     SAP 4, 0, 51200

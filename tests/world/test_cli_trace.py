@@ -33,7 +33,7 @@ def test_trace_rows_and_csv(tmp_path):
     assert set(last) == {"time", "pos0", "vel0", "left0", "right0", "home0", "load0", "current0",
                          "encoder0", "stage0"}
     out = tmp_path / "t.csv"
-    trace.to_csv(out)
+    trace.to_csv(out, layout="table")     # the table of `run --csv` (the default: the trace file)
     rows = list(csv.DictReader(out.open()))
     assert len(rows) == 5 and rows[-1]["right0"] == "1"
     with pytest.raises(ValueError):

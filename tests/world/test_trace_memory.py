@@ -14,9 +14,7 @@ import pytest
 
 from opentmcl import VirtualModule
 from opentmcl.columns import Column
-from opentmcl.plot.trace import RECORDED
-from opentmcl.plot.trace import Trace as PlotTrace
-from opentmcl.trace import Trace, TraceFull
+from opentmcl.trace import HOST_CHANNELS, Trace, TraceFull
 
 ROWS = 2000
 
@@ -56,10 +54,10 @@ def test_plot_trace_of_six_axes_stays_under_200_bytes_per_sample():
     axes = list(range(6))
 
     def fill():
-        t = PlotTrace(axes)
+        t = Trace(axes)
         for i in range(ROWS):
             t.add(i * 0.01, {(a, ch): (i * 37 + a if ch == "position" else float(i % 500) if ch == "velocity"
-                                       else i % 2) for a in axes for ch in RECORDED})
+                                       else i % 2) for a in axes for ch in HOST_CHANNELS})
         return t
 
     per_sample = held_bytes(fill) / ROWS
@@ -93,3 +91,19 @@ def test_column_widens_to_the_narrowest_type_and_keeps_none(values, typecode):
     assert [v is None for v in back] == [v is None for v in values]
     assert all(b == pytest.approx(v) for b, v in zip(back, values, strict=True) if v is not None)
     assert Column([math.nan]).tolist() == [None]   # documented: NaN reads back as None
+
+
+@pytest.mark.parametrize(("before", "values"), [
+    ([], [0, 1, 127]), ([], [-127, 127]), ([], [-128]), ([5], [32767, -32767]), ([5], [-32768]),
+    ([1], [2 ** 31 - 1, -(2 ** 31)]), ([1, None], [2 ** 63 - 1]), ([1], [-(2 ** 63)]), ([1], [2 ** 70]),
+    ([2.5], [1, 2]), ([], [True, False]), ([], [1, None, 3]), ([], [1, 2.5]), ([300], []), ([None], [7])])
+def test_column_extend_is_append_in_one_go(before, values):
+    """A trace keeps its samples in blocks (opentmcl/trace.py FLUSH_ROWS): `extend` gives the very
+    column that appending the values one by one gives - the same type at each width's edge (the
+    smallest value of a type is its None) and the same values."""
+    one_by_one, at_once = Column(before), Column(before)
+    for v in values:
+        one_by_one.append(v)
+    at_once.extend(values)
+    assert at_once.typecode == one_by_one.typecode
+    assert at_once.tolist() == one_by_one.tolist()

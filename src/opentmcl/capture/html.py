@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 from ..atomicfile import write_atomic
 
 if TYPE_CHECKING:
-    from .replay import ReplayReport
+    from .outcome import ReplayReport
 
 WIDTH, HEIGHT = 640, 220
 MARGIN = (58, 14, 16, 30)   # left, right, top, bottom

@@ -101,35 +101,55 @@ def find_moves(slots: list[Slot], events: list[tuple[float, dict]], runs: list[T
             continue
         kind, target = _kind(rec)  # type: ignore[misc]
         motor = rec["motor"]
-        last_no, first_yes = start.e, None
-        for later in slots[i + 1:]:
-            lrec = later.rec
-            if lrec["kind"] != "request" or lrec["address"] != address or lrec["motor"] != motor:
-                continue
-            if _axis_motion(lrec, address):
-                break   # the next motion of this axis: this one was not seen to end
-            verdict = _verdict(kind, target, later)
-            if verdict is False:
-                last_no = later.e
-            elif verdict is True:
-                first_yes = later.s
-                break
+        last_no, first_yes = _reads_after(slots, i, kind, target, address)
         if kind == "position":
-            for t_ev, ev in events:
-                if t_ev >= start.e and ev.get("value", 0) >> motor & 1 and (first_yes is None or t_ev < first_yes):
-                    first_yes = max(t_ev, last_no)
-                    break
+            first_yes = _arrival_event(events, start.e, motor, last_no, first_yes)
         if first_yes is None:
             continue
         real = (max(0.0, last_no - start.s), max(0.0, first_yes - start.e))
-        durations = [run.done[rec["n"]] - run.results[rec["n"]].t for run in runs
-                     if rec["n"] in run.done and rec["n"] in run.results]
-        twin = (min(durations), max(durations)) if durations else None
+        twin = _twin_duration(runs, rec["n"])
         ok = twin is not None and twin[0] <= real[1] + 2 * tau and twin[1] >= real[0] - 2 * tau
         text = format_instruction(rec["command"], rec["type"], motor, rec["value"]) or str(rec["command"])
         moves.append(Move(rec["n"], float(rec["t"]), motor, text, kind, target, real, twin, ok,
                           _speed_before(slots, i, motor, address)))
     return moves
+
+
+def _reads_after(slots: list[Slot], i: int, kind: str, target: int, address: int) -> tuple[float, float | None]:
+    """(the window end of the last read after the motion request `slots[i]` that says "not yet"
+    (else that of the request), the window start of the first that says "done" or None), up to
+    the next motion of the axis."""
+    start = slots[i]
+    motor = start.rec["motor"]
+    last_no = start.e
+    for later in slots[i + 1:]:
+        lrec = later.rec
+        if lrec["kind"] != "request" or lrec["address"] != address or lrec["motor"] != motor:
+            continue
+        if _axis_motion(lrec, address):
+            break   # the next motion of this axis: this one was not seen to end
+        verdict = _verdict(kind, target, later)
+        if verdict is False:
+            last_no = later.e
+        elif verdict is True:
+            return last_no, later.s
+    return last_no, None
+
+
+def _arrival_event(events: list[tuple[float, dict]], since: float, motor: int, last_no: float,
+                   first_yes: float | None) -> float | None:
+    """The end of a move to a position: a command-138 event of the axis after `since` that came
+    before the first read that said "done" (no earlier than the last that said "not yet")."""
+    for t_ev, ev in events:
+        if t_ev >= since and ev.get("value", 0) >> motor & 1 and (first_yes is None or t_ev < first_yes):
+            return max(t_ev, last_no)
+    return first_yes
+
+
+def _twin_duration(runs: list[TwinRun], n: int) -> tuple[float, float] | None:
+    """The shortest and longest time the twins' axes took to finish request `n`, if they did."""
+    durations = [run.done[n] - run.results[n].t for run in runs if n in run.done and n in run.results]
+    return (min(durations), max(durations)) if durations else None
 
 
 def _speed_before(slots: list[Slot], i: int, motor: int, address: int) -> int | None:

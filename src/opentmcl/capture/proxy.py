@@ -126,7 +126,7 @@ class StreamUpstream(_ThreadUpstream):
     def _loop(self) -> None:
         while not self._stop.is_set():
             try:
-                data = self.transport._read_some(0.2)
+                data = self.transport.read_some(0.2)
             except TmclConnectionError as exc:
                 self.error = str(exc)
                 return
@@ -192,7 +192,7 @@ class CanUpstream(_ThreadUpstream):
         from ..protocol.can import decode_reply
         from ..protocol.frame import Reply
 
-        bus, reply_id = self.transport._bus, self.transport.reply_id
+        bus, reply_id = self.transport.bus, self.transport.reply_id
         while not self._stop.is_set():
             try:
                 msg = bus.recv(0.2)
@@ -211,9 +211,9 @@ class CanUpstream(_ThreadUpstream):
 
 def open_upstream(url: str, on_bytes):
     """The link to the module behind `url` (serial://, tcp://, sim://, can://); TmclConnectionError if not."""
-    from ..host.connect import _split, open_transport
+    from ..host.connect import open_transport, split_url
 
-    scheme = _split(url, None).scheme
+    scheme = split_url(url).scheme
     if scheme == "sim":
         try:
             return SimUpstream(url, on_bytes)

@@ -15,7 +15,7 @@ from xml.sax.saxutils import escape, quoteattr
 from ..atomicfile import write_atomic
 
 if TYPE_CHECKING:
-    from .replay import ReplayReport
+    from .outcome import ReplayReport
 
 FORMAT = "opentmcl-replay-report"
 VERSION = 1

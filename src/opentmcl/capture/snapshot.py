@@ -164,26 +164,48 @@ def snapshot_of(capture: Capture, address: int | None) -> Snapshot | None:
     address = recs[0]["address"]
     snap = Snapshot(address, t=float(recs[0].get("t") or 0.0), complete=False, source=capture.path)
     for rec in recs:
-        if rec["address"] != address:
-            continue
-        part = rec["part"]
-        if part == "begin":
-            snap.firmware_version = rec.get("firmware_version") if isinstance(rec.get("firmware_version"), str) else None
-            snap.module = rec.get("module") if isinstance(rec.get("module"), str) else None
-        elif part == "axis":
-            snap.axis.setdefault(rec["motor"], {}).update({n: v for n, v in rec["values"]})
-        elif part == "global":
-            snap.globals.update({(rec["bank"], n): v for n, v in rec["values"]})
-        elif part == "io":
-            snap.io.update({(rec["bank"], p): v for p, v in rec["values"]})
-        elif part == "program":
-            prog = snap.program if snap.program is not None else {}
-            for i, ins in enumerate(rec["values"]):
-                prog[rec["start"] + i] = (ins[0], ins[1], ins[2], ins[3])
-            snap.program = prog
-        elif part == "done":
-            snap.complete = True
+        add = _PARTS.get(rec["part"])
+        if rec["address"] == address and add is not None:
+            add(snap, rec)
     return snap
+
+
+def _text(rec: dict, key: str) -> str | None:
+    value = rec.get(key)
+    return value if isinstance(value, str) else None
+
+
+def _begin(snap: Snapshot, rec: dict) -> None:
+    snap.firmware_version = _text(rec, "firmware_version")
+    snap.module = _text(rec, "module")
+
+
+def _axis(snap: Snapshot, rec: dict) -> None:
+    snap.axis.setdefault(rec["motor"], {}).update({n: v for n, v in rec["values"]})
+
+
+def _global(snap: Snapshot, rec: dict) -> None:
+    snap.globals.update({(rec["bank"], n): v for n, v in rec["values"]})
+
+
+def _io(snap: Snapshot, rec: dict) -> None:
+    snap.io.update({(rec["bank"], p): v for p, v in rec["values"]})
+
+
+def _program(snap: Snapshot, rec: dict) -> None:
+    prog = snap.program if snap.program is not None else {}
+    for i, ins in enumerate(rec["values"]):
+        prog[rec["start"] + i] = (ins[0], ins[1], ins[2], ins[3])
+    snap.program = prog
+
+
+def _done(snap: Snapshot, rec: dict) -> None:
+    snap.complete = True
+
+
+_PARTS: dict[str, Callable[[Snapshot, dict], None]] = {
+    "begin": _begin, "axis": _axis, "global": _global, "io": _io, "program": _program, "done": _done}
+"""What each part of a snapshot record adds to the snapshot (docs/capture.md)."""
 
 
 def snapshot_from_file(path: str | os.PathLike[str], address: int | None) -> Snapshot:
@@ -262,6 +284,13 @@ def _set(vm, notes: list[str], what: str, command: int, type_: int, motor: int, 
 
 def _apply_config(vm, snap: Snapshot, notes: list[str]) -> None:
     """Every writable setting that differs: global parameters, axis parameters, outputs."""
+    _apply_globals(vm, snap, notes)
+    _apply_axis_settings(vm, snap, notes)
+    _apply_outputs(vm, snap, notes)
+
+
+def _apply_globals(vm, snap: Snapshot, notes: list[str]) -> None:
+    """Writable global parameters (but KEEP) and the profile's user variables."""
     prof = vm.profile
     for (bank, number), value in sorted(snap.globals.items()):
         p = prof.global_parameters.get((bank, number))
@@ -270,6 +299,11 @@ def _apply_config(vm, snap: Snapshot, notes: list[str]) -> None:
             continue
         if _differs(vm, GGP, number, bank, value):
             _set(vm, notes, f"GP {bank}:{number}", SGP, number, bank, value)
+
+
+def _apply_axis_settings(vm, snap: Snapshot, notes: list[str]) -> None:
+    """Writable axis parameters that are settings, not state."""
+    prof = vm.profile
     for motor, values in sorted(snap.axis.items()):
         for number, value in sorted(values.items()):
             p = prof.axis_parameters.get(number)
@@ -277,8 +311,12 @@ def _apply_config(vm, snap: Snapshot, notes: list[str]) -> None:
                 continue
             if _differs(vm, GAP, number, motor, value):
                 _set(vm, notes, f"axis {motor} {p.name}", SAP, number, motor, value)
+
+
+def _apply_outputs(vm, snap: Snapshot, notes: list[str]) -> None:
+    """Writable outputs (bank 2)."""
     for (bank, port), value in sorted(snap.io.items()):
-        p = prof.io.get((bank, port))
+        p = vm.profile.io.get((bank, port))
         if bank == OUTPUT_BANK and p is not None and "W" in p.access and _differs(vm, GIO, port, bank, value):
             _set(vm, notes, f"output {port}", SIO, port, bank, value)
 

@@ -11,11 +11,10 @@ at the start of its window, and the twin's value is followed over the whole samp
 [window start - time tolerance, window end + time tolerance]: at its ends, at every event of the
 twin in between (a ramp phase change, an arrival, a switch edge: between two events a position is
 quadratic and a speed linear in time) and at a turning point, so the range is the true range of
-the value over the interval. Requests act in capture order.
+the value over the interval. Requests act in capture order (the timeline: capture/schedule.py).
 """
 from __future__ import annotations
 
-import heapq
 from dataclasses import dataclass, field
 
 from ..modules.state import READ_CLEARS
@@ -27,8 +26,12 @@ from .timing import Slot
 GAP, GGP, GIO, GCO, RFS, APP_STATUS = 6, 10, 15, 31, 13, 135
 ROR, ROL, MST, MVP, SAP, RSAP, SGP, SIO = 1, 2, 3, 4, 5, 8, 9, 14
 READS_OF = {SAP: GAP, RSAP: GAP, SGP: GGP, SIO: GIO}
-FACTORY_RESET = 137
 """A setting written and the command that reads it back (same type and motor or bank)."""
+FACTORY_RESET = 137
+MOTION = frozenset({ROR, ROL, MST, MVP, RFS, SAP, RSAP})
+"""Requests whose instant of action may change where an axis goes (`Twin.effect`)."""
+NO_MOTION = frozenset({SGP, SIO, 138, 7, 11, 134, 136, GAP, GGP, GIO, GCO, APP_STATUS})
+"""Requests that do not change where an axis goes (SGP: unless a program runs)."""
 APPLICATION_STATUS = 128
 """GGP 128: 1 while a TMCL program runs."""
 MAX_STEPS = 400
@@ -102,7 +105,8 @@ class TwinRun:
 
 
 class Twin:
-    """Runs one `VirtualModule` through the slots of a capture (see the module doc)."""
+    """One `VirtualModule` played through a capture: it acts, samples and watches motions;
+    `Schedule` (capture/schedule.py) says when (see the module doc)."""
 
     def __init__(self, vm, policy: str, tau: float, trace_axes: set[int], idle: float = 0.0) -> None:
         from ..firmware.table import execute  # the firmware loads when a replay runs, not on import
@@ -220,39 +224,42 @@ class Twin:
         command, 0 for a request that does not change where any axis goes (a setting of an axis
         at rest, a global parameter, an output), None when it is not known (a program started, a
         reference search, a ramp setting changed while the axis moves)."""
-        command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
-        prof = self.vm.profile
-        if command in (SGP, SIO, 138, 7, 11, 134, 136) or command in (GAP, GGP, GIO, GCO, APP_STATUS):
+        command, type_, motor = rec["command"], rec["type"], rec["motor"]
+        if command in NO_MOTION:
             return None if command == SGP and self.read(GGP, APPLICATION_STATUS, 0) == 1 else 0
-        motion = command in (ROR, ROL, MST, MVP, RFS) or command in (SAP, RSAP)
-        if not motion or motor >= prof.axes:
+        if command not in MOTION or motor >= self.vm.profile.axes:
             return None
         v0 = self.read(GAP, 3, motor)
         x0 = self.read(GAP, 1, motor)
         if v0 is None or x0 is None:
             return None
         if command in (SAP, RSAP) and type_ not in (0, 1, 2, 4):
-            p = prof.axis_parameters.get(type_)
+            p = self.vm.profile.axis_parameters.get(type_)
             return None if v0 and p is not None and p.engine else 0   # a ramp setting while moving
         if command == RSAP:
             return None if v0 else 0
         if command == SAP and type_ == 1:
             return -_sign(v0)   # a position overwritten later keeps the distance run until then
+        v1 = self.asked_speed(rec, v0, x0)
+        return None if v1 is None else _sign(v0 - v1)
+
+    def asked_speed(self, rec: dict, v0: int, x0: int) -> int | None:
+        """The speed a motion request sends its axis to (signed; a move to a position at its
+        maximum speed AP4), from speed `v0` at position `x0`; None when not known (RFS START, MVP COORD)."""
+        command, type_, value = rec["command"], rec["type"], rec["value"]
         if command == MST or (command == RFS and type_ == 1):
-            v1 = 0
-        elif command in (ROR, ROL):
-            v1 = value if command == ROR else -value
-        elif command == SAP and type_ == 2:
-            v1 = value
-        elif command == SAP and type_ == 4:
-            v1 = _sign(v0) * value
-        elif command == MVP and type_ in (0, 1) or command == SAP and type_ == 0:
+            return 0
+        if command in (ROR, ROL):
+            return value if command == ROR else -value
+        if command == SAP and type_ == 2:
+            return value
+        if command == SAP and type_ == 4:
+            return _sign(v0) * value
+        if command == MVP and type_ in (0, 1) or command == SAP and type_ == 0:
             target = value if type_ == 0 or command == SAP else x0 + value
-            vmax = self.read(GAP, 4, motor) or 0
-            v1 = _sign(target - x0) * vmax
-        else:
-            return None
-        return _sign(v0 - v1)
+            vmax = self.read(GAP, 4, rec["motor"]) or 0
+            return _sign(target - x0) * vmax
+        return None
 
     def late(self, sign: int | None) -> bool:
         """Does this twin act at the end of the request's window? The "early" and "late" twins
@@ -317,86 +324,9 @@ class Twin:
 
     def start(self, t: float) -> None:
         """Stand idle until capture time `t` (the twin's clock starts `idle` seconds before 0)."""
-        self.advance(self._tick(t))
+        self.advance(self.tick_of(t))
 
-    def go(self, slots: list[Slot]) -> TwinRun:
-        """Run every slot; see the module doc. A module handles requests one after the other, so a
-        read's sampling interval starts no earlier than the last request before it that writes
-        what it reads acts, and ends no later than the next such request acts (whatever the time
-        tolerance)."""
-        points: list[tuple[int, int, int, str]] = []
-        profile = self.vm.profile
-        reads = [s.rec["kind"] == "request" and windowed(s.rec, profile) for s in slots]
-        last_write = []   # for each read: the last slot before it that writes what it reads (-1: none)
-        written: dict[tuple, int] = {}
-        for i, slot in enumerate(slots):
-            rec = slot.rec
-            if reads[i]:
-                key = (rec["command"], rec["type"], rec["motor"])
-                last_write.append(max(written.get(key, -1), written.get(("all",), -1)))
-            else:
-                last_write.append(-1)
-                if rec["kind"] == "request" and rec["command"] == FACTORY_RESET:
-                    written[("all",)] = i
-                elif rec["kind"] == "request" and rec["command"] in READS_OF:
-                    written[(READS_OF[rec["command"]], rec["type"], rec["motor"])] = i
-            if reads[i]:
-                heapq.heappush(points, (self._tick(slot.e - self.tau), 0, i, "open"))
-                heapq.heappush(points, (self._tick(slot.s + self.tau), 3, i, "close"))
-        index = 0   # slots acted on so far
-        pending: tuple[int, Slot, bool] | None = None   # the next action: (tick, slot, decided)
-        sign: int | None = None   # the effect of the pending action, once decided
-        waiting: dict[int, int] = {}   # window -> the slot that must act before it opens
-        opened: set[int] = set()
-        closed: set[int] = set()
-        while index < len(slots) or points or pending is not None:
-            if pending is None and index < len(slots):
-                slot = slots[index]
-                pending = (max(self._tick(slot.e), self.last_action), slot, False)
-            head = points[0][0] if points else None
-            if pending is not None and (head is None or pending[0] < head or
-                                        (pending[0] == head and points[0][1] > 0)):
-                tick, slot, decided = pending
-                self.advance(tick)
-                if not decided and not reads[index]:
-                    sign = self.effect(slot.rec) if slot.rec["kind"] == "request" else None
-                    if slot.s > slot.e and self.late(sign):
-                        pending = (max(self._tick(slot.s), tick), slot, True)
-                        continue
-                if not reads[index]:
-                    for j in [j for j in opened if j < index and self.writes(slot.rec, slots[j].rec)]:
-                        self.close(slots[j])   # sampled before this request acted
-                        opened.discard(j)
-                        closed.add(j)
-                self.act(slot)
-                self.last_action = self.vm.now
-                pending = None
-                index += 1
-                for j in [j for j, after in waiting.items() if after < index]:
-                    del waiting[j]
-                    self.open(slots[j])
-                    if j in closed:
-                        self.close(slots[j])
-                    else:
-                        opened.add(j)
-                continue
-            tick, _, i, kind = heapq.heappop(points)
-            if kind == "open":
-                if index <= last_write[i]:   # the request that changed something before it has not acted
-                    waiting[i] = last_write[i]
-                    continue
-                self.advance(tick)
-                self.open(slots[i])
-                opened.add(i)
-            elif i in opened:
-                self.advance(tick)
-                self.close(slots[i])
-                opened.discard(i)
-                closed.add(i)
-            else:
-                closed.add(i)   # closed before it could open: only its own answer counts
-        return self.run
-
-    def _tick(self, t: float) -> int:
+    def tick_of(self, t: float) -> int:
         """The twin's tick of capture time `t` (the twin may have stood `idle` seconds before)."""
         return max(0, round((t + self.idle) * CLOCK_HZ))
+

@@ -107,25 +107,21 @@ def _world_demo(args: argparse.Namespace) -> int:
     trace = Trace(_shown_axes(args.axes, vm.profile.axes) if args.axes else None)
     trace.record(vm, args.duration, args.interval)
     if args.csv == "-":
-        print(trace.to_csv(), end="")
+        print(trace.to_csv(layout="table"), end="")
     elif args.csv:
         try:
-            trace.to_csv(args.csv)
+            trace.to_csv(args.csv, layout="table")
         except OSError as exc:
             raise CliError(f"cannot write {args.csv}: {exc.strerror or exc}") from None
-        print(f"{len(trace.rows)} rows written to {args.csv}")
+        print(f"{len(trace)} rows written to {args.csv}")
     else:
         from .table import fit, width
 
         print(f"Virtual {vm.profile.name} in a physical world, virtual time; scenario:")
         print(f"  {args.scenario}")
-        rows = trace.rows
-        header = list(rows[0]) if rows else ["time"]
-        cells = [["" if r[c] is None else (f"{r[c]:.3f}" if c == "time" else str(r[c])) for c in header]
-                 for r in rows]
-        from ..trace import FIELDS
-
-        print("\n".join(fit(header, cells, width(), group=len(FIELDS) + 1)))   # an axis's columns together
+        header, cells = trace.cells()
+        group = len(trace.channels or ()) or 1
+        print("\n".join(fit(header, cells, width(), group=group)))   # an axis's columns together
     return 0
 
 

@@ -1,8 +1,9 @@
 """`opentmcl plot FILE -o out.png`: plot position, velocity, acceleration, load, current and switches.
 
 FILE is a TMCL program (.tmc source or .bin), run on an in-process virtual module in virtual
-time (or, with --to URL, on that module in real time); a trace recorded earlier (.csv); or a
-scenario file for the virtual module (any other name). The output format follows the name
+time (or, with --to URL, on that module in real time); a trace recorded earlier (.csv: a trace
+file of `plot --csv`, or the table of `run --csv` / `demo --csv`); or a scenario file for the
+virtual module (any other name). The output format follows the name
 (.png or .svg); --csv also saves the trace. Examples:
 
     opentmcl plot examples/tmcm6212_2.4_first_program.tmc -o first.png --seconds 15
@@ -32,7 +33,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, help="image file to write (.png or .svg)")
     p.add_argument("--axes", default=None, help="comma-separated axis numbers (default 0; for a .csv trace all of its axes)")
     p.add_argument("--channels", help="comma-separated panels: position, velocity, acceleration, load, "
-                   "current, switches (default all the module has)")
+                   "current, encoder, stage, switches (default all the module has but encoder and stage, "
+                   "which traces of `run --csv` hold)")
     p.add_argument("-t", "--seconds", type=float, default=None,
                    help="record at most this long (default: a program runs until it stops or has looped twice, "
                    "at most 300 s; otherwise 10 s)")
@@ -124,7 +126,7 @@ def _record_remote(args: argparse.Namespace, axes: list[int], is_program: bool) 
 def _check_duration(args: argparse.Namespace) -> None:
     """Without --seconds a program's length is derived and capped to fit: only the interval counts."""
     from ..extras import MissingExtra, require
-    from ..plot.trace import check_duration
+    from ..plot.recording import check_duration
 
     derived = args.seconds is None and Path(args.file).suffix.lower() in PROGRAM_SUFFIXES
     try:

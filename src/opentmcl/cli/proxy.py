@@ -100,10 +100,28 @@ def build_proxy(args: argparse.Namespace) -> Proxy:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..host.errors import TmclError
-    from ..server import PtyServer, TcpServer
-
     proxy = build_proxy(args)
+    _start(proxy, args)
+    stop = threading.Event()
+    previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        _announce(proxy, args)
+        error = _relay(proxy, args, stop)
+        if error:
+            print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
+            return NO_REPLY   # the module's link broke (docs/cli.md)
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        proxy.stop()
+    print("stopped; capture closed" if args.log else "stopped", flush=True)
+    return 0
+
+
+def _start(proxy: Proxy, args: argparse.Namespace) -> None:
+    """Snapshot, then relay; what went wrong as one CliError line."""
+    from ..host.errors import TmclError
+
     try:
         proxy.start()
     except TmclError as exc:   # the snapshot: the module did not answer (exit 3) or is unknown
@@ -113,37 +131,38 @@ def run(args: argparse.Namespace) -> int:
         raise start_error("proxy", exc, args.tcp) from None
     except (KeyError, ValueError) as exc:   # --snapshot-module names no profile
         raise CliError(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)) from None
-    stop = threading.Event()
-    previous = {s: signal.signal(s, lambda *_: stop.set()) for s in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        print(f"OpenTMCL proxy to {args.to}:", flush=True)
-        for ep in proxy.endpoints:
-            if isinstance(ep, TcpServer):
-                print(f"  tcp {ep.url}", flush=True)
-            elif isinstance(ep, PtyServer):
-                link = f" (link {ep.link})" if ep.link else ""
-                print(f"  pty {ep.path}{link}  ->  serial://{ep.path}", flush=True)
-        if args.log:
-            print(f"  capture {args.log}", flush=True)
-        snap = proxy.snapshot
-        if snap is not None:
-            print(f"  snapshot of {snap.module} at address {snap.address}: {snap.count()} values", flush=True)
-        print("Press Ctrl-C to stop.", flush=True)
-        warned = False
-        while not stop.wait(0.2):
-            if not warned and proxy.writer is not None and proxy.writer.truncated:
-                warned = True
-                logging.getLogger("opentmcl.cli").warning(   # -q hides it (cli/verbosity.py)
-                    "warning: %s reached its size limit; relaying goes on, capturing stopped", args.log)
-            error = getattr(proxy.upstream, "error", None)
-            if error:
-                if args.to.startswith("tcp://") and "closed" in error and "--idle-timeout" not in error:  # e.g. serve's idle timeout
-                    error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
-                print(f"opentmcl proxy: error: {error}", file=sys.stderr, flush=True)
-                return NO_REPLY   # the module's link broke (docs/cli.md)
-    finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
-        proxy.stop()
-    print("stopped; capture closed" if args.log else "stopped", flush=True)
-    return 0
+
+
+def _announce(proxy: Proxy, args: argparse.Namespace) -> None:
+    """Where the host program connects, the capture file and the snapshot."""
+    from ..server import PtyServer, TcpServer
+
+    print(f"OpenTMCL proxy to {args.to}:", flush=True)
+    for ep in proxy.endpoints:
+        if isinstance(ep, TcpServer):
+            print(f"  tcp {ep.url}", flush=True)
+        elif isinstance(ep, PtyServer):
+            link = f" (link {ep.link})" if ep.link else ""
+            print(f"  pty {ep.path}{link}  ->  serial://{ep.path}", flush=True)
+    if args.log:
+        print(f"  capture {args.log}", flush=True)
+    snap = proxy.snapshot
+    if snap is not None:
+        print(f"  snapshot of {snap.module} at address {snap.address}: {snap.count()} values", flush=True)
+    print("Press Ctrl-C to stop.", flush=True)
+
+
+def _relay(proxy: Proxy, args: argparse.Namespace, stop: threading.Event) -> str | None:
+    """Relay until `stop` is set (None) or the module's link breaks (why, with a hint)."""
+    warned = False
+    while not stop.wait(0.2):
+        if not warned and proxy.writer is not None and proxy.writer.truncated:
+            warned = True
+            logging.getLogger("opentmcl.cli").warning(   # -q hides it (cli/verbosity.py)
+                "warning: %s reached its size limit; relaying goes on, capturing stopped", args.log)
+        error = getattr(proxy.upstream, "error", None)
+        if error:
+            if args.to.startswith("tcp://") and "closed" in error and "--idle-timeout" not in error:  # e.g. serve's idle timeout
+                error += " (it may drop idle clients: run `opentmcl serve` with --idle-timeout 0)"
+            return error
+    return None

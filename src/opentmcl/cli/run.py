@@ -203,13 +203,13 @@ class _Recorder:
 
     def save(self) -> None:
         if self.path == "-":
-            print(self.trace.to_csv(), end="")
+            print(self.trace.to_csv(layout="table"), end="")
             return
         try:
-            self.trace.to_csv(self.path)
+            self.trace.to_csv(self.path, layout="table")
         except OSError as exc:
             raise CliError(f"cannot write {self.path}: {exc.strerror or exc}") from None
-        print(f"world trace: {len(self.trace.rows)} rows written to {self.path}")
+        print(f"world trace: {len(self.trace)} rows written to {self.path}")
 
 
 def _recorder(client: Client, args: argparse.Namespace) -> _Recorder | None:

@@ -54,6 +54,7 @@ class AxisWorld:
         """Power-up: the world (which persists) meets the module's new axis."""
         self.axis = axis
         self._axis = axis
+        self._ram, self._params = axis.ram, axis.params  # read on every check: looked up once
         self.engine = axis.engine
         self.rotor.bind(axis)
         self.encoder.bind(axis)
@@ -68,11 +69,11 @@ class AxisWorld:
 
     def p(self, number: int, default: int = 0) -> int:
         """Motor parameter `number` in RAM; `default` on a module that does not have it."""
-        return self._axis.ram.get(number, default) if number in self._axis.params else default
+        return self._ram.get(number, default)  # the RAM holds every parameter the module has
 
     def has(self, number: int) -> bool:
         """Does the module have axis parameter `number` (a feature that comes with a parameter)?"""
-        return number in self._axis.params
+        return number in self._params
 
     # --- Python API (docs/scenarios.md "Python API") --------------------------------------------
     def force_switch(self, name: str, level: int | None) -> None:

@@ -36,8 +36,11 @@ if TYPE_CHECKING:
 _FAR = 1 << 63  # a tick no advance reaches
 _INF = float("inf")
 _RUNNING = (RUNNING, STEPPING)
-_WRITES = Effect.ENGINES | Effect.EVENTS
-_ENDS_CARRY = _WRITES | Effect.COMMAND
+# The flags as plain ints: an IntFlag's `&` runs Python code, and these tests run on every command.
+_ENGINES = int(Effect.ENGINES)
+_WRITES = int(Effect.ENGINES | Effect.EVENTS)
+_ENDS_CARRY = _WRITES | int(Effect.COMMAND)
+_NOT_READ = ~int(Effect.READ)
 
 
 class Scheduler:
@@ -49,7 +52,7 @@ class Scheduler:
         """The module's time in 16 MHz ticks since power-up of the object."""
         self.horizon: int | None = None
         """The end of the `advance_to` in progress: the program may run ahead up to here."""
-        self._caches: dict[str, tuple[Effect, Callable[[], None]]] = {}
+        self._caches: dict[str, tuple[int, Callable[[], None]]] = {}
         self._engines: list[Any] = []
         self._axis_next: list[int | None] = []
         self._engine_next: int | None = None
@@ -67,11 +70,12 @@ class Scheduler:
     def register(self, name: str, effect: Effect, forget: Callable[[], None]) -> None:
         """Call `forget` whenever something of `effect` changes: the cache `name` of another part
         (registering a name again replaces it, as a power-up's new parts do)."""
-        self._caches[name] = (effect, forget)
+        self._caches[name] = (int(effect), forget)
 
-    def invalidate(self, effect: Effect) -> None:
+    def invalidate(self, effect: Effect | int) -> None:
         """Something of `effect` changed: drop what depends on it."""
-        if effect & Effect.ENGINES:
+        effect = int(effect)
+        if effect & _ENGINES:
             self._dirty = True
         if effect & _WRITES:
             self._limit_ok = False
@@ -90,12 +94,12 @@ class Scheduler:
         self.synced_at = -1
         self.invalidate(ALL)
 
-    def prepare(self, effect: Effect) -> None:
+    def prepare(self, effect: Effect | int) -> None:
         """Before a command of `effect` acts: the engines are brought to now, and what it may
         change is dropped. A pure read (Effect.READ) leaves the engines' plans and events."""
         if self.synced_at != self.now:
             self._sync_engines()
-        if effect & ~Effect.READ:
+        if int(effect) & _NOT_READ:
             self.invalidate(effect)
 
     # --- the clock ---------------------------------------------------------------------------

@@ -285,8 +285,11 @@ class VirtualModule:
         return self.ascii.feed(data)
 
     def drain_events(self) -> list[bytes]:
-        """Unsolicited replies produced while time advanced (command 138, status 128)."""
-        out, self.events = self.events, []
+        """Unsolicited replies produced while time advanced (command 138, status 128). `events` stays
+        the same list (emptied here): a caller may look at it to learn whether any wait."""
+        events = self.events
+        out = events[:]
+        events.clear()
         return out
 
     # --- time -----------------------------------------------------------------------------

@@ -37,6 +37,9 @@ if TYPE_CHECKING:
 
 __all__ = ["AxisWorld", "ScenarioSource", "World"]
 
+_SWITCH_STATES = (11, 10, 9)
+"""AP11 left, AP10 right, AP9 home switch state: the order of `Switches.logical`."""
+
 ScenarioSource = Scenario | dict[str, object] | str | os.PathLike[str] | None
 """What `load_scenario` takes: a Scenario, its parsed dict, a .toml/.yaml path, or None (empty world)."""
 
@@ -223,13 +226,29 @@ class World:
             self.vm.interpreter.set_error_flag(fl.ESD)
 
     def read_axis(self, axis: Motor, number: int) -> int | None:
-        aw = self.axes_world[axis.index]
+        """GAP of a parameter the world computes (`axis_numbers`), or None for the others."""
         self.vm.sync()
+        return self.readings(axis, (number,))[0]
+
+    def readings(self, axis: Motor, numbers: tuple[int, ...]) -> list[int | None]:
+        """Several of the world's readings of one axis at once, each what GAP answers: the stage
+        follows the counter and the switches are looked at once (the engines are at now)."""
+        aw = self.axes_world[axis.index]
         aw.rotor.follow()
         aw.switches.update()
-        if number in (9, 10, 11):
-            left, right, home = aw.switches.logical()
-            return int({9: home, 10: right, 11: left}[number])
+        out: list[int | None] = []
+        states: dict[int, bool] | None = None
+        for number in numbers:
+            if number in _SWITCH_STATES:
+                if states is None:  # the logical states of the three switches, once
+                    states = dict(zip(_SWITCH_STATES, aw.switches.logical(), strict=True))
+                out.append(int(states[number]))
+            else:
+                out.append(self._reading(aw, axis, number))
+        return out
+
+    @staticmethod
+    def _reading(aw: AxisWorld, axis: Motor, number: int) -> int | None:
         drive = aw.drive
         if number == 180:
             drive.current.update(aw)

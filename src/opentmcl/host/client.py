@@ -2,16 +2,20 @@
 
 One request is in flight at a time ("Do not send the next command before
 having received the reply!", manual 3.2) unless `request_many` is asked to send
-a window of them (`Transport.window`); a lock lets threads share a client.
-Replies are matched to the request by module address and command number;
-unsolicited "target position reached" replies (status 128, command 138) that
-arrive in between are kept and handed to `wait_position_reached`.
+a window of them (`Transport.window`); the link's lock (`Transport.lock`) lets
+threads share a client. Replies are matched to the request by module address and
+command number; unsolicited "target position reached" replies (status 128,
+command 138) that arrive in between are kept and handed to `wait_position_reached`.
+
+One path for every link: a request checked once is kept ready to send; the transport
+sends it (`Transport.exchange`, which in process may hand the reply over at once);
+the first frame, when it is the plain reply asked for, is decoded at once, and
+anything else is read by the general rule (`_read_plain`, `_read_reply`).
 """
 from __future__ import annotations
 
 import struct
-import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
@@ -49,9 +53,13 @@ _WAIT_SLICE = 0.05  # seconds the lock is held at a time while waiting for an ev
 MAX_BATCH = 256
 """The most requests one `Client.request_many` call takes (a longer batch: `TmclBatchError`)."""
 _BODY = struct.Struct(">BBBBi")  # the first eight bytes of a frame (manual 3.1)
-_SUCCESS = frozenset(int(s) for s in Status if is_success(s))  # 100, 101 and 128 (`is_success`)
-_EVENT = (int(Status.POSITION_REACHED_EVENT), REQUEST_TARGET_POSITION_REACHED_EVENT)
-_PLAIN = (int(Status.OK), int(Status.LOADED))  # success statuses that are never an event
+_VALUE = struct.Struct(">i")  # the value of a CAN reply, after module address, status and command
+MAX_PLAIN = 1024
+"""The most checked requests a `Client` keeps ready to send (then it starts afresh)."""
+
+
+_new_tuple = tuple.__new__  # `_new_tuple(Reply, fields)`: a Reply from the unpacked fields at C speed
+_NO_REPLY = Reply(0, 0, 0, 0, 0)
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,25 +104,29 @@ def has_special_reply(command: int, type: int) -> bool:
     return command in NO_REPLY or command == READ_PROGRAM_MEMORY or is_version_request(command, type)
 
 
-def _lean_frame(address: int, command: int, type: int, motor: int, value: int) -> bytes | None:
-    """The request frame when every field is a plain int in range (the common case), else None:
-    `Client._prepare` then checks and names what is wrong."""
-    if (address.__class__ is int and command.__class__ is int and type.__class__ is int
-            and motor.__class__ is int and value.__class__ is int
-            and 0 <= address <= 255 and 0 <= command <= 255 and 0 <= type <= 255 and 0 <= motor <= 255
-            and -0x8000_0000 <= value <= 0x7FFF_FFFF):
-        body = _BODY.pack(address, command, type, motor, value)
-        return body + bytes((sum(body) & 0xFF,))
-    return None
-
-
-def _request_of(frame: bytes) -> Request:
-    return Request(*_BODY.unpack_from(frame))
-
-
 def check_address(value: int) -> int:
     """A module address: an int 0..255 (the address byte of the frame, manual 3.1)."""
     return _check_byte("address", value)
+
+
+class _Plain:
+    """A checked request answered in the reply format of manual 3.2, ready to send."""
+
+    __slots__ = ("frame", "head", "request", "last")
+
+    def __init__(self, frame: bytes, head: bytes, request: Request) -> None:
+        self.frame = frame
+        """The request on the wire: nine bytes (eight on CAN, where the CAN ID carries the address)."""
+        self.head = head
+        """Module address, status 100 and command: the bytes after the reply address of its plain
+        reply (the first three bytes of a CAN reply)."""
+        self.request = request
+        self.last: tuple[bytes, Reply] = (b"", _NO_REPLY)
+        """The last plain reply read, as received and decoded: the same bytes again decode alike."""
+
+
+_Key = tuple[int, int, int, int, int]
+"""Module address, command, type, motor/bank and value of a request, as the caller gave them."""
 
 
 class Client:
@@ -134,14 +146,12 @@ class Client:
         self.timeout = check_timeout(timeout)
         self.stray_replies = 0  # replies received that matched no request (counted, then dropped)
         self._events: dict[int, int] = {}  # module address -> OR of motor masks not yet consumed
-        self._lock = threading.RLock()
+        self._lock = transport.lock  # one lock per link: the client's requests and work behind it
         self._dirty = False  # a reply was lost or garbled: discard pending input before the next request
-        # The lean path of an in-process link (transports/inprocess.py `exchange`), looked up once.
-        serial = transport.frame_format == "serial"
-        self._exchange: Callable[[list[bytes]], list[bytes] | None] | None = getattr(
-            transport, "exchange", None) if serial else None
-        self._exchange_one: Callable[[bytes], bytes | None] | None = getattr(
-            transport, "exchange_one", None) if serial else None
+        self._held = bytearray()  # reply bytes taken from the transport, not read yet (empty between requests)
+        self._plain: dict[_Key, _Plain] = {}  # checked requests, ready to send (`_check`)
+        self._can = transport.frame_format == "can"
+        self._exchange = transport.exchange
 
     # ------------------------------------------------------------------ requests
 
@@ -152,30 +162,95 @@ class Client:
         Command 136 type 0 returns a `VersionReply`, command 134 a `MemoryReply` (the stored
         instruction); command 137 sends no reply and returns None.
         """
-        if self._exchange_one is not None:
-            lean = self._lean(command, type, motor, value, address, timeout)
-            if lean is not None:
-                return lean
-        req, timeout = self._prepare(command, type, motor, value, address, timeout)
+        target = self.address if address is None else address
+        if target.__class__ is command.__class__ is type.__class__ is motor.__class__ is value.__class__ is int:
+            plain = self._plain.get((target, command, type, motor, value))
+            if plain is not None:  # the same plain ints were checked before
+                return self._ask(plain, timeout)
+        checked, wait = self._check(command, type, motor, value, address, timeout)
+        if isinstance(checked, _Plain):
+            return self._ask(checked, wait)
         with self._lock:
-            self._send(req)
-            return self._read_answer(req, timeout)
+            self._send(checked)
+            return self._read_answer(checked, wait)
 
     def reply(self, command: int, type: int = 0, motor: int = 0, value: int = 0, *,
               address: int | None = None, timeout: float | None = None) -> Reply:
         """`request` for a command answered in the reply format of manual 3.2. Commands 134,
         136 type 0 and 137 answer otherwise (or not at all): TmclValueError, nothing is sent."""
-        if has_special_reply(command, type):
+        target = self.address if address is None else address
+        if target.__class__ is command.__class__ is type.__class__ is motor.__class__ is value.__class__ is int:
+            plain = self._plain.get((target, command, type, motor, value))
+            if plain is not None:
+                return self._ask(plain, timeout)
+        checked, wait = self._check(command, type, motor, value, address, timeout)
+        if not isinstance(checked, _Plain):
             raise TmclValueError(f"command {command} type {type} has no reply in the normal format "
                                  "(manual 3.2); use Client.request")
-        if self._exchange_one is not None:
-            lean = self._lean(command, type, motor, value, address, timeout)
-            if lean is not None:
-                return lean
-        req, timeout = self._prepare(command, type, motor, value, address, timeout)
-        with self._lock:
-            self._send(req)
-            return self._read_reply(req, timeout)
+        return self._ask(checked, wait)
+
+    def _check(self, command: int, type: int, motor: int, value: int, address: int | None,
+               timeout: float | None) -> tuple[_Plain | Request, float]:
+        """The checked request (TmclValueError/TmclTypeError if it is not one) and the time-out
+        for its reply. A request answered in the format of manual 3.2 comes back as a `_Plain`,
+        kept for the next request with the same arguments (up to `MAX_PLAIN` of them); the
+        others (134, 136 type 0, 137) as their `Request`."""
+        req, wait = self._prepare(command, type, motor, value, address, timeout)
+        if has_special_reply(req.command, req.type):
+            return req, wait
+        plain = _Plain(self._wire(req), bytes((req.address, Status.OK, req.command)), req)
+        kept = self._plain
+        if len(kept) >= MAX_PLAIN:
+            kept.clear()
+        kept[(req.address, command, type, motor, value)] = plain
+        return plain, wait
+
+    def _ask(self, plain: _Plain, timeout: float | None) -> Reply:
+        """Send a plain request and return its reply."""
+        wait = self.timeout if timeout is None else check_timeout(timeout)
+        lock = self._lock
+        lock.acquire()
+        try:
+            if self._dirty:
+                self._reset_input()
+            return self._read_plain(plain, wait, self._exchange(plain.frame))
+        finally:
+            lock.release()
+
+    def _read_plain(self, plain: _Plain, timeout: float, raw: bytes | None) -> Reply:
+        """The reply to `plain`, sent; the caller holds the lock.
+
+        `raw` is the reply when the transport had it at hand (`Transport.exchange`), else the first
+        reply frame is read here. The common case, that frame is the plain reply of this module
+        and command (status 100, a good checksum), is decoded at once (the bytes of the last one
+        are not even decoded again). Anything else goes back in front of the bytes to read, and
+        the general rule (`_read_reply`) reads from there: events kept, strays counted, errors
+        raised."""
+        deadline = None
+        if raw is None:
+            size = CAN_REPLY_LEN if self._can else FRAME_LEN
+            held = self._held
+            if len(held) >= size:  # a window's replies that were at hand (`request_many`)
+                raw = bytes(held[:size])
+                del held[:size]
+            else:
+                deadline = self.transport.monotonic() + timeout
+                try:
+                    raw = self._recv(size, deadline)
+                except TmclTimeout:
+                    raise self._no_reply(plain.request, timeout) from None
+        last = plain.last
+        if raw == last[0]:
+            return last[1]
+        if self._can:  # the reply address is the client's `host_address`, not on the wire: decoded each time
+            if raw[:3] == plain.head:
+                return Reply(self.host_address, raw[0], raw[1], raw[2], _VALUE.unpack_from(raw, 3)[0])
+        elif raw[1:4] == plain.head and sum(raw[:8]) & 0xFF == raw[8]:
+            reply = _new_tuple(Reply, _BODY.unpack_from(raw))
+            plain.last = (raw, reply)
+            return reply
+        self._held[:0] = raw
+        return self._read_reply(plain.request, timeout, deadline)
 
     def read_memory(self, index: int, *, address: int | None = None,
                     timeout: float | None = None) -> MemoryReply:
@@ -199,22 +274,46 @@ class Client:
         (`TmclTimeout`, requests after the window not sent); replies still on the way are
         discarded before the next request, as after a timeout of `request`. `timeout` is per reply.
         """
-        frames, timeout = self._prepare_many(requests, address, timeout)
-        if not frames:
-            return []
+        batch, timeout = self._prepare_many(requests, address, timeout)
+        answers: list[Answer] = []
+        first: TmclStatusError | None = None
         with self._lock:
-            exchange = self._exchange
-            special = any(f[1] == 134 or f[1] == 136 or f[1] == 137 for f in frames)
-            if exchange is not None and not self._dirty and not special:
-                replies = exchange(frames)
-                if replies is not None:
-                    return self._lean_replies(frames, replies, timeout)
-                return self._read_batch([_request_of(f) for f in frames], timeout, sent=True)
-            return self._read_batch([_request_of(f) for f in frames], timeout, sent=False)
+            window = max(1, self.transport.window)
+            for start in range(0, len(batch), window):
+                chunk = batch[start:start + window]
+                self._send_window(chunk)
+                for item in chunk:
+                    try:
+                        if isinstance(item, _Plain):
+                            answers.append(self._read_plain(item, timeout, None))
+                        else:
+                            answers.append(self._read_answer(item, timeout))
+                    except TmclStatusError as exc:
+                        if first is None:
+                            first, exc.index = exc, len(answers)
+                        answers.append(None)
+        if first is not None:
+            first.answers = list(answers)
+            raise first
+        return answers
+
+    def _send_window(self, chunk: list[_Plain | Request]) -> None:
+        """Send a window of requests. Replies the transport has at hand at once
+        (`Transport.exchange_many`; never for a window with a special reply) are held, in order,
+        in front of the bytes still to receive."""
+        if self._dirty:
+            self._reset_input()
+        frames = [item.frame if isinstance(item, _Plain) else self._wire(item) for item in chunk]
+        if all(isinstance(item, _Plain) for item in chunk):
+            replies = self.transport.exchange_many(frames)
+            if replies is not None:
+                self._held += b"".join(replies)
+        else:
+            self.transport.send_many(frames)
 
     def _prepare_many(self, requests: Sequence[tuple[int, int, int, int]], address: int | None,
-                      timeout: float | None) -> tuple[list[bytes], float]:
-        """The checked request frames (nine bytes each) and the time-out per reply."""
+                      timeout: float | None) -> tuple[list[_Plain | Request], float]:
+        """The checked requests (`_Plain`, or the `Request` of a special reply) and the time-out per reply."""
         if isinstance(requests, (str, bytes)) or not isinstance(requests, Sequence):
             raise TmclTypeError("requests must be a sequence of (command, type, motor, value) tuples, "
                                 f"got {type(requests).__name__}")
@@ -224,43 +323,27 @@ class Client:
         timeout = self.timeout if timeout is None else check_timeout(timeout)
         self._check_reachable(address)
         target = self.address if address is None else address
-        frames = []
+        kept = self._plain
+        batch: list[_Plain | Request] = []
         for index, item in enumerate(requests):
             if not (item.__class__ is tuple and len(item) == 4) and (
                     isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) != 4):
                 raise TmclTypeError(f"requests[{index}] must be a (command, type, motor, value) tuple, "
                                     f"got {item!r}")
-            frame = _lean_frame(target, *item)
-            if frame is None:  # not plain ints in range: checked (and named) the long way
-                try:
-                    frame = self._prepare(*item, address, timeout)[0].encode()
-                except TmclValueError as exc:
-                    raise TmclValueError(f"requests[{index}]: {exc}") from None
-                except TmclTypeError as exc:
-                    raise TmclTypeError(f"requests[{index}]: {exc}") from None
-            frames.append(frame)
-        return frames, timeout
-
-    def _read_batch(self, reqs: list[Request], timeout: float, *, sent: bool) -> list[Answer]:
-        """Send the requests a window at a time (unless `sent`) and read the answers in order."""
-        window = len(reqs) if sent else max(1, self.transport.window)
-        answers: list[Answer] = []
-        first: TmclStatusError | None = None
-        for start in range(0, len(reqs), window):
-            chunk = reqs[start:start + window]
-            if not sent:
-                self._send_many(chunk)
-            for req in chunk:
-                try:
-                    answers.append(self._read_answer(req, timeout))
-                except TmclStatusError as exc:
-                    if first is None:
-                        first, exc.index = exc, len(answers)
-                    answers.append(None)
-        if first is not None:
-            first.answers = list(answers)
-            raise first
-        return answers
+            command, type_, motor, value = item
+            if target.__class__ is command.__class__ is type_.__class__ is motor.__class__ \
+                    is value.__class__ is int:
+                plain = kept.get((target, command, type_, motor, value))
+                if plain is not None:
+                    batch.append(plain)
+                    continue
+            try:
+                batch.append(self._check(command, type_, motor, value, address, timeout)[0])
+            except TmclValueError as exc:
+                raise TmclValueError(f"requests[{index}]: {exc}") from None
+            except TmclTypeError as exc:
+                raise TmclTypeError(f"requests[{index}]: {exc}") from None
+        return batch, timeout
 
     def _read_answer(self, req: Request, timeout: float) -> Answer:
         """The answer to a request already sent, as `request` reads it."""
@@ -271,65 +354,6 @@ class Client:
         if req.command == READ_PROGRAM_MEMORY:
             return self._read_memory(req, timeout)
         return self._read_reply(req, timeout)
-
-    def _lean(self, command: int, type: int, motor: int, value: int, address: int | None,
-              timeout: float | None) -> Reply | None:
-        """`request` on the in-process lean path (`exchange_one`), or None when it does not apply:
-        a special reply (134, 136, 137), a field that is not a plain int in range, a dirty link."""
-        exchange = self._exchange_one
-        if exchange is None or command == 134 or command == 136 or command == 137:
-            return None
-        frame = _lean_frame(self.address if address is None else address, command, type, motor, value)
-        if frame is None:
-            return None
-        wait = self.timeout if timeout is None else check_timeout(timeout)
-        with self._lock:
-            if self._dirty:
-                return None
-            reply = exchange(frame)
-            if reply is None:
-                return self._read_reply(_request_of(frame), wait)
-            if sum(reply[:8]) & 0xFF == reply[8] and reply[1] == frame[0] and reply[3] == frame[1] \
-                    and reply[2] in _PLAIN:
-                return Reply(*_BODY.unpack_from(reply))
-            return self._lean_reply(frame, reply, wait)
-
-    def _lean_reply(self, frame: bytes, reply: bytes, timeout: float) -> Reply:
-        """The in-process reply to `frame` without the receive buffer, when it is the plain
-        matching reply; anything else goes back to the transport and is read the usual way."""
-        if sum(reply[:8]) & 0xFF == reply[8] and reply[1] == frame[0] and reply[3] == frame[1] \
-                and (reply[2], reply[3]) != _EVENT:
-            fields = _BODY.unpack_from(reply)
-            if fields[2] in _SUCCESS:
-                return Reply(*fields)
-            req = _request_of(frame)
-            raise TmclStatusError(fields[2], req, Reply(*fields))
-        self.transport.unread(reply)  # type: ignore[attr-defined]
-        return self._read_reply(_request_of(frame), timeout)
-
-    def _lean_replies(self, frames: list[bytes], replies: list[bytes], timeout: float) -> list[Answer]:
-        """`_lean_reply` for a batch: plain matching replies decoded at once, else all of them
-        back to the transport and read the usual way (errors after every reply was read)."""
-        answers: list[Answer] = []
-        first: TmclStatusError | None = None
-        for index, (frame, reply) in enumerate(zip(frames, replies, strict=True)):
-            if sum(reply[:8]) & 0xFF != reply[8] or reply[1] != frame[0] or reply[3] != frame[1] \
-                    or (reply[2], reply[3]) == _EVENT:
-                self.transport.unread(b"".join(replies))  # type: ignore[attr-defined]
-                return self._read_batch([_request_of(f) for f in frames], timeout, sent=True)
-            fields = _BODY.unpack_from(reply)
-            answer = Reply(*fields)
-            if fields[2] not in _SUCCESS:
-                if first is None:
-                    first = TmclStatusError(fields[2], _request_of(frame), answer)
-                    first.index = index
-                answers.append(None)
-            else:
-                answers.append(answer)
-        if first is not None:
-            first.answers = answers
-            raise first
-        return answers
 
     def _prepare(self, command: int, type: int, motor: int, value: int, address: int | None,
                  timeout: float | None) -> tuple[Request, float]:
@@ -357,37 +381,47 @@ class Client:
         return self.request(req.command, req.type, req.motor, req.value, address=req.address,
                             timeout=timeout)
 
+    def _reset_input(self) -> None:
+        """Discard what is left of a lost or garbled reply before the next request."""
+        self.transport.reset_input()
+        self._held.clear()
+        self._dirty = False
+
+    def _wire(self, req: Request) -> bytes:
+        """`req` as sent: nine bytes, or eight on CAN, where the CAN ID carries the module address."""
+        data = req.encode()
+        return data[1:] if self._can else data
+
     def _send(self, req: Request) -> None:
         if self._dirty:
-            self.transport.reset_input()
-            self._dirty = False
-        data = req.encode()
-        if self.transport.frame_format == "can":
-            data = data[1:]  # the CAN ID carries the module address
-        self.transport.send(data)
-
-    def _send_many(self, reqs: list[Request]) -> None:
-        if self._dirty:
-            self.transport.reset_input()
-            self._dirty = False
-        cut = 1 if self.transport.frame_format == "can" else 0  # the CAN ID carries the address
-        self.transport.send_many([req.encode()[cut:] for req in reqs])
+            self._reset_input()
+        self.transport.send(self._wire(req))
 
     def _remaining(self, deadline: float) -> float:
         return max(0.0, deadline - self.transport.monotonic())
 
     def _recv(self, n: int, deadline: float) -> bytes:
+        """`n` reply bytes: those held (`_read_plain`) first, then from the transport."""
+        held = self._held
         try:
-            return self.transport.recv(n, self._remaining(deadline))
+            if not held:
+                return self.transport.recv(n, self._remaining(deadline))
+            if len(held) >= n:
+                out = bytes(held[:n])
+                del held[:n]
+                return out
+            out = bytes(held) + self.transport.recv(n - len(held), self._remaining(deadline))
+            held.clear()
+            return out
         except TmclTimeout:
             self._dirty = True
             raise
 
     def _read_frame(self, deadline: float) -> Reply:
         """Read one reply frame, re-synchronising byte by byte past garbage on serial links."""
-        if self.transport.frame_format == "can":
+        if self._can:
             b = self._recv(CAN_REPLY_LEN, deadline)
-            return Reply(self.host_address, b[0], b[1], b[2], int.from_bytes(b[3:7], "big", signed=True))
+            return Reply(self.host_address, b[0], b[1], b[2], _VALUE.unpack_from(b, 3)[0])
         buf = self._recv(FRAME_LEN, deadline)
         first_bad = None
         while not checksum_ok(buf):
@@ -396,7 +430,11 @@ class Client:
                 buf = buf[1:] + self._recv(1, deadline)
             except TmclTimeout:
                 raise TmclProtocolError(f"reply with wrong checksum: {first_bad.hex(' ')}") from None
-        return Reply.decode(buf)
+        return _new_tuple(Reply, _BODY.unpack_from(buf))
+
+    def _no_reply(self, req: Request, timeout: float) -> TmclTimeout:
+        return TmclTimeout(f"no reply from module {req.address} to {describe_request(req)} "
+                           f"within {timeout:g} s")
 
     def _next_frame(self, req: Request, deadline: float, timeout: float) -> Reply:
         """The next frame that is not a command-138 event, or TmclTimeout naming the request."""
@@ -404,17 +442,20 @@ class Client:
             try:
                 reply = self._read_frame(deadline)
             except TmclTimeout:
-                raise TmclTimeout(f"no reply from module {req.address} to "
-                                  f"{describe_request(req)} within {timeout:g} s") from None
+                raise self._no_reply(req, timeout) from None
             if not self._take_event(reply):
                 return reply
 
     def _same_module(self, reply: Reply, req: Request) -> bool:
         # On CAN the reply ID already names the module; its address byte is not compared.
-        return self.transport.frame_format == "can" or reply.module_address == req.address
+        return self._can or reply.module_address == req.address
 
-    def _read_reply(self, req: Request, timeout: float) -> Reply:
-        deadline = self.transport.monotonic() + timeout
+    def _read_reply(self, req: Request, timeout: float, deadline: float | None = None) -> Reply:
+        """The reply of `req`'s module and command: events in between are kept, other replies
+        counted in `stray_replies`; an error status raises `TmclStatusError`. `deadline` (on the
+        transport's clock) is `timeout` from now unless given."""
+        if deadline is None:
+            deadline = self.transport.monotonic() + timeout
         while True:
             reply = self._next_frame(req, deadline, timeout)
             if not self._same_module(reply, req) or reply.command != req.command:

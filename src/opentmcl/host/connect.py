@@ -55,7 +55,10 @@ SCHEMES: Mapping[str, object] = _TRANSPORTS.targets()
 """Read-only view: registered scheme -> factory (or its lazy reference until first use)."""
 
 
-def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
+def split_url(url: str, address: int | None = None) -> urllib.parse.SplitResult:
+    """`url` split as `open_transport` reads it: the scheme in lower case and, for a sim:// URL of
+    one module that sets no address, `address` added as ``?address=N``. TmclUrlError if `url` is
+    no module URL."""
     if not isinstance(url, str) or "://" not in url:
         raise TmclUrlError(f"not a module URL: {url!r} (expected e.g. sim://TMCM-6212, "
                                   f"tcp://HOST:PORT, serial:///dev/ttyUSB0, can://socketcan/can0?id=1)")
@@ -77,7 +80,7 @@ def _split(url: str, address: int | None) -> urllib.parse.SplitResult:
 
 def open_transport(url: str, *, address: int | None = None) -> Transport:
     """The transport for `url` (see `register_transport`); `TmclConnectionError` if it cannot be opened."""
-    parts = _split(url, address)
+    parts = split_url(url, address)
     factory = _factory(parts.scheme, url)
     try:
         transport = factory(parts)

@@ -120,6 +120,19 @@ class Transport(ABC):
         for frame in frames:
             self.send(frame)
 
+    def exchange(self, frame: bytes) -> bytes | None:
+        """Send one request frame and return its reply if the link has it at hand at once (an
+        in-process module answers when called), else None: the caller then reads the reply with
+        `recv`. The caller holds `lock`. This default only sends."""
+        self.send(frame)
+        return None
+
+    def exchange_many(self, frames: list[bytes]) -> list[bytes] | None:
+        """`exchange` of a window of frames (`send_many`): their replies in order if the link has
+        them all at hand at once, else None. The caller holds `lock`. This default only sends."""
+        self.send_many(frames)
+        return None
+
     @abstractmethod
     def recv(self, n: int, timeout: float) -> bytes:
         """Return exactly `n` bytes, waiting at most `timeout` seconds, else raise `TmclTimeout`.
@@ -154,8 +167,9 @@ class Transport(ABC):
 
     @property
     def lock(self) -> threading.RLock:
-        """Held by whoever works on what lies behind this link outside the client (the dashboard
-        reads an in-process module under it). One re-entrant lock per transport, made on first use."""
+        """The link's one re-entrant lock, made on first use: a `Client` holds it for each request,
+        and whoever works on what lies behind the link outside the client holds it too (the
+        dashboard reads an in-process module under it)."""
         lock: threading.RLock = self.__dict__.setdefault("_lock", threading.RLock())
         return lock
 
@@ -205,6 +219,13 @@ class StreamTransport(Transport):
             for frame in frames:
                 log_frame("->", frame, self.frame_format)
         self._write(b"".join(frames))
+
+    def read_some(self, timeout: float) -> bytes:
+        """The bytes the link delivers within `timeout` seconds, unframed and unlogged (b"" if
+        none); TmclConnectionError if the link broke or is closed. For a relay that takes the link
+        over (the capture proxy): it reads past `recv`'s buffer, so do not mix the two."""
+        self._check_open()
+        return self._read_some(timeout)
 
     def recv(self, n: int, timeout: float) -> bytes:
         self._check_open()

@@ -81,7 +81,14 @@ class Stage:
         return sw.active(q, was) or sw.active(q - n, was) or sw.active(q + n, was)
 
     def switches(self) -> dict[str, Switch]:
-        return {n: s for n, s in (("left", self.left), ("right", self.right), ("home", self.home)) if s}
+        """The switches the stage has, by name (left, right, home); do not change the dict. Kept
+        while the three fields stay the same objects (asked at every check)."""
+        left, right, home = self.left, self.right, self.home
+        kept = self.__dict__.get("_switches")
+        if kept is None or kept[0] is not left or kept[1] is not right or kept[2] is not home:
+            found = {n: s for n, s in (("left", left), ("right", right), ("home", home)) if s}
+            kept = self.__dict__["_switches"] = (left, right, home, found)
+        return kept[3]
 
     def local(self, p: int) -> int:
         """Position on the stage (modulo one turn on a circular axis)."""

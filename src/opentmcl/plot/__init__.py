@@ -7,11 +7,11 @@
 
 See docs/plots.md.
 """
-from .events import Event, Mark
+from ..trace import CHANNELS, Event, Mark, Trace, TraceError, derivative
 from .figure import DEFAULT_CHANNELS, Figure, Panel, channel_names, plan
 from .program import record_program
+from .recording import Sampler, record
 from .render import draw, render
-from .trace import CHANNELS, Sampler, Trace, TraceError, derivative, record
 from .virtual import run_virtual
 
 __all__ = ["CHANNELS", "DEFAULT_CHANNELS", "Event", "Figure", "Mark", "Panel", "Sampler", "Trace", "TraceError",

@@ -10,41 +10,17 @@
 A virtual run knows both exactly (`EngineWatch` watches the module's ramp engines); a trace from a
 real module or an old CSV has no events (``Trace.events is None``), and `guess_origins` finds
 position jumps the actual speed cannot explain. Marks are the program counter of a program run
-(command 135 type 1, TMCM-6212 manual 3.6.36) at each sample where it changed.
+(command 135 type 1, TMCM-6212 manual 3.6.36) at each sample where it changed. `Event` and `Mark`
+live with the trace (opentmcl/trace.py), which writes and reads them in its CSV file.
 """
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-if TYPE_CHECKING:
-    from .trace import Trace
+from ..trace import HARD_STOP, KINDS, ORIGIN, Event, Mark
 
-ORIGIN, HARD_STOP = "origin", "hard_stop"
-KINDS = (ORIGIN, HARD_STOP)
-
-
-@dataclass(frozen=True)
-class Event:
-    """A discontinuity at `time` (trace seconds) on `axis`: ORIGIN (`before`/`after`: actual
-    position in µsteps) or HARD_STOP (`before`: actual speed in pps just before, `after`: 0).
-    None where the value is not known (a guessed event)."""
-
-    time: float
-    axis: int
-    kind: str
-    before: float | None = None
-    after: float | None = None
-
-
-@dataclass(frozen=True)
-class Mark:
-    """The program counter `pc` seen first at `time`, with the instruction's text."""
-
-    time: float
-    pc: int
-    text: str = ""
+__all__ = ["HARD_STOP", "KINDS", "ORIGIN", "EngineWatch", "Event", "Mark", "guess_origins"]
 
 
 class EngineWatch:
@@ -107,41 +83,3 @@ def guess_origins(time: list[float], position: list[float | None], velocity: lis
         if abs(p1 - p0) > 2 * speed * (time[i] - time[i - 1]) + 1:
             out.append(Event(time[i], axis, ORIGIN))
     return out
-
-
-# --- CSV metadata lines ------------------------------------------------------------------------
-
-def _num(v: float | None) -> str:
-    if v is None:
-        return ""
-    return str(int(v)) if float(v).is_integer() else f"{v:.9g}"
-
-
-def meta_lines(trace: Trace) -> list[str]:
-    """``# events=recorded`` (the module reported its events, even none), one ``# event=`` line per
-    event and one ``# mark=`` line per program mark."""
-    lines = []
-    if trace.events is not None:
-        lines.append("# events=recorded")
-        lines += [f"# event={e.time:.6f},{e.axis},{e.kind},{_num(e.before)},{_num(e.after)}"
-                  for e in trace.events]
-    lines += [f"# mark={m.time:.6f},{m.pc},{m.text}" for m in trace.marks]
-    return lines
-
-
-def _opt(text: str) -> float | None:
-    return float(text) if text else None
-
-
-def parse_event(value: str) -> Event:
-    """ValueError unless `value` is ``time,axis,kind,before,after``."""
-    t, axis, kind, before, after = value.split(",")
-    if kind not in KINDS:
-        raise ValueError(kind)
-    return Event(float(t), int(axis), kind, _opt(before), _opt(after))
-
-
-def parse_mark(value: str) -> Mark:
-    """ValueError unless `value` is ``time,pc,text`` (the text may hold commas)."""
-    t, pc, text = value.split(",", 2)
-    return Mark(float(t), int(pc), text)

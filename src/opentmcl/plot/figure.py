@@ -8,7 +8,9 @@ position in µsteps (AP 1, AP 0), velocity in pps or rpm (AP 3), acceleration in
 the stallGuard2 load value 0...1023 (AP 206), the motor current in % of the module's maximum
 current: AP 180 reads the coolStep scaling factor n = 0...31 ("1/32, 2/32, ... 32/32"), so the
 current is (n + 1) / 32 of the maximum (AP 6: "255 which means 100% of the maximum current of the
-module"); n itself is on the panel's right-hand axis. Breaks: plot/events.py.
+module"); n itself is on the panel's right-hand axis. A trace of an in-process module
+(`Trace.sample`) also has the encoder position (AP 209) and where the stage really is (µsteps,
+docs/world.md): panels "encoder" and "stage". Breaks: plot/events.py.
 """
 from __future__ import annotations
 
@@ -16,14 +18,14 @@ import math
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
-from .events import HARD_STOP, ORIGIN, Event, Mark, guess_origins
-from .trace import CHANNELS, SWITCHES, Trace, TraceError
+from ..trace import CHANNELS, HARD_STOP, ORIGIN, SWITCHES, Event, Mark, Trace, TraceError
+from .events import guess_origins
 
 DEFAULT_CHANNELS = ("position", "velocity", "acceleration", "load", "current", "switches")
 NAN = float("nan")
 # Smallest y range of a panel, so that a change of a few counts does not fill it (docs/plots.md).
 MIN_SPAN = {"position": 1000.0, "velocity": 100.0, "rpm": 1.0, "acceleration": 1000.0, "load": 100.0,
-            "current": 25.0}
+            "current": 25.0, "encoder": 1000.0, "stage": 1000.0}
 LIMITS = {"load": (0.0, 1023.0), "current": (0.0, 100.0)}   # the range a reading can have
 MARGIN = 0.05           # of the data range, above and below, when it is wider than MIN_SPAN
 LEGEND_ANCHOR = (1.01, 1.0)   # legend's upper left corner in panel coordinates: right of the data
@@ -207,7 +209,8 @@ def _ylabel(ch: str, rpm: bool) -> str:
     if ch == "velocity":
         return "velocity [rpm]" if rpm else "velocity [pps]"
     return {"position": "position [µsteps]", "acceleration": "acceleration [pps²]",
-            "load": "load value [0…1023]", "current": "current [% of module max.]"}[ch]
+            "load": "load value [0…1023]", "current": "current [% of module max.]",
+            "encoder": "encoder position (AP 209)", "stage": "stage position [µsteps]"}[ch]
 
 
 def _opt(f: Callable[[float], float], v: float | None) -> float | None:

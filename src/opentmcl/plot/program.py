@@ -13,8 +13,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from .events import EngineWatch, Mark
-from .trace import MAX_SAMPLES, Sampler, Trace, record
+from ..trace import MAX_SAMPLES, Mark, Trace
+from .events import EngineWatch
+from .recording import Sampler, record
 
 SETTLE_SAMPLES = 5      # samples of standstill after the program stopped before the recording ends
 AUTO_SECONDS = 300.0    # hard cap of a recording whose length comes from the program

@@ -10,8 +10,8 @@ from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 from ..atomicfile import write_atomic
+from ..trace import Trace, TraceError
 from .figure import DEFAULT_CHANNELS, PHASES, Figure, Panel, channel_names, plan
-from .trace import Trace, TraceError
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

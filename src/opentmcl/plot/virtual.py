@@ -7,8 +7,8 @@ manual 3.6.36), as `opentmcl run` does; plot/program.py records it.
 """
 from __future__ import annotations
 
+from ..trace import Trace
 from .program import SETTLE_SAMPLES, idle, record_program
-from .trace import Trace
 
 __all__ = ["SETTLE_SAMPLES", "run_virtual"]
 

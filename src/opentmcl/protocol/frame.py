@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
+from typing import NamedTuple
 
 FRAME_LEN = 9
 _BODY = struct.Struct(">BBBBi")
@@ -72,8 +73,7 @@ class Request:
         return cls(*decode_frame(data, verify=verify, what="request"))
 
 
-@dataclass(frozen=True, slots=True)
-class Reply:
+class Reply(NamedTuple):
     """Reply address, module address, status, command, value (manual 3.2)."""
 
     reply_address: int

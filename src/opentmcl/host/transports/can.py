@@ -48,6 +48,12 @@ class CanTransport(Transport):
     def name(self) -> str:
         return f"can://{self.interface}/{self.channel}"
 
+    @property
+    def bus(self) -> Any:
+        """The python-can bus (`can.BusABC`) under the transport, for a gateway that reads every
+        frame itself (the capture proxy's CAN upstream); `send`/`recv` stay the client's way in."""
+        return self._bus
+
     def _check_open(self) -> None:
         if self._closed:
             raise TmclConnectionError(f"{self.name} is closed")

@@ -25,9 +25,10 @@ import threading
 import time
 import urllib.parse
 from collections.abc import Callable, Iterable
-from typing import Generic, Protocol, TypeVar
+from typing import ClassVar, Generic, Protocol, TypeVar
 
 from ...modules.addresses import address_error
+from ...protocol.frame import FRAME_LEN
 from ..errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError, check_timeout
 from ..transport import DEBUG, Transport, log, log_frame
 
@@ -40,6 +41,9 @@ class SimulatedModule(Protocol):
 
     def drain_events(self) -> list[bytes]: ...
 
+    # Optional: ``events``, a list of the events waiting (what `drain_events` would answer): looked
+    # at to skip the call when nothing waits.
+
     def advance(self, seconds: float, /) -> object: ...
 
 
@@ -49,15 +53,24 @@ M = TypeVar("M", bound=SimulatedModule, covariant=True)  # the clocks only read 
 class Clock:
     """How time passes for the modules behind an `InProcessTransport` (policy ``"none"``)."""
 
+    syncs: ClassVar[bool] = False
+    """Whether `sync` does anything: true for every subclass that defines it."""
+
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        super().__init_subclass__(**kwargs)
+        if "sync" in cls.__dict__:
+            cls.syncs = True
+
     def sync(self, transport: InProcessTransport[SimulatedModule]) -> None:
-        """Called before every request: bring the modules up to date."""
+        """Called before every request (when `syncs`): bring the modules up to date."""
 
     def wait(self, transport: InProcessTransport[SimulatedModule], ready: Callable[[], bool],
              timeout: float) -> None:
         """Let time pass until `ready()` or `timeout` seconds have passed."""
 
     def sleep(self, transport: InProcessTransport[SimulatedModule], seconds: float) -> None:
-        """Let `seconds` pass."""
+        """Let `seconds` pass. Called without the transport's `lock`: work on the modules takes it
+        (`InProcessTransport.advance` does)."""
 
     def now(self, transport: InProcessTransport[SimulatedModule]) -> float:
         return transport.elapsed
@@ -166,8 +179,20 @@ class InProcessTransport(Transport, Generic[M]):
         self._rx = bytearray()
         self._closed = False
         self._lock = threading.RLock()  # `lock`: the modules are not thread-safe; one caller at a time
-        cls = type(self)  # a subclass that watches send/recv gets every frame through them
-        self._lean = cls.send is InProcessTransport.send and cls.recv is InProcessTransport.recv
+        self._only: M | None = self.modules[0] if len(self.modules) == 1 else None  # `exchange`; None once closed
+        # a module that keeps its waiting events in a list `events` (VirtualModule does): looked at
+        # before `drain_events` is called, which then only runs when something waits
+        self._listed = isinstance(getattr(self._only, "events", None), list)
+
+    def __init_subclass__(cls, **kwargs: object) -> None:
+        """A subclass that watches `send` or `recv` sees every frame there: its `send_many`,
+        `exchange` and `exchange_many` are `Transport`'s, which go through `send` and leave the
+        replies to `recv`."""
+        super().__init_subclass__(**kwargs)
+        if "send" in cls.__dict__ or "recv" in cls.__dict__:
+            for name in ("send_many", "exchange", "exchange_many"):
+                if name not in cls.__dict__:
+                    setattr(cls, name, getattr(Transport, name))
 
     @property
     def module(self) -> M:
@@ -182,13 +207,15 @@ class InProcessTransport(Transport, Generic[M]):
         return next((m for m in self.modules if _answers(m, address)), None)
 
     def _collect_events(self) -> None:
+        if self._listed and not self._only.events:  # type: ignore[union-attr]  # the one module: none waiting
+            return
         for m in self.modules:
             for event in m.drain_events():
                 self._rx += event
 
     def advance(self, seconds: float) -> None:
         """Advance every module by `seconds` of virtual time, collecting their events."""
-        with self.lock:
+        with self._lock:
             self._check_open()
             for m in self.modules:
                 m.advance(seconds)
@@ -200,103 +227,85 @@ class InProcessTransport(Transport, Generic[M]):
 
     def send_many(self, frames: list[bytes]) -> None:
         """Hand the frames to every module in turn, after one time sync for all of them."""
-        if not self._lean:
-            for frame in frames:
-                self.send(frame)
-            return
         self._send_frames(frames)
 
-    def _send_frames(self, frames: list[bytes]) -> None:
-        with self.lock:
+    def exchange_many(self, frames: list[bytes]) -> list[bytes] | None:
+        """`send_many`, returning the replies as they are when every frame got exactly one 9-byte
+        reply, no event arrived and nothing was waiting to be read (one module, DEBUG logging off).
+        Otherwise everything is in the receive buffer in arrival order, as `send_many` leaves it,
+        and None is returned."""
+        return self._send_frames(frames, at_hand=True)
+
+    def exchange(self, frame: bytes) -> bytes | None:
+        """`exchange_many` of one frame, short: the common case of a request (one module, nothing
+        waiting, no event, one 9-byte reply, DEBUG logging off) is one `handle` call between two
+        looks for events, after the clock's sync if it has one."""
+        rx = self._rx
+        module = self._only
+        if module is None or rx or log.isEnabledFor(DEBUG):
+            replies = self._send_frames([frame], at_hand=True)
+            return None if replies is None else replies[0]
+        clock = self.clock
+        if clock.syncs:
+            clock.sync(self)
+        listed = self._listed
+        events = module.drain_events() if not listed or module.events else ()  # type: ignore[attr-defined]
+        if events or rx:  # an event (or one collected by the sync) goes before the reply
+            for event in events:
+                rx += event
+            self._deliver(frame)
+            return None
+        reply = module.handle(frame)
+        events = module.drain_events() if not listed or module.events else ()  # type: ignore[attr-defined]
+        if events or len(reply) != FRAME_LEN:
+            rx += reply
+            for event in events:
+                rx += event
+            return None
+        return reply
+
+    def _send_frames(self, frames: list[bytes], *, at_hand: bool = False) -> list[bytes] | None:
+        """One time sync, then each frame to every module with the events collected before and
+        after it; with `at_hand`, the replies as `exchange_many` returns them."""
+        with self._lock:
             self._check_open()
             debug = log.isEnabledFor(DEBUG)
-            self.clock.sync(self)
+            if self.clock.syncs:
+                self.clock.sync(self)
             self._collect_events()
+            rx = self._rx
+            module = self._only
+            replies: list[bytes] | None = [] if at_hand and module is not None and not debug and not rx else None
             for data in frames:
                 if debug:
                     log_frame("->", data, self.frame_format)
                 frame = data if data.__class__ is bytes else bytes(data)
-                for m in self.modules:
-                    reply = m.handle(frame)
-                    if reply:
-                        self._rx += reply
-                self._collect_events()
-
-    def exchange(self, frames: list[bytes]) -> list[bytes] | None:
-        """The lean path of `Client`: one time sync, each frame to the modules, and the replies
-        returned as they are when every frame got exactly one 9-byte reply, no event arrived and
-        nothing was waiting to be read. Otherwise (or with DEBUG logging on) the replies and events
-        are left in the receive buffer in arrival order, as `send_many` leaves them, and None is
-        returned: the client then reads them the usual way."""
-        if not self._lean:
-            for frame in frames:
-                self.send(frame)
-            return None
-        if self._rx or log.isEnabledFor(DEBUG) or len(self.modules) != 1:
-            self._send_frames(frames)
-            return None
-        with self.lock:
-            self._check_open()
-            self.clock.sync(self)
-            module = self.modules[0]
-            handle, drain = module.handle, module.drain_events
-            rx = self._rx  # a real clock's sync may have put events there
-            for event in drain():  # an event before the first frame: the usual way
-                rx += event
-            if rx:
-                self._queue(frames, handle)
-                return None
-            replies = []
-            for index, frame in enumerate(frames):
-                reply = handle(frame)
-                replies.append(reply)
-                events = drain()
-                if len(reply) != 9 or events:
+                if replies is None or module is None:
+                    self._deliver(frame)
+                    continue
+                reply = module.handle(frame)
+                events = module.drain_events()
+                if events or len(reply) != FRAME_LEN:
                     for done in replies:
                         rx += done
+                    rx += reply
                     for event in events:
                         rx += event
-                    self._queue(frames[index + 1:], handle)
-                    return None
+                    replies = None
+                else:
+                    replies.append(reply)
             return replies
 
-    def exchange_one(self, frame: bytes) -> bytes | None:
-        """`exchange` of one frame: its reply, or None with everything left in the buffer."""
-        if self._rx or self._closed or not self._lean or len(self.modules) != 1 or log.isEnabledFor(DEBUG):
-            replies = self.exchange([frame])
-            return None if replies is None else replies[0]
-        with self._lock:
-            self.clock.sync(self)  # a real clock collects the events of the time that passed
-            module = self.modules[0]
-            events = module.drain_events()
-            reply = b"" if events or self._rx else module.handle(frame)
-            if not events and not self._rx:
-                events = module.drain_events()
-                if not events and len(reply) == 9:
-                    return reply
+    def _deliver(self, frame: bytes) -> None:
+        """`frame` to every module: the replies, then the events, into the receive buffer."""
+        for m in self.modules:
+            reply = m.handle(frame)
+            if reply:
                 self._rx += reply
-                for event in events:
-                    self._rx += event
-                return None
-            for event in events:
-                self._rx += event
-            self._queue([frame], module.handle)
-            return None
-
-    def _queue(self, frames: list[bytes], handle: Callable[[bytes], bytes]) -> None:
-        """`send_many` without the sync (done): replies and events into the receive buffer."""
-        for frame in frames:
-            self._rx += handle(frame)
-            self._collect_events()
-
-    def unread(self, data: bytes) -> None:
-        """Put bytes back in front of the receive buffer (the client's lean path gives back a
-        reply it does not read itself)."""
-        with self.lock:
-            self._rx[:0] = data
+        self._collect_events()
 
     def recv(self, n: int, timeout: float) -> bytes:
-        with self.lock:
+        with self._lock:
             self._check_open()
             self._collect_events()
             if len(self._rx) < n:
@@ -310,22 +319,21 @@ class InProcessTransport(Transport, Generic[M]):
             return out
 
     def reset_input(self) -> None:
-        with self.lock:
+        with self._lock:
             self._rx.clear()
 
     def sleep(self, seconds: float) -> None:
+        """Let `seconds` pass as the clock says (virtual: advance at once; real: wait, then
+        catch up; none: nothing)."""
         self._check_open()
-        if isinstance(self.clock, RealClock):
-            self.clock.sleep(self, seconds)
-        else:
-            with self.lock:
-                self.clock.sleep(self, seconds)
+        self.clock.sleep(self, seconds)
 
     def monotonic(self) -> float:
         return self.clock.now(self)
 
     def close(self) -> None:
         self._closed = True
+        self._only = None
 
 
 def parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
