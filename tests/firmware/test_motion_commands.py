@@ -180,13 +180,13 @@ def test_1180_ramp_mode_follows_the_motion_commands(m1180):
 
 
 def test_1180_ror_rol_velocity_edges(m1180):
-    """PD86-1180 4.6.1/4.6.2: ROR/ROL <velocity> "0… 2047"; 2048 is status 4. A negative velocity
-    is taken as AP2 takes it ("the velocity value is transferred to axis parameter" 2, range
-    ±2047): ROR -2047 turns left, -2048 is status 4 (docs/assumptions.md, Value ranges)."""
-    got = {(op, v): m1180(op, 0, 0, v).status for op in (1, 2) for v in (2047, 2048, -2047, -2048)}
-    assert got == {(1, 2047): 100, (1, 2048): 4, (1, -2047): 100, (1, -2048): 4,
-                   (2, 2047): 100, (2, 2048): 4, (2, -2047): 100, (2, -2048): 4}
-    m1180.ok(1, 0, 0, -100)
+    """PD86-1180 4.6.1/4.6.2: ROR/ROL <velocity> "0… 2047" ("This makes possible choosing a velocity
+    between 0 and 2047"): both ends accepted, 2048 and -1 are status 4 (issue 29 item 7; ROL turns
+    left, so no negative velocity is needed)."""
+    got = {(op, v): m1180(op, 0, 0, v).status for op in (1, 2) for v in (0, 2047, 2048, -1, -2047)}
+    assert got == {(1, 0): 100, (1, 2047): 100, (1, 2048): 4, (1, -1): 4, (1, -2047): 4,
+                   (2, 0): 100, (2, 2047): 100, (2, 2048): 4, (2, -1): 4, (2, -2047): 4}
+    m1180.ok(2, 0, 0, 100)
     assert m1180.ok(6, 2, 0) == -100
 
 

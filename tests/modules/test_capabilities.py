@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from opentmcl import VirtualModule
-from opentmcl.modules.profile import builtin_raw, load_profile
+from opentmcl.modules.profile import builtin_raw, load_profile, parse_profile
 from opentmcl.modules.profile_file import ProfileError, validate
 from tests.capture.helpers import cli
 from tests.world.conftest import Rig
@@ -133,6 +133,12 @@ def test_an_axis_parameter_maps_onto_the_ramp_engine(tmp_path):
     ('unit_mode = "yes"', "", "module.capabilities.unit_mode: expected true or false"),
     ("encoder_counts = 0", "", "module.capabilities.encoder_counts: must be positive, got 0"),
     ("encoder_counts = true", "", "module.capabilities.encoder_counts: expected an integer, got True"),
+    ('usb = "no"', "", "module.capabilities.usb: expected true or false, got 'no'"),
+    ("", '[[io]]\nbank = 1\nport = 8\nmeasures = "current"\n',
+     "io[bank=1,port=8].measures: must be one of supply_voltage, temperature, got 'current'"),
+    ("", '[[io]]\nbank = 1\nport = 8\nper_unit = 0\n', "io[bank=1,port=8].per_unit: expected counts per unit"),
+    ("", '[[axis_parameter]]\nnumber = 4\nmeasures = "temperature"\n',
+     "axis_parameter[number=4].measures: only an I/O port measures a quantity of the world"),
     ("", '[[axis_parameter]]\nnumber = 4\nengine = "max speed"\n',
      "axis_parameter[number=4].engine: expected a ramp engine keyword"),
     ("", '[[axis_parameter]]\nnumber = 4\nengine = 4\n', "axis_parameter[number=4].engine: expected a string"),
@@ -164,6 +170,15 @@ def test_a_standalone_profile_declares_every_capability():
     assert validate(raw) == ["module.capabilities.encoder: missing"]
     del raw["module"]["capabilities"]
     assert validate(raw) == ["module.capabilities: missing table [module.capabilities] (docs/profiles.md)"]
+
+
+def test_usb_is_the_one_capability_a_profile_may_leave_out():
+    """docs/profiles.md: `usb` came after the schema was published; a standalone profile without it
+    keeps the former default (a pty serving it alone stands for USB, docs/endpoints.md)."""
+    raw = copy.deepcopy(builtin_raw("PD28-1021"))
+    assert raw["module"]["capabilities"].pop("usb") is False   # manual title page: "RS485 interface"
+    assert validate(raw) == []
+    assert parse_profile(raw).capabilities.usb is True
 
 
 def test_capabilities_that_are_not_a_table_are_named_so(tmp_path):

@@ -157,8 +157,13 @@ def test_reference_search_has_eight_modes(prof):
 
 
 def test_io_ports(prof):
-    """Chapter 1: "Up to four general-purpose digital inputs ... Two general purpose outputs"."""
-    assert sorted(prof.io) == [(0, 0), (0, 1), (0, 2), (0, 3), (2, 0), (2, 1)]
+    """Chapter 1: "Up to four general-purpose digital inputs ... Two general purpose outputs"; besides
+    them the supply voltage (bank 1 port 8, OpenTMCL extension) and the temperature the TMCM-1021
+    manual V1.42 lists ("Temperature GIO 9, 1 [°C]"; docs/assumptions.md)."""
+    manual = sorted(k for k, p in prof.io.items() if not p.measures)
+    assert manual == [(0, 0), (0, 1), (0, 2), (0, 3), (2, 0), (2, 1)]
+    assert {k: (p.measures, p.per_unit) for k, p in prof.io.items() if p.measures} == {
+        (1, 8): ("supply_voltage", 10), (1, 9): ("temperature", 1)}
     assert [prof.io[(0, i)].name for i in range(4)] == ["IN0", "IN1", "IN2", "IN3"]
     assert [prof.io[(2, i)].kind for i in range(2)] == ["output", "output"]
 

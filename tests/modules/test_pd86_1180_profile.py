@@ -295,7 +295,9 @@ def test_io_banks(prof):
     """4.6.15: bank 0 digital inputs (and "GIO 12, 0" reads OC_EN), bank 1 "IN_0 GIO 0, 1 0… 1023",
     bank 2 "OUT_0 GIO 0, 2, <n> 1/0"; 4.6.14: "SIO 0, 0,<bitmask> 0… 7" switches the pull-ups."""
     io = prof.io
-    assert sorted(io) == [(0, 0), (0, 1), (0, 12), (1, 0), (1, 1), (2, 0), (2, 1)]
+    assert sorted(k for k, p in io.items() if not p.measures) == [(0, 0), (0, 1), (0, 12), (1, 0), (1, 1),
+                                                                  (2, 0), (2, 1)]
+    assert [(k, p.measures) for k, p in io.items() if p.measures] == [((1, 8), "supply_voltage")]  # extension
     assert (io[(1, 0)].kind, io[(1, 0)].max) == ("analog", 1023)
     assert (io[(2, 1)].name, io[(2, 1)].kind, io[(2, 1)].access) == ("OUT_1", "output", "RW")
     assert io[(0, 12)].name == "OC_EN"

@@ -498,7 +498,8 @@ def test_opcodes(prof):
 def test_io_banks(prof):
     """3.6.13: "IN0 | GIO 0, 0 | 0/1" ... "IN3 | GIO 3, 1 | 0...65535"; 3.6.12: "OUT3 | SIO 3, 2,
     <value> | 0/1"."""
-    assert sorted(prof.io) == [(b, p) for b in (0, 1, 2) for p in range(4)]
+    assert sorted(k for k, p in prof.io.items() if not p.measures) == [(b, p) for b in (0, 1, 2) for p in range(4)]
+    assert [(k, p.measures) for k, p in prof.io.items() if p.measures] == [((1, 8), "supply_voltage")]  # extension
     for port in range(4):
         d, a, o = prof.io[(0, port)], prof.io[(1, port)], prof.io[(2, port)]
         assert (d.name, d.kind, d.access, d.min, d.max) == (f"IN{port}", "digital", "R", 0, 1)

@@ -214,6 +214,43 @@ def test_direction_change_through_zero_in_velocity_mode():
     assert (e.now, e.position, e.velocity) == (3 * F, 25600, -51200)
 
 
+def test_ramp_wait_before_a_direction_inversion_in_velocity_mode():
+    """4.1 AP21: "waiting time after ramping down to zero velocity before next movement or direction
+    inversion can start" - in velocity mode too (issue 29 item 6): ROR then ROL ramps down with
+    AMAX, stands for exactly AP21 * 512 clocks, then ramps up the other way."""
+    e = plain(ramp_wait_time=1000)
+    wait = 1000 * TZEROWAIT_CLOCKS
+    e.rotate(51200)                                   # power-up: at rest long ago, no wait
+    e.advance(F)
+    assert e.velocity == 51200
+    e.rotate(-51200)
+    e.advance(2 * F)
+    assert (e.position, e.velocity) == (51200, 0)     # ramped down, at rest
+    assert e.next_event() == 2 * F + wait
+    e.advance(2 * F + wait - 1)
+    assert (e.position, e.velocity) == (51200, 0)
+    events(e)
+    assert (e.now, e.position, e.velocity) == (3 * F + wait, 25600, -51200)
+
+
+def test_ramp_wait_before_a_rotation_from_rest():
+    """4.1 AP21: "before next movement ... can start": ROR within AP21 of coming to rest (here MST)
+    starts when the wait is over; a change of speed in the same direction is not delayed."""
+    e = plain(ramp_wait_time=100)
+    e.rotate(51200)
+    e.advance(F)
+    e.stop()                                          # MST: at rest at 2 F
+    e.advance(2 * F + 10)
+    e.rotate(51200)
+    assert e.next_event() == 2 * F + 100 * 512
+    e.advance(2 * F + 100 * 512)
+    assert e.velocity == 0
+    e.advance(2 * F + 100 * 512 + F // 2)
+    assert e.velocity == 25600
+    e.rotate(12800)                                   # slower, same direction: at once
+    assert e.next_event() == 2 * F + 100 * 512 + F // 2 + F // 4
+
+
 def test_mst_is_a_soft_stop_with_amax():
     """3.6.3 MST: 'The velocity mode is selected. Then, the target speed is set to zero.'"""
     e = plain(max_deceleration=1000)                  # DMAX must not be used

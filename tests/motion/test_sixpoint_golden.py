@@ -216,8 +216,12 @@ def digest(kind: str, seed: int, count: int) -> str:
     return h.hexdigest()
 
 
+# Issue 29 item 6 changed the "six" digest on purpose (it was eac514bc...196a93): AP21 "waiting time
+# after ramping down to zero velocity before next movement or direction inversion can start" (manual
+# 4.1) now holds in velocity mode too. Per-scenario hashes before and after: 9 of the 300 sequences
+# differ, each one with AP21 > 0 and a ROR/ROL that starts within AP21 of a rest or reverses.
 @pytest.mark.parametrize(("kind", "seed", "count", "expected"), [
-    ("six", 1, 300, "eac514bc5d4f39b82642dfcb532a1919d4e7f2dcd0005e48e4d9e44448196a93"),
+    ("six", 1, 300, "ba7e28cbcd0a9bc5ad43872dc2824197a6798947b5e7281adae956acd0ebff1a"),
     ("lin", 2, 100, "21ca325699907429b0c78ebe5bff317a1f7063bce4a5a61c7922edc673a4c79f"),
 ])
 def test_random_command_sequences_are_unchanged(kind, seed, count, expected):

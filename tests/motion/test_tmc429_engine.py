@@ -123,6 +123,28 @@ def test_ror_rol_mst():
     assert e.ramp.v_max == 100                              # AP4 again in position mode
 
 
+def test_position_reached_in_every_ramp_mode():
+    """PD86-1180 manual ch. 5 AP8: "Indicates that the actual position equals the target position"
+    (issue 29 item 1): after MVP, arrival and MST (velocity mode) the motor rests on X_TARGET and AP8
+    is 1. Passing X_TARGET at speed, and resting elsewhere, leave it 0."""
+    e = engine(max_positioning_speed=1000, max_acceleration=100, ramp_divisor=7, pulse_divisor=3)
+    e.move_to(2000)
+    run_to_rest(e)
+    assert (e.position, e.position_reached) == (2000, True)
+    e.stop()
+    assert (e.mode, e.target_position, e.velocity, e.position_reached) == (Mode.VELOCITY, 2000, 0, True)
+    e.rotate(300)
+    e.advance(e.now + CLOCK_HZ)
+    assert e.position > 2000 and not e.position_reached
+    e.rotate(-300)
+    back = e.time_at_position(2000)
+    e.advance(back)
+    assert (e.position, e.target_position) == (2000, 2000) and e.velocity != 0 and not e.position_reached
+    e.stop()
+    run_to_rest(e)
+    assert e.velocity == 0 and e.position < 2000 and not e.position_reached
+
+
 def test_ap2_reads_zero_while_decelerating_and_at_rest():
     """PD86-1180 manual ch. 5 AP2: "In position mode, this parameter is set by hardware:
     to the maximum speed during acceleration, and to zero during deceleration and rest"."""

@@ -12,6 +12,12 @@ many cycles: X_ACTUAL, the velocity with its hidden fraction, AP2, AP135, AP8, t
 the steps listed by `step_events` (count and digest) and `time_at_position` answers. Every vector
 was also checked against the per-tick oracle (tests/motion/tmc429_reference.py) when written,
 except the moves marked "oracle": false (too long for it). test_tmc429_vectors.py replays them.
+
+One field was changed by hand since (issue 29 item 1): AP8 of the sample at cycle 8000000 of the
+move "RAMP_DIV = PULSE_DIV = 0, AP4 = 2047, AP5 = 100: MVP 100000, MST at 0.5 s" reads 1. That move
+has arrived before the MST, so the motor rests on X_TARGET in velocity mode, and AP8 "Indicates that
+the actual position equals the target position" (PD86-1180 manual ch. 5) in every ramp mode now;
+the oracle does not record AP8, and every other number is the recorded one (`--check` agrees).
 """
 from __future__ import annotations
 

@@ -183,7 +183,7 @@ def test_a_body_that_never_completes_is_refused_and_changes_nothing(limited):
         reply = read_reply(sock, "POST")
     assert reply.status == 408, reply.body[:200]
     assert "not complete within 2 s" in reply.error and "\n" not in reply.error
-    assert get_json(port, "/m/1/api/program")["state"]["mode_name"] == "stop"
+    assert get_json(port, "/m/1/api/program")["state"]["mode_name"] == "reset"  # as the download left it
     assert request(port, "POST", "/m/1/api/program/stop", headers=page_headers(port)).status == 200
 
 

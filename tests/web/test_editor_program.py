@@ -168,3 +168,49 @@ def test_run_stops_at_breakpoint(page, served):
     page.click("#gutter-3")  # the breakpoint gutter clears it again
     page.wait_for_function("window.fetch('api/program').then(r => r.json())"
                            ".then(j => j.state.breakpoints.length === 0)", timeout=TIMEOUT_MS)
+
+
+def _user_variable(served, n: int, want: int) -> None:
+    """Until GGP n, 2 (over the dashboard's link) reads `want` (bounded)."""
+    import time
+
+    deadline = time.monotonic() + TIMEOUT_MS / 1000
+    while served.dashboard.module.reply(10, n, 2).value != want:
+        assert time.monotonic() < deadline, f"user variable {n} never became {want}"
+        time.sleep(0.02)
+
+
+def test_a_second_download_runs_from_its_first_instruction(page, served):
+    """Issue 29 item 10. Manual 3.6.36: 129 type 0 runs "from current address", and 132/133 leave
+    the program counter where the last program stopped; so the dashboard's Download ends with 131
+    ("Reset program counter and stack pointer to zero"): Run then starts the new program at its
+    first instruction, as in the TMCL-IDE. The first program stops on its STOP at address 4."""
+    open_program(page, "    SGP 8, 2, 1\n    SGP 8, 2, 2\n    SGP 8, 2, 3\n    SGP 8, 2, 4\n")
+    download(page)
+    page.click("#btn-run")
+    _user_variable(served, 8, 4)
+    page.evaluate("OpenTMCL.programEditor.setSource('    SGP 9, 2, 42\\n    SGP 8, 2, 5\\n    SGP 8, 2, 6\\n"
+                  "    SGP 8, 2, 7\\n    SGP 8, 2, 8\\n')")
+    download(page)
+    page.wait_for_function("document.getElementById('prog-pc').textContent === '0'", timeout=TIMEOUT_MS)
+    page.click("#btn-run")
+    _user_variable(served, 8, 8)
+    assert served.dashboard.module.reply(10, 9, 2).value == 42   # the first instruction ran
+
+
+def test_run_from_start_beside_run(page, served):
+    """"Run from start" (issue 29 item 10) sits beside Run and sends 131, then 129: after the program
+    stopped on its STOP, Run would start there (3.6.36 "from current address") and do nothing more;
+    Run from start runs it again from its first instruction."""
+    open_program(page, "    CALC LOAD, 0\n    CALC ADD, 1\n    AGP 5, 2\n    SGP 6, 2, 1\n")
+    download(page)
+    assert page.inner_text("#btn-run + #btn-run-start") == "Run from start"   # the next button
+    page.click("#btn-run")
+    _user_variable(served, 6, 1)
+    served.dashboard.module.reply(9, 6, 2, 0)        # SGP 6, 2, 0 from the host
+    served.dashboard.module.reply(9, 5, 2, 0)
+    page.click("#btn-run-start")
+    page.wait_for_function("document.getElementById('prog-message').textContent === 'run from start'",
+                           timeout=TIMEOUT_MS)
+    _user_variable(served, 6, 1)
+    assert served.dashboard.module.reply(10, 5, 2).value == 1       # A = 0 + 1 again: from the top

@@ -19,15 +19,16 @@ def _status(client):
 @pytest.mark.parametrize("action", ["run", "step"])
 def test_a_run_or_step_from_before_stop_all_is_refused(client, action):
     """The request arrived (stops counted then), STOP ALL came, then the request is carried out:
-    it is refused as "cancelled by STOP ALL", the program stays stopped (135 mode 0) and no move
-    was started (GAP 0, target position, stays 0)."""
+    it is refused as "cancelled by STOP ALL", the program stays as the download left it (135 mode 3,
+    reset: the dashboard's download ends with 131, docs/dashboard-program.md; not 1, run) and no
+    move was started (GAP 0, target position, stays 0)."""
     d = client.dash
     d.download(PROGRAM)
     arrived = d.stops
     assert motion.stop_module(d)["ok"]
     with pytest.raises(DashboardError, match="cancelled by STOP ALL"):
         getattr(d, action)(arrived)
-    assert _status(client) == 0
+    assert _status(client) == 3
     assert client.module.reply(6, 0, 0).value == 0
 
 

@@ -167,5 +167,14 @@ def run(args: argparse.Namespace) -> int:
     if args.symbols:
         _emit(args.symbols, program.symbol_file())
     if "-" not in (out, args.listing, args.symbols):
-        print(f"{out}: {len(program.instructions)} instructions, {len(program.labels)} labels")
+        print(f"{out}: {summary(program)}")
     return 0
+
+
+def summary(program) -> str:
+    """What `asm` reports: the source's instructions, as `disasm` lists them again, and the STOP
+    appended after them (docs/tmcl-assembler.md): "12 instructions + appended STOP = 13 records"."""
+    count, labels = len(program.instructions), f"{len(program.labels)} labels"
+    if program.appended_stop:
+        return f"{count - 1} instructions + appended STOP = {count} records, {labels}"
+    return f"{count} instructions, {labels}"

@@ -53,7 +53,8 @@ def register(subparsers: argparse._SubParsersAction) -> None:
     p.add_argument("--link", metavar="PATH", help="with --pty: also create a symbolic link PATH to it")
     p.add_argument("--interface", choices=("usb", "rs485", "rs232"),
                    help="with --pty: the link the port stands for; usb answers any address byte "
-                        "(default usb for one module, rs485 for several or with --pace)")
+                        "(default usb for one module that has a USB port, rs485 for several, with --pace "
+                        "or for a module without USB such as the PD28-1021)")
     p.add_argument("--can", metavar="INTERFACE:CHANNEL",
                    help="serve on a python-can bus, e.g. virtual:opentmcl (this process), udp_multicast:239.74.163.2 "
                         "(other processes) or socketcan:vcan0")

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Protocol
 from ..protocol.frame import to_int32
 from ..protocol.replies import encode_version_string_reply
 from ..protocol.status import Status
+from .calc import SWAP
 from .status import TmclStatus
 
 if TYPE_CHECKING:
@@ -50,7 +51,13 @@ def _axis(vm: VirtualModule, motor: int) -> Motor:
 
 # --- motion (3.6.1-3.6.4) --------------------------------------------------------
 def _rotate(vm: VirtualModule, motor: int, value: int, sign: int) -> StatusReply:
+    """ROR/ROL: the velocity within the command's own range where the manual prints one (profile
+    key `rotate_range`; PD86-1180 4.6.1 "0… 2047"), and within AP2's range (3.6.1: "the velocity
+    value is transferred to axis parameter #2")."""
     ax = _axis(vm, motor)
+    rotate = vm.profile.extra.get("rotate_range")
+    if rotate is not None and not rotate[0] <= value <= rotate[1]:
+        raise TmclStatus(4)
     velocity = to_int32(sign * value)
     ax.check_value(ax.param(2), velocity)
     ax.rotate(velocity)
@@ -270,6 +277,15 @@ def cmd_calc(vm: VirtualModule, type: int, motor: int, value: int, program: bool
 def cmd_no_effect(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """Program-flow and accumulator commands sent in direct mode: accepted,
     without touching the program's accumulator or flow (TMCM-6212 manual 7.6)."""
+    return OK, 0
+
+
+def cmd_calcx(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """CALCX and the PD28-1021's CALCxx in direct mode: no effect (7.6), but an operation beyond
+    the list (TMCM-6212 3.6.26: types 0 ADD ... 10 SWAP) is "3 Wrong type" (Table 4), as CALC's
+    type beyond LOAD is and as the same instruction in a program is."""
+    if not 0 <= type <= SWAP:
+        raise TmclStatus(3)
     return OK, 0
 
 

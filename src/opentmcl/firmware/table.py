@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
-from ..protocol.opcodes import COMMANDS, CONTROL_FIRST, Command
+from ..protocol.opcodes import COMMANDS, Command, is_control
 from ..protocol.status import Status
 from . import commands as c
 from . import steps as s
@@ -119,7 +119,7 @@ def _rotate_type(type: int) -> int:
     return 0
 
 
-_NO = c.cmd_no_effect
+_NO, _CX = c.cmd_no_effect, c.cmd_calcx
 _SPECS = (
     # motion, parameters, I/O (TMCM-6212 3.6.1-3.6.13, PD86-1180 4.6.1-4.6.15)
     _spec(1, c.cmd_ror, WRITE), _spec(2, c.cmd_rol, WRITE), _spec(3, c.cmd_mst, WRITE),
@@ -138,13 +138,13 @@ _SPECS = (
     _spec(27, _NO, Effect.EVENTS, step=s.wait_), _spec(28, _NO, Effect.EVENTS | Effect.PROGRAM, step=s.stop),
     # coordinates, X register, accumulator transfers, interrupts (3.6.22-3.6.33)
     _spec(30, c.cmd_sco, _NONE), _spec(31, c.cmd_gco, _NONE, loads=_gco_reads), _spec(32, c.cmd_cco, _READ),
-    _spec(33, _NO, _NONE, step=s.calcx), _spec(34, c.cmd_aap, WRITE),
+    _spec(33, _CX, _NONE, step=s.calcx), _spec(34, c.cmd_aap, WRITE),
     _spec(35, c.cmd_agp, WRITE, refine=_global_write), _spec(36, c.cmd_cle, _NONE),
     _spec(37, c.cmd_vect, Effect.EVENTS), _spec(38, _NO, Effect.EVENTS, step=s.reti), _spec(39, c.cmd_aco, _NONE),
     # the PD28-1021's extended set (PD28-1021 manual 3.5, Table 5)
-    _spec(40, _NO, _NONE, step=s.calc_vv), _spec(41, _NO, _NONE, step=s.calc_va),
-    _spec(42, _NO, _NONE, step=s.calc_av), _spec(43, _NO, _NONE, step=s.calc_vx),
-    _spec(44, _NO, _NONE, step=s.calc_xv), _spec(45, _NO, _NONE, step=s.calc_v),
+    _spec(40, _CX, _NONE, step=s.calc_vv), _spec(41, _CX, _NONE, step=s.calc_va),
+    _spec(42, _CX, _NONE, step=s.calc_av), _spec(43, _CX, _NONE, step=s.calc_vx),
+    _spec(44, _CX, _NONE, step=s.calc_xv), _spec(45, _CX, _NONE, step=s.calc_v),
     _spec(46, _NO, WRITE), _spec(48, _NO, Effect.EVENTS, step=s.rst), _spec(49, _NO, _NONE, step=s.djnz),
     _spec(50, _NO, WRITE), _spec(51, _NO, WRITE),
     _spec(55, _NO, _NONE, step=s.siv), _spec(56, _NO, _NONE, step=s.giv), _spec(57, _NO, _NONE, step=s.aiv),
@@ -173,10 +173,11 @@ def available(vm: VirtualModule, number: int) -> bool:
 
 def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
     """Run one command in direct mode (or a program's command that acts as in direct mode). In
-    download mode (132) the commands other than control commands are stored instead (status 101,
-    3.6.36). A number the module's command set lacks is an "Invalid command" (2)."""
+    download mode (132) the commands other than control commands (`opcodes.is_control`; 138 is
+    none) are stored instead (status 101, 3.6.36). A number the module's command set lacks is an
+    "Invalid command" (2)."""
     try:
-        if vm.download_mode and not program and command < CONTROL_FIRST:
+        if vm.download_mode and not program and not is_control(command):
             return vm.store_instruction(command, type, motor, value)
         spec = TABLE.get(command)
         if spec is None or command not in vm.opcodes:

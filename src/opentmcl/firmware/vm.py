@@ -222,17 +222,21 @@ class VirtualModule:
         out = execute(self, command, type_, motor, value, program=False)
         if out is None:  # no reply (command 137)
             return b""
-        if out.__class__ is bytes:  # special reply format (136 type 0, 134)
-            return out
+        if out.__class__ is bytes:  # special reply format (136 type 0, 134): suppressed as any other
+            return b"" if self._suppressed(command) else out
         status, result = out
         if status == _OK:
-            if suppressible(command) and self.globals.ram.get(_SUPPRESS) == 1:
+            if self._suppressed(command):
                 return b""
             if interface in OF_INTERFACE and not self._download_mode and (
                     interface != "usb" or self.accepts_address(target)):
                 # a USB frame is bound only if the serial link would take it too: the table is shared
                 self.requests.bind(frame, command, type_, motor)
         return self._reply(status, command, result, address)
+
+    def _suppressed(self, command: int) -> bool:
+        """GP255 = 1 suppresses the reply of a successful `command` (TMCM-6212 5.1, table.suppressible)."""
+        return self.globals.ram.get(_SUPPRESS) == 1 and suppressible(command)
 
     def _write(self, write: Setter, command: int, value: int, address: int, interface: str) -> bytes:
         """A pre-bound SAP/SGP: what `execute` does for it, without the lookups."""

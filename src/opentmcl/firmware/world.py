@@ -18,6 +18,8 @@ rotor, switches, encoder, drive, checks, events: firmware/axis_world.py),
 from __future__ import annotations
 
 import os
+from dataclasses import replace
+from functools import partial
 from typing import TYPE_CHECKING
 
 from ..motion import CLOCK_HZ
@@ -29,6 +31,7 @@ from .effects import Effect
 from .io import threshold
 
 if TYPE_CHECKING:
+    from ..modules.profile import IOPort
     from .motor import Motor
     from .vm import VirtualModule
 
@@ -39,6 +42,12 @@ _SWITCH_STATES = (11, 10, 9)
 
 ScenarioSource = Scenario | dict[str, object] | str | os.PathLike[str] | None
 """What `load_scenario` takes: a Scenario, its parsed dict, a .toml/.yaml path, or None (empty world)."""
+
+
+def _level(vm: VirtualModule, signal: Profile, port: IOPort) -> int:
+    """What `port` reads of `signal` now: its value times the port's counts per unit, rounded, and
+    saturated at the port's range (a function, not a closure: a module's copy pickles)."""
+    return min(max(round(signal.at(vm.now / CLOCK_HZ) * port.per_unit), port.min), port.max)
 
 
 class World:
@@ -105,15 +114,23 @@ class World:
             self.axes_world.append(AxisWorld(self, i, self.scenario.axis(i)))
         for aw, ax in zip(self.axes_world, vm.axes, strict=False):
             aw.bind(ax)
+        self._drive_measures()
         for key in self.inputs:
             self._drive_input(key)
+
+    def _drive_measures(self) -> None:
+        """Ports that read a quantity of the world (`IOPort.measures`: the supply voltage, the board
+        temperature) follow the scenario's value of it, in counts of the port (docs/scenarios.md)."""
+        vm = self.vm
+        for key, p in vm.io.ports.items():
+            if p.measures:
+                vm.io.drive_source(*key, partial(_level, vm, self.scenario.measure(p.measures), p))
 
     def _drive_input(self, key: tuple[int, int]) -> None:
         """The port reads the signal at the moment it is read, rounded; a signal outside the
         port's range saturates there."""
-        vm, sig, p = self.vm, self.inputs[key], self.vm.io.ports[key]
-        lo, hi = p.min, p.max
-        vm.io.drive_source(*key, lambda: min(max(round(sig.at(vm.now / CLOCK_HZ)), lo), hi))
+        vm = self.vm
+        vm.io.drive_source(*key, partial(_level, vm, self.inputs[key], replace(vm.io.ports[key], per_unit=1)))
 
     def _watched_levels(self, key: tuple[int, int]) -> tuple[int, ...]:
         """Levels whose crossing someone can see at once: a digital reading (input-change

@@ -50,6 +50,9 @@ def check(ins: Instruction, profile: ModuleProfile) -> list[Finding]:
     name = cmd.mnemonic if cmd is not None and cmd.mnemonic else f"command {ins.command}"
     if ins.command not in profile.opcodes:
         return [Finding("command", f"{name} (command {ins.command}) is not available on {profile.name}")]
+    if cmd is not None and not cmd.program:  # 138 (3.6.35) and the control commands (3.6.36)
+        return [Finding("command", f"{name} can only be used in direct mode: in a program the module skips "
+                                   "it (status 6)")]
     out: list[Finding] = []
     for names, rule in _RULES:
         meaning = cmd.naming(names, ins.type) if cmd is not None else None

@@ -34,6 +34,11 @@ class Program:
     warnings_more: int = 0
     """Warnings beyond diagnostics.MAX_REPORTED, counted but not listed."""
 
+    @property
+    def appended_stop(self) -> bool:
+        """The last record is the STOP the assembler appended (not a source instruction)."""
+        return bool(self.source) and self.source[-1] is None
+
     def image(self) -> bytes:
         """The binary file contents (TMCL-IDE format: 8-byte records, no header)."""
         return encode(self.instructions)

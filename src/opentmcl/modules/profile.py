@@ -16,7 +16,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     user_variables = 256          # bank 2 size
     storable_user_variables = 56  # variables 0..N-1 can be stored in EEPROM
 
-    [module.capabilities]         # what the firmware has; every key required (docs/profiles.md)
+    [module.capabilities]         # what the firmware has; every key but usb required (docs/profiles.md)
     velocity_unit = "pps"         # pps | tmc429: unit of the velocity and acceleration parameters
     unit_mode = true              # AP255 switches to TMC5130 internal units (TMCM-6212 4.1)
     encoder = "resolution"        # resolution (AP210 counts per round) | prescaler (AP210 = p/512)
@@ -24,6 +24,7 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     null_channel = false          # AP210 + 4 clears the encoder at the next null channel
     reference_input = "HOME"      # HOME | REFL: where the home switch is wired
     freewheel_delay = false       # AP204 is a delay in ms after which the motor current is cut
+    usb = true                    # the module has a USB port (default true; PD28-1021: false)
 
     [[axis_parameter]]            # one per axis parameter of the manual
     number = 4
@@ -53,6 +54,8 @@ A profile is read from `data/<key>.toml`. Schema (all numbers are plain ints):
     access = "R"                  # R for inputs, RW for outputs
     min = 0
     max = 1
+    measures = "supply_voltage"   # optional: the world's quantity the port reads (supply_voltage in
+    per_unit = 10                 #   volts, temperature in degrees C), per_unit counts per unit
 
     [[interrupt]]                 # interrupt vector table
     number = 0
@@ -121,6 +124,11 @@ class IOPort:
     access: str
     min: int = 0
     max: int = 1
+    measures: str = ""
+    """The quantity of the world the port reads ("supply_voltage" in V, "temperature" in °C; the
+    scenario keys of the same names, docs/scenarios.md); "" for an input the scenario drives."""
+    per_unit: int = 1
+    """Counts per volt or per degree of a `measures` port (10: the reading is in 0.1 V)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -141,8 +149,13 @@ CAPABILITY_VALUES: dict[str, tuple[str, ...] | type] = {
     "null_channel": bool,
     "reference_input": ("HOME", "REFL"),
     "freewheel_delay": bool,
+    "usb": bool,
 }
 """Every capability a profile declares: its allowed strings, or its TOML type (docs/profiles.md)."""
+CAPABILITY_DEFAULTS: dict[str, object] = {"usb": True}
+MEASURES = ("supply_voltage", "temperature")
+"""What an I/O port may measure (`IOPort.measures`): the scenario keys of the world's quantities."""
+"""Capabilities a profile may leave out (added after the schema was first published), and their value."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -165,6 +178,10 @@ class Capabilities:
     left limit switch (three-switch wiring, PD86-1180 7.1) and search mode + 128 inverts REFL."""
     freewheel_delay: bool
     """AP204 is a time in ms after which the current of a standing motor is cut (PD86-1180 5)."""
+    usb: bool = True
+    """The module has a USB port (TMCM-6212 1 "USB full speed ... device interface"; PD86-1180
+    "USB, RS232, RS485 and CAN"); the PD28-1021's manual lists an RS485 interface only. A pty that
+    serves one such module alone stands for USB by default, otherwise for RS-485 (server/bus.py)."""
 
 
 @dataclass(frozen=True)
@@ -239,7 +256,7 @@ def _param(d: RawProfile) -> Param:
 
 
 def _capabilities(d: RawProfile) -> Capabilities:
-    return Capabilities(**{f.name: d[f.name] for f in fields(Capabilities)})
+    return Capabilities(**{f.name: d[f.name] for f in fields(Capabilities) if f.name in d})
 
 
 USER_VARIABLES, STORABLE_USER_VARIABLES = 256, 56
@@ -261,7 +278,8 @@ def parse_profile(data: RawProfile) -> ModuleProfile:
         axis_parameters={p["number"]: _param(p) for p in data.get("axis_parameter", [])},
         global_parameters={(p["bank"], p["number"]): _param(p) for p in data.get("global_parameter", [])},
         io={(p["bank"], p["port"]): IOPort(p["bank"], p["port"], p["name"], p["kind"], p["access"],
-                                           p.get("min", 0), p.get("max", 1)) for p in data.get("io", [])},
+                                           p.get("min", 0), p.get("max", 1), p.get("measures", ""),
+                                           p.get("per_unit", 1)) for p in data.get("io", [])},
         interrupts={i["number"]: Interrupt(i["number"], i["name"], i.get("description", ""))
                     for i in data.get("interrupt", [])},
         capabilities=_capabilities(m["capabilities"]),

@@ -24,7 +24,14 @@ from .. import registry
 from ..limits import InputTooLarge, read_bytes, size_text
 from .bounds import AXES_MAX, NESTING_MAX, excess, too_deep
 from .names import compact
-from .profile import CAPABILITY_VALUES, STORABLE_USER_VARIABLES, USER_VARIABLES, RawProfile
+from .profile import (
+    CAPABILITY_DEFAULTS,
+    CAPABILITY_VALUES,
+    MEASURES,
+    STORABLE_USER_VARIABLES,
+    USER_VARIABLES,
+    RawProfile,
+)
 from .state import snapshot_errors
 
 MAX_FILE_BYTES = 1024 * 1024
@@ -40,7 +47,7 @@ _REQUIRED = {"axis_parameter": ("number", "name", "min", "max", "access"),
              "io": ("bank", "port", "name", "kind", "access"), "interrupt": ("number", "name")}
 _INT_FIELDS = ("number", "bank", "port", "min", "max", "default")
 _VALUE_FIELDS = ("min", "max", "default")   # a 32-bit value of a reply, signed or unsigned
-INT32_MIN, UINT32 = -(1 << 31), (1 << 32) - 1
+INT32_MIN, INT32_MAX, UINT32 = -(1 << 31), (1 << 31) - 1, (1 << 32) - 1
 _STR_FIELDS = ("name", "kind", "access", "title", "unit", "description", "engine")
 _TOP = {"extends", "module", "remove", "snapshot", *_TABLES}
 """`snapshot`: state values read by `profile probe` (modules/state.py); not inherited, no effect on the module."""
@@ -211,11 +218,16 @@ def _check_module_counts(m: RawProfile) -> list[str]:
 
 
 def _check_extras(m: RawProfile) -> list[str]:
-    """The [module] keys the firmware reads besides the schema's: `sio_all_max`, `pullups`."""
+    """The [module] keys the firmware reads besides the schema's: `sio_all_max`, `pullups`,
+    `rotate_range`."""
     errors = []
     top = m.get("sio_all_max")
     if top is not None and not (_is_int(top) and 0 <= top <= UINT32):
         errors.append(f"module.sio_all_max: expected an integer 0..{UINT32}, got {top!r}")
+    rotate = m.get("rotate_range")
+    if rotate is not None and not (isinstance(rotate, list) and len(rotate) == 2 and all(
+            _is_int(v) and INT32_MIN <= v <= INT32_MAX for v in rotate) and rotate[0] <= rotate[1]):
+        errors.append(f"module.rotate_range: expected [min, max], two 32-bit integers, got {rotate!r}"[:200])
     pullups = m.get("pullups")
     if pullups is not None and not (isinstance(pullups, dict) and all(
             _is_int(pullups.get(k)) and 0 <= pullups[k] <= hi for k, hi in (("bank", 255), ("port", 255),
@@ -273,7 +285,8 @@ def _check_capabilities(caps: object) -> list[str]:
               for key in caps if key not in CAPABILITY_VALUES]
     for key, allowed in CAPABILITY_VALUES.items():
         if key not in caps:
-            errors.append(f"{where}.{key}: missing")
+            if key not in CAPABILITY_DEFAULTS:
+                errors.append(f"{where}.{key}: missing")
             continue
         value = caps[key]
         if isinstance(allowed, tuple):
@@ -327,7 +340,20 @@ def _field_values(table: str, path: str, entry: RawProfile) -> list[str]:
         errors.append(f"{path}.default: {entry['default']} outside min..max {lo}..{hi}")
     if table == "io" and entry["kind"] not in ("digital", "analog", "output"):
         errors.append(f"{path}.kind: must be digital, analog or output, got {entry['kind']!r}")
-    return errors + _engine_field(table, path, entry)
+    return errors + _engine_field(table, path, entry) + _measure_fields(table, path, entry)
+
+
+def _measure_fields(table: str, path: str, entry: RawProfile) -> list[str]:
+    """`measures` (one of MEASURES) and `per_unit` (counts per unit, > 0) of an I/O port."""
+    errors = []
+    given = [f for f in ("measures", "per_unit") if f in entry]
+    if given and table != "io":
+        return [f"{path}.{given[0]}: only an I/O port measures a quantity of the world"]
+    if "measures" in entry and entry["measures"] not in MEASURES:
+        errors.append(f"{path}.measures: must be one of {', '.join(MEASURES)}, got {entry['measures']!r}"[:200])
+    if "per_unit" in entry and not (_is_int(entry["per_unit"]) and 0 < entry["per_unit"] <= 1_000_000):
+        errors.append(f"{path}.per_unit: expected counts per unit 1..1000000, got {entry['per_unit']!r}"[:200])
+    return errors
 
 
 def _value_widths(path: str, entry: RawProfile) -> list[str]:

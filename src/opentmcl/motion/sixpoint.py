@@ -5,9 +5,10 @@ datasheet (docs/motion.md). In positioning mode the motor starts at VSTART, acce
 A1 up to V1 and with AMAX up to VMAX, decelerates with DMAX down to V1 and
 with D1 down to VSTOP, then stops on the target; V1 = 0 disables the A1/D1
 phases. Before a move starts (and before a reversal) the motor rests for the
-ramp wait time (AP21, TZEROWAIT, units of 512 clocks). In velocity mode it
-accelerates and decelerates with AMAX only (manual 4.1: A1, V1, D1, VSTART
-and VSTOP are "in position mode only").
+ramp wait time (AP21, TZEROWAIT, units of 512 clocks), in velocity mode too
+(manual 4.1 AP21: "before next movement or direction inversion can start"). In
+velocity mode it accelerates and decelerates with AMAX only (manual 4.1: A1, V1,
+D1, VSTART and VSTOP are "in position mode only").
 
 The model is exact: integer arithmetic on the 16 MHz tick clock, motion
 stored as analytic constant-acceleration segments between whole ticks
@@ -254,7 +255,8 @@ class SixPointRampEngine(RampEngine):
             else:
                 pieces = plan_position(self._ramp, self.now, p, v, rest, self._target_abs * PSCALE, tol)
         else:
-            pieces = plan_velocity(self._ramp.amax, self.now, p, v, rest, velocity_units(self._vt_pps))
+            pieces = plan_velocity(self._ramp.amax, self.now, p, v, rest, velocity_units(self._vt_pps),
+                                   self._ramp.wait)
         self._queue = SegmentQueue(pieces)
 
     def move_to(self, target: int) -> None:

@@ -425,9 +425,12 @@ class RestPlans:
         return out
 
 
-def plan_velocity(amax: int, t: int, p: int, v: int, rest: int | None, vt: int) -> list[Segment]:
+def plan_velocity(amax: int, t: int, p: int, v: int, rest: int | None, vt: int,
+                  wait: int = 0) -> list[Segment]:
     """Velocity-mode plan: ramp with AMAX from v to vt (through zero if the
-    sign changes), then run at vt forever (engine units)."""
+    sign changes), then run at vt forever (engine units). A motion that starts
+    from rest, or turns after ramping down to zero, waits until rest + `wait`
+    ticks (AP21: "before next movement or direction inversion can start")."""
     if amax == 0 or v == vt:
         return [_new(Segment, (t, None, p, v, 0, rest if v == 0 else None))]
     out: list[Segment] = []
@@ -442,6 +445,9 @@ def plan_velocity(amax: int, t: int, p: int, v: int, rest: int | None, vt: int) 
         if vt == 0:
             out.append(_new(Segment, (t, None, p, 0, 0, rest)))
             return out
+    if v == 0 and rest is not None and rest + wait > t:  # ramp wait time (TZEROWAIT)
+        out.append(_new(Segment, (t, rest + wait, p, 0, 0, rest)))
+        t = rest + wait
     n = abs(vt - v) // amax
     if n:
         seg = _new(Segment, (t, t + n, p, v, sign(vt - v) * amax, rest if v == 0 else None))

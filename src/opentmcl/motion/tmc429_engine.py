@@ -152,7 +152,12 @@ class Tmc429Engine(RampEngine):
 
     @property
     def position_reached(self) -> bool:
-        return self.ramp.position_reached
+        """AP8: "Indicates that the actual position equals the target position" (PD86-1180 manual
+        ch. 5), with the motor at rest, in every ramp mode: after MST (velocity mode) a motor that
+        stands on X_TARGET reads 1, as on the other modules (docs/assumptions.md). The chip's own
+        flag (`Tmc429Ramp.position_reached`) is set in ramp_mode and soft_mode only."""
+        r = self.ramp
+        return r.v_internal == 0 and r.dx == 0
 
     @property
     def pmul(self) -> int:

@@ -162,8 +162,10 @@ class Command:
 
     `forms` lists the accepted source operand orders (first = canonical); `symbols` names the
     symbol table of the type field (a key of SYMBOL_TABLES) or is empty; `label` is True when the
-    value field is a program address (JA, JC, CSUB, VECT, ...). `program` is False for the control
-    commands (direct mode only, TMCM-6212 3.6.36); `direct` is False for the commands the manuals
+    value field is a program address (JA, JC, CSUB, VECT, ...). `program` is False for the commands
+    of direct mode only (the control commands, TMCM-6212 3.6.36, and 138, 3.6.35); `control` marks
+    the control commands of the manuals' tables (128-137, TMCM-6212 Table 13; PD86-1180 4.6.39 adds
+    139), which download mode executes instead of storing; `direct` is False for the commands the manuals
     call "intended for standalone mode only" (informational: whether a firmware rejects them in
     direct mode is the firmware's decision). `mnemonic` is None for control commands.
     """
@@ -175,6 +177,7 @@ class Command:
     symbols: str = ""
     label: bool = False
     program: bool = True
+    control: bool = False
     direct: bool = True
     source: str = "TMCM-6212"
     keeps_address: bool = False
@@ -326,18 +329,18 @@ _COMMANDS: tuple[Command, ...] = (
     *(Command(64 + i, f"UF{i}", f"User function {i}", ((T, M, V), (T, M), (T,), ()))
       for i in range(8)),
     # Control commands: direct mode only, no mnemonic (TMCM-6212 3.6.35, 3.6.36; PD86-1180 4.6.39).
-    Command(128, None, "Stop application", program=False),
-    Command(129, None, "Run application", program=False),
-    Command(130, None, "Step application", program=False),
-    Command(131, None, "Reset application", program=False),
-    Command(132, None, "Enter download mode", program=False),
-    Command(133, None, "Exit download mode", program=False),
-    Command(134, None, "Read program memory", program=False),
-    Command(135, None, "Get application status", program=False, keeps_address=True),
-    Command(136, None, "Get firmware version", program=False, keeps_address=True),
-    Command(137, None, "Restore factory settings", program=False, replies=False),
+    Command(128, None, "Stop application", program=False, control=True),
+    Command(129, None, "Run application", program=False, control=True),
+    Command(130, None, "Step application", program=False, control=True),
+    Command(131, None, "Reset application", program=False, control=True),
+    Command(132, None, "Enter download mode", program=False, control=True),
+    Command(133, None, "Exit download mode", program=False, control=True),
+    Command(134, None, "Read program memory", program=False, control=True),
+    Command(135, None, "Get application status", program=False, control=True, keeps_address=True),
+    Command(136, None, "Get firmware version", program=False, control=True, keeps_address=True),
+    Command(137, None, "Restore factory settings", program=False, control=True, replies=False),
     Command(138, None, "Request target position reached event", program=False, keeps_address=True),
-    Command(139, None, "Enter ASCII mode", program=False, source="PD86-1180"),
+    Command(139, None, "Enter ASCII mode", program=False, control=True, source="PD86-1180"),
 )
 
 COMMANDS: Mapping[int, Command] = MappingProxyType({c.number: c for c in _COMMANDS})
@@ -360,10 +363,20 @@ FACTORY_RESET_KEY = 1234  # value that command 137 requires
 MOTOR_STOP = 3  # MST (3.6.3)
 SET_GLOBAL_PARAMETER = 9  # SGP (3.6.7)
 CONTROL_FIRST = 128
-"""Numbers from here up are control commands (3.6.36): direct mode only, never stored by 132."""
+"""Numbers from here up are reserved for control commands (3.6.36); see `is_control`."""
 STOP_COMMANDS = frozenset({MOTOR_STOP, STOP_APPLICATION, RESET_APPLICATION})
 """Requests that stop motion or a program: a served module takes them before other waiting
 requests (docs/architecture.md "Real time")."""
+
+
+def is_control(number: int) -> bool:
+    """Is `number` a control command, which download mode (132) executes instead of storing
+    ("All following commands (except control commands) are not executed but stored", TMCM-6212
+    3.6.36)? The commands of Table 13 (and 139 on the PD86-1180, 4.6.39), not 138: 3.6.35 is no
+    control command, a 138 sent during a download is stored. A number no command has is one from
+    CONTROL_FIRST up."""
+    c = COMMANDS.get(number)
+    return c.control if c is not None else number >= CONTROL_FIRST
 
 
 def keeps_addressing(command: int, bank: int) -> bool:

@@ -73,9 +73,23 @@ SERIAL_INTERFACES = ("usb", "rs485", "rs232")
 
 
 def default_interface(modules, paced: bool = False) -> str:
-    """USB when the link carries one module, RS-485 for a bus of several or a paced line
-    (docs/endpoints.md)."""
-    return USB if len(modules) == 1 and not paced else "rs485"
+    """USB when the link carries one module that has a USB port (its profile's capability `usb`),
+    RS-485 for a bus of several, a paced line or a module without USB (the PD28-1021, whose manual
+    lists RS485 as its interface; docs/endpoints.md)."""
+    return USB if len(modules) == 1 and not paced and has_usb(modules[0]) else "rs485"
+
+
+def has_usb(module) -> bool:
+    """Whether a module (a VirtualModule, or the (profile name, address) of an ``opentmcl://`` URL)
+    has a USB port: its profile's capability `usb`; True when it has no profile to ask."""
+    profile = getattr(module, "profile", None)
+    if profile is None and isinstance(module, tuple):
+        from ..modules.profile import load_profile
+        try:
+            profile = load_profile(module[0])
+        except (KeyError, ValueError, OSError):
+            return True  # the unknown name is reported where the module is made
+    return bool(getattr(getattr(profile, "capabilities", None), "usb", True))
 
 
 def interface_error(interface: str, count: int, paced: bool) -> str | None:

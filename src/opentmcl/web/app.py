@@ -20,7 +20,7 @@ so one page serves every module). An unknown address is a 404 with {"error": ...
     POST /api/params/store         STAP/RSAP/STGP/RSGP
     POST /api/console              one direct-mode instruction -> reply with status text
     POST /api/io/output, /api/io/force
-    POST /api/program/{assemble,download,run,stop,step,reset,breakpoints}; GET /api/program
+    POST /api/program/{assemble,download,run,run_from_start,stop,step,reset,breakpoints}; GET /api/program
     GET  /api/faults; POST /api/faults/trigger {name}   named faults of the served plan (web/faults.py)
     WS   /ws                       {"type": "samples"} 25 times a second, {"type": "state"} on change
 
@@ -277,6 +277,7 @@ class ModuleApi:
             Route("/api/program/download", json_api(self.download), methods=post),
             Route("/api/program/breakpoints", json_api(self.set_breakpoints), methods=post),
             Route("/api/program/run", json_api(self.run), methods=post),
+            Route("/api/program/run_from_start", json_api(self.run_from_start), methods=post),
             Route("/api/program/stop", json_api(self.stop), methods=post),
             Route("/api/program/step", json_api(self.step), methods=post),
             Route("/api/program/reset", json_api(self.reset), methods=post),
@@ -385,6 +386,9 @@ class ModuleApi:
 
     async def run(self, _request: Request) -> object:
         return await self._program_action(partial(self.d.run, self.d.stops))  # stops at arrival
+
+    async def run_from_start(self, _request: Request) -> object:
+        return await self._program_action(partial(self.d.run_from_start, self.d.stops))
 
     async def stop(self, _request: Request) -> object:
         return await self._program_action(self.d.stop, stop=True)

@@ -417,7 +417,10 @@ class Dashboard:
                 "_program": prog}
 
     def download(self, source: str) -> dict:
-        """Assemble, stop the program, download with verify (132, ..., 133, 134)."""
+        """Assemble, stop the program, download with verify (132, ..., 133, 134), then reset (131):
+        the manuals give 132/133 no effect on the program counter and Run (129 type 0) goes on "from
+        current address", so without the reset a freshly downloaded program would start wherever the
+        last one stopped (docs/dashboard-program.md)."""
         from ..host.loader import LoaderError
 
         result = self.assemble(source)
@@ -442,6 +445,7 @@ class Dashboard:
             finally:
                 self.downloading = None
             loader.verify(prog.instructions)
+            loader.reset()  # 131: program counter, stack, A, X and flags to zero (TMCM-6212 3.6.36)
         except LoaderError as exc:
             raise DashboardError(str(exc)) from None
         except TmclError as exc:
@@ -476,6 +480,14 @@ class Dashboard:
             self._unless_stopped(since, lambda: self.loader().run())
             return
         self._unless_stopped(since, self._start_runner)
+
+    def run_from_start(self, since: int | None = None) -> None:
+        """Reset (131: "Reset program counter and stack pointer to zero. Reset accumulator and X
+        register to zero. Reset all flags.", TMCM-6212 3.6.36), then Run as `run` does: the program
+        from its first instruction, whatever it did before."""
+        self.cancel_run()
+        self._unless_stopped(since, lambda: self.loader().reset())
+        self.run(since)
 
     def _start_runner(self) -> None:
         """The host-side stepping thread (called under the lock: a STOP ALL's cancel comes after)."""

@@ -42,8 +42,8 @@ class SimulatedModule(Protocol):
 
     def drain_events(self) -> list[bytes]: ...
 
-    # Optional: ``events``, the list `drain_events` empties (kept the same object): looked at to
-    # skip the call when nothing waits.
+    # Optional: ``events``, a list of the events waiting (what `drain_events` would answer): looked
+    # at to skip the call when nothing waits.
 
     def advance(self, seconds: float, /) -> object: ...
 
@@ -181,8 +181,9 @@ class InProcessTransport(Transport, Generic[M]):
         self._closed = False
         self._lock = threading.RLock()  # `lock`: the modules are not thread-safe; one caller at a time
         self._only: M | None = self.modules[0] if len(self.modules) == 1 else None  # `exchange`; None once closed
-        pending = getattr(self._only, "events", None)
-        self._pending: list[bytes] | None = pending if isinstance(pending, list) else None
+        # a module that keeps its waiting events in a list `events` (VirtualModule does): looked at
+        # before `drain_events` is called, which then only runs when something waits
+        self._listed = isinstance(getattr(self._only, "events", None), list)
 
     def __init_subclass__(cls, **kwargs: object) -> None:
         """A subclass that watches `send` or `recv` sees every frame there: its `send_many`,
@@ -215,8 +216,7 @@ class InProcessTransport(Transport, Generic[M]):
         return next((m for m in self.modules if _answers(m, address)), None)
 
     def _collect_events(self) -> None:
-        pending = self._pending
-        if pending is not None and not pending:  # the one module has no events waiting
+        if self._listed and not self._only.events:  # type: ignore[union-attr]  # the one module: none waiting
             return
         for m in self.modules:
             for event in m.drain_events():
@@ -257,15 +257,15 @@ class InProcessTransport(Transport, Generic[M]):
         clock = self.clock
         if clock.syncs:
             clock.sync(self)
-        pending = self._pending
-        events = module.drain_events() if pending is None or pending else ()
+        listed = self._listed
+        events = module.drain_events() if not listed or module.events else ()  # type: ignore[attr-defined]
         if events or rx:  # an event (or one collected by the sync) goes before the reply
             for event in events:
                 rx += event
             self._deliver(frame)
             return None
         reply = module.handle(frame)
-        events = module.drain_events() if pending is None or pending else ()
+        events = module.drain_events() if not listed or module.events else ()  # type: ignore[attr-defined]
         if events or len(reply) != FRAME_LEN:
             rx += reply
             for event in events:

@@ -64,7 +64,8 @@ const MARKUP = `
     <div class="toolbar">
       <button id="btn-assemble">Assemble</button>
       <button id="btn-download">Download</button>
-      <button id="btn-run">Run</button>
+      <button id="btn-run" title="run (129) from the current address; a download sets it to the first instruction">Run</button>
+      <button id="btn-run-start" title="reset (131), then run: the program from its first instruction">Run from start</button>
       <button id="btn-stop">Stop</button>
       <button id="btn-step">Step</button>
       <button id="btn-reset">Reset</button>
@@ -208,7 +209,7 @@ async function assembleOnly(download) {
     if (download) {
       D.downloaded = true;
       await pushBreakpoints();
-      message(`downloaded ${r.count} instructions${warned}`);
+      message(`downloaded ${r.count} instructions${warned}; Run starts at the first one`);
     } else {
       message(`assembled: ${r.count} instructions${warned}`);
     }
@@ -216,13 +217,13 @@ async function assembleOnly(download) {
   } catch (e) { message(e.message, true); return false; }
 }
 
-async function programAction(name) {
+async function programAction(name, label = name) {
   try {
     const st = await api(`api/program/${name}`, {});
     // A run to a breakpoint answers mid-run; the live state (WebSocket) brings where it stops,
     // and may already have: a late mid-run answer must not overwrite it.
     if (!st.stepping_to_breakpoint) showProgramState(st);
-    message(name);
+    message(label);
   } catch (e) { message(e.message, true); }
 }
 
@@ -325,6 +326,7 @@ function setupEditor(root, ov) {
   $("btn-assemble").addEventListener("click", () => assembleOnly(false));
   $("btn-download").addEventListener("click", () => assembleOnly(true));
   $("btn-run").addEventListener("click", () => programAction("run"));
+  $("btn-run-start").addEventListener("click", () => programAction("run_from_start", "run from start"));
   $("btn-stop").addEventListener("click", () => programAction("stop"));
   $("btn-step").addEventListener("click", () => programAction("step"));
   $("btn-reset").addEventListener("click", () => programAction("reset"));
