@@ -51,17 +51,14 @@ class Scenario:
     axes: dict[int, AxisSpec] = field(default_factory=dict)
     inputs: list[InputSpec] = field(default_factory=list)
     shutdown: Profile | None = None
-<<<<<<< HEAD
     faults: FaultPlan = field(default_factory=FaultPlan)
     """The scenario's [[fault]] tables and seed (docs/faults.md)."""
-=======
     measures: dict[str, Profile] = field(default_factory=dict)
     """`supply_voltage` (V) and `temperature` (°C) over time, where the scenario gives them."""
 
     def measure(self, name: str) -> Profile:
         """The quantity `name` of MEASURE_DEFAULTS over time: the scenario's, else its default."""
         return self.measures.get(name) or Profile.constant(MEASURE_DEFAULTS[name])
->>>>>>> main
 
     def axis(self, index: int) -> AxisSpec:
         return self.axes.get(index) or AxisSpec()
@@ -238,11 +235,8 @@ def parse_axis(d, where: str) -> AxisSpec:
 
 def parse_scenario(data: dict) -> Scenario:
     d = _table(data, "scenario")
-<<<<<<< HEAD
-    _known(d, {"module", "axis", "input", "shutdown", "description", "fault", "seed"}, "scenario")
-=======
-    _known(d, {"module", "axis", "input", "shutdown", "description", *MEASURE_DEFAULTS}, "scenario")
->>>>>>> main
+    _known(d, {"module", "axis", "input", "shutdown", "description", "fault", "seed", *MEASURE_DEFAULTS},
+           "scenario")
     sc = Scenario(module=d.get("module"))
     axes = d.get("axis", {})
     if isinstance(axes, list):
@@ -273,16 +267,13 @@ def parse_scenario(data: dict) -> Scenario:
                                    parse_profile(sig, where)))
     if "shutdown" in d:
         sc.shutdown = parse_profile(d["shutdown"], "shutdown")
-<<<<<<< HEAD
     try:
         sc.faults = FaultPlan(parse_faults(d.get("fault", []), "fault"), parse_seed(d.get("seed")))
     except FaultError as exc:
         raise ScenarioError(str(exc)) from None
-=======
     for name in MEASURE_DEFAULTS:
         if name in d:
             sc.measures[name] = parse_profile(d[name], name)
->>>>>>> main
     return sc
 
 
