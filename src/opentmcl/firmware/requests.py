@@ -19,7 +19,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING
 
-from ..protocol.frame import to_int32
+from ..protocol.frame import Reply, to_int32
 from .effects import Effect
 from .status import TmclStatus
 from .table import TABLE
@@ -28,6 +28,7 @@ if TYPE_CHECKING:
     from .vm import VirtualModule
 
 Entry = Callable[[], bytes]
+Replied = Callable[[], Reply]
 Setter = Callable[[int], None]
 Read = Callable[[], int]
 SAP, GAP, SGP, GGP, GIO = 5, 6, 9, 10, 15
@@ -36,6 +37,7 @@ USER_BANK = 2
 MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
 _TAIL = struct.Struct(">4siB")
 _PURE = Effect.READ
+_new_tuple = tuple.__new__  # `_new_tuple(Reply, fields)`: a Reply without the NamedTuple's Python __new__
 
 
 def reply_bytes(host: int, module: int, status: int, command: int, value: int) -> bytes:
@@ -59,6 +61,25 @@ def _packed(head: bytes, read: Read) -> Entry:
     return entry
 
 
+def _valued(head: bytes, read: Read) -> Replied:
+    """The same reply as `_packed`'s, as a `Reply` value: what an in-process host reads without
+    packing and decoding (`VirtualModule.handle` with `as_reply`). An unchanged value gives the
+    same `Reply` again."""
+    host, module, status, command = head
+    last = _new_tuple(Reply, (host, module, status, command, 0))
+
+    def entry() -> Reply:
+        nonlocal last
+        v = read()
+        if v == last[4]:  # the same value as last time: the same reply (a Reply is immutable)
+            return last
+        if v.__class__ is not int or not -0x8000_0000 <= v <= 0x7FFF_FFFF:
+            v = to_int32(v)  # as on the wire: a flag (bool) as 1 or 0, 32 bits
+        last = _new_tuple(Reply, (host, module, status, command, v))
+        return last
+    return entry
+
+
 def reader(vm: VirtualModule, command: int, type_: int, motor: int) -> Read | None:
     """The bound read of GAP `type_, motor`, GGP `type_, bank` or GIO `port, bank` when it is a pure
     read the module answers (the command table's effect), else None."""
@@ -79,13 +100,21 @@ def reader(vm: VirtualModule, command: int, type_: int, motor: int) -> Read | No
         return None
 
 
-def handler(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | None:
-    """The pre-bound handler of one read request (its whole reply), or None when it takes the
-    general path."""
+def handlers(vm: VirtualModule, command: int, type_: int, motor: int) -> tuple[Entry, Replied] | None:
+    """The pre-bound handlers of one read request, its whole reply as bytes and as a `Reply` from
+    one read, or None when it takes the general path."""
     read = reader(vm, command, type_, motor)
     if read is None:
         return None
-    return _packed(bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command)), read)
+    head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
+    return _packed(head, read), _valued(head, read)
+
+
+def handler(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | None:
+    """The pre-bound handler of one read request (its whole reply), or None when it takes the
+    general path."""
+    both = handlers(vm, command, type_, motor)
+    return None if both is None else both[0]
 
 
 def store(vm: VirtualModule, type_: int, bank: int) -> Setter | None:
@@ -104,13 +133,17 @@ class RequestPath:
         self.vm = vm
         self.reads: dict[bytes, Entry] = {}
         """Whole 9-byte frames -> handler (one lookup checks address, command, type, motor, checksum)."""
+        self.replies: dict[bytes, Replied] = {}
+        """The same frames -> the same reply as a `Reply` value (`VirtualModule.handle` with
+        `as_reply`)."""
         self.writes: dict[bytes, Setter] = {}
         """First four bytes of a SAP or SGP (bank 2) -> its setter."""
-        self._shapes: dict[bytes, Entry | None] = {}  # first four bytes -> handler, shared by values
+        self._shapes: dict[bytes, tuple[Entry, Replied] | None] = {}  # first four bytes -> handlers, shared by values
         vm.scheduler.register("pre-bound requests", Effect.REQUESTS, self.forget)
 
     def forget(self) -> None:
         self.reads.clear()
+        self.replies.clear()
         self.writes.clear()
         self._shapes.clear()
 
@@ -120,11 +153,13 @@ class RequestPath:
         binds = TABLE[command].binds
         if binds == "read":
             shape = bytes(frame[:4])  # frames differing in the value field share one handler
-            fast = self._shapes.get(shape) or self._shapes.setdefault(shape, handler(self.vm, command, type_, motor))
+            fast = self._shapes.get(shape) or self._shapes.setdefault(shape, handlers(self.vm, command, type_, motor))
             if fast is not None:
                 if len(self.reads) >= MAX_BOUND:  # a host varying the ignored value field
                     self.reads.clear()
-                self.reads[bytes(frame)] = fast
+                    self.replies.clear()
+                key = bytes(frame)
+                self.reads[key], self.replies[key] = fast
         elif binds == "write":
             write = self._setter(command, type_, motor)
             if write is not None:
@@ -144,7 +179,7 @@ class RequestPath:
 
     def __getstate__(self) -> dict[str, object]:
         """A copy (copy.deepcopy, pickle) binds its own handlers: these are bound to this module."""
-        return {**self.__dict__, "reads": {}, "writes": {}, "_shapes": {}}
+        return {**self.__dict__, "reads": {}, "replies": {}, "writes": {}, "_shapes": {}}
 
     def is_prebound(self, frame: bytes) -> bool:
         """Whether `frame` is answered by a pre-bound handler (tests, benchmarks)."""

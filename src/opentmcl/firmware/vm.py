@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import os
 import struct
-from typing import Any
+from typing import Any, Literal, overload
 
 from ..faults import load_plan
 from ..modules.profile import ModuleProfile, load_profile
@@ -76,6 +76,7 @@ class VirtualModule:
         self.scheduler = self.scheduler_class(self)
         self.requests = RequestPath(self)
         self._reads = self.requests.reads    # the request path's table, read on every frame
+        self._replies = self.requests.replies  # its replies as values: read after a hit in `_reads`
         self._writes = self.requests.writes
         self.events: list[bytes] = []
         """Unsolicited replies produced while time advanced (command 138, status 128)."""
@@ -172,7 +173,13 @@ class VirtualModule:
         return secondary != 0 and address == secondary
 
     # --- wire interface -------------------------------------------------------
-    def handle(self, frame: bytes, *, interface: str = "serial") -> bytes:
+    @overload
+    def handle(self, frame: bytes, *, interface: str = "serial", as_reply: Literal[False] = False) -> bytes: ...
+
+    @overload
+    def handle(self, frame: bytes, *, interface: str = "serial", as_reply: bool) -> Reply | bytes: ...
+
+    def handle(self, frame: bytes, *, interface: str = "serial", as_reply: bool = False) -> Reply | bytes:
         """Process one 9-byte request; return the reply bytes (b"" when no reply is due).
 
         `interface` is the link the frame came over: "serial" (or "rs232", "rs485": the module
@@ -182,7 +189,9 @@ class VirtualModule:
 
         A read that has a pre-bound handler skips the general path (requests.py): the table is
         keyed by the whole frame, so one lookup checks length, address, command, type, motor
-        and checksum at once. Every other frame takes the general path (`_handle_general`)."""
+        and checksum at once. Every other frame takes the general path (`_handle_general`).
+        `as_reply` (a host in this process, `InProcessTransport`): a pre-bound read's reply comes
+        as the `Reply` value it packs (nothing to pack or decode); every other reply as bytes."""
         try:
             fast = self._reads.get(frame)
         except TypeError:  # a mutable buffer: the general path reads it
@@ -197,7 +206,7 @@ class VirtualModule:
                 hb.fired = False
                 if sched.synced_at != now:
                     sched.sync_for_read()
-                return fast()
+                return self._replies[frame]() if as_reply else fast()
         hook = self._hook
         if hook is not None:  # faults decide first (firmware/faults.py)
             return hook.handle(frame, interface, self._handle_general)
@@ -253,11 +262,12 @@ class VirtualModule:
     def __getstate__(self) -> dict[str, Any]:
         """A copy (copy.deepcopy, pickle) binds its own handlers: the request path's table is
         looked up again from the copy's own request path."""
-        return {k: v for k, v in self.__dict__.items() if k not in ("_reads", "_writes")}
+        return {k: v for k, v in self.__dict__.items() if k not in ("_reads", "_replies", "_writes")}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._reads = self.requests.reads if self._hook is None else _NO_READS
+        self._replies = self.requests.replies
         self._writes = self.requests.writes
 
     # --- faults (docs/faults.md) ----------------------------------------------------------------

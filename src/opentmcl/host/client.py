@@ -130,7 +130,7 @@ def check_address(value: int) -> int:
 class _Plain:
     """A checked request answered in the reply format of manual 3.2, ready to send."""
 
-    __slots__ = ("frame", "head", "request", "last", "silent", "quiets")
+    __slots__ = ("frame", "head", "fields", "request", "last", "silent", "quiets")
 
     def __init__(self, frame: bytes, head: bytes, request: Request) -> None:
         self.frame = frame
@@ -138,6 +138,8 @@ class _Plain:
         self.head = head
         """Module address, status 100 and command: the bytes after the reply address of its plain
         reply (the first three bytes of a CAN reply)."""
+        self.fields = tuple(head)
+        """The same as the fields of a `Reply` (`reply[1:4]`)."""
         self.request = request
         self.last: tuple[bytes, Reply] = (b"", _NO_REPLY)
         """The last plain reply read, as received and decoded: the same bytes again decode alike."""
@@ -240,7 +242,12 @@ class Client:
                 self._in_step(plain.request, wait)
             if plain.silent and (self._quiet or plain.quiets):
                 return self._ask_quiet(plain, wait)
-            return self._read_plain(plain, wait, self._exchange(plain.frame))
+            raw = self._exchange(plain.frame)
+            if raw.__class__ is Reply:  # handed over by an in-process module: nothing to decode
+                if raw[1:4] == plain.fields:  # type: ignore[index]  # the plain reply asked for
+                    return raw  # type: ignore[return-value]
+                raw = raw.encode()  # type: ignore[union-attr]  # anything else: read as bytes
+            return self._read_plain(plain, wait, raw)  # type: ignore[arg-type]
         finally:
             lock.release()
 

@@ -36,6 +36,7 @@ from .errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueErr
 if TYPE_CHECKING:
     from typing import Self  # annotations only
 
+    from ..protocol.frame import Reply
     from ..registry import Registry
 
 log = logging.getLogger("opentmcl.host.transport")
@@ -120,10 +121,11 @@ class Transport(ABC):
         for frame in frames:
             self.send(frame)
 
-    def exchange(self, frame: bytes) -> bytes | None:
+    def exchange(self, frame: bytes) -> Reply | bytes | None:
         """Send one request frame and return its reply if the link has it at hand at once (an
-        in-process module answers when called), else None: the caller then reads the reply with
-        `recv`. The caller holds `lock`. This default only sends."""
+        in-process module answers when called; as bytes, or as the `Reply` value the module handed
+        over), else None: the caller then reads the reply with `recv`. The caller holds `lock`.
+        This default only sends."""
         self.send(frame)
         return None
 

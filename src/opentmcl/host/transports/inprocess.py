@@ -3,7 +3,9 @@
 Any object with the VirtualModule interface can sit behind it:
 ``handle(frame9) -> bytes`` (the reply, b"" when none is due),
 ``drain_events() -> list[bytes]`` (unsolicited replies such as the command-138
-"position reached" reply, TMCM-6212 manual 3.6.35) and ``advance(seconds)``.
+"position reached" reply, TMCM-6212 manual 3.6.35) and ``advance(seconds)``. A module whose
+`handle` takes ``as_reply=True`` (VirtualModule does) may hand a reply over as a `Reply` value:
+`exchange` hands it on to the client, nothing is packed or decoded.
 Several modules may share one transport, like modules on one RS-485 bus: each
 request is offered to every module and only the addressed one answers.
 This module never imports the firmware: ``sim://`` URLs are turned into
@@ -21,6 +23,7 @@ No thread and no socket: time passes only as the clock policy says
 """
 from __future__ import annotations
 
+import inspect
 import threading
 import time
 import urllib.parse
@@ -29,7 +32,7 @@ from typing import ClassVar, Generic, Protocol, TypeVar
 
 from ...faults import FaultBoard
 from ...modules.addresses import address_error
-from ...protocol.frame import FRAME_LEN
+from ...protocol.frame import FRAME_LEN, Reply
 from ..errors import TmclConnectionError, TmclTimeout, TmclUrlError, TmclValueError, check_timeout
 from ..transport import DEBUG, Transport, log, log_frame
 
@@ -43,7 +46,8 @@ class SimulatedModule(Protocol):
     def drain_events(self) -> list[bytes]: ...
 
     # Optional: ``events``, a list of the events waiting (what `drain_events` would answer): looked
-    # at to skip the call when nothing waits.
+    # at to skip the call when nothing waits; ``handle(frame, as_reply=True) -> Reply | bytes``, a
+    # reply handed over as a value where the module has it (`exchange` asks for it).
 
     def advance(self, seconds: float, /) -> object: ...
 
@@ -157,6 +161,14 @@ def make_clock(clock: str | Clock) -> Clock:
         raise TmclValueError(f"unknown clock policy {clock!r}; use one of {', '.join(CLOCKS)}") from None
 
 
+def _takes_as_reply(module: object) -> bool:
+    """Whether the module's `handle` takes ``as_reply`` (a reply handed over as a `Reply`)."""
+    try:
+        return "as_reply" in inspect.signature(module.handle).parameters  # type: ignore[attr-defined]
+    except (TypeError, ValueError):  # a callable without a signature Python can read
+        return False
+
+
 def _answers(module: object, address: int) -> bool:
     accepts: Callable[[int], bool] | None = getattr(module, "accepts_address", None)
     return accepts is not None and accepts(address)
@@ -183,7 +195,12 @@ class InProcessTransport(Transport, Generic[M]):
         self._only: M | None = self.modules[0] if len(self.modules) == 1 else None  # `exchange`; None once closed
         # a module that keeps its waiting events in a list `events` (VirtualModule does): looked at
         # before `drain_events` is called, which then only runs when something waits
-        self._listed = isinstance(getattr(self._only, "events", None), list)
+        waiting = getattr(self._only, "events", None)
+        self._waiting: list[bytes] | None = waiting if isinstance(waiting, list) else None
+        # `exchange`: the one module, while it keeps its events in a list; `_as_reply`: its `handle`
+        # takes `as_reply`
+        self._exchanged: M | None = None if waiting is None else self._only
+        self._as_reply = self._exchanged is not None and _takes_as_reply(self._exchanged)
 
     def __init_subclass__(cls, **kwargs: object) -> None:
         """A subclass that watches `send` or `recv` sees every frame there: its `send_many`,
@@ -216,7 +233,8 @@ class InProcessTransport(Transport, Generic[M]):
         return next((m for m in self.modules if _answers(m, address)), None)
 
     def _collect_events(self) -> None:
-        if self._listed and not self._only.events:  # type: ignore[union-attr]  # the one module: none waiting
+        waiting = self._waiting
+        if waiting is not None and not waiting:  # the one module: none waiting
             return
         for m in self.modules:
             for event in m.drain_events():
@@ -245,33 +263,33 @@ class InProcessTransport(Transport, Generic[M]):
         and None is returned."""
         return self._send_frames(frames, at_hand=True)
 
-    def exchange(self, frame: bytes) -> bytes | None:
-        """`exchange_many` of one frame, short: the common case of a request (one module, nothing
-        waiting, no event, one 9-byte reply, DEBUG logging off) is one `handle` call between two
-        looks for events, after the clock's sync if it has one."""
+    def exchange(self, frame: bytes) -> Reply | bytes | None:
+        """`exchange_many` of one frame, short: the common case of a request (one module that keeps
+        its events in a list, nothing waiting, no event, one reply, DEBUG logging off) is one
+        `handle` call after the clock's sync if it has one. The reply comes as the module handed
+        it over: a `Reply` value (``as_reply``) or 9 bytes."""
+        module = self._exchanged
+        waiting = self._waiting
         rx = self._rx
-        module = self._only
-        if module is None or rx or log.isEnabledFor(DEBUG):
+        if module is None or waiting or rx or log.isEnabledFor(DEBUG):
             replies = self._send_frames([frame], at_hand=True)
             return None if replies is None else replies[0]
         clock = self.clock
         if clock.syncs:
             clock.sync(self)
-        listed = self._listed
-        events = module.drain_events() if not listed or module.events else ()  # type: ignore[attr-defined]
-        if events or rx:  # an event (or one collected by the sync) goes before the reply
-            for event in events:
-                rx += event
-            self._deliver(frame)
+            if waiting or rx:  # an event (or one collected by the sync) goes before the reply
+                self._collect_events()
+                self._deliver(frame)
+                return None
+        reply = module.handle(frame, as_reply=True) if self._as_reply else module.handle(frame)  # type: ignore[call-arg]
+        if waiting:  # events came with the reply: the reply, then the events, as bytes arrive
+            rx += reply.encode() if reply.__class__ is Reply else reply  # type: ignore[union-attr, operator]
+            self._collect_events()
             return None
-        reply = module.handle(frame)
-        events = module.drain_events() if not listed or module.events else ()  # type: ignore[attr-defined]
-        if events or len(reply) != FRAME_LEN:
-            rx += reply
-            for event in events:
-                rx += event
-            return None
-        return reply
+        if reply.__class__ is Reply or len(reply) == FRAME_LEN:
+            return reply
+        rx += reply  # type: ignore[operator]  # no reply, or one of another length (the version string)
+        return None
 
     def _send_frames(self, frames: list[bytes], *, at_hand: bool = False) -> list[bytes] | None:
         """One time sync, then each frame to every module with the events collected before and
@@ -343,6 +361,7 @@ class InProcessTransport(Transport, Generic[M]):
     def close(self) -> None:
         self._closed = True
         self._only = None
+        self._exchanged = None
 
 
 def parse_modules(netloc: str, default_address: int) -> list[tuple[str, int]]:
