@@ -27,8 +27,9 @@ from .table import TABLE
 if TYPE_CHECKING:
     from .vm import VirtualModule
 
-Entry = Callable[[], bytes]
-Replied = Callable[[], Reply]
+Entry = Callable[..., "Reply | bytes"]
+"""A pre-bound read: ``entry(heartbeat="serial", as_reply=False)``, its reply as bytes or
+(`as_reply`) as a `Reply` (`_entry`)."""
 Setter = Callable[[int], None]
 Read = Callable[[], int]
 SAP, GAP, SGP, GGP, GIO = 5, 6, 9, 10, 15
@@ -49,34 +50,34 @@ def reply_bytes(host: int, module: int, status: int, command: int, value: int) -
     return _TAIL.pack(head, value, (sum(head) + value + (value >> 8) + (value >> 16) + (value >> 24)) & 0xFF)
 
 
-def _packed(head: bytes, read: Read) -> Entry:
-    """A handler answering `read()` behind the fixed first four reply bytes."""
+def _entry(vm: VirtualModule, head: bytes, read: Read) -> Entry:
+    """The pre-bound handler of one read. Called with the heartbeat of the request's link
+    (`heartbeat.OF_INTERFACE`), it restarts that heartbeat (as `Heartbeats.touch`), brings the
+    engines to now for a pure read (`Scheduler.sync_for_read`) and answers `read()` behind the
+    fixed first four reply bytes; with `as_reply` as the `Reply` of the same fields (nothing
+    packed), the same object again while the value stays the same (a Reply is immutable)."""
+    sched, heartbeats = vm.scheduler, vm.heartbeats
+    ticks = heartbeats.last
     head_sum, pack = sum(head), _TAIL.pack
+    reply = _new_tuple(Reply, (*head, 0))
 
-    def entry() -> bytes:
+    def entry(heartbeat: str = "serial", as_reply: bool = False) -> Reply | bytes:
+        nonlocal reply
+        now = sched.now
+        ticks[heartbeat] = now  # restart the heartbeat
+        heartbeats.fired = False
+        if sched.synced_at != now:
+            sched.sync_for_read()
         v = read()
+        if as_reply:
+            if v != reply[4]:
+                if v.__class__ is not int or not -0x8000_0000 <= v <= 0x7FFF_FFFF:
+                    v = to_int32(v)  # as on the wire: a flag (bool) as 1 or 0, 32 bits
+                reply = _new_tuple(Reply, reply[:4] + (v,))
+            return reply
         if not -0x8000_0000 <= v <= 0x7FFF_FFFF:
             v = to_int32(v)
         return pack(head, v, (head_sum + v + (v >> 8) + (v >> 16) + (v >> 24)) & 0xFF)
-    return entry
-
-
-def _valued(head: bytes, read: Read) -> Replied:
-    """The same reply as `_packed`'s, as a `Reply` value: what an in-process host reads without
-    packing and decoding (`VirtualModule.handle` with `as_reply`). An unchanged value gives the
-    same `Reply` again."""
-    host, module, status, command = head
-    last = _new_tuple(Reply, (host, module, status, command, 0))
-
-    def entry() -> Reply:
-        nonlocal last
-        v = read()
-        if v == last[4]:  # the same value as last time: the same reply (a Reply is immutable)
-            return last
-        if v.__class__ is not int or not -0x8000_0000 <= v <= 0x7FFF_FFFF:
-            v = to_int32(v)  # as on the wire: a flag (bool) as 1 or 0, 32 bits
-        last = _new_tuple(Reply, (host, module, status, command, v))
-        return last
     return entry
 
 
@@ -100,21 +101,13 @@ def reader(vm: VirtualModule, command: int, type_: int, motor: int) -> Read | No
         return None
 
 
-def handlers(vm: VirtualModule, command: int, type_: int, motor: int) -> tuple[Entry, Replied] | None:
-    """The pre-bound handlers of one read request, its whole reply as bytes and as a `Reply` from
-    one read, or None when it takes the general path."""
-    read = reader(vm, command, type_, motor)
-    if read is None:
-        return None
-    head = bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command))
-    return _packed(head, read), _valued(head, read)
-
-
 def handler(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | None:
     """The pre-bound handler of one read request (its whole reply), or None when it takes the
     general path."""
-    both = handlers(vm, command, type_, motor)
-    return None if both is None else both[0]
+    read = reader(vm, command, type_, motor)
+    if read is None:
+        return None
+    return _entry(vm, bytes((vm.host_address & 0xFF, vm.address & 0xFF, OK, command)), read)
 
 
 def store(vm: VirtualModule, type_: int, bank: int) -> Setter | None:
@@ -133,17 +126,13 @@ class RequestPath:
         self.vm = vm
         self.reads: dict[bytes, Entry] = {}
         """Whole 9-byte frames -> handler (one lookup checks address, command, type, motor, checksum)."""
-        self.replies: dict[bytes, Replied] = {}
-        """The same frames -> the same reply as a `Reply` value (`VirtualModule.handle` with
-        `as_reply`)."""
         self.writes: dict[bytes, Setter] = {}
         """First four bytes of a SAP or SGP (bank 2) -> its setter."""
-        self._shapes: dict[bytes, tuple[Entry, Replied] | None] = {}  # first four bytes -> handlers, shared by values
+        self._shapes: dict[bytes, Entry | None] = {}  # first four bytes -> handler, shared by values
         vm.scheduler.register("pre-bound requests", Effect.REQUESTS, self.forget)
 
     def forget(self) -> None:
         self.reads.clear()
-        self.replies.clear()
         self.writes.clear()
         self._shapes.clear()
 
@@ -153,13 +142,11 @@ class RequestPath:
         binds = TABLE[command].binds
         if binds == "read":
             shape = bytes(frame[:4])  # frames differing in the value field share one handler
-            fast = self._shapes.get(shape) or self._shapes.setdefault(shape, handlers(self.vm, command, type_, motor))
+            fast = self._shapes.get(shape) or self._shapes.setdefault(shape, handler(self.vm, command, type_, motor))
             if fast is not None:
                 if len(self.reads) >= MAX_BOUND:  # a host varying the ignored value field
                     self.reads.clear()
-                    self.replies.clear()
-                key = bytes(frame)
-                self.reads[key], self.replies[key] = fast
+                self.reads[bytes(frame)] = fast
         elif binds == "write":
             write = self._setter(command, type_, motor)
             if write is not None:
@@ -179,7 +166,7 @@ class RequestPath:
 
     def __getstate__(self) -> dict[str, object]:
         """A copy (copy.deepcopy, pickle) binds its own handlers: these are bound to this module."""
-        return {**self.__dict__, "reads": {}, "replies": {}, "writes": {}, "_shapes": {}}
+        return {**self.__dict__, "reads": {}, "writes": {}, "_shapes": {}}
 
     def is_prebound(self, frame: bytes) -> bool:
         """Whether `frame` is answered by a pre-bound handler (tests, benchmarks)."""

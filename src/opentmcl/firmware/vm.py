@@ -76,7 +76,6 @@ class VirtualModule:
         self.scheduler = self.scheduler_class(self)
         self.requests = RequestPath(self)
         self._reads = self.requests.reads    # the request path's table, read on every frame
-        self._replies = self.requests.replies  # its replies as values: read after a hit in `_reads`
         self._writes = self.requests.writes
         self.events: list[bytes] = []
         """Unsolicited replies produced while time advanced (command 138, status 128)."""
@@ -174,12 +173,12 @@ class VirtualModule:
 
     # --- wire interface -------------------------------------------------------
     @overload
-    def handle(self, frame: bytes, *, interface: str = "serial", as_reply: Literal[False] = False) -> bytes: ...
+    def handle(self, frame: bytes, as_reply: Literal[False] = False, *, interface: str = "serial") -> bytes: ...
 
     @overload
-    def handle(self, frame: bytes, *, interface: str = "serial", as_reply: bool) -> Reply | bytes: ...
+    def handle(self, frame: bytes, as_reply: bool, *, interface: str = "serial") -> Reply | bytes: ...
 
-    def handle(self, frame: bytes, *, interface: str = "serial", as_reply: bool = False) -> Reply | bytes:
+    def handle(self, frame: bytes, as_reply: bool = False, *, interface: str = "serial") -> Reply | bytes:
         """Process one 9-byte request; return the reply bytes (b"" when no reply is due).
 
         `interface` is the link the frame came over: "serial" (or "rs232", "rs485": the module
@@ -190,8 +189,8 @@ class VirtualModule:
         A read that has a pre-bound handler skips the general path (requests.py): the table is
         keyed by the whole frame, so one lookup checks length, address, command, type, motor
         and checksum at once. Every other frame takes the general path (`_handle_general`).
-        `as_reply` (a host in this process, `InProcessTransport`): a pre-bound read's reply comes
-        as the `Reply` value it packs (nothing to pack or decode); every other reply as bytes."""
+        `as_reply` (a host in this process, `InProcessTransport`): a pre-bound read answers with
+        the `Reply` it would pack (nothing to pack or decode), every other request with bytes."""
         try:
             fast = self._reads.get(frame)
         except TypeError:  # a mutable buffer: the general path reads it
@@ -199,14 +198,7 @@ class VirtualModule:
         if fast is not None:
             heartbeat = OF_INTERFACE.get(interface)
             if heartbeat is not None:
-                sched = self.scheduler
-                now = sched.now
-                hb = self.heartbeats
-                hb.last[heartbeat] = now  # restart the heartbeat
-                hb.fired = False
-                if sched.synced_at != now:
-                    sched.sync_for_read()
-                return self._replies[frame]() if as_reply else fast()
+                return fast(heartbeat, as_reply)  # the heartbeat restarted, the engines at now
         hook = self._hook
         if hook is not None:  # faults decide first (firmware/faults.py)
             return hook.handle(frame, interface, self._handle_general)
@@ -262,12 +254,11 @@ class VirtualModule:
     def __getstate__(self) -> dict[str, Any]:
         """A copy (copy.deepcopy, pickle) binds its own handlers: the request path's table is
         looked up again from the copy's own request path."""
-        return {k: v for k, v in self.__dict__.items() if k not in ("_reads", "_replies", "_writes")}
+        return {k: v for k, v in self.__dict__.items() if k not in ("_reads", "_writes")}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.__dict__.update(state)
         self._reads = self.requests.reads if self._hook is None else _NO_READS
-        self._replies = self.requests.replies
         self._writes = self.requests.writes
 
     # --- faults (docs/faults.md) ----------------------------------------------------------------

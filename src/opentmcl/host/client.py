@@ -130,7 +130,7 @@ def check_address(value: int) -> int:
 class _Plain:
     """A checked request answered in the reply format of manual 3.2, ready to send."""
 
-    __slots__ = ("frame", "head", "fields", "request", "last", "silent", "quiets")
+    __slots__ = ("frame", "head", "fields", "request", "last", "seen", "silent", "quiets")
 
     def __init__(self, frame: bytes, head: bytes, request: Request) -> None:
         self.frame = frame
@@ -143,6 +143,9 @@ class _Plain:
         self.request = request
         self.last: tuple[bytes, Reply] = (b"", _NO_REPLY)
         """The last plain reply read, as received and decoded: the same bytes again decode alike."""
+        self.seen: Reply = _NO_REPLY
+        """The last plain reply handed over as a `Reply` value (`Transport.exchange`): the same
+        object again needs no look."""
         self.silent = request.command not in ANSWERED_ALWAYS
         """GP255 = 1 suppresses its reply when it succeeds."""
         self.quiets = request.command == SGP and request.type == SUPPRESS_REPLY and request.motor == 0 \
@@ -244,7 +247,10 @@ class Client:
                 return self._ask_quiet(plain, wait)
             raw = self._exchange(plain.frame)
             if raw.__class__ is Reply:  # handed over by an in-process module: nothing to decode
+                if raw is plain.seen:  # the same reply object as last time, checked then
+                    return raw  # type: ignore[return-value]
                 if raw[1:4] == plain.fields:  # type: ignore[index]  # the plain reply asked for
+                    plain.seen = raw
                     return raw  # type: ignore[return-value]
                 raw = raw.encode()  # type: ignore[union-attr]  # anything else: read as bytes
             return self._read_plain(plain, wait, raw)  # type: ignore[arg-type]

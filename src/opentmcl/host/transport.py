@@ -41,6 +41,9 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("opentmcl.host.transport")
 DEBUG = logging.DEBUG
+_MAKING_LOCK = threading.Lock()
+"""Held while a transport's `lock` is made (not reading the instance's `__dict__`, which would
+slow every attribute look-up on the transport)."""
 
 
 def _request_text(command: int, type_: int, motor: int, value: int) -> str:
@@ -167,12 +170,19 @@ class Transport(ABC):
         Lets the debugger read state the wire does not carry, such as the program flags."""
         return None
 
+    _lock: threading.RLock | None = None   # `lock`, once made
+
     @property
     def lock(self) -> threading.RLock:
         """The link's one re-entrant lock, made on first use: a `Client` holds it for each request,
         and whoever works on what lies behind the link outside the client holds it too (the
         dashboard reads an in-process module under it)."""
-        lock: threading.RLock = self.__dict__.setdefault("_lock", threading.RLock())
+        lock = self._lock
+        if lock is None:
+            with _MAKING_LOCK:  # two threads at the first use make one lock
+                lock = self._lock
+                if lock is None:
+                    lock = self._lock = threading.RLock()
         return lock
 
     def __enter__(self) -> Self:

@@ -71,6 +71,8 @@ class Stage:
     steps_per_turn: int | None = None
     start: int = 0          # physical position at first power-up (position counter 0)
     ends: tuple[int | None, int | None] = (None, None)   # mechanical hard stops
+    _switches: tuple[Switch | None, Switch | None, Switch | None, dict[str, Switch]] | None = \
+        field(default=None, init=False, repr=False, compare=False)   # `switches`, kept
 
     def active(self, sw: Switch, p: int, was: bool) -> bool:
         """State of `sw` at position `p` (a circular axis repeats every turn)."""
@@ -84,10 +86,10 @@ class Stage:
         """The switches the stage has, by name (left, right, home); do not change the dict. Kept
         while the three fields stay the same objects (asked at every check)."""
         left, right, home = self.left, self.right, self.home
-        kept = self.__dict__.get("_switches")
+        kept = self._switches
         if kept is None or kept[0] is not left or kept[1] is not right or kept[2] is not home:
             found = {n: s for n, s in (("left", left), ("right", right), ("home", home)) if s}
-            kept = self.__dict__["_switches"] = (left, right, home, found)
+            kept = self._switches = (left, right, home, found)
         return kept[3]
 
     def local(self, p: int) -> int:

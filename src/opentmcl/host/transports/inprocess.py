@@ -188,6 +188,8 @@ class InProcessTransport(Transport, Generic[M]):
         if not self.modules:
             raise TmclValueError("InProcessTransport needs at least one module")
         self.clock = make_clock(clock)
+        """The clock policy, fixed when the transport is made."""
+        self._syncs = self.clock.syncs
         self.elapsed = 0.0  # virtual seconds advanced through this transport
         self._rx = bytearray()
         self._closed = False
@@ -197,10 +199,9 @@ class InProcessTransport(Transport, Generic[M]):
         # before `drain_events` is called, which then only runs when something waits
         waiting = getattr(self._only, "events", None)
         self._waiting: list[bytes] | None = waiting if isinstance(waiting, list) else None
-        # `exchange`: the one module, while it keeps its events in a list; `_as_reply`: its `handle`
+        # `exchange`'s module: the one module, if it keeps its events in a list and its `handle`
         # takes `as_reply`
-        self._exchanged: M | None = None if waiting is None else self._only
-        self._as_reply = self._exchanged is not None and _takes_as_reply(self._exchanged)
+        self._exchanged: M | None = self._only if waiting is not None and _takes_as_reply(self._only) else None
 
     def __init_subclass__(cls, **kwargs: object) -> None:
         """A subclass that watches `send` or `recv` sees every frame there: its `send_many`,
@@ -242,12 +243,17 @@ class InProcessTransport(Transport, Generic[M]):
 
     def advance(self, seconds: float) -> None:
         """Advance every module by `seconds` of virtual time, collecting their events."""
-        with self._lock:
+        lock = self._lock
+        lock.acquire()
+        try:
             self._check_open()
             for m in self.modules:
                 m.advance(seconds)
             self.elapsed += seconds
-            self._collect_events()
+            if self._waiting != []:  # (the one module's list: none waiting)
+                self._collect_events()
+        finally:
+            lock.release()
 
     def send(self, data: bytes) -> None:
         self._send_frames([data])
@@ -274,14 +280,13 @@ class InProcessTransport(Transport, Generic[M]):
         if module is None or waiting or rx or log.isEnabledFor(DEBUG):
             replies = self._send_frames([frame], at_hand=True)
             return None if replies is None else replies[0]
-        clock = self.clock
-        if clock.syncs:
-            clock.sync(self)
+        if self._syncs:
+            self.clock.sync(self)
             if waiting or rx:  # an event (or one collected by the sync) goes before the reply
                 self._collect_events()
                 self._deliver(frame)
                 return None
-        reply = module.handle(frame, as_reply=True) if self._as_reply else module.handle(frame)  # type: ignore[call-arg]
+        reply = module.handle(frame, True)  # type: ignore[call-arg]  # as_reply
         if waiting:  # events came with the reply: the reply, then the events, as bytes arrive
             rx += reply.encode() if reply.__class__ is Reply else reply  # type: ignore[union-attr, operator]
             self._collect_events()
