@@ -15,6 +15,9 @@ from typing import cast
 
 _INTS = ("b", "h", "i", "q")
 _LIMITS = {code: 1 << (array(code).itemsize * 8 - 1) for code in _INTS}   # 2**(bits-1)
+_SENTINEL_BYTES = {code: array(code, [-half]).tobytes() for code, half in _LIMITS.items()}
+"""The None sentinel of each integer type as stored: where its bytes are not in a block, no value
+of the block is the sentinel (a find of bytes, not a look at every value)."""
 
 
 def _array(code: str, values: Iterable[float] = ()) -> array[float]:
@@ -59,8 +62,19 @@ class Column:
         self._a.append(v)
 
     def extend(self, values: Sequence[float | int | None]) -> None:
-        """Append `values`. A run of 64-bit integers (no None, no float) widens the column at most
-        once, to the narrowest type that holds all of them, and is copied in one go."""
+        """Append `values`. Values that fit the column as it is (no None, no float in an integer
+        column, none equal to its None sentinel) are copied in one go; a run of 64-bit integers
+        widens the column at most once, to the narrowest type that holds all of them."""
+        a = self._a
+        code = a.typecode
+        try:
+            same = _array(code, cast("Sequence[int]", values))   # OverflowError: too wide for it
+        except (TypeError, OverflowError):                       # TypeError: None, or a float
+            same = None
+        if same is not None and (code == "d" or _SENTINEL_BYTES[code] not in same.tobytes()
+                                 or -_LIMITS[code] not in same):
+            a.extend(same)
+            return
         try:
             ints: array[int] = array("q", cast("Sequence[int]", values))
         except (TypeError, OverflowError):     # None, a float, or an integer beyond 64 bits

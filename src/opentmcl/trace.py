@@ -233,14 +233,19 @@ class WorldReads:
         self.scheduler.sync_for_read()
         readings = self.vm.world.readings
         out: list[int | None] = []
+        append = out.append
         ended = False
         for position, velocity, axis, rotor, numbers, missing in self.parts:
             slipping = rotor.slipping
-            values = [position(), velocity(), *readings(axis, numbers), rotor.phys]   # WORLD_CHANNELS
-            ended = ended or (slipping and not rotor.slipping)
+            start = len(out)
+            append(position())                 # WORLD_CHANNELS: position, velocity, the world's
+            append(velocity())                 # readings, the stage
+            readings(axis, numbers, out)
+            append(rotor.phys)
+            if slipping and not rotor.slipping:
+                ended = True
             for i in missing:
-                values[i] = None
-            out += values
+                out[start + i] = None
         if ended:
             self.scheduler.invalidate(WRITE)
         return out

@@ -96,11 +96,13 @@ def test_column_widens_to_the_narrowest_type_and_keeps_none(values, typecode):
 @pytest.mark.parametrize(("before", "values"), [
     ([], [0, 1, 127]), ([], [-127, 127]), ([], [-128]), ([5], [32767, -32767]), ([5], [-32768]),
     ([1], [2 ** 31 - 1, -(2 ** 31)]), ([1, None], [2 ** 63 - 1]), ([1], [-(2 ** 63)]), ([1], [2 ** 70]),
-    ([2.5], [1, 2]), ([], [True, False]), ([], [1, None, 3]), ([], [1, 2.5]), ([300], []), ([None], [7])])
+    ([2.5], [1, 2]), ([], [True, False]), ([], [1, None, 3]), ([], [1, 2.5]), ([300], []), ([None], [7]),
+    ([300], [5, 384]), ([300], [5, -32768])])
 def test_column_extend_is_append_in_one_go(before, values):
     """A trace keeps its samples in blocks (opentmcl/trace.py FLUSH_ROWS): `extend` gives the very
     column that appending the values one by one gives - the same type at each width's edge (the
-    smallest value of a type is its None) and the same values."""
+    smallest value of a type is its None) and the same values. [5, 384] in a 16-bit column holds
+    the sentinel's two bytes (-32768) across two values: no sentinel, the column stays 16-bit."""
     one_by_one, at_once = Column(before), Column(before)
     for v in values:
         one_by_one.append(v)

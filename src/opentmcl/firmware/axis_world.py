@@ -21,7 +21,7 @@ from .world_checks import Checks
 from .world_events import EventLookup
 
 if TYPE_CHECKING:
-    from ..modules.profile import Capabilities
+    from ..modules.profile import Capabilities, Param
     from ..motion import RampEngine
     from .motor import Motor
     from .vm import VirtualModule
@@ -37,6 +37,9 @@ class AxisWorld:
 
     def __init__(self, world: World, index: int, spec: AxisSpec) -> None:
         self.world = world
+        self.vm: VirtualModule = world.vm
+        self.scheduler = world.vm.scheduler
+        """The module's scheduler: its clock `now` (ticks), read by every reading."""
         self.index = index
         self.spec = spec
         self.stage = spec.stage
@@ -54,7 +57,7 @@ class AxisWorld:
         """Power-up: the world (which persists) meets the module's new axis."""
         self.axis = axis
         self._axis = axis
-        self._ram, self._params = axis.ram, axis.params  # read on every check: looked up once
+        self.ram, self.params = axis.ram, axis.params  # read on every check: looked up once
         self.engine = axis.engine
         self.rotor.bind(axis)
         self.encoder.bind(axis)
@@ -63,17 +66,18 @@ class AxisWorld:
         self.events.bind(axis)
         self.switches.update()
 
-    @property
-    def vm(self) -> VirtualModule:
-        return self.world.vm
+    ram: dict[int, int]
+    """The bound axis's parameters in RAM (every one the module has): `p`, or ``ram.get(n, 0)``
+    where a reading is hot."""
+    params: dict[int, Param]
 
     def p(self, number: int, default: int = 0) -> int:
         """Motor parameter `number` in RAM; `default` on a module that does not have it."""
-        return self._ram.get(number, default)  # the RAM holds every parameter the module has
+        return self.ram.get(number, default)  # the RAM holds every parameter the module has
 
     def has(self, number: int) -> bool:
         """Does the module have axis parameter `number` (a feature that comes with a parameter)?"""
-        return number in self._params
+        return number in self.params
 
     # --- Python API (docs/scenarios.md "Python API") --------------------------------------------
     def force_switch(self, name: str, level: int | None) -> None:

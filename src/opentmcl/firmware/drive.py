@@ -62,19 +62,11 @@ class Drive:
         """Load torque now; pushing into a mechanical end adds END_LOAD."""
         aw = self.aw
         rotor = aw.rotor
-        load = self.load.at(rotor.phys, aw.vm.now / CLOCK_HZ)
+        load = self.load.at(rotor.phys, aw.scheduler.now / CLOCK_HZ)
         d = rotor.slipping or rotor.heading()
         if d and rotor.blocked(d):
             load += END_LOAD
         return load
-
-    def pps(self, v) -> float:
-        """A velocity of the engine in microsteps per second."""
-        aw = self.aw
-        if aw.caps.velocity_unit == "tmc429":
-            div = aw.p(154)  # AP154 pulse divisor (PD86-1180 manual 5)
-            return float(v) * CLOCK_HZ / ((1 << div) * 2048 * 32)
-        return float(v)
 
     def falloff(self) -> float:
         """Share of the torque left at the present speed: falls linearly to 0 at the scenario's
@@ -82,16 +74,21 @@ class Drive:
         aw = self.aw
         fall = aw.spec.torque_falloff_speed
         if not fall:
-            fall = DEFAULT_FALLOFF_RPS * FULLSTEPS * (1 << aw.p(140, 8))
-        return max(0.0, 1.0 - abs(self.pps(aw.engine.velocity)) / fall)
+            fall = DEFAULT_FALLOFF_RPS * FULLSTEPS * (1 << aw.ram.get(140, 8))
+        pps = float(aw.engine.velocity)  # the engine's velocity in microsteps per second
+        if aw.caps.velocity_unit == "tmc429":  # AP154 pulse divisor (PD86-1180 manual 5)
+            pps = pps * CLOCK_HZ / ((1 << aw.ram.get(154, 0)) * 2048 * 32)
+        left = 1.0 - abs(pps) / fall
+        return left if left > 0.0 else 0.0
 
-    def capacity(self) -> float:
-        """Torque the motor can make now, as a fraction of the torque at 100 % current."""
-        return self.current.fraction(self.aw) * self.falloff()
+    def capacity(self, use: int | None = None) -> float:
+        """Torque the motor can make now, as a fraction of the torque at 100 % current (`use`:
+        the current in use, `CurrentModel.in_use`, if known already)."""
+        return self.current.fraction(self.aw, use) * self.falloff()
 
-    def load_value(self) -> int:
-        """AP206 (docs/world.md, stallGuard2 model)."""
-        return load_value(self.load_now(), self.capacity(), self.aw.p(174))
+    def load_value(self, use: int | None = None) -> int:
+        """AP206 (docs/world.md, stallGuard2 model); `use` as for `capacity`."""
+        return load_value(self.load_now(), self.capacity(use), self.aw.ram.get(174, 0))
 
     def overloaded(self) -> bool:
         return self.load_now() > self.capacity()

@@ -32,31 +32,28 @@ class Encoder:
 
     def steps_per_round(self) -> int:
         aw = self.aw
-        return aw.spec.fullsteps_per_round * (1 << aw.p(140, 8))
+        return aw.spec.fullsteps_per_round * (1 << aw.ram.get(140, 8))
 
     def quantized(self, phys: int) -> int:
         """Encoder reading (in microsteps) of a physical position, before the offset."""
         aw = self.aw
-        spr = self.steps_per_round()
+        ram = aw.ram
         if aw.caps.encoder == "resolution":
             # TMCM-6212 manual 6.2: counts per round AP210 converted with AP202 and AP140. The
             # encoder itself has the scenario's counts per round on a motor of its full steps
             # (without them: exactly what AP210 / AP202 say, so the conversion always matches).
-            res = aw.p(210, 51200)
-            spr = aw.p(202, 200) * (1 << aw.p(140, 8))
+            res = ram.get(210, 51200)
+            spr = ram.get(202, 200) * (1 << ram.get(140, 8))
             if res <= 0 or spr <= 0:
                 return 0
-            if aw.spec.encoder_counts:
-                real = aw.spec.encoder_counts
-                real_spr = aw.spec.fullsteps_per_round * (1 << aw.p(140, 8))
-            else:
-                real, real_spr = res, spr
-            counts = (phys * real) // real_spr
+            real = aw.spec.encoder_counts
+            real_spr = self.steps_per_round() if real else spr
+            counts = (phys * (real or res)) // real_spr
             return (counts * spr) // res
         # PD86-1180 manual 7.2: prescaler p/512 applied to the encoder's own counts
         cpr = aw.spec.encoder_counts or aw.caps.encoder_counts
-        p = aw.p(210, 6400) & ~CLEAR_AT_NULL
-        counts = (phys * cpr) // spr
+        p = ram.get(210, 6400) & ~CLEAR_AT_NULL
+        counts = (phys * cpr) // self.steps_per_round()
         return (counts * p) // 512
 
     def position(self) -> int:

@@ -70,6 +70,9 @@ class Motor:
     @property
     def internal_units(self) -> bool:
         """TMCM-6212 AP255 = 0: velocities and accelerations in TMC5130 units."""
+        return self._internal()
+
+    def _internal(self) -> bool:
         return self._unit_mode and self.ram.get(255, 1) == 0
 
     def to_engine(self, number: int, value: int) -> int | Fraction:
@@ -87,10 +90,11 @@ class Motor:
         return -v if v < 0 else v
 
     def from_engine(self, number: int, value: int | float | Fraction) -> int:
-        if self.internal_units and number in VELOCITY_PARAMS:
-            return internal_velocity_from_pps(value)
-        if self.internal_units and number in ACCEL_PARAMS:
-            return internal_acceleration_from_pps2(value)
+        if self._internal():
+            if number in VELOCITY_PARAMS:
+                return internal_velocity_from_pps(value)
+            if number in ACCEL_PARAMS:
+                return internal_acceleration_from_pps2(value)
         return int(value)
 
     def _convert_units(self) -> None:

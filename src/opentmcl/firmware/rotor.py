@@ -39,7 +39,7 @@ class Rotor:
         free-wheel" (TMCM-6212 4.1), or the driver shut down by overtemperature or a short (AP208
         bits 1, 3, 4): the step counter runs on, the rotor does not follow it."""
         aw = self.aw
-        return aw.drive.shut_down or (aw.has(167) and aw.p(167, 1) == 0)
+        return aw.drive.shut_down or (167 in aw.params and aw.ram.get(167, 1) == 0)
 
     def follow(self) -> None:
         """Bring the physical position up to the counter (unless steps are being lost or the

@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from ..motion.stage import Switch
     from .axis_world import AxisWorld
 
 NAMES = ("left", "right", "home")
@@ -18,6 +19,7 @@ class Switches:
         self.aw = aw
         self.raw = {"left": False, "right": False, "home": False}   # actuated by the stage
         self.forced: dict[str, int] = dict(aw.spec.force)
+        self._inverted: tuple[dict[str, Switch], tuple[bool, ...]] | None = None   # `levels`
 
     def force(self, name: str, level: int | None) -> None:
         """Force a switch input to 1/0; None returns it to the stage."""
@@ -32,18 +34,30 @@ class Switches:
         for name, sw in stage.switches().items():
             raw[name] = stage.active(sw, phys, raw[name])
 
-    def input_level(self, name: str) -> bool:
-        """Level of a switch input: forced, else actuated (inverted for a normally closed switch)."""
-        if name in self.forced:
-            return bool(self.forced[name])
-        sw = self.aw.stage.switches().get(name)
-        return self.raw[name] != bool(sw is not None and sw.inverted)
+    def levels(self) -> list[bool]:
+        """Levels of the (left, right, home) switch inputs: forced, else actuated (inverted for a
+        normally closed switch)."""
+        found = self.aw.stage.switches()
+        kept = self._inverted
+        if kept is None or kept[0] is not found:  # normally closed, per input (for these switches)
+            kept = self._inverted = (found, tuple(bool(sw is not None and sw.inverted)
+                                                  for sw in (found.get(name) for name in NAMES)))
+        inverted, forced, raw = kept[1], self.forced, self.raw
+        if not forced:
+            return [raw["left"] != inverted[0], raw["right"] != inverted[1], raw["home"] != inverted[2]]
+        return [bool(forced[name]) if name in forced else raw[name] != inverted[i]
+                for i, name in enumerate(NAMES)]
 
-    def inputs(self) -> tuple[bool, bool, bool]:
+    def input_level(self, name: str) -> bool:
+        """Level of one switch input (`levels`)."""
+        return self.levels()[NAMES.index(name)]
+
+    def inputs(self, three_switch_wiring: bool | None = None) -> tuple[bool, bool, bool]:
         """Physical (left, right, home) inputs; on the TMCM-1180 the home switch is wired in
-        series with the left switch on REFL (three-switch wiring, PD86-1180 manual 7.1)."""
-        left, right, home = (self.input_level(n) for n in NAMES)
-        if self.three_switch_wiring:
+        series with the left switch on REFL (three-switch wiring, PD86-1180 manual 7.1; the
+        argument: `three_switch_wiring`, if known already)."""
+        left, right, home = self.levels()
+        if self.three_switch_wiring if three_switch_wiring is None else three_switch_wiring:
             left = left or home
         return left, right, home
 
@@ -55,17 +69,19 @@ class Switches:
     def logical(self) -> tuple[bool, bool, bool]:
         """Logical (left, right, home) states after swap (AP14) and polarity (AP24/25 or GP79)."""
         aw = self.aw
-        left, right, home = self.inputs()
-        if aw.p(14):
+        ram = aw.ram
+        three = self.three_switch_wiring
+        left, right, home = self.inputs(three)
+        if ram.get(14, 0):
             left, right = right, left
-        if aw.has(24):
-            right ^= bool(aw.p(24))
-            left ^= bool(aw.p(25))
+        if 24 in aw.params:
+            right ^= bool(ram.get(24, 0))
+            left ^= bool(ram.get(25, 0))
         elif (0, 79) in aw.vm.profile.global_parameters:
             pol = bool(aw.vm.globals.get_raw(0, 79))
             left ^= pol
             right ^= pol
-        if self.three_switch_wiring:
+        if three:
             home = left
         return left, right, home
 

@@ -37,8 +37,8 @@ if TYPE_CHECKING:
 
 __all__ = ["AxisWorld", "ScenarioSource", "World"]
 
-_SWITCH_STATES = (11, 10, 9)
-"""AP11 left, AP10 right, AP9 home switch state: the order of `Switches.logical`."""
+_SWITCH_STATES = {11: 0, 10: 1, 9: 2}
+"""AP11 left, AP10 right, AP9 home switch state -> its place in `Switches.logical`."""
 
 ScenarioSource = Scenario | dict[str, object] | str | os.PathLike[str] | None
 """What `load_scenario` takes: a Scenario, its parsed dict, a .toml/.yaml path, or None (empty world)."""
@@ -230,36 +230,42 @@ class World:
         self.vm.sync()
         return self.readings(axis, (number,))[0]
 
-    def readings(self, axis: Motor, numbers: tuple[int, ...]) -> list[int | None]:
-        """Several of the world's readings of one axis at once, each what GAP answers: the stage
-        follows the counter and the switches are looked at once (the engines are at now)."""
+    def readings(self, axis: Motor, numbers: tuple[int, ...],
+                 out: list[int | None] | None = None) -> list[int | None]:
+        """Several of the world's readings of one axis at once, each what GAP answers, appended to
+        `out` (a new list by default): the stage follows the counter, the switches are looked at
+        and the current in use is found once (the engines are at now)."""
         aw = self.axes_world[axis.index]
         aw.rotor.follow()
         aw.switches.update()
-        out: list[int | None] = []
-        states: dict[int, bool] | None = None
+        if out is None:
+            out = []
+        append = out.append
+        states: tuple[bool, bool, bool] | None = None
+        use: int | None = None
         for number in numbers:
             if number in _SWITCH_STATES:
                 if states is None:  # the logical states of the three switches, once
-                    states = dict(zip(_SWITCH_STATES, aw.switches.logical(), strict=True))
-                out.append(int(states[number]))
+                    states = aw.switches.logical()
+                append(int(states[_SWITCH_STATES[number]]))
+            elif number == 180 or number == 206:
+                drive = aw.drive
+                if use is None:  # the current in use, once
+                    moving = aw.engine.moving
+                    drive.current.update(aw, moving)
+                    use = drive.current.in_use(aw, moving)
+                append(drive.current.actual_scale(aw, use) if number == 180 else drive.load_value(use))
             else:
-                out.append(self._reading(aw, axis, number))
+                append(self._reading(aw, axis, number))
         return out
 
     @staticmethod
     def _reading(aw: AxisWorld, axis: Motor, number: int) -> int | None:
-        drive = aw.drive
-        if number == 180:
-            drive.current.update(aw)
-            return drive.current.actual_scale(aw)
-        if number == 206:
-            drive.current.update(aw)
-            return drive.load_value()
-        if number == 208:
-            return drive.current.driver_status(aw) | drive.fault_flags
         if number == 209:
             return aw.encoder.position()
+        drive = aw.drive
+        if number == 208:
+            return drive.current.driver_status(aw) | drive.fault_flags
         if number == 29:
             return aw.rotor.speed()
         if number == 215:

@@ -48,6 +48,10 @@ from .sixpoint_plan import (  # noqa: F401  (the planner's names, as they were i
     wrap32,
 )
 
+_STEP_UNITS = DEN // CLOCK_HZ
+"""Velocity units (DEN per tick) per pps: a whole number, so a velocity in pps is one division."""
+assert _STEP_UNITS * CLOCK_HZ == DEN
+
 
 class SixPointRampEngine(RampEngine):
     """TMC5130-style ramp generator of one TMCM-6212 axis, in pps units.
@@ -204,12 +208,16 @@ class SixPointRampEngine(RampEngine):
     @property
     def velocity(self) -> int:
         """Actual signed velocity (AP3) in pps, truncated towards zero."""
-        n = self._v() * CLOCK_HZ
-        return n // DEN if n >= 0 else -((-n) // DEN)
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        v = self._read_v  # v * CLOCK_HZ / DEN = v / _STEP_UNITS, truncated towards zero
+        return v // _STEP_UNITS if v >= 0 else -((-v) // _STEP_UNITS)
 
     @property
     def moving(self) -> bool:
-        return self._v() != 0
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        return self._read_v != 0
 
     @property
     def target_position(self) -> int:
@@ -334,7 +342,9 @@ class SixPointRampEngine(RampEngine):
 
     @property
     def direction(self) -> int:
-        v = self._v()
+        if self._read_at != self.now or self._read_pieces is not self._queue.pieces:
+            self._read()
+        v = self._read_v
         return (v > 0) - (v < 0)
 
     @property

@@ -10,7 +10,8 @@ L is the load torque as a fraction of the torque at 100 % current, SGT the
 threshold AP174. SG falls linearly with load, rises with current and reaches
 0 at L = C (SGT = 0); a lower SGT reaches 0 at a lower load (more sensitive).
 The objects here read the axis through the firmware's axis world `aw` (firmware/axis_world.py):
-`aw.p(n)`, `aw.has(n)`, `aw.engine`, `aw.axis`, `aw.vm`, `aw.spec`, and its drive `aw.drive`
+`aw.p(n)` (or `aw.ram`), `aw.has(n)`, `aw.engine`, `aw.axis`, `aw.vm`, `aw.scheduler` (its clock
+`now`), `aw.caps`, `aw.spec`, and its drive `aw.drive`
 (`load_now()`, `falloff()`, `load_value()`).
 """
 from __future__ import annotations
@@ -28,7 +29,7 @@ def load_value(load: float, capacity: float, sgt: int) -> int:
     if capacity <= 0:
         return 0
     sg = round(1023 * (1 - load / capacity)) + 16 * sgt
-    return max(0, min(1023, sg))
+    return sg if 0 <= sg <= 1023 else 0 if sg < 0 else 1023
 
 
 class CurrentModel:
@@ -48,23 +49,28 @@ class CurrentModel:
         return aw.p(6, 128) >> 3
 
     @staticmethod
-    def coolstep_on(aw) -> bool:
+    def coolstep_on(aw, moving: bool | None = None) -> bool:
+        """coolStep regulates now (`moving`: whether the engine moves, if known already)."""
         e = aw.engine
-        if not aw.p(172) or not e.moving:
+        if not aw.ram.get(172, 0) or not (e.moving if moving is None else moving):
             return False
-        return abs(e.velocity) >= abs(aw.axis.to_engine(182, aw.p(182)))
+        return abs(e.velocity) >= abs(aw.axis.to_engine(182, aw.ram.get(182, 0)))
 
     # --- update --------------------------------------------------------------------------------
-    def update(self, aw) -> None:
-        e, now = aw.engine, aw.vm.now
-        if e.moving:
+    def update(self, aw, moving: bool | None = None) -> None:
+        """Bring the model to now (`moving` as for `coolstep_on`)."""
+        e = aw.engine
+        if moving is None:
+            moving = e.moving
+        if moving:
             self.still_since = None
         elif self.still_since is None:
-            self.still_since = now
+            self.still_since = aw.scheduler.now
         counter = e.position
-        moved = 0 if self._last_counter is None else abs(counter - self._last_counter)
+        last = self._last_counter
+        moved = 0 if last is None else abs(counter - last)
         self._last_counter = counter
-        if not self.coolstep_on(aw):
+        if not self.coolstep_on(aw, moving):
             self.cs_act = None
             self._microsteps = 0
             return
@@ -100,30 +106,35 @@ class CurrentModel:
         return cs_act
 
     # --- readings ---------------------------------------------------------------------------------
-    def in_use(self, aw) -> int:
-        """Current in use on the 0..255 scale of AP6."""
-        e, now = aw.engine, aw.vm.now
-        if not e.moving:
-            still = 0 if self.still_since is None else now - self.still_since
-            if aw.vm.profile.capabilities.freewheel_delay and aw.p(204) and still >= aw.p(204) * TICKS_PER_MS:
+    def in_use(self, aw, moving: bool | None = None) -> int:
+        """Current in use on the 0..255 scale of AP6 (`moving` as for `coolstep_on`)."""
+        e, ram = aw.engine, aw.ram
+        if not (e.moving if moving is None else moving):
+            still = 0 if self.still_since is None else aw.scheduler.now - self.still_since
+            freewheel = ram.get(204, 0)
+            if freewheel and aw.caps.freewheel_delay and still >= freewheel * TICKS_PER_MS:
                 return 0                         # PD86-1180 AP204: power cut after the freewheeling time
-            if still >= aw.p(214, 200) * TICKS_PER_10MS:
-                return aw.p(7, 8)                # standby current after the power-down delay
-            return aw.p(6, 128)
-        if aw.p(200) and e.accelerating:  # boost current while the ramp changes the velocity
-            return aw.p(200)                     # boost current during acceleration / deceleration
-        if aw.has(183) and aw.p(182) and abs(e.velocity) < abs(aw.axis.to_engine(182, aw.p(182))):
-            return aw.p(183)                     # slow-run current below the coolStep threshold speed
+            if still >= ram.get(214, 200) * TICKS_PER_10MS:
+                return ram.get(7, 8)             # standby current after the power-down delay
+            return ram.get(6, 128)
+        boost = ram.get(200, 0)
+        if boost and e.accelerating:  # boost current while the ramp changes the velocity
+            return boost                         # boost current during acceleration / deceleration
+        slow = ram.get(182, 0)
+        if slow and 183 in aw.params and abs(e.velocity) < abs(aw.axis.to_engine(182, slow)):
+            return ram[183]                      # slow-run current below the coolStep threshold speed
         if self.cs_act is not None:
             return (self.cs_act + 1) * 8 - 1
-        return aw.p(6, 128)
+        return ram.get(6, 128)
 
-    def actual_scale(self, aw) -> int:
-        """AP180: current scale 0..31 in use."""
-        return self.in_use(aw) >> 3
+    def actual_scale(self, aw, use: int | None = None) -> int:
+        """AP180: current scale 0..31 in use (`use`: `in_use`, if known already)."""
+        return (self.in_use(aw) if use is None else use) >> 3
 
-    def fraction(self, aw) -> float:
-        i = self.in_use(aw)
+    def fraction(self, aw, use: int | None = None) -> float:
+        """The share of the full current's torque the current in use makes (`use`: `in_use`,
+        if known already)."""
+        i = self.in_use(aw) if use is None else use
         return 0.0 if i == 0 else ((i >> 3) + 1) / 32
 
     def driver_status(self, aw) -> int:
