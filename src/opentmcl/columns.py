@@ -68,8 +68,8 @@ class Column:
         a = self._a
         code = a.typecode
         try:
-            same = _array(code, cast("Sequence[int]", values))   # OverflowError: too wide for it
-        except (TypeError, OverflowError):                       # TypeError: None, or a float
+            same = array(code, values)        # type: ignore[arg-type]  # OverflowError: too wide
+        except (TypeError, OverflowError):   # TypeError: None, or a float in an integer column
             same = None
         if same is not None and (code == "d" or _SENTINEL_BYTES[code] not in same.tobytes()
                                  or -_LIMITS[code] not in same):

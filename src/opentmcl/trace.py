@@ -373,7 +373,7 @@ class Trace:
             reads = self._reads = self._bind(vm)
         self._room()
         values = reads.read()
-        self.time.append(round(vm.now / CLOCK_HZ, 9))
+        self.time.append(round(reads.scheduler.now / CLOCK_HZ, 9))   # vm.now
         self._keep(values)
         log = vm.faults.log
         if log.count != self._faults_seen:

@@ -52,26 +52,21 @@ class Switches:
         """Level of one switch input (`levels`)."""
         return self.levels()[NAMES.index(name)]
 
-    def inputs(self, three_switch_wiring: bool | None = None) -> tuple[bool, bool, bool]:
-        """Physical (left, right, home) inputs; on the TMCM-1180 the home switch is wired in
-        series with the left switch on REFL (three-switch wiring, PD86-1180 manual 7.1; the
-        argument: `three_switch_wiring`, if known already)."""
-        left, right, home = self.levels()
-        if self.three_switch_wiring if three_switch_wiring is None else three_switch_wiring:
-            left = left or home
-        return left, right, home
-
     @property
     def three_switch_wiring(self) -> bool:
         aw = self.aw
         return aw.caps.reference_input == "REFL" and aw.stage.home is not None
 
     def logical(self) -> tuple[bool, bool, bool]:
-        """Logical (left, right, home) states after swap (AP14) and polarity (AP24/25 or GP79)."""
+        """Logical (left, right, home) states of the physical inputs after swap (AP14) and polarity
+        (AP24/25 or GP79). On the TMCM-1180 the home switch is wired in series with the left
+        switch on REFL (three-switch wiring, PD86-1180 manual 7.1): the left input reads either."""
         aw = self.aw
         ram = aw.ram
         three = self.three_switch_wiring
-        left, right, home = self.inputs(three)
+        left, right, home = self.levels()
+        if three:
+            left = left or home
         if ram.get(14, 0):
             left, right = right, left
         if 24 in aw.params:

@@ -255,14 +255,14 @@ class World:
                     drive.current.update(aw, moving)
                     use = drive.current.in_use(aw, moving)
                 append(drive.current.actual_scale(aw, use) if number == 180 else drive.load_value(use))
+            elif number == 209:
+                append(aw.encoder.position())
             else:
                 append(self._reading(aw, axis, number))
         return out
 
     @staticmethod
     def _reading(aw: AxisWorld, axis: Motor, number: int) -> int | None:
-        if number == 209:
-            return aw.encoder.position()
         drive = aw.drive
         if number == 208:
             return drive.current.driver_status(aw) | drive.fault_flags
