@@ -82,9 +82,12 @@ class Drive:
         return left if left > 0.0 else 0.0
 
     def capacity(self, use: int | None = None) -> float:
-        """Torque the motor can make now, as a fraction of the torque at 100 % current (`use`:
-        the current in use, `CurrentModel.in_use`, if known already)."""
-        return self.current.fraction(self.aw, use) * self.falloff()
+        """Torque the motor can make now, as a fraction of the torque at 100 % current: (CS + 1)
+        / 32 of the current scale CS in use (none without current) times the fall-off with speed
+        (`use`: the current in use, `CurrentModel.in_use`, if known already)."""
+        if use is None:
+            use = self.current.in_use(self.aw)
+        return 0.0 if use == 0 else ((use >> 3) + 1) / 32 * self.falloff()
 
     def load_value(self, use: int | None = None) -> int:
         """AP206 (docs/world.md, stallGuard2 model); `use` as for `capacity`."""

@@ -41,10 +41,12 @@ class Rotor:
         aw = self.aw
         return aw.drive.shut_down or (167 in aw.params and aw.ram.get(167, 1) == 0)
 
-    def follow(self) -> None:
+    def follow(self, counter: int | None = None) -> None:
         """Bring the physical position up to the counter (unless steps are being lost or the
-        driver is off; then the stage stays and the frame offset follows the counter)."""
-        counter = self.engine.position
+        driver is off; then the stage stays and the frame offset follows the counter). `counter`:
+        the engine's position now, if read already."""
+        if counter is None:
+            counter = self.engine.position
         if self.driver_off():
             self.slipping = 0
             self.offset = self.phys - counter

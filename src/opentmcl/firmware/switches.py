@@ -19,7 +19,9 @@ class Switches:
         self.aw = aw
         self.raw = {"left": False, "right": False, "home": False}   # actuated by the stage
         self.forced: dict[str, int] = dict(aw.spec.force)
-        self._inverted: tuple[dict[str, Switch], tuple[bool, ...]] | None = None   # `levels`
+        self._kept: tuple[Switch | None, Switch | None, Switch | None, tuple[bool, ...], bool] | None = None
+        """`levels`: the stage's (left, right, home) switches, whether each input is inverted
+        (normally closed) and `three_switch_wiring`, kept while the switches stay the same."""
 
     def force(self, name: str, level: int | None) -> None:
         """Force a switch input to 1/0; None returns it to the stage."""
@@ -37,12 +39,13 @@ class Switches:
     def levels(self) -> list[bool]:
         """Levels of the (left, right, home) switch inputs: forced, else actuated (inverted for a
         normally closed switch)."""
-        found = self.aw.stage.switches()
-        kept = self._inverted
-        if kept is None or kept[0] is not found:  # normally closed, per input (for these switches)
-            kept = self._inverted = (found, tuple(bool(sw is not None and sw.inverted)
-                                                  for sw in (found.get(name) for name in NAMES)))
-        inverted, forced, raw = kept[1], self.forced, self.raw
+        stage = self.aw.stage
+        left, right, home = stage.left, stage.right, stage.home
+        kept = self._kept
+        if kept is None or kept[0] is not left or kept[1] is not right or kept[2] is not home:
+            kept = self._kept = (left, right, home, tuple(bool(sw is not None and sw.inverted)
+                                                          for sw in (left, right, home)), self.three_switch_wiring)
+        inverted, forced, raw = kept[3], self.forced, self.raw
         if not forced:
             return [raw["left"] != inverted[0], raw["right"] != inverted[1], raw["home"] != inverted[2]]
         return [bool(forced[name]) if name in forced else raw[name] != inverted[i]
@@ -63,8 +66,8 @@ class Switches:
         switch on REFL (three-switch wiring, PD86-1180 manual 7.1): the left input reads either."""
         aw = self.aw
         ram = aw.ram
-        three = self.three_switch_wiring
         left, right, home = self.levels()
+        three = self._kept[4]  # type: ignore[index]  # `three_switch_wiring`, as `levels` found it
         if three:
             left = left or home
         if ram.get(14, 0):

@@ -236,7 +236,8 @@ class World:
         `out` (a new list by default): the stage follows the counter, the switches are looked at
         and the current in use is found once (the engines are at now)."""
         aw = self.axes_world[axis.index]
-        aw.rotor.follow()
+        counter = aw.engine.position  # the engine's state, read once
+        aw.rotor.follow(counter)
         aw.switches.update()
         if out is None:
             out = []
@@ -247,14 +248,14 @@ class World:
             if number in _SWITCH_STATES:
                 if states is None:  # the logical states of the three switches, once
                     states = aw.switches.logical()
-                append(int(states[_SWITCH_STATES[number]]))
+                append(1 if states[_SWITCH_STATES[number]] else 0)
             elif number == 180 or number == 206:
                 drive = aw.drive
                 if use is None:  # the current in use, once
                     moving = aw.engine.moving
-                    drive.current.update(aw, moving)
+                    drive.current.update(aw, moving, counter)
                     use = drive.current.in_use(aw, moving)
-                append(drive.current.actual_scale(aw, use) if number == 180 else drive.load_value(use))
+                append(use >> 3 if number == 180 else drive.load_value(use))   # AP180: current scale 0..31
             elif number == 209:
                 append(aw.encoder.position())
             else:

@@ -48,17 +48,11 @@ class CurrentModel:
     def cs(aw) -> int:
         return aw.p(6, 128) >> 3
 
-    @staticmethod
-    def coolstep_on(aw, moving: bool | None = None) -> bool:
-        """coolStep regulates now (`moving`: whether the engine moves, if known already)."""
-        e = aw.engine
-        if not aw.ram.get(172, 0) or not (e.moving if moving is None else moving):
-            return False
-        return abs(e.velocity) >= abs(aw.axis.to_engine(182, aw.ram.get(182, 0)))
-
     # --- update --------------------------------------------------------------------------------
-    def update(self, aw, moving: bool | None = None) -> None:
-        """Bring the model to now (`moving` as for `coolstep_on`)."""
+    def update(self, aw, moving: bool | None = None, counter: int | None = None) -> None:
+        """Bring the model to now (`moving`: whether the engine moves, `counter`: its position,
+        if read already). coolStep regulates while AP172 (SEMIN) is set and the motor moves at
+        least at the coolStep threshold speed AP182."""
         e = aw.engine
         if moving is None:
             moving = e.moving
@@ -66,11 +60,13 @@ class CurrentModel:
             self.still_since = None
         elif self.still_since is None:
             self.still_since = aw.scheduler.now
-        counter = e.position
+        if counter is None:
+            counter = e.position
         last = self._last_counter
         moved = 0 if last is None else abs(counter - last)
         self._last_counter = counter
-        if not self.coolstep_on(aw, moving):
+        ram = aw.ram
+        if not (ram.get(172, 0) and moving and abs(e.velocity) >= abs(aw.axis.to_engine(182, ram.get(182, 0)))):
             self.cs_act = None
             self._microsteps = 0
             return
@@ -107,7 +103,7 @@ class CurrentModel:
 
     # --- readings ---------------------------------------------------------------------------------
     def in_use(self, aw, moving: bool | None = None) -> int:
-        """Current in use on the 0..255 scale of AP6 (`moving` as for `coolstep_on`)."""
+        """Current in use on the 0..255 scale of AP6 (`moving` as for `update`)."""
         e, ram = aw.engine, aw.ram
         if not (e.moving if moving is None else moving):
             still = 0 if self.still_since is None else aw.scheduler.now - self.still_since
@@ -127,15 +123,6 @@ class CurrentModel:
             return (self.cs_act + 1) * 8 - 1
         return ram.get(6, 128)
 
-    def actual_scale(self, aw, use: int | None = None) -> int:
-        """AP180: current scale 0..31 in use (`use`: `in_use`, if known already)."""
-        return (self.in_use(aw) if use is None else use) >> 3
-
-    def fraction(self, aw, use: int | None = None) -> float:
-        """The share of the full current's torque the current in use makes (`use`: `in_use`,
-        if known already)."""
-        i = self.in_use(aw) if use is None else use
-        return 0.0 if i == 0 else ((i >> 3) + 1) / 32
 
     def driver_status(self, aw) -> int:
         """AP208 (PD86-1180 manual 5, TMC262 flags): bit 0 stallGuard2 threshold reached,
