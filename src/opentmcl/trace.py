@@ -210,6 +210,7 @@ class WorldReads:
         self.vm = vm
         self.module_axes = vm.axes          # a power-up makes new axes (and readers)
         self.scheduler = vm.scheduler
+        self.faults = vm.faults             # its `log`: what fired
         world = vm.world
         self.parts = [self._parts(vm, world.axis(a), a) for a in axes]
 
@@ -228,11 +229,13 @@ class WorldReads:
         """Made for this module, since its last power-up."""
         return vm is self.vm and vm.axes is self.module_axes
 
-    def read(self) -> list[int | None]:
-        """The values of one sample: per axis in the order of WORLD_CHANNELS."""
+    def read(self, out: list[int | None] | None = None) -> list[int | None]:
+        """The values of one sample, appended to `out` (a new list by default): per axis in the
+        order of WORLD_CHANNELS."""
         self.scheduler.sync_for_read()
         readings = self.vm.world.readings
-        out: list[int | None] = []
+        if out is None:
+            out = []
         append = out.append
         ended = False
         for position, velocity, axis, rotor, numbers, missing in self.parts:
@@ -346,9 +349,11 @@ class Trace:
         pending.clear()
 
     def _keep(self, values: Iterable[float | int | None]) -> None:
-        pending = self._pending
-        pending += values
-        if len(pending) >= len(self._columns) * FLUSH_ROWS:
+        self._pending += values
+        self._flush_when_full()
+
+    def _flush_when_full(self) -> None:
+        if len(self._pending) >= len(self._columns) * FLUSH_ROWS:
             self._flush()
 
     def add(self, t: float, values: Mapping[Key, float | int | None]) -> None:
@@ -372,10 +377,16 @@ class Trace:
         if reads is None or not reads.bound_to(vm):
             reads = self._reads = self._bind(vm)
         self._room()
-        values = reads.read()
+        pending = self._pending
+        start = len(pending)
+        try:
+            reads.read(pending)  # the values, kept straight away
+        except BaseException:
+            del pending[start:]
+            raise
         self.time.append(round(reads.scheduler.now / CLOCK_HZ, 9))   # vm.now
-        self._keep(values)
-        log = vm.faults.log
+        self._flush_when_full()
+        log = reads.faults.log
         if log.count != self._faults_seen:
             self.faults += [FaultMark(f.t, f.kind, f.name or "", f.detail) for f in log.since(self._faults_seen)]
             self._faults_seen = log.count

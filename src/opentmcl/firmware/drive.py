@@ -58,12 +58,13 @@ class Drive:
         self.fault_flags = bits & 0x7E
         self.shut_down = bool(self.fault_flags & SHUTS_DOWN)
 
-    def load_now(self) -> float:
-        """Load torque now; pushing into a mechanical end adds END_LOAD."""
+    def load_now(self, direction: int | None = None) -> float:
+        """Load torque now; pushing into a mechanical end adds END_LOAD (`direction`: the
+        engine's, if read already)."""
         aw = self.aw
         rotor = aw.rotor
         load = self.load.at(rotor.phys, aw.scheduler.now / CLOCK_HZ)
-        d = rotor.slipping or rotor.heading()
+        d = rotor.slipping or rotor.heading(direction)
         if d and rotor.blocked(d):
             load += END_LOAD
         return load
@@ -89,9 +90,10 @@ class Drive:
             use = self.current.in_use(self.aw)
         return 0.0 if use == 0 else ((use >> 3) + 1) / 32 * self.falloff()
 
-    def load_value(self, use: int | None = None) -> int:
-        """AP206 (docs/world.md, stallGuard2 model); `use` as for `capacity`."""
-        return load_value(self.load_now(), self.capacity(use), self.aw.ram.get(174, 0))
+    def load_value(self, use: int | None = None, direction: int | None = None) -> int:
+        """AP206 (docs/world.md, stallGuard2 model); `use` as for `capacity`, `direction` as for
+        `load_now`."""
+        return load_value(self.load_now(direction), self.capacity(use), self.aw.ram.get(174, 0))
 
     def overloaded(self) -> bool:
         return self.load_now() > self.capacity()

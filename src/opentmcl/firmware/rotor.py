@@ -57,10 +57,11 @@ class Rotor:
         else:
             self.phys = counter + self.offset
 
-    def heading(self) -> int:
-        """Direction of motion, or of the motion about to start (0 when there is none)."""
+    def heading(self, direction: int | None = None) -> int:
+        """Direction of motion, or of the motion about to start (0 when there is none);
+        `direction`: the engine's, if read already."""
         e = self.engine
-        v = e.direction
+        v = e.direction if direction is None else direction
         if v:
             return v
         if e.mode.value == "velocity":

@@ -244,6 +244,7 @@ class World:
         append = out.append
         states: tuple[bool, bool, bool] | None = None
         use: int | None = None
+        direction = 0
         for number in numbers:
             if number in _SWITCH_STATES:
                 if states is None:  # the logical states of the three switches, once
@@ -252,10 +253,10 @@ class World:
             elif number == 180 or number == 206:
                 drive = aw.drive
                 if use is None:  # the current in use, once
-                    moving = aw.engine.moving
-                    drive.current.update(aw, moving, counter)
-                    use = drive.current.in_use(aw, moving)
-                append(use >> 3 if number == 180 else drive.load_value(use))   # AP180: current scale 0..31
+                    direction = aw.engine.direction  # moving: not 0 (RampEngine)
+                    drive.current.update(aw, direction != 0, counter)
+                    use = drive.current.in_use(aw, direction != 0)
+                append(use >> 3 if number == 180 else drive.load_value(use, direction))   # AP180: 0..31
             elif number == 209:
                 append(aw.encoder.position())
             else:
