@@ -229,7 +229,7 @@ class WorldReads:
         """Made for this module, since its last power-up."""
         return vm is self.vm and vm.axes is self.module_axes
 
-    def read(self, out: list[int | None] | None = None) -> list[int | None]:
+    def read(self, out: list[Any] | None = None) -> list[int | None]:
         """The values of one sample, appended to `out` (a new list by default): per axis in the
         order of WORLD_CHANNELS."""
         self.scheduler.sync_for_read()

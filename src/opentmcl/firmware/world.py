@@ -20,7 +20,7 @@ from __future__ import annotations
 import os
 from dataclasses import replace
 from functools import partial
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ..motion import CLOCK_HZ
 from ..motion.scenario import Scenario, ScenarioError, load_scenario
@@ -230,8 +230,7 @@ class World:
         self.vm.sync()
         return self.readings(axis, (number,))[0]
 
-    def readings(self, axis: Motor, numbers: tuple[int, ...],
-                 out: list[int | None] | None = None) -> list[int | None]:
+    def readings(self, axis: Motor, numbers: tuple[int, ...], out: list[Any] | None = None) -> list[int | None]:
         """Several of the world's readings of one axis at once, each what GAP answers, appended to
         `out` (a new list by default): the stage follows the counter, the switches are looked at
         and the current in use is found once (the engines are at now)."""

@@ -248,11 +248,11 @@ class Client:
             raw = self._exchange(plain.frame)
             if raw.__class__ is Reply:  # handed over by an in-process module: nothing to decode
                 if raw is plain.seen:  # the same reply object as last time, checked then
-                    return raw  # type: ignore[return-value]
-                if raw[1:4] == plain.fields:  # type: ignore[index]  # the plain reply asked for
+                    return raw
+                if raw[1:4] == plain.fields:  # the plain reply asked for
                     plain.seen = raw
-                    return raw  # type: ignore[return-value]
-                raw = raw.encode()  # type: ignore[union-attr]  # anything else: read as bytes
+                    return raw
+                raw = raw.encode()  # anything else: read as bytes, by the general rule
             return self._read_plain(plain, wait, raw)  # type: ignore[arg-type]
         finally:
             lock.release()

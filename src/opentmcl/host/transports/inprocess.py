@@ -179,6 +179,7 @@ class InProcessTransport(Transport, Generic[M]):
 
     frame_format = "serial"
     window = 1 << 16  # a whole batch is handed over at once: nothing is lost in between
+    _lock: threading.RLock
 
     def __init__(self, modules: M | Iterable[M], clock: str | Clock = "virtual") -> None:
         if isinstance(modules, Iterable):
@@ -286,14 +287,14 @@ class InProcessTransport(Transport, Generic[M]):
                 self._collect_events()
                 self._deliver(frame)
                 return None
-        reply = module.handle(frame, True)  # type: ignore[call-arg]  # as_reply
+        reply: Reply | bytes = module.handle(frame, True)  # type: ignore[call-arg]  # as_reply
         if waiting:  # events came with the reply: the reply, then the events, as bytes arrive
-            rx += reply.encode() if reply.__class__ is Reply else reply  # type: ignore[union-attr, operator]
+            rx += reply.encode() if reply.__class__ is Reply else reply  # type: ignore[arg-type]
             self._collect_events()
             return None
         if reply.__class__ is Reply or len(reply) == FRAME_LEN:
             return reply
-        rx += reply  # type: ignore[operator]  # no reply, or one of another length (the version string)
+        rx += reply  # type: ignore[arg-type]  # no reply, or one of another length (the version string)
         return None
 
     def _send_frames(self, frames: list[bytes], *, at_hand: bool = False) -> list[bytes] | None:
