@@ -167,7 +167,12 @@ def test_read_back_the_stored_program(done):
     page.wait_for_selector(".CodeMirror", timeout=TIMEOUT_MS)
     page.evaluate(f"OpenTMCL.programEditor.setSource({PROGRAM!r})")
     page.click("#btn-download")
-    page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')", timeout=TIMEOUT_MS)
+    try:
+        page.wait_for_function("document.getElementById('prog-message').textContent.startsWith('downloaded')",
+                               timeout=TIMEOUT_MS)
+    except Exception as exc:   # say what the page said instead (a rare time-out under load)
+        raise AssertionError(f"no 'downloaded': {page.inner_text('#prog-message')!r}, "
+                             f"console {page.inner_text('#console-log')[-600:]!r}") from exc
     page.evaluate("OpenTMCL.programEditor.setSource('')")
     page.click("#btn-readback")
     page.wait_for_selector("#btn-readback-open", timeout=TIMEOUT_MS)
