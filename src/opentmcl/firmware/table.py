@@ -144,7 +144,7 @@ _SPECS = (
     # the PD28-1021's extended set (PD28-1021 manual 3.5, Table 5)
     _spec(40, _CX, _NONE, step=s.calc_vv), _spec(41, _CX, _NONE, step=s.calc_va),
     _spec(42, _CX, _NONE, step=s.calc_av), _spec(43, _CX, _NONE, step=s.calc_vx),
-    _spec(44, _CX, _NONE, step=s.calc_xv), _spec(45, _CX, _NONE, step=s.calc_v),
+    _spec(44, _CX, _NONE, step=s.calc_xv), _spec(45, c.cmd_calcv, _NONE, step=s.calc_v),
     _spec(46, _NO, WRITE), _spec(48, _NO, Effect.EVENTS, step=s.rst), _spec(49, _NO, _NONE, step=s.djnz),
     _spec(50, _NO, WRITE), _spec(51, _NO, WRITE),
     _spec(55, _NO, _NONE, step=s.siv), _spec(56, _NO, _NONE, step=s.giv), _spec(57, _NO, _NONE, step=s.aiv),
