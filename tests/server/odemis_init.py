@@ -1,7 +1,8 @@
 """The requests odemis' TMCM driver sends while `TMCLController.__init__` runs, and the checks it
 makes of each reply, restated from the driver's source (delmic/odemis, src/odemis/driver/tmcm.py;
-docs/sources.md "odemis' TMCM driver"). odemis is not on PyPI and cannot be installed here, so this
-re-enacts its start-up on a real serial port opened with pyserial as the driver opens it.
+docs/sources.md "odemis' TMCM driver"; the published version with `CANController`). odemis is not on
+PyPI, so this re-enacts its start-up on a real serial port opened with pyserial as the driver opens
+it. The unmodified driver, run once by hand on a served TMCM-6212, sent these requests in this order.
 
 The driver, with its defaults (address=None, refproc=None, temp=False, no param_file, no
 abs_encoder, no refswitch, minpower=10.8 V):
