@@ -19,8 +19,8 @@ from ..faults import FaultBoard, FaultError, FaultPlan, load_plan, seed_of
 from ..firmware.vm import VirtualModule
 from ..host.client import Client
 from ..host.connect import register_transport
-from ..host.module import Module
 from ..host.errors import TmclUrlError
+from ..host.module import Module
 from ..host.transport import url_query
 from ..host.transports.faulty import FaultyTransport
 from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, make_clock, parse_modules
