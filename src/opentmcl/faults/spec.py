@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -136,6 +136,14 @@ class FaultPlan:
 
     def with_seed(self, seed: int) -> FaultPlan:
         return replace(self, seed=seed)
+
+    def check_addresses(self, addresses: Iterable[int]) -> None:
+        """FaultError for a module fault whose `address` none of the modules at `addresses` has."""
+        have = sorted(set(addresses))
+        for f in self.module_faults:
+            if f.address is not None and f.address not in have:
+                raise FaultError(f"fault {f.label}: no module at address {f.address} "
+                                 f"(modules at {', '.join(map(str, have))})")
 
     def merged(self, other: FaultPlan) -> FaultPlan:
         """Both plans' faults (names must stay distinct); this plan's seed unless it has none."""

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 
-from ..faults import FaultBoard, FaultError, FaultPlan, load_plan
+from ..faults import FaultBoard, FaultPlan, load_plan
 from .bus import ModuleBus, RealTimeRunner
 
 
@@ -51,11 +51,7 @@ class Server:
             own = getattr(scenario, "faults", None)
             if own:
                 plan = plan.merged(FaultPlan(own.link_faults, own.seed))
-        addresses = sorted(getattr(vm, "address", 1) for vm in self.bus.modules)
-        for f in plan.module_faults:
-            if f.address is not None and f.address not in addresses:
-                raise FaultError(f"fault {f.label}: no module at address {f.address} "
-                                 f"(served: {', '.join(map(str, addresses))})")
+        plan.check_addresses(getattr(vm, "address", 1) for vm in self.bus.modules)
         board = FaultBoard(plan, clock=lambda: time.monotonic() - start)
         board.lock = self.bus.lock
         for vm in self.bus.modules:
