@@ -7,6 +7,7 @@ derived from the one seed; `trigger(name)` fires the named fault wherever it liv
 from __future__ import annotations
 
 import logging
+import math
 import random
 import threading
 import weakref
@@ -48,6 +49,9 @@ class FaultBoard:
         self._links: weakref.WeakSet[LinkFaults] = weakref.WeakSet()
         self.pending = Pending()
         """Named link faults triggered and not fired yet: the next matching request of any link."""
+        self.down_until = -math.inf
+        """Every link passes nothing before this time (a `link_down` triggered by name); a link
+        opened meanwhile is down too."""
         self._opened = 0
         log.info("fault plan: %d fault(s), seed %d", len(plan.faults), self.seed)
 
@@ -66,6 +70,7 @@ class FaultBoard:
         self._opened += 1
         number = self._opened
         link = LinkFaults(faults, lambda i, f: stream(self.seed, scope, number, i, f.kind), self.log, self.pending)
+        link.down_until = self.down_until
         self._links.add(link)
         return link
 
@@ -99,8 +104,11 @@ class FaultBoard:
         if fault is None:
             return []
         if fault.kind == "link_down":
+            duration = fault.duration or 0.0
+            self.down_until = max(self.down_until, t + duration)
             for link in list(self._links):
-                link.go_down(fault, t, "triggered by name")
+                link.go_down(fault, t, "triggered by name", record=False)
+            self.log.record(fault, f"link down for {duration:g} s (triggered by name)", t)
             return ["every link: down now"]
         self.pending.add(name)
         return ["the next matching request on a link"]

@@ -1,0 +1,114 @@
+"""Fault plans on served links (issue 34: link faults "on every endpoint ... Each is given as a
+probability, at a scheduled time, or on a matching command (for example, drop the reply to the
+third MVP). All are reproducible from a seed."): a served TMCM-6212 (`Server`, `TcpServer`: real
+sockets) and the host library on ``tcp://``, each check made through the wire.
+
+Real time: the host's time-outs are short; waits are polled with generous deadlines."""
+from __future__ import annotations
+
+import time
+
+import pytest
+
+import opentmcl
+from opentmcl import VirtualModule
+from opentmcl.host import TmclStatusError, TmclTimeout
+from opentmcl.server import Server, TcpServer
+
+from .helpers import GAP, MVP, SAP
+
+
+class Served:
+    """A served TMCM-6212 with a fault plan, and host links to it."""
+
+    def __init__(self, plan: dict) -> None:
+        self.server = Server([VirtualModule("TMCM-6212", address=1)], faults=plan)
+        self.tcp = self.server.add(TcpServer(self.server.bus, "127.0.0.1", 0))
+        self.server.start()
+        self.links: list[opentmcl.Module] = []
+
+    def link(self, timeout: float = 0.2) -> opentmcl.Module:
+        m = opentmcl.connect(self.tcp.url, timeout=timeout, profile="TMCM-6212")
+        self.links.append(m)
+        return m
+
+    def close(self) -> None:
+        for m in self.links:
+            m.close()
+        self.server.stop()
+
+
+@pytest.fixture
+def served():
+    made: list[Served] = []
+    yield lambda plan: made.append(Served(plan)) or made[-1]
+    for s in made:
+        s.close()
+
+
+def outcomes(m, requests) -> list:
+    """What each request got: its value, "timeout", or the error status (status 1: a garbled request)."""
+    out: list = []
+    for request in requests:
+        try:
+            out.append(m.request(*request).value)
+        except TmclTimeout:
+            out.append("timeout")
+        except TmclStatusError as exc:
+            out.append(f"status {exc.status}")
+    return out
+
+
+def test_the_reply_to_the_third_mvp_and_a_seeded_run_repeat(served):
+    """"drop the reply to the third MVP" on a served link; a fourth of the GAP requests garbled by
+    chance (the module answers status 1, "wrong checksum", TMCM-6212 manual 3.2.1): two servers with
+    the same seed garble the same requests, another seed garbles others."""
+    plan = {"fault": [{"kind": "drop_reply", "command": "MVP", "count": 3},
+                      {"kind": "corrupt_request", "command": "GAP", "probability": 0.25, "byte": 7}]}
+    moves = [(MVP, 0, 0, target) for target in (100, 200, 300, 400)]
+    reads = [(GAP, 4, axis % 6) for axis in range(40)]
+
+    def run(seed: int) -> list:
+        m = served({**plan, "seed": seed}).link(timeout=0.3)
+        return outcomes(m, moves + reads)
+
+    first = run(7)
+    assert first[:4] == [0, 0, "timeout", 0]
+    garbled = [i for i, v in enumerate(first[4:]) if v == "status 1"]
+    assert 3 <= len(garbled) <= 25 and set(first[4:]) == {51200, "status 1"}
+    assert run(7) == first
+    assert run(8) != first
+
+
+def test_a_link_fault_at_a_time(served):
+    """`at` alone: the first request from that time on (seconds since the server started) loses
+    its reply, once; the ones before and after are answered."""
+    s = served({"seed": 1, "fault": [{"kind": "drop_reply", "at": 0.5}]})
+    m = s.link(timeout=1.0)
+    deadline = time.monotonic() + 30
+    results: list = []
+    while not (s.server.faults.log.count and results[-1] != "timeout"):
+        assert time.monotonic() < deadline
+        results += outcomes(m, [(GAP, 4, 0)])
+        time.sleep(0.02)
+    assert results.count("timeout") == 1 and results[0] != "timeout"
+    (fired,) = s.server.faults.log.fired
+    assert fired.t >= 0.5
+
+
+def test_a_link_down_by_name_takes_every_link_down_once(served):
+    """`link_down` triggered by name: both TCP clients lose their requests, and so does a client
+    that connects while the link is down; it is recorded once; afterwards all are answered."""
+    s = served({"seed": 1, "fault": [{"name": "down", "kind": "link_down", "duration": 1.5}]})
+    a, b = s.link(), s.link()
+    assert a.request(GAP, 4, 0).status == b.request(GAP, 4, 0).status == 100
+    s.server.faults.trigger("down")
+    late = s.link()
+    for m in (a, b, late):
+        with pytest.raises(TmclTimeout):
+            m.request(SAP, 4, 0, 5)
+    assert [f.kind for f in s.server.faults.log.fired] == ["link_down"]
+    deadline = time.monotonic() + 30
+    while outcomes(late, [(GAP, 4, 0)]) == ["timeout"]:
+        assert time.monotonic() < deadline
+    assert a.request(GAP, 4, 0).value == b.request(GAP, 4, 0).value == 51200   # no SAP got through
