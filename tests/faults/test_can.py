@@ -19,7 +19,8 @@ from .helpers import GAP, SAP
 PLAN = {"seed": 2, "fault": [
     {"name": "drop-request", "kind": "drop_request"}, {"name": "drop-reply", "kind": "drop_reply"},
     {"name": "garble-request", "kind": "corrupt_request"}, {"name": "garble-reply", "kind": "corrupt_reply"},
-    {"name": "slow", "kind": "delay", "delay": 0.3}, {"name": "down", "kind": "link_down", "duration": 0.6}]}
+    {"name": "slow", "kind": "delay", "delay": 0.3}, {"name": "down", "kind": "link_down", "duration": 0.6},
+    {"name": "cut", "kind": "split_reply", "pieces": 3, "gap": 0.5}]}
 
 
 @pytest.fixture
@@ -61,3 +62,12 @@ def test_delay_and_link_down_on_can(can_link):
         m.request(GAP, 4, 0)
     time.sleep(0.6)
     assert m.request(10, 66, 0).value == 1
+
+
+def test_a_can_frame_is_not_cut(can_link):
+    """A split fault has nothing to cut on CAN: the reply comes whole and in time, and the log does
+    not claim a cut (the fault stays pending for a serial link of the same server)."""
+    server, m = can_link
+    server.faults.trigger("cut")
+    assert m.request(GAP, 4, 0).status == 100
+    assert server.faults.log.count == 0

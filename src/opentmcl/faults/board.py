@@ -11,7 +11,7 @@ import math
 import random
 import threading
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from contextlib import AbstractContextManager
 from typing import Protocol
 
@@ -62,9 +62,10 @@ class FaultBoard:
             out += [n for n in target.names() if n not in out]
         return out
 
-    def link(self, scope: str = "link") -> LinkFaults | None:
-        """The link faults of a new link (None when the plan has none); each link its own streams."""
-        faults = self.plan.link_faults
+    def link(self, scope: str = "link", kinds: Collection[str] | None = None) -> LinkFaults | None:
+        """The link faults of a new link (None when the plan has none); each link its own streams.
+        `kinds`: those the link can have (a CAN frame is never cut), others are left to other links."""
+        faults = tuple(f for f in self.plan.link_faults if kinds is None or f.kind in kinds)
         if not faults:
             return None
         self._opened += 1
