@@ -112,3 +112,21 @@ def test_a_link_down_by_name_takes_every_link_down_once(served):
     while outcomes(late, [(GAP, 4, 0)]) == ["timeout"]:
         assert time.monotonic() < deadline
     assert a.request(GAP, 4, 0).value == b.request(GAP, 4, 0).value == 51200   # no SAP got through
+
+
+def test_a_modules_own_link_faults_act_on_the_served_link():
+    """`VirtualModule(faults=...)` with a link fault (or a scenario's [[fault]] tables): served, the
+    fault acts on the link (docs/faults.md "Served": the served plan takes the modules' link faults)."""
+    vm = VirtualModule("TMCM-6212", address=1, faults=[{"name": "lost", "kind": "drop_reply"}])
+    server = Server([vm])
+    tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0))
+    server.start()
+    m = opentmcl.connect(tcp.url, timeout=0.3, profile="TMCM-6212")
+    try:
+        server.faults.trigger("lost")
+        with pytest.raises(TmclTimeout):
+            m.request(SAP, 4, 0, 1234)
+        assert m.request(GAP, 4, 0).value == 1234
+    finally:
+        m.close()
+        server.stop()

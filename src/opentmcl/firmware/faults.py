@@ -30,7 +30,7 @@ from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING
 
-from ..faults import Fault, FaultError, FaultLog, Trigger, load_plan, new_seed, parse_fault, stream
+from ..faults import Fault, FaultError, FaultLog, FaultPlan, Trigger, load_plan, new_seed, parse_fault, stream
 from ..faults.board import FaultBoard
 from ..faults.link import describe
 from ..motion import CLOCK_HZ
@@ -64,19 +64,24 @@ class ModuleFaults:
         self.silent_until = -1
         """The tick before which the firmware answers nothing (a hang)."""
         self._order = 0
+        self.link_plan = FaultPlan()
+        """The link faults of the plans loaded here (a scenario's, `VirtualModule(faults=)`): a
+        server serving this module applies them on its links (`Server.arm`)."""
         self._ends: dict[tuple, float] = {}     # a held state (power off, a hot driver, ...) -> its end tick
         self._before: dict[tuple, object] = {}  # what a held state restores when it ends
 
     # --- loading ----------------------------------------------------------------------------------
     def load(self, faults: object, *, board: FaultBoard | None = None) -> None:
         """Arm the module faults of a plan (a file, a dict, a list of faults, a `FaultPlan`); link
-        faults are left to the link. With `board`, its seed, streams and log (a server, sim://)."""
+        faults are kept for the link (`link_plan`). With `board`, its seed, streams and log (a
+        server, sim://)."""
         if board is not None:
             pairs = board.module_faults(self.vm.address)
             self.log, self.seed = board.log, board.seed
             board.attach(self)
         else:
             plan = load_plan(faults)
+            self.link_plan = self.link_plan.merged(FaultPlan(plan.link_faults, plan.seed))
             self.seed = plan.seed if plan.seed is not None else new_seed()
             pairs = [(f, stream(self.seed, "module", self.vm.address, i, f.kind))
                      for i, f in enumerate(plan.faults) if not f.link]
