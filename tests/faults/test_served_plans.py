@@ -99,7 +99,7 @@ def test_a_link_fault_at_a_time(served):
 def test_a_link_down_by_name_takes_every_link_down_once(served):
     """`link_down` triggered by name: both TCP clients lose their requests, and so does a client
     that connects while the link is down; it is recorded once; afterwards all are answered."""
-    s = served({"seed": 1, "fault": [{"name": "down", "kind": "link_down", "duration": 1.5}]})
+    s = served({"seed": 1, "fault": [{"name": "down", "kind": "link_down", "duration": 1.0}]})
     a, b = s.link(), s.link()
     assert a.request(GAP, 4, 0).status == b.request(GAP, 4, 0).status == 100
     s.server.faults.trigger("down")
