@@ -54,6 +54,8 @@ STORES = ("complete", "absent", "either")
 NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}\Z")
 MAX_FAULTS = 1000
 """The most faults one plan may hold."""
+MAX_SECONDS = 1e6
+"""The longest time a fault may name (`at`, `delay`, `duration`, ...): about 11.6 days."""
 
 
 class FaultError(ValueError):
@@ -166,6 +168,14 @@ def _number(value: object, where: str, lo: float = 0.0, hi: float = math.inf) ->
     return float(value)
 
 
+def _seconds(value: object, where: str) -> float:
+    """A time of a fault: >= 0 and at most MAX_SECONDS."""
+    out = _number(value, where)
+    if out > MAX_SECONDS:
+        raise FaultError(f"{where}: must be at most {MAX_SECONDS:g} s (about 11.6 days), got {value!r}")
+    return out
+
+
 def _int(value: object, where: str, lo: int, hi: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         raise FaultError(f"{where}: expected an integer, got {value!r}")
@@ -200,7 +210,7 @@ def _level(kind: str, value: object, where: str) -> str | int:
 
 _READERS: dict[str, Any] = {
     "probability": lambda v, w: _number(v, w, 0.0, 1.0),
-    "at": _number, "delay": _number, "jitter": _number, "gap": _number, "period": _number,
+    "at": _seconds, "delay": _seconds, "jitter": _seconds, "gap": _seconds, "period": _seconds,
     "count": lambda v, w: _int(v, w, 1, 2**31),
     "type": lambda v, w: _int(v, w, 0, 255), "motor": lambda v, w: _int(v, w, 0, 255),
     "pieces": lambda v, w: _int(v, w, 2, 9), "byte": lambda v, w: _int(v, w, 0, 8),
@@ -213,7 +223,7 @@ _READERS: dict[str, Any] = {
 
 
 def _duration(value: object, where: str) -> float:
-    out = _number(value, where)
+    out = _seconds(value, where)
     if out == 0:
         raise FaultError(f"{where}: must be > 0, got {value!r}")
     return out
@@ -246,7 +256,9 @@ def parse_fault(data: object, where: str = "fault") -> Fault:
     allowed = set(COMMON_KEYS) | set(KIND_KEYS[kind])
     extra = sorted(str(k) for k in data if k not in allowed)
     if extra:
-        raise FaultError(f"{where}: unknown key(s) {', '.join(extra)} for a {kind} fault")
+        hint = " (YAML reads a key 'on' as true: the requests that count are given with 'command')" \
+            if any(k is True for k in data) else ""
+        raise FaultError(f"{where}: unknown key(s) {', '.join(extra)} for a {kind} fault{hint}")
     _check_trigger(kind, data, where)
     values: dict[str, Any] = {"kind": kind}
     for key, value in data.items():
