@@ -229,6 +229,15 @@ def _duration(value: object, where: str) -> float:
     return out
 
 
+def _check_keys(kind: str, d: Mapping[Any, Any], where: str) -> None:
+    allowed = set(COMMON_KEYS) | set(KIND_KEYS[kind])
+    extra = sorted(str(k) for k in d if k not in allowed)
+    if extra:
+        hint = " (YAML reads a key 'on' as true: the requests that count are given with 'command')" \
+            if any(k is True for k in d) else ""
+        raise FaultError(f"{where}: unknown key(s) {', '.join(extra)} for a {kind} fault{hint}")
+
+
 def _check_trigger(kind: str, d: Mapping[str, Any], where: str) -> None:
     if ("type" in d or "motor" in d or "count" in d) and "command" not in d:
         raise FaultError(f"{where}: 'type', 'motor' and 'count' narrow 'command': give the command too")
@@ -253,12 +262,7 @@ def parse_fault(data: object, where: str = "fault") -> Fault:
     kind = data["kind"]
     if kind not in KIND_KEYS:
         raise FaultError(f"{where}.kind: unknown fault kind {kind!r} (known: {', '.join(KINDS)})")
-    allowed = set(COMMON_KEYS) | set(KIND_KEYS[kind])
-    extra = sorted(str(k) for k in data if k not in allowed)
-    if extra:
-        hint = " (YAML reads a key 'on' as true: the requests that count are given with 'command')" \
-            if any(k is True for k in data) else ""
-        raise FaultError(f"{where}: unknown key(s) {', '.join(extra)} for a {kind} fault{hint}")
+    _check_keys(kind, data, where)
     _check_trigger(kind, data, where)
     values: dict[str, Any] = {"kind": kind}
     for key, value in data.items():
