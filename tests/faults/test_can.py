@@ -16,6 +16,8 @@ from opentmcl.server import CanServer, Server
 from ..server.helpers import unique_channel
 from .helpers import GAP, SAP
 
+LOST = 0.3
+"""Seconds a request whose reply the test expects to be lost waits for it (the others: 5 s)."""
 PLAN = {"seed": 2, "fault": [
     {"name": "drop-request", "kind": "drop_request"}, {"name": "drop-reply", "kind": "drop_reply"},
     {"name": "garble-request", "kind": "corrupt_request"}, {"name": "garble-reply", "kind": "corrupt_reply"},
@@ -29,7 +31,7 @@ def can_link():
     server = Server([VirtualModule("TMCM-6212", address=1)], faults=PLAN)
     server.add(CanServer(server.bus, "virtual", channel))
     server.start()
-    m = opentmcl.connect(f"can://virtual/{channel}?id=1&reply_id=2", timeout=0.3, profile="TMCM-6212")
+    m = opentmcl.connect(f"can://virtual/{channel}?id=1&reply_id=2", timeout=5.0, profile="TMCM-6212")
     try:
         yield server, m
     finally:
@@ -46,7 +48,7 @@ def test_requests_and_replies_lost_on_can(can_link):
         server.faults.trigger(name)
         value = 100 + len(name)
         with pytest.raises(TmclTimeout):
-            m.request(SAP, 4, 0, value)
+            m.request(SAP, 4, 0, value, timeout=LOST)
         assert m.request(GAP, 4, 0).value == (value if done else 100), name
         m.request(SAP, 4, 0, 100)
 
@@ -55,11 +57,11 @@ def test_delay_and_link_down_on_can(can_link):
     server, m = can_link
     server.faults.trigger("slow")
     start = time.monotonic()
-    assert m.request(GAP, 4, 0, timeout=2.0).status == 100
+    assert m.request(GAP, 4, 0).status == 100
     assert time.monotonic() - start >= 0.3
     server.faults.trigger("down")
     with pytest.raises(TmclTimeout):
-        m.request(GAP, 4, 0)
+        m.request(GAP, 4, 0, timeout=LOST)
     time.sleep(0.6)
     assert m.request(10, 66, 0).value == 1
 

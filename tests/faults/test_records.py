@@ -46,11 +46,11 @@ def test_a_capture_records_the_faults_and_a_replay_names_them(tmp_path):
     tcp = proxy.listen(TcpServer(proxy, "127.0.0.1", 0, session=ProxySession))
     proxy.start()
     try:
-        m = opentmcl.connect(tcp.url, timeout=0.3, profile="TMCM-6212")
+        m = opentmcl.connect(tcp.url, timeout=5.0, profile="TMCM-6212")
         assert m.request(GAP, 4, 0).status == 100
         proxy.upstream.faults.trigger("lost")
         with pytest.raises(TmclTimeout):
-            m.request(GAP, 4, 0)
+            m.request(GAP, 4, 0, timeout=0.3)
         assert m.request(GAP, 4, 0).status == 100
         m.close()
     finally:
