@@ -4,6 +4,7 @@ beneath their cause, the move-duration table, and per axis the module's against 
 position and speed, drawn (capture/html.py)."""
 from __future__ import annotations
 
+import importlib
 import os
 import shutil
 import tempfile
@@ -26,7 +27,7 @@ ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 def browser():
     if not (os.path.exists(CHROMIUM) and os.access(CHROMIUM, os.X_OK)):
         pytest.skip(f"browser tests need Chromium at {CHROMIUM} (Debian: apt-get install chromium)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="browser tests need the playwright package")
+    sync_api = importlib.import_module("playwright.sync_api")
     profile = tempfile.mkdtemp(prefix="opentmcl-chromium-")
     with sync_api.sync_playwright() as pw:
         context = pw.chromium.launch_persistent_context(profile, executable_path=CHROMIUM, headless=True, args=ARGS,

@@ -2,6 +2,7 @@
 and headless Chromium from Debian's `chromium` package driven by Playwright."""
 from __future__ import annotations
 
+import importlib
 import os
 import shutil
 import tempfile
@@ -55,8 +56,8 @@ def client():
 @pytest.fixture
 def served():
     """A running dashboard for sim://TMCM-6212 (real clock); yields the handle."""
-    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    importlib.import_module("starlette")
+    importlib.import_module("uvicorn")
     import opentmcl
     from opentmcl.web import start_dashboard
 
@@ -74,8 +75,8 @@ def served():
 def served_bus():
     """A running dashboard for a bus with a TMCM-6212 at address 1 and a PD86-1180 at address 2
     (real clock), as `opentmcl serve --web` starts it; yields the handle."""
-    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    importlib.import_module("starlette")
+    importlib.import_module("uvicorn")
     from opentmcl import VirtualModule
     from opentmcl.server.bus import ModuleBus
     from opentmcl.web import start_dashboard_for_bus
@@ -94,7 +95,7 @@ def browser():
     skipped when either is missing. Yields a browser context."""
     if not (os.path.exists(CHROMIUM) and os.access(CHROMIUM, os.X_OK)):
         pytest.skip(f"browser tests need Chromium at {CHROMIUM} (Debian: apt-get install chromium)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="browser tests need the playwright package")
+    sync_api = importlib.import_module("playwright.sync_api")
     profile = tempfile.mkdtemp(prefix="opentmcl-chromium-")
     with sync_api.sync_playwright() as pw:
         context = pw.chromium.launch_persistent_context(

@@ -6,6 +6,7 @@ a new one, and a reserve carries STOP ALL (issue 28 item 2). Real sockets throug
 the first test runs a real `opentmcl dashboard` process with its default limits."""
 from __future__ import annotations
 
+import importlib
 import socket
 import urllib.parse
 
@@ -13,7 +14,7 @@ import pytest
 
 from .rawhttp import get_json, page_headers, post_json, read_reply, request, start_cli, stop_cli
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 HEAD_TIMEOUT = 10.0     # docs/dashboard.md: a request head must be complete within 10 s
 GENEROUS = 60.0         # socket timeouts: far above the limit under test, never a timing assert

@@ -13,6 +13,7 @@ needed 13-35 s or never answered, in every attempt.
 """
 from __future__ import annotations
 
+import importlib
 import socket
 import threading
 import time
@@ -23,7 +24,7 @@ import pytest
 from .processes import GENEROUS, Served, served_module, wait_for, watcher
 from .rawhttp import get_json, post_json
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 BOUND = 1.0             # seconds, issue 28 "Done when"
 ATTEMPTS = 3
