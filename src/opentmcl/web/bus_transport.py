@@ -3,7 +3,10 @@
 
 Requests are offered to the bus without a channel, so the bus keeps routing the modules'
 unsolicited replies (command 138, TMCM-6212 manual 3.6.35) to the TCP/pty/CAN client that
-asked for them: the dashboard never steals another host's events (docs/assumptions.md).
+asked for them: the dashboard never steals another host's events (docs/assumptions.md). The
+transport is a link of its own all the same (`link=`): a program download belongs to the link
+that opened it (server/downloads.py), so the dashboard's polls during another host's download
+are executed, not stored, and its own download is not disturbed by the other hosts.
 """
 from __future__ import annotations
 
@@ -34,7 +37,7 @@ class BusTransport(Transport):
     def send(self, data: bytes) -> None:
         if self._closed:
             raise TmclConnectionError("dashboard bus link is closed")
-        replies = self.bus.request(bytes(data), None)
+        replies = self.bus.request(bytes(data), None, link=self)
         with self._cond:
             for _vm, reply in replies:
                 self._rx += reply
@@ -57,4 +60,7 @@ class BusTransport(Transport):
             self._rx.clear()
 
     def close(self) -> None:
-        self._closed = True
+        """No more requests; a download this link opened has no owner from now on."""
+        if not self._closed:
+            self._closed = True
+            self.bus.forget(self)
