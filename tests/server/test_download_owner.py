@@ -133,6 +133,30 @@ def test_the_served_dashboards_polls_are_not_stored(served):
         dashboard.close()
 
 
+def test_the_served_dashboards_own_download_is_its_own(served):
+    """The other way round: the served dashboard opens a download (3.6.36); a TCP client's GAP 1, 0
+    between its instructions gets the true position and its 132 is refused (6). When the
+    dashboard's link closes mid-download, the TCP client's 132 opens a download of its own."""
+    server, _tcp, connect = served
+    other = connect()
+    assert ask(other, SAP, 1, 0, POSITION).status == OK
+    dashboard = Client(BusTransport(server.bus), address=1, timeout=30)
+    assert dashboard.request(ENTER, 0, 0, 0).status == OK
+    polled = []
+    for ins in PROGRAM[:6]:
+        assert dashboard.request(*ins).status == LOADED
+        reply = ask(other, GAP, 1, 0)
+        polled.append((reply.status, reply.value))
+    assert ask(other, ENTER, 0, 0, 20).status == NOT_AVAILABLE
+    dashboard.close()
+    assert ask(other, ENTER, 0, 0, 20).status == OK
+    assert ask(other, MST, 0, 0).status == LOADED
+    assert ask(other, EXIT).status == OK
+    assert polled == [(OK, POSITION)] * 6
+    assert read_back(other, 7) == [*PROGRAM[:6], EMPTY]
+    assert read_back(other, 22)[20:] == [(MST, 0, 0, 0), EMPTY]
+
+
 def test_a_stop_from_another_link_stops_the_motor_during_a_download(served):
     """Issue 28: a stop always gets through. During one client's download (3.6.36) another
     client's MST (3.6.3) is executed at once: the rotating motor's actual speed (GAP 3) reaches 0,

@@ -72,23 +72,34 @@ class Downloads:
         if owner is not None and not _in_download(vm):  # ended otherwise (power-up, 137)
             del self.owners[id(vm)]
             owner = None
-        if owner is not None:
-            if owner.link is link:
-                owner.heard = self.clock()
-            else:
-                self.heard(link)
-                reply = vm.handle(frame, interface=interface, direct=True)
-                if _status(reply) != _REFUSED or self.clock() - owner.heard < SILENT:
-                    return reply
-                log.warning("%s: the download of a link silent for %.0f s is taken over by another "
-                            "link's 132", _name(vm), self.clock() - owner.heard)
-                del self.owners[id(vm)]
-        else:
-            self.heard(link)
+        if owner is None or owner.link is link:
+            return self._own(vm, frame, interface, link, handle)
+        self.heard(link)
+        reply = vm.handle(frame, interface=interface, direct=True)
+        if _status(reply) == _REFUSED and self.clock() - owner.heard >= SILENT:
+            return self._take_over(vm, frame, interface, link, handle, owner)
+        return reply
+
+    def _own(self, vm, frame: bytes, interface: str, link: object, handle: Handle) -> bytes:
+        """A request handled as the module handles it: stored in its download if one is open."""
+        self.heard(link)
         was = _in_download(vm)
         reply = handle(vm, frame, interface)
         if len(frame) == 9:
             self.answered(vm, frame[1], reply, link, was)
+        return reply
+
+    def _take_over(self, vm, frame: bytes, interface: str, link: object, handle: Handle, owner: Owner) -> bytes:
+        """Another link's 132 (refused as long as `owner` talks) once `owner` has been silent for
+        `SILENT` s: handled as the module handles it; if it opens no download, `owner` keeps its own."""
+        silent = self.clock() - owner.heard
+        del self.owners[id(vm)]
+        reply = self._own(vm, frame, interface, link, handle)
+        if id(vm) in self.owners:
+            log.warning("%s: a link silent for %.0f s lost its program download to another link's 132",
+                        _name(vm), silent)
+        elif _in_download(vm):
+            self.owners[id(vm)] = owner
         return reply
 
     def answered(self, vm, command: int, reply: bytes, link: object, was: bool) -> None:
