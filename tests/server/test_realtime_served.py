@@ -179,3 +179,60 @@ def test_pty_and_can_answer_in_bounded_time_while_the_clock_lags(tmp_path):
     finally:
         host.shutdown()
         server.stop()
+
+
+def test_sigterm_ends_serve_web_within_two_seconds_during_a_long_download(serve, tmp_path):
+    """Issue 28: "`serve` ends within 2 s of SIGTERM/SIGINT in any state, with EEPROM written", here
+    with the dashboard (`serve --web`) downloading a long program: a profile with the largest
+    program memory a profile may have (65536 commands, docs/profiles.md "Bounds") and 65535
+    instructions sent one by one (132, ..., 133, manual 3.6.36). The download ends at its next
+    instruction; a value stored before (STGP, 3.6.9) is in the EEPROM.
+    (Before: `serve` waited for the download to end, 6-7 s.)"""
+    import json
+    import re
+    import threading
+    import urllib.request
+
+    base = opentmcl.__file__.replace("__init__.py", "modules/data/tmcm6212.toml")
+    profile = tmp_path / "big.toml"
+    profile.write_text(f'extends = {json.dumps(base)}\n[module]\nname = "BIGMEM"\nprogram_memory = 65536\n')
+    eeprom = tmp_path / "module.eeprom"
+    p = serve("--module", str(profile), "--eeprom", str(eeprom), "--tcp", "127.0.0.1:0", "--web", "127.0.0.1:0", "-q")
+    web = int(re.search(r"dashboard http://127\.0\.0\.1:(\d+)/", "".join(p.lines)).group(1))
+    host, port = p.tcp_address()
+    with socket.create_connection((host, port), timeout=30) as s:
+        assert round_trip(s, request(1, 9, 0, 2, 4711))[1][2] == 100   # SGP 0, 2, 4711
+        assert round_trip(s, request(1, 11, 0, 2, 0))[1][2] == 100     # STGP 0, 2
+    source = "MST 0\n" * 65534 + "STOP\n"  # 393 kB: within the dashboard's 1 MiB body
+    headers = {"Content-Type": "application/json", "X-OpenTMCL": "1", "Origin": f"http://127.0.0.1:{web}"}
+
+    def post() -> None:
+        req = urllib.request.Request(f"http://127.0.0.1:{web}/m/1/api/program/download",
+                                     json.dumps({"source": source}).encode(), headers, method="POST")
+        try:
+            urllib.request.urlopen(req, timeout=60).read()
+        except OSError:
+            pass  # the answer may be cut off by the exit
+
+    def sent() -> int:
+        with urllib.request.urlopen(f"http://127.0.0.1:{web}/m/1/api/state", timeout=30) as r:
+            return (json.loads(r.read())["download"] or [0])[0]
+
+    downloading = threading.Thread(target=post, daemon=True)
+    downloading.start()
+    end = time.monotonic() + 60
+    while sent() < 5:
+        assert time.monotonic() < end, "the download did not start"
+        time.sleep(0.01)
+    start = time.monotonic()
+    p.proc.send_signal(signal.SIGTERM)
+    p.proc.wait(timeout=30)
+    seconds = time.monotonic() - start
+    print(f"exit {seconds:.3f} s after SIGTERM")
+    assert seconds < 2.0
+    assert p.proc.returncode == 0
+    downloading.join(60)
+    again = serve("--module", str(profile), "--eeprom", str(eeprom), "--tcp", "127.0.0.1:0", "-q")
+    with socket.create_connection(again.tcp_address(), timeout=30) as s:
+        assert round_trip(s, request(1, 10, 0, 2))[1][4:8] == (4711).to_bytes(4, "big")  # GGP 0, 2
+    assert again.stop()[0] == 0

@@ -28,6 +28,8 @@ if TYPE_CHECKING:
     from ..server.bus import ModuleBus
     from .app import ModuleIndex
 
+STOP_GRACE = 0.5
+"""Seconds `DashboardHandle.stop` waits for the requests under way before it closes the links."""
 WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's default is 16 MiB
 
 
@@ -81,18 +83,23 @@ class DashboardHandle:
         return f"{self.url}m/{address}/"
 
     def stop(self) -> None:
+        """Within about `STOP_GRACE` s (issue 28: `serve` ends within 2 s of SIGTERM): a download
+        under way ends at its next instruction (133 sent), the scan at its current address; what
+        still runs after the grace time finds the links closed."""
+        for d in self.dashboards:
+            d.closed.set()
         if self.index is not None:
             self.index.close()  # the scan and the modules opened from it
         for d in self.dashboards:
-            d.closed.set()
             d.cancel_run()
         for poller in self._pollers:
             poller.stop()
         self._server.should_exit = True
-        self._thread.join(timeout=5.0)
+        self._thread.join(timeout=STOP_GRACE)
         if self._on_stop is not None:
             self._on_stop()
             self._on_stop = None
+        self._thread.join(timeout=STOP_GRACE)
 
     def __enter__(self) -> DashboardHandle:
         return self

@@ -435,6 +435,12 @@ class Dashboard:
                 raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
             if self.lock.stops_waiting:
                 raise DashboardError("download cancelled by a stop command (download mode left with 133)")
+            if self.closed.is_set():
+                raise DashboardError("download cancelled: the dashboard is stopping (download mode left with 133)")
+
+        def closing(_done: int, _total: int) -> None:
+            if self.closed.is_set():
+                raise DashboardError("verify cancelled: the dashboard is stopping")
         loader = self.loader()
         try:
             # One turn from 132 to 133: a command sent meanwhile would be stored, not executed
@@ -444,7 +450,7 @@ class Dashboard:
                     loader.download(prog.instructions, verify=False, progress=abort_point)
             finally:
                 self.downloading = None
-            loader.verify(prog.instructions)
+            loader.verify(prog.instructions, progress=closing)
             loader.reset()  # 131: program counter, stack, A, X and flags to zero (TMCM-6212 3.6.36)
         except LoaderError as exc:
             raise DashboardError(str(exc)) from None
