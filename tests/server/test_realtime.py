@@ -339,3 +339,86 @@ def test_a_stop_over_any_serial_endpoint_goes_ahead_of_requests_waiting(stop_ove
             client.close()
         tcp.stop()
         pty.stop()
+
+
+class Hooked(Recording):
+    """A `Recording` module that calls `hook` (once) while it handles the first frame."""
+
+    hook = None
+
+    def handle(self, frame, *, interface="serial"):
+        hook, self.hook = self.hook, None
+        if hook is not None:
+            hook()
+        return super().handle(frame, interface=interface)
+
+
+def wait_for(predicate, what: str) -> None:
+    end = time.monotonic() + 30
+    while not predicate():
+        assert time.monotonic() < end, f"not reached: {what}"
+        time.sleep(0.001)
+
+
+def test_a_stop_goes_between_two_frames_of_another_hosts_pipelined_read():
+    """Issue 28: "Stop requests ... go ahead of queued work". A host may pipeline hundreds of frames
+    in one read (docs/endpoints.md "Several frames at once"), each maybe costly (a factory reset,
+    137, of a large profile: 30 ms); a stop of another host goes between two of them, not after the
+    whole read: three GAPs (3.6.6) in one read, and an MST (3.6.3) that comes over a second
+    connection while the first GAP is handled, is read by the module second. (Before: after the
+    last GAP; a host pipelining 137 held a stop 15.7 s.)"""
+    import socket
+
+    from opentmcl.server import TcpServer
+
+    from .helpers import recv_exactly
+
+    vm = Hooked(address=1)
+    bus = ModuleBus([vm])
+    tcp = TcpServer(bus, "127.0.0.1", 0)
+    tcp.start()
+    busy, stopper = (socket.create_connection(tcp.address, timeout=30) for _ in range(2))
+    try:
+        def stop_meanwhile() -> None:
+            stopper.sendall(request(1, 3, 0, 0))
+            wait_for(lambda: bus.lock.stops_waiting, "the MST waiting for the bus")
+
+        vm.hook = stop_meanwhile
+        busy.sendall(request(1, 6, 1, 0) * 3)
+        assert recv_exactly(stopper, 9, timeout=30)[2] == 100
+        assert len(recv_exactly(busy, 27, timeout=30)) == 27
+        assert vm.handled == [6, 3, 6, 6]
+    finally:
+        busy.close()
+        stopper.close()
+        tcp.stop()
+
+
+def test_a_server_that_stops_drops_the_rest_of_a_pipelined_read():
+    """Issue 28: "`serve` ends within 2 s of SIGTERM/SIGINT in any state": an endpoint that stops
+    while it handles a read of many frames handles no further frame of it (the server closes the
+    modules and writes the EEPROM at once). (Before: a read of 455 factory resets of a large
+    profile kept `serve` from ending for 16 s.)"""
+    import socket
+
+    from opentmcl.server import TcpServer
+
+    vm = Hooked(address=1)
+    bus = ModuleBus([vm])
+    tcp = TcpServer(bus, "127.0.0.1", 0)
+    tcp.start()
+    stopping = threading.Thread(target=tcp.stop)
+    client = socket.create_connection(tcp.address, timeout=30)
+    try:
+        def stop_meanwhile() -> None:
+            stopping.start()
+            wait_for(lambda: all(s.closed for s in tcp.sessions), "the session closing")
+
+        vm.hook = stop_meanwhile
+        client.sendall(request(1, 6, 1, 0) * 3)
+        wait_for(lambda: stopping.ident is not None, "the endpoint stopping")
+        stopping.join(30)
+        assert vm.handled == [6]
+    finally:
+        client.close()
+        tcp.stop()

@@ -15,6 +15,7 @@ from __future__ import annotations
 import time
 
 from ..faults import FaultBoard, FaultError, FaultPlan, load_plan
+from ..handover import STOP
 from .bus import ModuleBus, RealTimeRunner
 from .eeprom_writer import EepromWriter
 
@@ -103,7 +104,7 @@ class Server:
                 pass
         self.runner.stop()
         self.eeprom_writer.stop()
-        with self.bus.lock:
+        with self.bus.lock.hold(STOP):  # ahead of requests still under way
             for vm in self.bus.modules:
                 close = getattr(vm, "close", None)
                 if callable(close):

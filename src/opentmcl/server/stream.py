@@ -136,6 +136,8 @@ class SerialStream:
         outputs: list = []
         pos, size = 0, len(data)
         while size - pos >= FRAME_LEN:
+            if pos and not self._between_frames(channel):
+                return outputs
             frame = data[pos:pos + FRAME_LEN]
             pos += FRAME_LEN
             self.frames += 1
@@ -148,6 +150,15 @@ class SerialStream:
         if pos < size:
             outputs += self._feed_each(data[pos:], now, channel)
         return outputs
+
+    def _between_frames(self, channel) -> bool:
+        """Between two frames of one read (a pipelining host may send hundreds, each maybe costly):
+        a stop that waits for the bus goes first (docs/architecture.md "Real time"); False when
+        the link is closing (the server stops): the rest of the read is dropped."""
+        lock = self.bus.lock
+        if lock.stops_waiting:
+            lock.yield_to_stops()
+        return not getattr(channel, "closed", False)
 
     def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
         """The general case: every module reads the bytes in its own mode."""
@@ -201,6 +212,8 @@ class SerialStream:
             piece = data[pos:pos + need] if pos or need < size else data
             pos += len(piece)
             for frame in framer.feed(piece, now):
+                if frames and not self._between_frames(channel):
+                    return frames
                 frames += 1
                 reply = self._frame(vm, frame, channel)
                 if reply:
