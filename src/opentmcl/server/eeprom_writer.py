@@ -30,8 +30,8 @@ class EepromWriter:
     def __init__(self, bus, every: float = WRITE_EVERY) -> None:
         self.bus = bus
         self.every = every
-        self.eeproms = [e for e in (getattr(vm, "eeprom", None) for vm in bus.modules)
-                        if getattr(e, "path", None) is not None and callable(getattr(e, "snapshot", None))]
+        self.eeproms: list = [e for e in (getattr(vm, "eeprom", None) for vm in bus.modules)
+                              if getattr(e, "path", None) is not None and callable(getattr(e, "snapshot", None))]
         self._changed = threading.Event()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
