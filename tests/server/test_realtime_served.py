@@ -151,10 +151,13 @@ def test_pty_and_can_answer_in_bounded_time_while_the_clock_lags(tmp_path):
     import can
     import serial
 
+    from opentmcl.cli.serve import SWITCH_INTERVAL
     from opentmcl.server import CanServer, PtyServer, Server
 
     from .helpers import unique_channel
 
+    switch = sys.getswitchinterval()
+    sys.setswitchinterval(SWITCH_INTERVAL)  # as `opentmcl serve` does: the server shares this process
     server = Server(loaded_modules(4))
     pty = server.add(PtyServer(server.bus, interface="rs485"))
     channel = unique_channel()
@@ -179,6 +182,7 @@ def test_pty_and_can_answer_in_bounded_time_while_the_clock_lags(tmp_path):
     finally:
         host.shutdown()
         server.stop()
+        sys.setswitchinterval(switch)
 
 
 def test_sigterm_ends_serve_web_within_two_seconds_during_a_long_download(serve, tmp_path):
