@@ -135,9 +135,14 @@ class SerialStream:
         bus = self.bus
         outputs: list = []
         pos, size = 0, len(data)
+        lock = bus.lock
+        closable = channel if hasattr(channel, "closed") else None
         while size - pos >= FRAME_LEN:
-            if pos and not self._between_frames(channel):
-                return outputs
+            if pos:  # between two frames (`_between_frames`, inlined: this loop is hot)
+                if lock.stops_waiting:
+                    lock.yield_to_stops()
+                if closable is not None and closable.closed:
+                    return outputs
             frame = data[pos:pos + FRAME_LEN]
             pos += FRAME_LEN
             self.frames += 1
