@@ -213,6 +213,27 @@ def test_pty_and_can_answer_in_bounded_time_while_the_clock_lags(tmp_path):
         sys.setswitchinterval(switch)
 
 
+def test_sigterm_ends_serve_within_two_seconds_while_bytes_cross_a_paced_line(serve):
+    """Issue 28: "`serve` ends within 2 s of SIGTERM/SIGINT in any state": with `--pace` the bytes
+    a host sends cross the line at GP65's 9600 baud (TMCM-6212 manual 5.1, 10 bit times per byte),
+    so 455 pipelined GAPs (4095 bytes) take 4.3 s to arrive, and their replies as long again.
+    SIGTERM in the middle ends `serve` within 2 s, exit status 0. (Before: 3.8-4 s, the session
+    slept out the wire time.)"""
+    import serial
+
+    p = serve("--module", "TMCM-6212", "--pty", "--pace", "--tcp", "127.0.0.1:0", "-q")
+    path = p.endpoint("pty")
+    with serial.Serial(path, timeout=30) as port:
+        port.write(request(1, 6, 1, 0) * 455)
+        assert len(port.read(9)) == 9  # the first reply: the line is busy with the rest
+        start = time.monotonic()
+        p.proc.send_signal(signal.SIGTERM)
+        p.proc.wait(timeout=30)
+        seconds = time.monotonic() - start
+    assert seconds < 2.0, f"exit {seconds:.2f} s after SIGTERM"
+    assert p.proc.returncode == 0
+
+
 def test_sigterm_ends_serve_web_within_two_seconds_during_a_long_download(serve, tmp_path):
     """Issue 28: "`serve` ends within 2 s of SIGTERM/SIGINT in any state, with EEPROM written", here
     with the dashboard (`serve --web`) downloading a long program: a profile with the largest
