@@ -6,6 +6,8 @@
     ...
     server.stop()        # endpoints closed, EEPROM flushed (vm.close())
 
+While it runs, the EEPROM files are written by a thread of their own (server/eeprom_writer.py).
+
 `stop()` is idempotent and safe to call from a signal-handling main thread.
 """
 from __future__ import annotations
@@ -13,7 +15,9 @@ from __future__ import annotations
 import time
 
 from ..faults import FaultBoard, FaultPlan, load_plan
+from ..handover import STOP
 from .bus import ModuleBus, RealTimeRunner
+from .eeprom_writer import EepromWriter
 
 
 def start_all(endpoints) -> None:
@@ -33,6 +37,8 @@ class Server:
     def __init__(self, modules, *, tick: float = 0.01, faults: object = None) -> None:
         self.bus = ModuleBus(modules)
         self.runner = RealTimeRunner(self.bus, tick=tick)
+        self.eeprom_writer = EepromWriter(self.bus)
+        """Writes the EEPROM files outside the bus lock while the server runs."""
         self.endpoints: list = []
         self._started = False
         self._stopped = False
@@ -79,6 +85,7 @@ class Server:
         except BaseException:
             self._started = False
             raise
+        self.eeprom_writer.start()
         self.runner.start()
 
     def stop(self) -> None:
@@ -91,7 +98,8 @@ class Server:
             except OSError:
                 pass
         self.runner.stop()
-        with self.bus.lock:
+        self.eeprom_writer.stop()
+        with self.bus.lock.hold(STOP):  # ahead of requests still under way
             for vm in self.bus.modules:
                 close = getattr(vm, "close", None)
                 if callable(close):

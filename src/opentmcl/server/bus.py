@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import inspect
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -46,7 +47,7 @@ from ..handover import BACKGROUND, REQUEST, STOP, HandoverLock
 from ..protocol.opcodes import ENTER_DOWNLOAD_MODE, STOP_COMMANDS, keeps_addressing
 from . import canmap, vmapi
 from .downloads import Downloads
-from .pacing import REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
+from .pacing import FIRST_SLICE, REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
 
 
 class AsciiOutput(NamedTuple):
@@ -272,12 +273,17 @@ class ModuleBus:
     runner_attached = False
     """A `RealTimeRunner` works the lag off: requests then take only a lag they can take whole."""
 
-    def sync(self, budget: float = REQUEST_BUDGET, whole: bool | None = None) -> None:
+    _slicing = False
+    """A slice is under way: some modules are advanced, the others not yet (`_advance`)."""
+
+    def sync(self, budget: float = REQUEST_BUDGET, whole: bool | None = None, *,
+             between: bool = False) -> None:
         """Advance every module's virtual time towards the wall clock by at most `budget` CPU seconds
         of simulation (by the cost estimate), unless less than `min_step` has passed (then the
         modules stay at most that far behind). With `whole` (the default while a runner is
         attached: a host request), a lag that costs more is left to the clock thread; else one
-        slice of `budget` is simulated."""
+        slice of `budget` is simulated. With `between` (the clock thread), the stops and requests
+        that wait go first between two modules of the slice. Nothing while a slice is under way."""
         dt = self._clock() - self.pacer.at
         if dt <= 0 or dt < self.min_step:
             return  # the common case on a busy link: no lock needed to find it out
@@ -285,20 +291,34 @@ class ModuleBus:
             whole = self.runner_attached
         with self.lock:
             now = self._clock()
-            if now - self.pacer.at >= self.min_step:
-                self._advance(self.pacer.step(now, budget, whole), now)
+            if now - self.pacer.at >= self.min_step and not self._slicing:
+                first = FIRST_SLICE if self.runner_attached else math.inf
+                self._advance(self.pacer.step(now, budget, whole, first), now, between)
 
-    def _advance(self, seconds: float, now: float) -> None:
+    def _advance(self, seconds: float, now: float, between: bool = False) -> None:
+        """Every module `seconds` ahead; with `between`, the requests waiting are served after each
+        module (a bus of many costly modules must not hold them for the whole slice): those for a
+        module not advanced yet are answered at its time, at most one slice behind."""
         if seconds <= 0:
             return
         work = self.pacer.work_clock()
         running = False
-        for vm in self.modules:
-            running = running or getattr(vm, "application_status", RUNNING) == RUNNING
-            vm.advance(seconds)
+        modules = self.modules
+        last = len(modules) - 1
+        self._slicing = True
+        try:
+            for i, vm in enumerate(modules):
+                running = running or getattr(vm, "application_status", RUNNING) == RUNNING
+                vm.advance(seconds)
+                if between and i < last and self.lock.waiting():
+                    if running:
+                        self._map = None  # a TMCL program may have changed an address (SGP 66)
+                    self.lock.yield_to_waiting()
+        finally:
+            self._slicing = False
         self.pacer.advanced(seconds, self.pacer.work_clock() - work, now)
         if running:
-            self._map = None  # a TMCL program may have changed an address (SGP 66)
+            self._map = None
 
     @property
     def lag(self) -> float:
@@ -459,7 +479,7 @@ class ModuleBus:
         """One slice of the clock thread (`SLICE_BUDGET`), taken only when no request waits:
         (the pending events, the seconds the modules still lag behind the wall clock)."""
         with self.lock.hold(BACKGROUND):
-            self.sync(SLICE_BUDGET, whole=False)
+            self.sync(SLICE_BUDGET, whole=False, between=True)
             events = self._events()
             lag = self._clock() - self.pacer.at
         return events, lag
