@@ -211,5 +211,9 @@ def test_a_served_store_is_written_by_the_writer_not_under_the_bus_lock(tmp_path
     eeprom.write(older)                                      # late: skipped
     assert json.loads(path.read_text())["user"] == {"0": 2}
     eeprom.on_change = None
+    eeprom.set_program([[4, 0, 0, 1000], [28, 0, 0, 0]])
     eeprom.set_user(0, 3)                                    # without a writer: written at once
     assert json.loads(path.read_text())["user"] == {"0": 3}
+    assert path.read_text() == json.dumps(                   # the same bytes as one json.dumps
+        {"format": "opentmcl-eeprom", "version": 1, "module": "TMCM-6212", **eeprom.data},
+        separators=(",", ":"), sort_keys=True)

@@ -5,8 +5,8 @@ program) writes the module's EEPROM file atomically, with an fsync that takes mi
 the bus lock, a host that pipelines stores, or a program that stores in a loop, held every other
 request behind those writes, stops too (an MST waited 0.9-1.9 s beside a host pipelining STGP).
 While a server runs, a store therefore only marks the image changed; `EepromWriter`'s thread
-takes the new content under the lock (a copy, no disk) and writes it outside, at most once every
-`WRITE_EVERY` seconds; `Server.stop` writes what is left (`vm.close`). A process killed with
+takes a copy under the lock (no encoding, no disk: 0.2 ms for the largest image) and encodes and
+writes it outside, at most once every `WRITE_EVERY` seconds; `Server.stop` writes what is left (`vm.close`). A process killed with
 SIGKILL loses the stores of at most the last `WRITE_EVERY` seconds and the write under way; the
 file is the old one or a new one, never torn (atomicfile.py).
 """
