@@ -360,13 +360,15 @@ def wait_for(predicate, what: str) -> None:
         time.sleep(0.001)
 
 
-def test_a_stop_goes_between_two_frames_of_another_hosts_pipelined_read():
+@pytest.mark.parametrize("split", [False, True])
+def test_a_stop_goes_between_two_frames_of_another_hosts_pipelined_read(split):
     """Issue 28: "Stop requests ... go ahead of queued work". A host may pipeline hundreds of frames
     in one read (docs/endpoints.md "Several frames at once"), each maybe costly (a factory reset,
     137, of a large profile: 30 ms); a stop of another host goes between two of them, not after the
     whole read: three GAPs (3.6.6) in one read, and an MST (3.6.3) that comes over a second
-    connection while the first GAP is handled, is read by the module second. (Before: after the
-    last GAP; a host pipelining 137 held a stop 15.7 s.)"""
+    connection while the first GAP is handled, is read by the module second; also when the read
+    completes a frame begun by the read before (`split`: the general path of server/stream.py).
+    (Before: after the last GAP; a host pipelining 137 held a stop 15.7 s.)"""
     import socket
 
     from opentmcl.server import TcpServer
@@ -383,8 +385,13 @@ def test_a_stop_goes_between_two_frames_of_another_hosts_pipelined_read():
             stopper.sendall(request(1, 3, 0, 0))
             wait_for(lambda: bus.lock.stops_waiting, "the MST waiting for the bus")
 
+        frames = request(1, 6, 1, 0) * 3
+        if split:  # the first 4 bytes in a read of their own, the rest in the next
+            busy.sendall(frames[:4])
+            wait_for(lambda: sum(s.bytes_received for s in tcp.sessions) == 4, "the first 4 bytes handled")
+            frames = frames[4:]
         vm.hook = stop_meanwhile
-        busy.sendall(request(1, 6, 1, 0) * 3)
+        busy.sendall(frames)
         assert recv_exactly(stopper, 9, timeout=30)[2] == 100
         assert len(recv_exactly(busy, 27, timeout=30)) == 27
         assert vm.handled == [6, 3, 6, 6]
