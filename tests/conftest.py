@@ -32,3 +32,11 @@ def wheel(sdist, tmp_path_factory):
         archive.extractall(base, filter="data")
     (tree,) = [p for p in base.iterdir() if p.is_dir()]
     return Built(tree, build(tree, base / "dist", "wheel"))
+
+
+@pytest.fixture(scope="session")
+def browser():
+    """Headless Chromium through Playwright, once per test process (tests/browser.py)."""
+    from tests.browser import chromium_context
+
+    yield from chromium_context()

@@ -133,3 +133,36 @@ def test_stops_then_requests_then_background():
     for t in threads:
         t.join(GUARD)
     assert order == ["stop", "request 1", "request 2", "slice 1", "slice 2"]
+
+
+def test_yield_to_waiting_lets_the_stops_and_requests_in_then_resumes_before_the_slices():
+    """The served bus's clock slice between two modules (issue 28: "serves pending requests between
+    them"): the stop and the requests that wait go first, in their order; the slice then carries
+    on, at its depth, before another clock slice that waits; a request that comes while the
+    requests are served waits behind the slice."""
+    gate, order = HandoverLock(), []
+    gate.acquire(BACKGROUND)
+    gate.acquire()  # held twice: the depth comes back
+    threads = [queue_up(gate, order, "slice 2", BACKGROUND), queue_up(gate, order, "request 1"),
+               queue_up(gate, order, "stop", STOP), queue_up(gate, order, "request 2")]
+    gate.yield_to_waiting()
+    order.append("slice 1")
+    assert order == ["stop", "request 1", "request 2", "slice 1"]
+    late = queue_up(gate, order, "request 3")
+    gate.release()
+    assert gate.held()
+    gate.release()
+    for t in [*threads, late]:
+        t.join(GUARD)
+    assert order == ["stop", "request 1", "request 2", "slice 1", "request 3", "slice 2"]
+
+
+def test_yield_to_waiting_with_only_a_slice_waiting_keeps_the_lock():
+    gate, order = HandoverLock(), []
+    gate.acquire(BACKGROUND)
+    other = queue_up(gate, order, "slice 2", BACKGROUND)
+    gate.yield_to_waiting()
+    order.append("slice 1")
+    gate.release()
+    other.join(GUARD)
+    assert order == ["slice 1", "slice 2"]

@@ -29,7 +29,7 @@ def retried(call):
 def main(port: str) -> int:
     timeouts = 0
     with ConnectionManager(f"--interface serial_tmcl --port {port} --data-rate 9600").connect() as interface:
-        interface.set_timeout(0.3)
+        interface.set_timeout(0.5)
         motor = TMCM6212(interface).motors[0]
         for i in range(ROUNDS):
             speed = 10000 + i

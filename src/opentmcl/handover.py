@@ -10,7 +10,9 @@ whoever waits is served in three classes, in this order, first come first served
 `release` hands the lock straight to the first waiter, so a thread that lets go and asks again at
 once queues behind everyone who was already waiting: nothing is starved by a busy neighbour, and a
 stop waits for at most the one holder it finds. A holder doing long work in steps can let the
-stops waiting go first and then carry on ahead of the other waiters (`yield_to_stops`).
+stops waiting go first and then carry on ahead of the other waiters (`yield_to_stops`), or let
+every stop and request waiting go first and carry on after them (`yield_to_waiting`: the served
+bus's clock slice, between two modules).
 
     lock = HandoverLock()
     with lock:                   # a REQUEST
@@ -107,6 +109,22 @@ class HandoverLock:
             self._depth = 0
             self._hand_over()
             self._queues[REQUEST].appendleft(waiter)
+        waiter.gate.acquire()
+
+    def yield_to_waiting(self) -> None:
+        """Let the stops and requests waiting now go first, then take the lock back after them
+        (behind requests that come meanwhile only if they came earlier; ahead of `BACKGROUND`
+        waiters). The caller holds the lock, at any depth."""
+        if not (self._queues[STOP] or self._queues[REQUEST]):
+            return
+        me = threading.get_ident()
+        with self._mutex:
+            if self._owner != me:
+                raise RuntimeError("cannot yield a lock this thread does not hold")
+            waiter = _Waiter(me, self._depth)
+            self._queues[REQUEST].append(waiter)
+            self._depth = 0
+            self._hand_over()
         waiter.gate.acquire()
 
     def __enter__(self) -> HandoverLock:

@@ -161,8 +161,12 @@ def meta_lines(trace: Trace) -> list[str]:
         lines += [f"# event={e.time:.6f},{e.axis},{e.kind},{_num(e.before)},{_num(e.after)}"
                   for e in trace.events]
     lines += [f"# mark={m.time:.6f},{m.pc},{m.text}" for m in trace.marks]
-    lines += [f"# fault={f.time:.6f},{f.kind},{f.name},{' '.join(f.detail.split())}" for f in trace.faults]
-    return lines
+    return lines + fault_lines(trace)
+
+
+def fault_lines(trace: Trace) -> list[str]:
+    """One ``# fault=`` line per fault that fired (docs/faults.md "Seeing what fired")."""
+    return [f"# fault={f.time:.6f},{f.kind},{f.name},{' '.join(f.detail.split())}" for f in trace.faults]
 
 
 def _opt(text: str) -> float | None:
@@ -497,7 +501,7 @@ class Trace:
         layout "trace": ``# module=``, ``# microsteps_<axis>=`` and event/mark lines, then ``time_s``
         and ``<channel>_<axis>`` with velocity in pps (`from_csv` and `opentmcl plot` read it).
         layout "table": ``time`` and ``pos<axis>``, ``vel<axis>``, ... as the module answered
-        (`opentmcl run --csv`, `demo --csv`)."""
+        (`opentmcl run --csv`, `demo --csv`), after the ``# fault=`` lines of faults that fired."""
         write = {"trace": self._write_file, "table": self._write_table}.get(layout)
         if write is None:
             raise ValueError(f"a CSV layout is one of {', '.join(LAYOUTS)}, not {layout!r}")
@@ -513,6 +517,7 @@ class Trace:
         return None
 
     def _write_table(self, fh: Any) -> None:
+        fh.writelines(line + "\n" for line in fault_lines(self))   # none without faults
         names = self.row_keys()
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(["time"] + [name for name, _ in names])

@@ -43,6 +43,22 @@ def talk(address, chunks, expect):
     return got
 
 
+def ask_in_turn(address, frames, expect):
+    """Send each frame once the reply of the one before has come; read `expect` bytes in all."""
+    sock = socket.create_connection(address, timeout=30)
+    got = b""
+    try:
+        for n, request in enumerate(frames):
+            sock.sendall(request)
+            while len(got) < 9 * (n + 1):
+                got += sock.recv(4096) or b"!"       # "!" ends the wait on EOF, and fails the length check
+        while len(got) < expect:
+            got += sock.recv(4096) or b"!"
+    finally:
+        sock.close()
+    return got
+
+
 def test_bytes_through_the_proxy_equal_bytes_straight_from_the_bus(tmp_path):
     direct_srv, direct = served()
     behind_srv, behind = served()
@@ -72,7 +88,7 @@ def test_late_event_reply_reaches_the_host_and_the_capture(tmp_path):
     front = proxy.listen(TcpServer(proxy, "127.0.0.1", 0, session=ProxySession))
     proxy.start()
     try:
-        got = talk(front.address, [frame(138, 0, 0, 1), frame(4, 1, 0, 500)], 27)
+        got = ask_in_turn(front.address, [frame(138, 0, 0, 1), frame(4, 1, 0, 500)], 27)
     finally:
         proxy.stop()
         srv.stop()

@@ -4,38 +4,14 @@ beneath their cause, the move-duration table, and per axis the module's against 
 position and speed, drawn (capture/html.py)."""
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
 from pathlib import Path
-
-import pytest
 
 from opentmcl.capture import replay
 from opentmcl.capture.html import write_html
 
 from .recorder import planted_session
 
-CHROMIUM = os.environ.get("OPENTMCL_CHROMIUM", "/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--disable-dev-shm-usage"]
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not (os.path.exists(CHROMIUM) and os.access(CHROMIUM, os.X_OK)):
-        pytest.skip(f"browser tests need Chromium at {CHROMIUM} (Debian: apt-get install chromium)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="browser tests need the playwright package")
-    profile = tempfile.mkdtemp(prefix="opentmcl-chromium-")
-    with sync_api.sync_playwright() as pw:
-        context = pw.chromium.launch_persistent_context(profile, executable_path=CHROMIUM, headless=True, args=ARGS,
-                                                        viewport={"width": 1400, "height": 1000})
-        try:
-            yield context
-        finally:
-            context.close()
-            shutil.rmtree(profile, ignore_errors=True)
 
 
 def test_the_html_report_shows_causes_first_folds_knock_ons_and_draws_both_curves(browser, tmp_path):

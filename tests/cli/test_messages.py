@@ -190,7 +190,7 @@ def test_bytes_that_are_no_reply_name_the_likely_fix():
     finally:
         server.close()
     line = one_line(done)
-    assert done.returncode == 3 and "reply with wrong checksum: ff ff ff ff ff ff ff ff ff" in line
+    assert done.returncode == 3 and "reply to GAP 1, 0 from module 1 with a wrong checksum: ff ff ff ff ff ff ff ff ff" in line
     assert line.endswith("check the baud rate (serial), that the port or socket leads to a TMCL module "
                          "and that one host talks at a time")
 

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import pytest
 
+import opentmcl
+from opentmcl.host.errors import TmclUrlError
+
 from ..capture.helpers import cli
 from .helpers import plan_file
 
@@ -45,6 +48,21 @@ def test_a_bad_plan_in_a_sim_url(tmp_path):
     one_line_exit_2(cli("send", "--to", f"sim://TMCM-6212?faults={path}", "GAP 4, 0"), "must be 0..1")
     one_line_exit_2(cli("send", "--to", f"sim://TMCM-6212?faults={plan_file(tmp_path, [])}&seed=-1", "GAP 4, 0"),
                     "seed: must be 0..")
+
+
+@pytest.mark.parametrize(("query", "needle"), [
+    ("faults=", "faults= needs a fault file"),
+    ("seed=3", "seed= belongs to faults=FILE"),
+    ("faults={hang9}", "no module at address 9"),
+])
+def test_a_sim_url_refuses_what_serve_refuses(tmp_path, query, needle):
+    """A blank faults=, a seed without faults (`serve --fault-seed` without --faults is refused
+    too) and a module fault for an address no module has (as `serve` says "no module at address"):
+    a TmclUrlError of one line (on the command line: one line, exit 2, as above)."""
+    hang9 = plan_file(tmp_path, [{"kind": "hang", "at": 1, "duration": 1, "address": 9}])
+    with pytest.raises(TmclUrlError) as info:
+        opentmcl.connect(f"sim://TMCM-6212?{query.format(hang9=hang9)}")
+    assert needle in str(info.value) and "\n" not in str(info.value)
 
 
 def test_the_control_socket_does_not_replace_a_file(tmp_path):

@@ -9,12 +9,12 @@ import sys
 from pathlib import Path
 
 import pytest
+import pytrinamic  # noqa: F401  (a test dependency, pyproject.toml [test]: missing, the test must not pass)
 
 from opentmcl.server.control import ask
 
 from ..capture.helpers import Tool
 
-pytest.importorskip("pytrinamic")
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="pseudo-terminals need POSIX")
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "faults"

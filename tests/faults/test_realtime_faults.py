@@ -15,7 +15,7 @@ from .helpers import GAP, MVP
 
 def test_a_delayed_reply_does_not_hold_up_another_link():
     server = Server([VirtualModule("TMCM-6212", address=1)],
-                    faults=[{"name": "slow", "kind": "delay", "delay": 5.0}])
+                    faults=[{"name": "slow", "kind": "delay", "delay": 3.0}])
     tcp = server.add(TcpServer(server.bus, "127.0.0.1", 0))
     server.start()
     slow = opentmcl.connect(tcp.url, timeout=20.0, profile="TMCM-6212")
@@ -32,7 +32,7 @@ def test_a_delayed_reply_does_not_hold_up_another_link():
         assert server.faults.log.count == 1          # the slow link holds its reply now
         other.request(MVP, 0, 0, 100000)
         first = other.request(GAP, 1, 0).value
-        time.sleep(0.5)
+        time.sleep(0.2)
         later = other.request(GAP, 1, 0).value
         assert not done.is_set()                     # answered while the delayed reply still waits
         assert later > first                         # and the modules' clock went on

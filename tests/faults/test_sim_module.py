@@ -139,3 +139,66 @@ def test_lost_steps_under_load_seen_by_encoder_and_deviation_check(tmp_path):
     assert m.request(GAP, 3, 0).value == 0
     assert m.request(GAP, 207, 0).value & 2
     assert m.request(GAP, 1, 0).value - m.request(GAP, 209, 0).value > 5000
+
+
+def _answers(m) -> bool:
+    try:
+        m.request(GGP, 66, 0, timeout=0.05)
+        return True
+    except TmclTimeout:
+        return False
+
+
+def test_overlapping_power_losses_end_with_the_last(tmp_path):
+    """A power loss of 1 s, and another of 1 s half a second later (a plan that fires power losses
+    by chance or by name may do so): the module is off until the second ends, and powers up once
+    (a SAP done after the power-up is kept)."""
+    m = sim(tmp_path, [{"name": "cut", "kind": "power_loss", "duration": 1.0}], module="PD86-1180")
+    m.client.transport.faults.trigger("cut")
+    m.client.sleep(0.5)
+    m.client.transport.faults.trigger("cut")
+    m.client.sleep(0.6)                      # 1.1 s after the first: the second still holds
+    assert not _answers(m)
+    m.client.sleep(0.4)
+    assert _answers(m)
+    m.request(SAP, 4, 0, 777)
+    m.client.sleep(1.0)
+    assert m.request(GAP, 4, 0).value == 777
+    backs = [f for f in m.client.transport.faults.log.fired if f.detail.startswith("power back")]
+    assert [f.name for f in backs] == ["cut"]
+
+
+def test_overlapping_overtemperatures_keep_the_flags_of_the_one_still_hot(tmp_path):
+    """AP208 bit 2 "pre-warning overtemperature" for 2 s and, within it, bit 1 "driver is shut down
+    due to overtemperature" for 0.5 s (PD86-1180 manual 5): when the shutdown is over the
+    pre-warning stays (and the driver runs again); a second shutdown that overlaps the first keeps
+    the driver off until it ends."""
+    m = sim(tmp_path, [{"name": "warm", "kind": "overtemperature", "level": "prewarning", "duration": 2.0},
+                       {"name": "hot", "kind": "overtemperature", "level": "shutdown", "duration": 0.5}])
+    board = m.client.transport.faults
+    board.trigger("warm")
+    board.trigger("hot")
+    m.client.sleep(0.3)
+    board.trigger("hot")                     # again: hot until 0.8 s
+    m.client.sleep(0.3)
+    assert m.request(GAP, 208, 0).value & 0x06 == 0x06
+    m.client.sleep(0.3)
+    assert m.request(GAP, 208, 0).value & 0x06 == 0x04
+    m.request(MVP, 0, 0, 2000)
+    m.client.sleep(0.5)
+    assert vm_of(m).world.axis(0).physical_position == 2000     # the driver runs again
+    m.client.sleep(0.7)
+    assert m.request(GAP, 208, 0).value & 0x06 == 0
+
+
+def test_overlapping_stuck_switches_release_once_to_the_stage(tmp_path):
+    """The left switch stuck for 1 s, and again half a second later: it reads 1 until the second
+    ends, then follows the stage (0) again, not the level the first fault forced."""
+    m = sim(tmp_path, [{"name": "stuck", "kind": "stuck_switch", "switch": "left", "duration": 1.0}])
+    m.client.transport.faults.trigger("stuck")
+    m.client.sleep(0.5)
+    m.client.transport.faults.trigger("stuck")
+    m.client.sleep(0.7)
+    assert m.request(GAP, 11, 0).value == 1
+    m.client.sleep(0.4)
+    assert m.request(GAP, 11, 0).value == 0

@@ -47,6 +47,10 @@ def test_every_kind_is_described_by_a_table(kind):
     ({"kind": "stuck_switch", "at": 1, "switch": "middle"}, "one of left, right, home"),
     ({"kind": "power_loss", "at": 1, "store": "half"}, "one of complete, absent, either"),
     ({"kind": "hang", "name": "a b", "duration": 1}, "letters, digits"),
+    ({"kind": "delay", "at": 1, "delay": 1e308}, "must be at most 1e+06 s"),
+    ({"kind": "hang", "duration": 1e6 + 1, "at": 1}, "must be at most 1e+06 s"),
+    ({"kind": "drop_reply", "at": 2e6}, "must be at most 1e+06 s"),
+    ({"kind": "drop_reply", True: "MVP", "count": 3}, "YAML reads a key 'on' as true"),
 ])
 def test_a_bad_fault_names_its_key(table, message):
     with pytest.raises(FaultError) as info:
@@ -55,12 +59,14 @@ def test_a_bad_fault_names_its_key(table, message):
 
 
 def test_the_edges_that_are_allowed():
-    """Probability 0 and 1, time 0, a split into 2 and 9 pieces, bytes 0 and 8, a command by number."""
+    """Probability 0 and 1, time 0 and 1e6 s (the longest), a split into 2 and 9 pieces, bytes 0 and 8,
+    a command by number."""
     for table in ({"kind": "drop_reply", "probability": 0}, {"kind": "drop_reply", "probability": 1},
                   {"kind": "drop_reply", "at": 0}, {"kind": "split_reply", "at": 0, "pieces": 2},
                   {"kind": "split_reply", "at": 0, "pieces": 9}, {"kind": "corrupt_reply", "at": 0, "byte": 0},
                   {"kind": "corrupt_reply", "at": 0, "byte": 8}, {"kind": "drop_reply", "command": 4, "count": 1},
-                  {"kind": "drop_reply", "command": "mvp", "count": 1}):
+                  {"kind": "drop_reply", "command": "mvp", "count": 1}, {"kind": "drop_reply", "at": 1e6},
+                  {"kind": "delay", "at": 0, "delay": 1e6, "jitter": 1e6}, {"kind": "hang", "at": 0, "duration": 1e6}):
         parse_fault(table)
     assert parse_fault({"kind": "drop_reply", "command": "mvp", "count": 1}).command == 4
 

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import random
 
+import pytest
+
 import opentmcl
 from opentmcl.host import TmclChecksumError, TmclStatusError, TmclTimeout
 
@@ -26,12 +28,16 @@ def _true_value(vm, kind: str, index: int) -> int:
     return vm.user_vars[index]
 
 
-def test_ten_thousand_mixed_requests_on_a_noisy_link(tmp_path):
+@pytest.mark.parametrize("window", [1, 8])
+def test_ten_thousand_mixed_requests_on_a_noisy_link(tmp_path, window):
     """"opentmcl.connect against a link with 5 % dropped, 5 % delayed (past the timeout) and 1 %
     corrupted replies runs 10,000 mixed requests: every value it returns is the true one for its
     own request, and every failure is a typed timeout or checksum error." Single requests and
-    request_many batches, writes and reads of axis parameters 4 and 5 and of user variables."""
+    request_many batches, writes and reads of axis parameters 4 and 5 and of user variables; the
+    batches one request at a time (a serial line) and 8 in flight (a TCP link's default window,
+    host/transports/tcp.py; tests/faults/test_client_windows.py has them on a real TCP link)."""
     m = sim(tmp_path, NOISY, seed=34, timeout=0.5)
+    m.client.transport.window = window
     vm = vm_of(m)
     rng = random.Random(34)
     sent = failures = answered = 0
@@ -69,6 +75,7 @@ def test_late_replies_do_not_shift_a_batch(tmp_path):
     never taken for the second batch's (issue 34: "Today a late reply after a timed-out batch
     window shifts the next batch")."""
     m = sim(tmp_path, [{"kind": "delay", "command": "GAP", "motor": 1, "count": 1, "delay": 0.7}], timeout=0.5)
+    m.client.transport.window = 8   # the six GAPs in flight at once, as on TCP
     for axis in range(6):
         m.request(SAP, 4, axis, 1000 + axis)
     try:

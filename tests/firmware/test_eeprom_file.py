@@ -187,3 +187,33 @@ def test_killed_writers_temp_file_is_removed_live_one_and_decoys_stay(tmp_path, 
     live.wait(timeout=10)
     Eeprom(image, "TMCM-6212")
     assert temp_files(tmp_path) == [link]
+
+
+def test_a_served_store_is_written_by_the_writer_not_under_the_bus_lock(tmp_path):
+    """Issue 28 ("host requests are never queued behind" other work): with `on_change` set (a
+    server's writer thread, server/eeprom_writer.py) a store (STGP, TMCM-6212 manual 3.6.9) only
+    marks the image changed and calls it; the file is written from a `snapshot`. Two writers that
+    race keep the newer content: a snapshot older than the one written last is not written."""
+    import json
+
+    path = tmp_path / "m.eeprom"
+    eeprom = Eeprom(path, "TMCM-6212")
+    calls: list[int] = []
+    eeprom.on_change = lambda: calls.append(1)
+    eeprom.set_user(0, 1)
+    assert calls == [1] and eeprom.dirty
+    assert json.loads(path.read_text())["user"] == {}          # not written by the store
+    older = eeprom.snapshot()
+    eeprom.set_user(0, 2)
+    newer = eeprom.snapshot()
+    assert not eeprom.dirty and eeprom.snapshot() is None    # nothing changed since
+    eeprom.write(newer)
+    eeprom.write(older)                                      # late: skipped
+    assert json.loads(path.read_text())["user"] == {"0": 2}
+    eeprom.on_change = None
+    eeprom.set_program([[4, 0, 0, 1000], [28, 0, 0, 0]])
+    eeprom.set_user(0, 3)                                    # without a writer: written at once
+    assert json.loads(path.read_text())["user"] == {"0": 3}
+    assert path.read_text() == json.dumps(                   # the same bytes as one json.dumps
+        {"format": "opentmcl-eeprom", "version": 1, "module": "TMCM-6212", **eeprom.data},
+        separators=(",", ":"), sort_keys=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from opentmcl import VirtualModule
-from opentmcl.protocol.frame import Request, checksum
+from opentmcl.protocol.frame import Reply, Request, checksum
 
 from .test_program_support import STOP, T, Wire, module
 
@@ -234,3 +234,45 @@ def test_a_stored_command_answers_status_101_with_value_0(anymod):
         raw = anymod.raw(134, 0, 0, address)
         assert len(raw) == 9 and raw[1:4] == bytes((5, 4, 0))
         assert int.from_bytes(raw[4:8], "big", signed=True) == value
+
+
+def _direct(w, command, type=0, motor=0, value=0) -> Reply:
+    """A request from a host that did not open the download (`VirtualModule.handle(direct=True)`)."""
+    raw = w.vm.handle(Request(1, command, type, motor, value).encode(), direct=True)
+    return Reply.decode(raw)
+
+
+@pytest.mark.parametrize("hooked", [False, True], ids=["plain", "faults watching"])
+def test_direct_requests_are_executed_during_a_download(hooked):
+    """3.6.36: after 132 "All following commands (except control commands) are not executed but
+    stored" - for the host that opened the download. A request with `direct=True` (another host of
+    a served module, docs/endpoints.md "Several hosts") is executed as in direct mode and not
+    stored; that host cannot start the download again (132: status 6, "Command not available")
+    nor end it (133 does nothing, as in direct mode). Also with faults watching every frame."""
+    w = module(faults=[{"name": "later", "kind": "hang", "duration": 1}] if hooked else None)
+    before = w.ok(6, 4, 0)
+    w.ok(132, 0, 0, 0)
+    assert w(5, 4, 0, before + 1).status == STATUS_LOADED
+    read = _direct(w, 6, 4, 0)
+    assert (read.status, read.value) == (100, before)
+    assert _direct(w, 5, 4, 0, before + 2).status == 100
+    assert _direct(w, 6, 4, 0).value == before + 2
+    refused = _direct(w, 132, 0, 0, 7)
+    assert (refused.status, refused.command) == (6, 132)
+    assert _direct(w, 133).status == 100
+    assert w.vm.download_mode and w.vm.download_pointer == 1
+    assert w(28).status == STATUS_LOADED  # the owner's next instruction is still stored
+    w.ok(133)
+    assert w.vm.program.code[:3] == [(5, 4, 0, before + 1), (28, 0, 0, 0), (0, 0, 0, 0)]
+
+
+def test_direct_changes_nothing_without_a_download():
+    """Without a download under way, `direct=True` is a plain direct-mode request: SAP and GAP
+    answer as without it, and its 132 opens a download (3.6.36) that stores the next command."""
+    w = module()
+    assert _direct(w, 5, 4, 0, 1234).status == 100
+    assert _direct(w, 6, 4, 0).value == w.ok(6, 4, 0) == 1234
+    assert _direct(w, 132, 0, 0, 0).status == 100
+    assert w(28).status == STATUS_LOADED
+    w.ok(133)
+    assert w.vm.program.code[0] == (28, 0, 0, 0)

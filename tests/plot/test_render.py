@@ -1,9 +1,11 @@
 """PNG/SVG rendering and the `opentmcl plot` command."""
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
-pytest.importorskip("matplotlib", reason="plots need matplotlib")
+importlib.import_module("matplotlib")
 
 from opentmcl.cli import main  # noqa: E402
 from opentmcl.plot import Trace, TraceError, render  # noqa: E402

@@ -1,7 +1,8 @@
 """The requests odemis' TMCM driver sends while `TMCLController.__init__` runs, and the checks it
 makes of each reply, restated from the driver's source (delmic/odemis, src/odemis/driver/tmcm.py;
-docs/sources.md "odemis' TMCM driver"). odemis is not on PyPI and cannot be installed here, so this
-re-enacts its start-up on a real serial port opened with pyserial as the driver opens it.
+docs/sources.md "odemis' TMCM driver"; the published version with `CANController`). odemis is not on
+PyPI, so this re-enacts its start-up on a real serial port opened with pyserial as the driver opens
+it. The unmodified driver, run once by hand on a served TMCM-6212, sent these requests in this order.
 
 The driver, with its defaults (address=None, refproc=None, temp=False, no param_file, no
 abs_encoder, no refswitch, minpower=10.8 V):
@@ -15,7 +16,9 @@ abs_encoder, no refswitch, minpower=10.8 V):
 4. GAP 1 of the highest axis it is given ("doesn't support N axes" otherwise);
 5. GIO 8, 1 "supply voltage ... on analog channel 8", 1 <-> 0.1 V; below minpower: "has no power";
 6. (the user configuration in bank 2 is read only on TMCM-1110/1140/3110/6110);
-7. per axis: GAP 207 (extended error flags; bit 0 stall, bit 1 deviation: only logged);
+7. per axis: GAP 207 (extended error flags; bit 0 stall, bit 1 deviation: only logged, but for
+   bit 1 without bit 0 it first reads GAP 1 and GAP 209 for its message; a refused GAP 207 stops
+   the start-up);
 8. per axis GAP 1 (position), GAP 4 (speed; with GAP 154 on TMC429 models 1110/1140/3110/6110),
    GAP 5 (acceleration).
 
@@ -125,7 +128,10 @@ def initialise(port: serial.Serial, axes: int) -> OdemisStart:
     start.supply_volts = 0.1 * send(port, start, 15, 8, 1)              # _isFullyPowered
     assert start.supply_volts >= MIN_POWER, "odemis: 'has no power, check the power supply input'"
     for axis in range(axes):
-        send(port, start, 6, 207, axis)                                 # _checkErrorFlag
+        flags = send(port, start, 6, 207, axis)                         # _checkErrorFlag
+        if flags & 2 and not flags & 1:                                 # "Encoder deviation too large"
+            send(port, start, 6, 1, axis)
+            send(port, start, 6, 209, axis)
     start.positions = [send(port, start, 6, 1, axis) for axis in range(axes)]   # _updatePosition
     for axis in range(axes):                                            # _updateSpeed (_readSpeed)
         send(port, start, 6, 4, axis)

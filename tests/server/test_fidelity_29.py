@@ -104,20 +104,44 @@ def link():
 
 
 # --- item 1: AP8 after a stop ------------------------------------------------------------------
-@pytest.mark.parametrize("name", ["PD86-1180", "TMCM-6212"])
-def test_position_reached_after_mst_on_the_target(link, name):
-    """PD86-1180 manual ch. 5 AP8 "Position reached flag": "Indicates that the actual position
+@pytest.mark.parametrize(("name", "ramp_mode"), [("PD86-1180", 0), ("PD86-1180", 1), ("TMCM-6212", None)])
+def test_position_reached_after_mst_on_the_target(link, name, ramp_mode):
+    """PD86-1180 manual ch. 5 AP8 "Target pos. reached": "Indicates that the actual position
     equals the target position" (TMCM-6212 4.1: "always set when target position and actual
-    position are equal"). MVP ABS 0, 2000, arrival, MST: AP0 = AP1 = 2000 at rest, so GAP 8 reads 1
-    on both modules (the PD86-1180 read 0 in velocity mode), and a program's MST; WAIT POS ends."""
+    position are equal"). MVP ABS 0, 2000 in position mode (AP138 = 0) or soft mode (1), arrival,
+    MST, which selects velocity mode (AP138 = 2, "Automatically set when using ROR, ROL, MST and
+    MVP"): AP0 = AP1 = 2000 at rest, so GAP 8 reads 1 in every ramp mode (the PD86-1180 read 0 in
+    velocity mode), and a program's MST; WAIT POS ends."""
     lk = link(name)
+    if ramp_mode is not None:
+        assert lk.ask(SAP, 138, 0, ramp_mode).status == 100
+        assert lk.ask(SAP, 5, 0, 2047).status == 100      # AP5: a short soft-mode approach
     assert lk.ask(MVP, 0, 0, 2000).status == 100
     assert lk.until(GAP, 8, 0, lambda v: v == 1) == 1
+    if ramp_mode is not None:
+        assert lk.value(GAP, 138, 0) == ramp_mode
     assert lk.ask(MST).status == 100
     assert [lk.value(GAP, n) for n in (0, 1, 3, 8)] == [2000, 2000, 0, 1]
+    if ramp_mode is not None:
+        assert lk.value(GAP, 138, 0) == 2
     lk.download("    MST 0\n    WAIT POS, 0, 0\n    SGP 7, 2, 1\n", name)
     assert lk.ask(RUN, 1, 0, 0).status == 100
     assert lk.until(GGP, 7, 2, lambda v: v == 1) == 1   # past the WAIT POS
+
+
+@pytest.mark.parametrize("name", ["PD86-1180", "TMCM-6212"])
+def test_no_position_reached_after_mst_elsewhere(link, name):
+    """The other side of AP8 (PD86-1180 ch. 5: "the actual position equals the target position"):
+    an MST during a move stops the motor short of AP0, which the stop leaves alone, so GAP 8 reads
+    0 at rest."""
+    lk = link(name)
+    assert lk.ask(MVP, 0, 0, 10**8).status == 100
+    lk.until(GAP, 1, 0, lambda v: v >= 100)
+    assert lk.ask(MST).status == 100
+    assert lk.until(GAP, 3, 0, lambda v: v == 0) == 0
+    target, actual = lk.value(GAP, 0), lk.value(GAP, 1)
+    assert target == 10**8 and 0 < actual < target
+    assert lk.value(GAP, 8) == 0
 
 
 # --- item 3: GP255 suppresses the version string too --------------------------------------------
@@ -165,7 +189,7 @@ def test_a_stored_138_arms_no_event(link):
 def test_the_assembler_says_138_is_direct_mode_only(tmp_path):
     """3.6.35 "This instruction can only be used in direct mode": `asm --module` warns, as it warns of
     what the module would refuse (docs/tmcl-assembler.md "Checking against a module"); --strict
-    refuses (exit 2, nothing written)."""
+    refuses (exit 2, nothing written). `asm` without --module warns too: no module runs it."""
     src = tmp_path / "p.tmc"
     src.write_text("    MVP ABS, 0, 500\n    RAW 138, 1, 0, 1\n")
     out = tmp_path / "p.bin"
@@ -175,38 +199,69 @@ def test_the_assembler_says_138_is_direct_mode_only(tmp_path):
     out.unlink()
     r = cli("asm", str(src), "-o", str(out), "--module", "TMCM-6212", "--strict")
     assert r.returncode == 2 and not out.exists()
+    r = cli("asm", str(src), "-o", str(out))    # no module: 138 is direct mode only on every one
+    assert (r.returncode, r.stderr.strip()) == (0, warning)
 
 
 # --- item 5: CALCX type 11 ---------------------------------------------------------------------
-@pytest.mark.parametrize(("name", "command"), [("TMCM-6212", 33), ("PD86-1180", 33), ("PD28-1021", 45)])
+@pytest.mark.parametrize(("name", "command"), [("TMCM-6212", 33), ("PD86-1180", 33), ("PD28-1021", 40)])
 def test_calcx_beyond_swap_is_wrong_type(link, name, command):
     """TMCM-6212 manual 3.6.26 CALCX: types "0 ADD ... 10 SWAP"; Table 4 "3 Wrong type". In direct
     mode CALCX has no effect (status 100 up to SWAP) and type 11 is status 3, as CALC's type 10
-    is (3.6.14 lists 0...9). The PD28-1021's CALCV (Table 5) takes the same operations."""
+    is (3.6.14 lists 0...9). The PD28-1021's CALCVV (Table 5) takes the same operations."""
     lk = link(name)
     got = {t: lk.ask(command, t, 0, 0).status for t in (0, 10, 11, 255)}
     assert got == {0: 100, 10: 100, 11: 3, 255: 3}
     assert (lk.ask(19, 9, 0, 1).status, lk.ask(19, 10, 0, 1).status) == (100, 3)
 
 
+def test_calcv_ends_at_load(link):
+    """PD28-1021 Table 5 CALCV (45): "Arithmetical operation between user variable and direct
+    value": a constant cannot be swapped, so its last operation is 9 LOAD and 10 SWAP is "3 Wrong
+    type" (Table 4), in direct mode as in a program (docs/assumptions.md "PD28-1021 extended set")."""
+    lk = link("PD28-1021")
+    assert [lk.ask(45, t, 0, 1).status for t in (0, 9, 10, 11)] == [100, 100, 3, 3]
+    lk.download("    CALCV SWAP, 3, 1\n    SGP 4, 2, 1\n", "PD28-1021")
+    assert lk.ask(RUN, 1, 0, 0).status == 100
+    assert lk.until(GGP, 4, 2, lambda v: v == 1) == 1  # the program went on past it
+    assert lk.value(GGP, 3, 2) == 0                    # the refused CALCV changed nothing
+
+
 # --- item 6: AP21 in velocity mode -------------------------------------------------------------
+AP21_PROGRAM = """
+    SAP 5, 0, 500000      // AMAX: ramps of 0.1 s
+    SAP 21, 0, 65535      // ramp wait time: 65535 * 0.000032 s = 2097.12 ms
+    ROR 0, 50000
+Up: GAP 3, 0
+    COMP 50000
+    JC NE, Up
+    ROL 0, 50000          // a direction inversion
+Down: GAP 3, 0
+    COMP 0
+    JC GT, Down
+    GGP 132, 0            // the tick at which the speed reached zero
+    AGP 0, 2
+Rest: GAP 3, 0
+    COMP 0
+    JC GE, Rest
+    GGP 132, 0            // the tick at which the motor turned left
+    AGP 1, 2
+    SGP 2, 2, 1
+"""
+
+
 def test_ramp_wait_time_before_a_direction_inversion(link):
     """TMCM-6212 manual 4.1 AP21 "Ramp wait time": "waiting time after ramping down to zero
     velocity before next movement or direction inversion can start", 0.000032 s per unit. ROR then
-    ROL with AP21 = 65535 (2.097 s): the motor ramps down, stands, and turns left only after the
-    wait, measured on the module's own clock (GP132 tick timer, ms)."""
+    ROL with AP21 = 65535: the motor ramps down, stands 2097.12 ms, then turns left. A program on
+    the module times it with its own clock (GP132 tick timer, "incremented by one every
+    millisecond"), so the host's speed does not enter: whole ms 2097, plus at most one for the poll."""
     lk = link("TMCM-6212")
-    assert lk.ask(SAP, 5, 0, 500000).status == 100              # AMAX: a ramp of 0.1 s
-    assert lk.ask(1, 0, 0, 50000).status == 100                 # ROR
-    lk.until(GAP, 3, 0, lambda v: v == 50000)
-    assert lk.ask(SAP, 21, 0, 65535).status == 100
-    assert lk.ask(2, 0, 0, 50000).status == 100                 # ROL: a direction inversion
-    lk.until(GAP, 3, 0, lambda v: v <= 0)
-    rest = lk.value(GGP, 132, 0)                                 # at rest since at most this tick
-    assert lk.value(GAP, 3, 0) == 0
-    lk.until(GAP, 3, 0, lambda v: v < 0)
-    moving = lk.value(GGP, 132, 0)
-    assert moving - rest >= 1500   # 2097 ms less what the polls may have added to `rest`
+    lk.download(AP21_PROGRAM, "TMCM-6212")
+    assert lk.ask(RUN, 1, 0, 0).status == 100
+    assert lk.until(GGP, 2, 2, lambda v: v == 1) == 1
+    rest, moving = lk.value(GGP, 0, 2), lk.value(GGP, 1, 2)
+    assert 2097 <= moving - rest <= 2099
 
 
 # --- item 7: ranges of the PD86-1180 -----------------------------------------------------------
@@ -253,6 +308,24 @@ def test_serve_takes_the_interface_the_manual_lists(serve, name, interface):
             assert lk.port.read(9) == b""
     finally:
         lk.close()
+
+
+# --- item 9: what asm counts -------------------------------------------------------------------
+def test_asm_counts_what_disasm_lists(tmp_path):
+    """Issue 29 item 9: `asm` said "14 instructions" where `disasm` shows 13. It counts the source's
+    instructions apart from the STOP it appends (docs/tmcl-assembler.md), in the singular for one,
+    and without the appended STOP it says why `disasm` lists one fewer for a final STOP."""
+    src, out = tmp_path / "p.tmc", tmp_path / "p.bin"
+    src.write_text("    MVP ABS, 0, 500\n    STOP\n")
+    r = cli("asm", str(src), "-o", str(out))
+    assert r.stdout.strip() == f"{out}: 2 instructions + appended STOP = 3 records, 0 labels"
+    assert len(cli("disasm", str(out)).stdout.splitlines()) == 2
+    r = cli("asm", str(src), "-o", str(out), "--no-stop")
+    assert r.stdout.strip() == f"{out}: 2 instructions (disasm lists 1: it leaves a final STOP out), 0 labels"
+    assert len(cli("disasm", str(out)).stdout.splitlines()) == 1
+    src.write_text("Here:\n    MVP ABS, 0, 500\n")
+    r = cli("asm", str(src), "-o", str(out))
+    assert r.stdout.strip() == f"{out}: 1 instruction + appended STOP = 2 records, 1 label"
 
 
 # --- item 10: download, then run from the first instruction ------------------------------------

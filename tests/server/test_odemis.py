@@ -6,9 +6,11 @@ supply voltage is reported on analog channel 8" and "1 <-> 0.1 V". The three man
 the port; OpenTMCL answers it as a documented extension (docs/assumptions.md "Supply voltage and
 temperature"), from the world's `supply_voltage` (docs/scenarios.md, default 24.0 V).
 
-odemis is not on PyPI and could not be installed here, so the unmodified driver itself was not
-run: tests/server/odemis_init.py re-enacts the requests its `TMCLController.__init__` sends and the
-checks it makes of every reply, over a real pseudo-terminal that the server serves as USB.
+odemis is not on PyPI, so CI cannot run the driver itself: tests/server/odemis_init.py re-enacts
+the requests its `TMCLController.__init__` sends and the checks it makes of every reply, over a real
+pseudo-terminal that the server serves as USB. The unmodified driver was run once by hand against
+`opentmcl serve --module TMCM-6212 --pty` and sent the same requests (docs/sources.md "odemis' TMCM
+driver").
 """
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """Interop: unmodified PyTrinamic against the endpoints (docs/architecture.md "Request path": third-party clients
-must behave the same against a virtual module). Skipped when pytrinamic is not installed."""
+must behave the same against a virtual module); the test extra installs pytrinamic."""
+import importlib
 import sys
 import time
 
@@ -10,7 +11,7 @@ import opentmcl.urlhandler  # noqa: F401
 from opentmcl import VirtualModule
 from opentmcl.server import PtyServer, Server, TcpServer
 
-pytrinamic = pytest.importorskip("pytrinamic")
+pytrinamic = importlib.import_module("pytrinamic")
 from pytrinamic.connections import ConnectionManager  # noqa: E402
 from pytrinamic.connections.serial_tmcl_interface import SerialTmclInterface  # noqa: E402
 from pytrinamic.modules import TMCM1021, TMCM6212  # noqa: E402

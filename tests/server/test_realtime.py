@@ -7,13 +7,14 @@ Costs are measured on a work clock the tests drive, so nothing here depends on t
 from __future__ import annotations
 
 import threading
+import time
 
 import pytest
 
 from opentmcl import VirtualModule
 from opentmcl.handover import BACKGROUND, REQUEST, STOP
 from opentmcl.server.bus import ModuleBus, urgency
-from opentmcl.server.pacing import MIN_SLICE, REQUEST_BUDGET, SLICE_BUDGET, Pacer
+from opentmcl.server.pacing import FIRST_SLICE, MIN_SLICE, REQUEST_BUDGET, SLICE_BUDGET, Pacer
 
 from .helpers import request
 
@@ -164,12 +165,98 @@ def test_a_lag_beyond_max_lag_is_dropped_and_reported():
 
 
 def test_a_cheap_lag_is_caught_up_whole_however_long():
-    """Idle modules cost next to nothing: a long gap (a suspended process, a fake clock) is caught up
-    whole, nothing dropped."""
+    """Idle modules cost next to nothing: once that is measured, a long gap (a suspended process, a
+    fake clock) is caught up whole, nothing dropped."""
     bus, vm, wall = costly_bus(1e-6)
+    wall.t = 0.001
+    bus.request(request(1, 6, 1, 0))  # the first slice measures the cost
     wall.t = 10.0
     bus.request(request(1, 6, 1, 0))
     assert vm.time == pytest.approx(10.0) and bus.clock_report().dropped == 0
+
+
+def test_before_the_cost_is_measured_a_slice_is_short():
+    """A served bus does not know what its modules cost before it has simulated them (a TMCL
+    program started from the EEPROM at power-up may cost more than a CPU): the first lag is left
+    by a request to the clock thread, which simulates FIRST_SLICE of it and so measures the cost;
+    then the slices follow the estimate. (Before: the whole start-up lag in one slice.)"""
+    bus, vm, wall = costly_bus(0.5)
+    wall.t = 5.0
+    assert bus.request(request(1, 6, 1, 0))[0][1][2] == 100
+    assert vm.advanced == []
+    bus.step()
+    assert vm.advanced == [FIRST_SLICE] and bus.pacer.cost == pytest.approx(0.5)
+    bus.step()
+    assert vm.advanced[1] == pytest.approx(SLICE_BUDGET / 0.5)
+
+
+def test_without_a_clock_thread_the_first_lag_is_taken_whole():
+    """A bare bus (no clock thread: the library with a fake clock) moves on with its requests as
+    before: an unmeasured lag is simulated whole."""
+    bus, vm, wall = costly_bus(0.5, runner=False)
+    wall.t = 5.0
+    bus.request(request(1, 6, 1, 0))
+    assert vm.advanced == [5.0]
+
+
+def many_costly(count: int, cost: float, log: list):
+    """A served bus (clock thread attached, not started) of `count` `CostlyModule`s at addresses
+    1..count on a test clock, each noting ("advance", address) and ("handle", address) in `log`."""
+    wall, work = Clock(), Clock()
+
+    class Noting(CostlyModule):
+        def advance(self, seconds: float) -> None:
+            log.append(("advance", self.address))
+            super().advance(seconds)
+            if self.hook is not None:
+                self.hook()
+
+        def handle(self, frame, *, interface="serial"):
+            log.append(("handle", self.address))
+            return super().handle(frame, interface=interface)
+
+    modules = [Noting(work, cost, address=a) for a in range(1, count + 1)]
+    for vm in modules:
+        vm.hook = None
+    bus = ModuleBus(modules, clock=wall, min_step=0.0, pacer=Pacer(wall, work_clock=work))
+    bus.runner_attached = True
+    return bus, modules, wall
+
+
+def test_a_clock_slice_serves_waiting_requests_between_two_modules():
+    """Issue 28: "the real-time loop advances the simulation in bounded slices and serves pending
+    requests between them", on "a bus of up to 255 modules": a slice advances the modules one
+    after the other, and a request that comes while it runs is served after the module being
+    advanced, not after all of them (with 255 modules running the issue's program one slice held
+    the bus for 40 ms; GAP p99 was 224 ms with two CPU burners). The request is answered at the
+    time of its module, which the slice has not reached yet, and does not advance any module
+    itself: after the slice every module stands at the same time, the wall clock's."""
+    log: list = []
+    bus, modules, wall = many_costly(3, 0.5, log)
+    wall.t = 0.001
+    bus.request(request(1, 6, 1, 0))  # the cost is now known
+    del log[:]
+    replies: list = []
+
+    def ask() -> None:
+        replies.extend(bus.request(request(3, 6, 1, 0)))
+
+    asker = threading.Thread(target=ask)
+
+    def during_first() -> None:
+        modules[0].hook = None
+        asker.start()
+        end = time.monotonic() + 30
+        while bus.lock.waiting() < 1 and time.monotonic() < end:
+            time.sleep(0.001)
+
+    modules[0].hook = during_first
+    wall.t += 0.0005
+    bus.step()
+    asker.join(30)
+    assert log == [("advance", 1), ("handle", 3), ("advance", 2), ("advance", 3)]
+    assert replies and replies[0][1][2] == 100
+    assert [vm.time for vm in modules] == [pytest.approx(wall.t)] * 3
 
 
 def test_pacer_step_edges():
@@ -188,3 +275,157 @@ def test_pacer_step_edges():
     assert pacer.step(-1.0, REQUEST_BUDGET) == 0.0
     with pytest.raises(ValueError):
         Pacer(wall, max_lag=0)
+
+
+class Recording(VirtualModule):
+    """A TMCM-6212 noting the command byte of every frame it reads."""
+
+    def __init__(self, **kwargs) -> None:
+        self.handled: list[int] = []
+        super().__init__("TMCM-6212", **kwargs)
+
+    def handle(self, frame, *, interface="serial"):
+        self.handled.append(frame[1])
+        return super().handle(frame, interface=interface)
+
+
+@pytest.mark.parametrize("stop_over", ["pty", "tcp"])
+def test_a_stop_over_any_serial_endpoint_goes_ahead_of_requests_waiting(stop_over):
+    """Issue 28: "Stop requests (128, MST, 131 ...) go ahead of queued work" on every endpoint,
+    also when the stop comes over another endpoint than the one that loads the bus: with the bus
+    busy, two TCP clients' GAP requests (3.6.6) wait for it; an MST (3.6.3) that comes after them
+    over the pty (or a third TCP client) is read by the module first. (Before: the TCP and pty
+    endpoints took the bus as plain requests, so the stop waited behind every one of them.)"""
+    import socket
+
+    import serial
+
+    from opentmcl.server import PtyServer, TcpServer
+
+    from .helpers import recv_exactly
+
+    vm = Recording(address=1)
+    bus = ModuleBus([vm])
+    tcp = TcpServer(bus, "127.0.0.1", 0)
+    pty = PtyServer(bus, interface="rs485")
+    tcp.start()
+    pty.start()
+    clients = [socket.create_connection(tcp.address, timeout=30) for _ in range(3)]
+    port = serial.Serial(pty.path, timeout=30)
+    try:
+        bus.lock.acquire(BACKGROUND)  # a clock slice is running
+        try:
+            for n, client in enumerate(clients[:2], 1):
+                client.sendall(request(1, 6, 1, 0))
+                end = time.monotonic() + 30
+                while bus.lock.waiting() < n and time.monotonic() < end:
+                    time.sleep(0.001)
+            if stop_over == "pty":
+                port.write(request(1, 3, 0, 0))
+            else:
+                clients[2].sendall(request(1, 3, 0, 0))
+            end = time.monotonic() + 30
+            while bus.lock.waiting() < 3 and time.monotonic() < end:
+                time.sleep(0.001)
+        finally:
+            bus.lock.release()
+        assert [recv_exactly(c, 9, timeout=30)[2] for c in clients[:2]] == [100, 100]
+        stop_reply = port.read(9) if stop_over == "pty" else recv_exactly(clients[2], 9, timeout=30)
+        assert stop_reply[2] == 100
+        assert vm.handled == [3, 6, 6]
+    finally:
+        port.close()
+        for client in clients:
+            client.close()
+        tcp.stop()
+        pty.stop()
+
+
+class Hooked(Recording):
+    """A `Recording` module that calls `hook` (once) while it handles the first frame."""
+
+    hook = None
+
+    def handle(self, frame, *, interface="serial"):
+        hook, self.hook = self.hook, None
+        if hook is not None:
+            hook()
+        return super().handle(frame, interface=interface)
+
+
+def wait_for(predicate, what: str) -> None:
+    end = time.monotonic() + 30
+    while not predicate():
+        assert time.monotonic() < end, f"not reached: {what}"
+        time.sleep(0.001)
+
+
+@pytest.mark.parametrize("split", [False, True])
+def test_a_stop_goes_between_two_frames_of_another_hosts_pipelined_read(split):
+    """Issue 28: "Stop requests ... go ahead of queued work". A host may pipeline hundreds of frames
+    in one read (docs/endpoints.md "Several frames at once"), each maybe costly (a factory reset,
+    137, of a large profile: 30 ms); a stop of another host goes between two of them, not after the
+    whole read: three GAPs (3.6.6) in one read, and an MST (3.6.3) that comes over a second
+    connection while the first GAP is handled, is read by the module second; also when the read
+    completes a frame begun by the read before (`split`: the general path of server/stream.py).
+    (Before: after the last GAP; a host pipelining 137 held a stop 15.7 s.)"""
+    import socket
+
+    from opentmcl.server import TcpServer
+
+    from .helpers import recv_exactly
+
+    vm = Hooked(address=1)
+    bus = ModuleBus([vm])
+    tcp = TcpServer(bus, "127.0.0.1", 0)
+    tcp.start()
+    busy, stopper = (socket.create_connection(tcp.address, timeout=30) for _ in range(2))
+    try:
+        def stop_meanwhile() -> None:
+            stopper.sendall(request(1, 3, 0, 0))
+            wait_for(lambda: bus.lock.stops_waiting, "the MST waiting for the bus")
+
+        frames = request(1, 6, 1, 0) * 3
+        if split:  # the first 4 bytes in a read of their own, the rest in the next
+            busy.sendall(frames[:4])
+            wait_for(lambda: sum(s.bytes_received for s in tcp.sessions) == 4, "the first 4 bytes handled")
+            frames = frames[4:]
+        vm.hook = stop_meanwhile
+        busy.sendall(frames)
+        assert recv_exactly(stopper, 9, timeout=30)[2] == 100
+        assert len(recv_exactly(busy, 27, timeout=30)) == 27
+        assert vm.handled == [6, 3, 6, 6]
+    finally:
+        busy.close()
+        stopper.close()
+        tcp.stop()
+
+
+def test_a_server_that_stops_drops_the_rest_of_a_pipelined_read():
+    """Issue 28: "`serve` ends within 2 s of SIGTERM/SIGINT in any state": an endpoint that stops
+    while it handles a read of many frames handles no further frame of it (the server closes the
+    modules and writes the EEPROM at once). (Before: a read of 455 factory resets of a large
+    profile kept `serve` from ending for 16 s.)"""
+    import socket
+
+    from opentmcl.server import TcpServer
+
+    vm = Hooked(address=1)
+    bus = ModuleBus([vm])
+    tcp = TcpServer(bus, "127.0.0.1", 0)
+    tcp.start()
+    stopping = threading.Thread(target=tcp.stop)
+    client = socket.create_connection(tcp.address, timeout=30)
+    try:
+        def stop_meanwhile() -> None:
+            stopping.start()
+            wait_for(lambda: all(s.closed for s in tcp.sessions), "the session closing")
+
+        vm.hook = stop_meanwhile
+        client.sendall(request(1, 6, 1, 0) * 3)
+        wait_for(lambda: stopping.ident is not None, "the endpoint stopping")
+        stopping.join(30)
+        assert vm.handled == [6]
+    finally:
+        client.close()
+        tcp.stop()

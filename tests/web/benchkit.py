@@ -4,10 +4,9 @@ confirms every effect with GAP/GGP), and a fresh page on one module."""
 from __future__ import annotations
 
 import contextlib
+import importlib
 from collections.abc import Iterator
 from pathlib import Path
-
-import pytest
 
 from .shellkit import TIMEOUT_MS, Bench, open_view, wait_until
 
@@ -22,8 +21,8 @@ __all__ = ["STAGE", "TIMEOUT_MS", "Bench", "console_has", "fresh_page", "open_vi
 def served(*modules: tuple[str, int, str | None]) -> Iterator[Bench]:
     """Virtual modules (name, address, scenario file or None) on one bus, served over TCP and by the
     dashboard, in this process (so the dashboard may reach their worlds)."""
-    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    importlib.import_module("starlette")
+    importlib.import_module("uvicorn")
     from opentmcl import VirtualModule
     from opentmcl.server.app import Server
     from opentmcl.server.tcp import TcpServer

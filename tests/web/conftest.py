@@ -2,20 +2,14 @@
 and headless Chromium from Debian's `chromium` package driven by Playwright."""
 from __future__ import annotations
 
-import os
-import shutil
-import tempfile
+import importlib
 from pathlib import Path
 
 import pytest
 
-CHROMIUM = os.environ.get("OPENTMCL_CHROMIUM", "/usr/bin/chromium")
+from tests.browser import CHROMIUM, CHROMIUM_ARGS  # noqa: F401 (make_doc_screenshots imports them here)
+
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                 "--disable-dev-shm-usage",
-                 # names that resolve to loopback, as a rebound or another local site's name would
-                 "--host-resolver-rules=MAP *.opentmcl.test 127.0.0.1"]
 
 
 @pytest.fixture
@@ -55,8 +49,8 @@ def client():
 @pytest.fixture
 def served():
     """A running dashboard for sim://TMCM-6212 (real clock); yields the handle."""
-    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    importlib.import_module("starlette")
+    importlib.import_module("uvicorn")
     import opentmcl
     from opentmcl.web import start_dashboard
 
@@ -74,8 +68,8 @@ def served():
 def served_bus():
     """A running dashboard for a bus with a TMCM-6212 at address 1 and a PD86-1180 at address 2
     (real clock), as `opentmcl serve --web` starts it; yields the handle."""
-    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    importlib.import_module("starlette")
+    importlib.import_module("uvicorn")
     from opentmcl import VirtualModule
     from opentmcl.server.bus import ModuleBus
     from opentmcl.web import start_dashboard_for_bus
@@ -86,25 +80,6 @@ def served_bus():
         yield handle
     finally:
         handle.stop()
-
-
-@pytest.fixture(scope="session")
-def browser():
-    """Headless Chromium (Debian package) through Playwright, with a fresh profile directory;
-    skipped when either is missing. Yields a browser context."""
-    if not (os.path.exists(CHROMIUM) and os.access(CHROMIUM, os.X_OK)):
-        pytest.skip(f"browser tests need Chromium at {CHROMIUM} (Debian: apt-get install chromium)")
-    sync_api = pytest.importorskip("playwright.sync_api", reason="browser tests need the playwright package")
-    profile = tempfile.mkdtemp(prefix="opentmcl-chromium-")
-    with sync_api.sync_playwright() as pw:
-        context = pw.chromium.launch_persistent_context(
-            profile, executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS,
-            viewport={"width": 1400, "height": 1000})
-        try:
-            yield context
-        finally:
-            context.close()
-            shutil.rmtree(profile, ignore_errors=True)
 
 
 @pytest.fixture

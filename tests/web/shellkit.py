@@ -4,11 +4,10 @@ a page that records every console error or warning."""
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-
-import pytest
 
 TIMEOUT_MS = int(os.environ.get("OPENTMCL_TEST_TIMEOUT_MS", "60000"))  # a guard against hanging: the tests wait for a state, they do not time anything
 GAP, SAP, MST = 6, 5, 3
@@ -36,8 +35,8 @@ class Bench:
 @contextlib.contextmanager
 def bench(*modules: tuple[str, int]) -> Iterator[Bench]:
     """Virtual modules (name, address) on one bus, served over TCP and by the dashboard."""
-    pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra (starlette, uvicorn)")
+    importlib.import_module("starlette")
+    importlib.import_module("uvicorn")
     from opentmcl import VirtualModule
     from opentmcl.server.app import Server
     from opentmcl.server.tcp import TcpServer

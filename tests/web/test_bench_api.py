@@ -4,12 +4,13 @@ manual 6.5, PD86-1180 manual 5), the wizards' all-or-none apply and EEPROM store
 a virtual module only, program read-back with 134 (3.6.36), the profile keys the page reads."""
 from __future__ import annotations
 
+import importlib
 import json
 import tomllib
 
 import pytest
 
-pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
+importlib.import_module("starlette")
 from starlette.testclient import TestClient  # noqa: E402
 
 import opentmcl  # noqa: E402

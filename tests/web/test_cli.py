@@ -1,6 +1,7 @@
 """`opentmcl serve --web` and `opentmcl dashboard --to URL` start the dashboard (subprocesses)."""
 from __future__ import annotations
 
+import importlib
 import json
 import urllib.request
 
@@ -11,7 +12,7 @@ from opentmcl.cli.dashboard import parse_web, sim_url_real_time
 
 from .rawhttp import start_cli, stop_cli
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 
 def _get(url: str) -> dict:

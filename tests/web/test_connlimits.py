@@ -6,6 +6,7 @@ a new one, and a reserve carries STOP ALL (issue 28 item 2). Real sockets throug
 the first test runs a real `opentmcl dashboard` process with its default limits."""
 from __future__ import annotations
 
+import importlib
 import socket
 import urllib.parse
 
@@ -13,7 +14,7 @@ import pytest
 
 from .rawhttp import get_json, page_headers, post_json, read_reply, request, start_cli, stop_cli
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 HEAD_TIMEOUT = 10.0     # docs/dashboard.md: a request head must be complete within 10 s
 GENEROUS = 60.0         # socket timeouts: far above the limit under test, never a timing assert
@@ -76,13 +77,16 @@ def test_an_idle_connection_gives_its_place_to_a_new_one(limited):
 
 def test_a_kept_alive_connection_counts_as_waiting_from_its_last_response(limited):
     """A connection kept alive after a response waits for its next head from then on: a new
-    connection takes the place of one that connected after it but has waited longer."""
+    connection takes the place of one that connected after it but has waited longer. Each wait is
+    started by a response the test has read, so the order does not hang on when the server
+    accepted a connection."""
     port = limited
     early = socket.create_connection(("127.0.0.1", port), timeout=GENEROUS)
     a, b = (socket.create_connection(("127.0.0.1", port), timeout=GENEROUS) for _ in range(2))
     ask = f"GET /api/modules HTTP/1.1\r\nHost: 127.0.0.1:{port}\r\n\r\n".encode()
-    early.sendall(ask)
-    assert read_reply(early).status == 200        # kept alive: waiting since this response
+    for sock in (a, early, b):                     # a waits from now, then early, then b
+        sock.sendall(ask)
+        assert read_reply(sock).status == 200      # kept alive: waiting since this response
     late = socket.create_connection(("127.0.0.1", port), timeout=GENEROUS)  # the fourth
     newcomer = socket.create_connection(("127.0.0.1", port))
     assert closed_by_server(a)                    # connected after `early`, waited longer

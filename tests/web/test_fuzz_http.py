@@ -5,6 +5,7 @@ changes nothing; the dashboard keeps answering. 60 examples in CI, more with HYP
 several thousand behind the `slow` marker."""
 from __future__ import annotations
 
+import importlib
 import json
 
 import pytest
@@ -13,7 +14,7 @@ from hypothesis import strategies as st
 
 from .rawhttp import request
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 ROUTES = ["/", "/api/modules", "/m/1/", "/m/1/api/overview", "/m/1/api/state", "/m/1/api/params/axis/0",
           "/m/1/api/params/axis", "/m/1/api/params/global", "/m/1/api/params/store", "/m/1/api/console",

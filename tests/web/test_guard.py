@@ -3,6 +3,7 @@ cross-site requests, DNS rebinding, oversized bodies and over-long number litera
 with a one-line reason, and nothing changes on the module."""
 from __future__ import annotations
 
+import importlib
 import json
 import socket
 import urllib.parse
@@ -21,7 +22,7 @@ from .rawhttp import (
     ws_upgrade,
 )
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 LOOP = "    CALC LOAD, 0\nLoop:\n    CALC ADD, 1\n    JA Loop\n"  # manual 3.6.26 CALC, 3.6.9 JA
 MAX_BODY = 1 << 20  # docs/dashboard.md: the request body limit

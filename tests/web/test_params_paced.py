@@ -11,6 +11,8 @@ The module is watched with GAP over its TCP endpoint, a second connection, not t
 """
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
 from .processes import served_module
@@ -25,7 +27,7 @@ TABLE = "#param-axis-table"
 @pytest.fixture(scope="module")
 def paced():
     """A TMCM-6212 on a paced pty with `opentmcl dashboard --to` in front (tests/web/processes.py)."""
-    pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+    importlib.import_module("uvicorn")
     with served_module("paced") as served:
         yield served
 

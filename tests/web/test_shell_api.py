@@ -2,9 +2,11 @@
 time): stop-all across modules when one fails, and the motion read-out's bounds."""
 from __future__ import annotations
 
+import importlib
+
 import pytest
 
-pytest.importorskip("starlette", reason="the dashboard needs the web extra (starlette, uvicorn)")
+importlib.import_module("starlette")
 from starlette.testclient import TestClient  # noqa: E402
 
 import opentmcl  # noqa: E402

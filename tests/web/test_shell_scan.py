@@ -126,16 +126,35 @@ def test_scan_edges_are_accepted():
 
 def test_one_scan_at_a_time_and_cancel():
     """A second scan while one runs is refused; cancel ends the running one between two requests
-    (fewer addresses asked than the range holds)."""
+    (fewer addresses asked than the range holds). The dashboard talks to the bus over TCP, where
+    an address without a module costs the scan its time-out (on the server's own bus the silence
+    is known at once and the scan is over in a moment)."""
+    from opentmcl.web import start_dashboard
+
     with bench(("TMCM-6212", 1)) as b:
-        assert call(b.handle, "POST", "/api/scan", {"first": 1, "last": 255, "timeout": 0.05})[0] == 200
-        status, data = call(b.handle, "POST", "/api/scan", {"first": 1, "last": 2})
-        assert status == 400 and "already running" in data["error"]
-        assert call(b.handle, "POST", "/api/scan/cancel", {})[0] == 200
-        out: dict = {}
-        wait_until(lambda: not out.update(call(b.handle, "GET", "/api/scan")[1]) and not out["running"], "ended")
-        assert out["cancelled"] and out["done"] < out["total"] == 255
-        assert [f["address"] for f in out["found"]] == [1]
+        handle = start_dashboard(b.client(1), "127.0.0.1", 0, poll=False)
+        try:
+            assert call(handle, "POST", "/api/scan", {"first": 1, "last": 255, "timeout": 0.05})[0] == 200
+            status, data = call(handle, "POST", "/api/scan", {"first": 1, "last": 2})
+            assert status == 400 and "already running" in data["error"]
+            assert call(handle, "POST", "/api/scan/cancel", {})[0] == 200
+            out: dict = {}
+            wait_until(lambda: not out.update(call(handle, "GET", "/api/scan")[1]) and not out["running"], "ended")
+            assert out["cancelled"] and out["done"] < out["total"] == 255
+            assert [f["address"] for f in out["found"]] == [1]
+        finally:
+            handle.stop()
+
+
+def test_a_scan_of_the_servers_own_bus_does_not_wait_for_silent_addresses():
+    """`serve --web`: the served modules answer while the request is handled, so an address
+    without a module is known to be silent at once: scanning 1..255 at the longest time-out per
+    address (0.5 s) ends long before 254 time-outs would (127 s; issue 28: a stop waited for such
+    a time-out), and finds the two modules."""
+    with bench(("TMCM-6212", 1), ("PD86-1180", 7)) as b:
+        out = scan_to_end(b.handle, {"first": 1, "last": 255, "timeout": 0.5})
+        assert out["done"] == out["total"] == 255 and not out["cancelled"]
+        assert [f["address"] for f in out["found"]] == [1, 7]
 
 
 @pytest.mark.parametrize("path", ["/api/scan", "/api/scan/cancel", "/api/scan/open"])
@@ -190,3 +209,27 @@ def test_serial_link_scans_baud_rates_and_returns_to_its_own():
             module.close()
     finally:
         server.stop()
+
+
+def test_a_scan_cancelled_while_it_waits_for_its_turn_asks_nothing_more():
+    """Issue 28 item 2, "a running module scan holds the link": STOP ALL cancels the scan and then
+    waits for its current address only. A scan that is waiting for its turn on the link when it is
+    cancelled asks no address when the turn comes (before, it asked one more, and STOP ALL waited
+    up to another time-out per address for it)."""
+    from opentmcl.web.link import link_gate
+    from opentmcl.web.scan import Scanner
+
+    with bench(("TMCM-6212", 1)) as b:
+        module = b.client(1)
+        scanner = Scanner(module.client, lambda: [1])
+        gate = link_gate(module.client)
+        gate.acquire()  # another turn holds the link
+        try:
+            scanner.start(1, 255, 0.5)
+            wait_until(lambda: gate.waiting() == 1, "the scan waiting for its turn")
+            scanner.cancel()
+        finally:
+            gate.release()
+        scanner.join(30)
+        status = scanner.status()
+        assert not status["running"] and status["cancelled"] and status["done"] == 0

@@ -13,6 +13,7 @@ needed 13-35 s or never answered, in every attempt.
 """
 from __future__ import annotations
 
+import importlib
 import socket
 import threading
 import time
@@ -23,7 +24,7 @@ import pytest
 from .processes import GENEROUS, Served, served_module, wait_for, watcher
 from .rawhttp import get_json, post_json
 
-pytest.importorskip("uvicorn", reason="the dashboard needs the web extra")
+importlib.import_module("uvicorn")
 
 BOUND = 1.0             # seconds, issue 28 "Done when"
 ATTEMPTS = 3
@@ -132,8 +133,9 @@ def test_stop_all_during_a_module_scan(mode):
     """Issue 28 item 2: "a running module scan holds the link". A scan of addresses 1..255 with the
     longest time-out per address the dashboard takes (`TIMEOUT_MAX`, 0.5 s, docs/dashboard.md
     "Module scan") runs; STOP ALL is answered and every axis stands within 1 s, on the server's bus
-    (`serve --web`) and over a TCP link (`dashboard --to`), where the scan shares the dashboard's
-    one client."""
+    (`serve --web`, where an address without a module is known to be silent at once, so the scan
+    holds the link for a moment per address) and over a TCP link (`dashboard --to`), where the
+    scan shares the dashboard's one client and waits its time-out at every empty address."""
     from opentmcl.web.scan import TIMEOUT_MAX
 
     with served_module(mode) as served, watcher(served) as client:

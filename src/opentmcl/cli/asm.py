@@ -173,8 +173,18 @@ def run(args: argparse.Namespace) -> int:
 
 def summary(program) -> str:
     """What `asm` reports: the source's instructions, as `disasm` lists them again, and the STOP
-    appended after them (docs/tmcl-assembler.md): "12 instructions + appended STOP = 13 records"."""
-    count, labels = len(program.instructions), f"{len(program.labels)} labels"
+    appended after them (docs/tmcl-assembler.md): "12 instructions + appended STOP = 13 records".
+    Without an appended STOP (`--no-stop`, `#nostop`) a final STOP of the source is the one record
+    `disasm` leaves out, and the summary says so."""
+    from ..lang.output import STOP
+
+    count, labels = len(program.instructions), _count(len(program.labels), "label")
     if program.appended_stop:
-        return f"{count - 1} instructions + appended STOP = {count} records, {labels}"
-    return f"{count} instructions, {labels}"
+        return f"{_count(count - 1, 'instruction')} + appended STOP = {count} records, {labels}"
+    if count and program.instructions[-1] == STOP:
+        return f"{_count(count, 'instruction')} (disasm lists {count - 1}: it leaves a final STOP out), {labels}"
+    return f"{_count(count, 'instruction')}, {labels}"
+
+
+def _count(n: int, word: str) -> str:
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"

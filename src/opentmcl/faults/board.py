@@ -7,10 +7,11 @@ derived from the one seed; `trigger(name)` fires the named fault wherever it liv
 from __future__ import annotations
 
 import logging
+import math
 import random
 import threading
 import weakref
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from contextlib import AbstractContextManager
 from typing import Protocol
 
@@ -48,6 +49,9 @@ class FaultBoard:
         self._links: weakref.WeakSet[LinkFaults] = weakref.WeakSet()
         self.pending = Pending()
         """Named link faults triggered and not fired yet: the next matching request of any link."""
+        self.down_until = -math.inf
+        """Every link passes nothing before this time (a `link_down` triggered by name); a link
+        opened meanwhile is down too."""
         self._opened = 0
         log.info("fault plan: %d fault(s), seed %d", len(plan.faults), self.seed)
 
@@ -58,14 +62,16 @@ class FaultBoard:
             out += [n for n in target.names() if n not in out]
         return out
 
-    def link(self, scope: str = "link") -> LinkFaults | None:
-        """The link faults of a new link (None when the plan has none); each link its own streams."""
-        faults = self.plan.link_faults
+    def link(self, scope: str = "link", kinds: Collection[str] | None = None) -> LinkFaults | None:
+        """The link faults of a new link (None when the plan has none); each link its own streams.
+        `kinds`: those the link can have (a CAN frame is never cut), others are left to other links."""
+        faults = tuple(f for f in self.plan.link_faults if kinds is None or f.kind in kinds)
         if not faults:
             return None
         self._opened += 1
         number = self._opened
         link = LinkFaults(faults, lambda i, f: stream(self.seed, scope, number, i, f.kind), self.log, self.pending)
+        link.down_until = self.down_until
         self._links.add(link)
         return link
 
@@ -99,8 +105,11 @@ class FaultBoard:
         if fault is None:
             return []
         if fault.kind == "link_down":
+            duration = fault.duration or 0.0
+            self.down_until = max(self.down_until, t + duration)
             for link in list(self._links):
-                link.go_down(fault, t, "triggered by name")
+                link.go_down(fault, t, "triggered by name", record=False)
+            self.log.record(fault, f"link down for {duration:g} s (triggered by name)", t)
             return ["every link: down now"]
         self.pending.add(name)
         return ["the next matching request on a link"]

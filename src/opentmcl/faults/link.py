@@ -133,9 +133,10 @@ class LinkFaults:
                     trig.armed += 1
         return found
 
-    def go_down(self, fault: Fault, t: float, why: str) -> None:
-        """The link goes down now for the fault's duration."""
-        self._down(fault, t, why)
+    def go_down(self, fault: Fault, t: float, why: str, *, record: bool = True) -> None:
+        """The link goes down now for the fault's duration (`record`: in the log; a `FaultBoard`
+        that takes every link down records it once)."""
+        self._down(fault, t, why, record)
 
     def _fires(self, trig: Trigger, fields: Fields, t: float) -> bool:
         f = trig.fault
@@ -148,10 +149,11 @@ class LinkFaults:
         """Is the link down at `t` (a reply sent then is lost)?"""
         return t < self.down_until
 
-    def _down(self, fault: Fault, t: float, why: str) -> None:
+    def _down(self, fault: Fault, t: float, why: str, record: bool = True) -> None:
         duration = fault.duration or 0.0
         self.down_until = max(self.down_until, t + duration)
-        self.log.record(fault, f"link down for {duration:g} s ({why})", t)
+        if record:
+            self.log.record(fault, f"link down for {duration:g} s ({why})", t)
 
     def request(self, fields: Fields | None, t: float) -> Fate:
         """The fate of a request with `fields` (None: bytes that are no whole frame) at time `t`."""

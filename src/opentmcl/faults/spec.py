@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 import os
 import re
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -54,6 +54,8 @@ STORES = ("complete", "absent", "either")
 NAME = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}\Z")
 MAX_FAULTS = 1000
 """The most faults one plan may hold."""
+MAX_SECONDS = 1e6
+"""The longest time a fault may name (`at`, `delay`, `duration`, ...): about 11.6 days."""
 
 
 class FaultError(ValueError):
@@ -137,6 +139,14 @@ class FaultPlan:
     def with_seed(self, seed: int) -> FaultPlan:
         return replace(self, seed=seed)
 
+    def check_addresses(self, addresses: Iterable[int]) -> None:
+        """FaultError for a module fault whose `address` none of the modules at `addresses` has."""
+        have = sorted(set(addresses))
+        for f in self.module_faults:
+            if f.address is not None and f.address not in have:
+                raise FaultError(f"fault {f.label}: no module at address {f.address} "
+                                 f"(modules at {', '.join(map(str, have))})")
+
     def merged(self, other: FaultPlan) -> FaultPlan:
         """Both plans' faults (names must stay distinct); this plan's seed unless it has none."""
         names = set(self.names())
@@ -156,6 +166,14 @@ def _number(value: object, where: str, lo: float = 0.0, hi: float = math.inf) ->
         bound = f"{lo:g}..{hi:g}" if hi < math.inf else f">= {lo:g}"
         raise FaultError(f"{where}: must be {bound}, got {value!r}")
     return float(value)
+
+
+def _seconds(value: object, where: str) -> float:
+    """A time of a fault: >= 0 and at most MAX_SECONDS."""
+    out = _number(value, where)
+    if out > MAX_SECONDS:
+        raise FaultError(f"{where}: must be at most {MAX_SECONDS:g} s (about 11.6 days), got {value!r}")
+    return out
 
 
 def _int(value: object, where: str, lo: int, hi: int) -> int:
@@ -192,7 +210,7 @@ def _level(kind: str, value: object, where: str) -> str | int:
 
 _READERS: dict[str, Any] = {
     "probability": lambda v, w: _number(v, w, 0.0, 1.0),
-    "at": _number, "delay": _number, "jitter": _number, "gap": _number, "period": _number,
+    "at": _seconds, "delay": _seconds, "jitter": _seconds, "gap": _seconds, "period": _seconds,
     "count": lambda v, w: _int(v, w, 1, 2**31),
     "type": lambda v, w: _int(v, w, 0, 255), "motor": lambda v, w: _int(v, w, 0, 255),
     "pieces": lambda v, w: _int(v, w, 2, 9), "byte": lambda v, w: _int(v, w, 0, 8),
@@ -205,10 +223,19 @@ _READERS: dict[str, Any] = {
 
 
 def _duration(value: object, where: str) -> float:
-    out = _number(value, where)
+    out = _seconds(value, where)
     if out == 0:
         raise FaultError(f"{where}: must be > 0, got {value!r}")
     return out
+
+
+def _check_keys(kind: str, d: Mapping[Any, Any], where: str) -> None:
+    allowed = set(COMMON_KEYS) | set(KIND_KEYS[kind])
+    extra = sorted(str(k) for k in d if k not in allowed)
+    if extra:
+        hint = " (YAML reads a key 'on' as true: the requests that count are given with 'command')" \
+            if any(k is True for k in d) else ""
+        raise FaultError(f"{where}: unknown key(s) {', '.join(extra)} for a {kind} fault{hint}")
 
 
 def _check_trigger(kind: str, d: Mapping[str, Any], where: str) -> None:
@@ -235,10 +262,7 @@ def parse_fault(data: object, where: str = "fault") -> Fault:
     kind = data["kind"]
     if kind not in KIND_KEYS:
         raise FaultError(f"{where}.kind: unknown fault kind {kind!r} (known: {', '.join(KINDS)})")
-    allowed = set(COMMON_KEYS) | set(KIND_KEYS[kind])
-    extra = sorted(str(k) for k in data if k not in allowed)
-    if extra:
-        raise FaultError(f"{where}: unknown key(s) {', '.join(extra)} for a {kind} fault")
+    _check_keys(kind, data, where)
     _check_trigger(kind, data, where)
     values: dict[str, Any] = {"kind": kind}
     for key, value in data.items():

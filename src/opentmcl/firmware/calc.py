@@ -13,6 +13,14 @@ from __future__ import annotations
 from ..protocol.frame import to_int32
 
 ADD, SUB, MUL, DIV, MOD, AND, OR, XOR, NOT, LOAD, SWAP = range(11)
+CALCX, CALCV = 33, 45  # TMCM-6212 3.6.26; PD28-1021 Table 5 (user variable and direct value)
+
+
+def last_operation(command: int) -> int:
+    """The highest operation type of CALCX (33) and the CALCxx commands (40-45): SWAP, but LOAD for
+    CALCV, whose source is a constant it cannot exchange with (docs/assumptions.md "PD28-1021
+    extended set"). A type above it is "3 Wrong type", in direct mode and in a program alike."""
+    return LOAD if command == CALCV else SWAP
 
 
 def divide(a: int, b: int) -> int:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Protocol
 from ..protocol.frame import to_int32
 from ..protocol.replies import encode_version_string_reply
 from ..protocol.status import Status
-from .calc import SWAP
+from .calc import CALCV, CALCX, last_operation
 from .status import TmclStatus
 
 if TYPE_CHECKING:
@@ -281,10 +281,20 @@ def cmd_no_effect(vm: VirtualModule, type: int, motor: int, value: int, program:
 
 
 def cmd_calcx(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
-    """CALCX and the PD28-1021's CALCxx in direct mode: no effect (7.6), but an operation beyond
-    the list (TMCM-6212 3.6.26: types 0 ADD ... 10 SWAP) is "3 Wrong type" (Table 4), as CALC's
-    type beyond LOAD is and as the same instruction in a program is."""
-    if not 0 <= type <= SWAP:
+    """CALCX and the PD28-1021's CALCVV ... CALCXV in direct mode: no effect (7.6), but an operation
+    beyond the list (TMCM-6212 3.6.26: types 0 ADD ... 10 SWAP) is "3 Wrong type" (Table 4), as
+    CALC's type beyond LOAD is and as the same instruction in a program is."""
+    return _operation(type, last_operation(CALCX))
+
+
+def cmd_calcv(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """The PD28-1021's CALCV in direct mode: as CALCX, but its operations end at LOAD (it has no
+    second register to SWAP with; calc.last_operation)."""
+    return _operation(type, last_operation(CALCV))
+
+
+def _operation(type: int, last: int) -> Result:
+    if not 0 <= type <= last:
         raise TmclStatus(3)
     return OK, 0
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import json
 import os
+import threading
+from collections.abc import Callable
 from pathlib import Path
 
 from ..atomicfile import remove_stale, write_atomic
@@ -56,6 +58,13 @@ class Eeprom:
         self.data = _empty()
         self.dirty = False
         self.deferred = False
+        self.on_change: Callable[[], None] | None = None
+        """Called instead of `flush` after a change: a server's writer thread writes the file
+        outside the bus lock (server/eeprom_writer.py)."""
+        self._write_lock = threading.Lock()
+        self._taken = 0    # snapshots taken
+        self._program_json: tuple[list, str] | None = None  # (the program list, its JSON)
+        self._written = 0  # the latest snapshot written
         if self.path is not None:
             remove_stale(self.path)   # temp files of a writer killed mid-write (atomicfile)
         if self.path is not None and self.path.exists():
@@ -66,6 +75,17 @@ class Eeprom:
                 self.flush()
             except OSError as exc:
                 raise EepromError(f"cannot create EEPROM file {self.path}: {exc.strerror or exc}") from None
+
+    def __getstate__(self) -> dict[str, object]:
+        """A copy (deepcopy, pickle) is nobody's to write through a server's thread."""
+        state = self.__dict__.copy()
+        del state["_write_lock"]
+        state["on_change"] = None
+        return state
+
+    def __setstate__(self, state: dict[str, object]) -> None:
+        self.__dict__.update(state)
+        self._write_lock = threading.Lock()
 
     def _read(self, path: Path) -> dict:
         try:
@@ -135,13 +155,55 @@ class Eeprom:
     def _changed(self) -> None:
         self.dirty = True
         if not self.deferred:
-            self.flush()
+            if self.on_change is not None:
+                self.on_change()
+            else:
+                self.flush()
 
     def flush(self) -> None:
+        """Write the image now if it changed."""
+        snap = self.snapshot()
+        if snap is not None:
+            self.write(snap)
+
+    def snapshot(self) -> tuple[int, dict] | None:
+        """A copy of the image if it changed since the last snapshot (it then counts as written),
+        else None; the caller holds what guards the module (the bus lock). Cheap: the sections are
+        copied one level deep, the program list is shared (it is only ever replaced, never changed
+        in place); `write` encodes it."""
         if self.path is None or not self.dirty:
             self.dirty = False
-            return
-        payload = json.dumps({"format": FORMAT, "version": VERSION, "module": self.module, **self.data},
-                             separators=(",", ":"), sort_keys=True)
-        write_atomic(self.path, payload.encode("utf-8"))
+            return None
+        data = self.data
+        copy = {key: {k: dict(v) for k, v in data[key].items()} for key in ("axis", "global", "coord")}
+        copy["user"] = dict(data["user"])
+        copy["program"] = data["program"]
         self.dirty = False
+        self._taken += 1
+        return self._taken, copy
+
+    def _encode(self, data: dict) -> str:
+        """The file's JSON (keys sorted, compact); the program's part is encoded once per program
+        (up to 65536 instructions: 30 ms, during which no other thread runs) and kept."""
+        program = data["program"]
+        if self._program_json is None or self._program_json[0] is not program:
+            self._program_json = (program, json.dumps(program, separators=(",", ":")))
+        fields = {"format": FORMAT, "version": VERSION, "module": self.module, **data}
+        return "{" + ",".join(
+            json.dumps(key) + ":" + (self._program_json[1] if key == "program" else
+                                     json.dumps(value, separators=(",", ":"), sort_keys=True))
+            for key, value in sorted(fields.items())) + "}"
+
+    def write(self, snap: tuple[int, dict]) -> None:
+        """Write a `snapshot` atomically, unless a later one is written already (two writers may
+        race); an OSError leaves the image marked changed."""
+        number, data = snap
+        with self._write_lock:
+            if number <= self._written or self.path is None:
+                return
+            try:
+                write_atomic(self.path, self._encode(data).encode("utf-8"))
+            except OSError:
+                self.dirty = True
+                raise
+            self._written = number

@@ -24,12 +24,13 @@ advances only once it holds a fault (`VirtualModule.watch`): an untouched module
 from __future__ import annotations
 
 import heapq
+import math
 import random
 from collections.abc import Callable
 from functools import partial
 from typing import TYPE_CHECKING
 
-from ..faults import Fault, FaultError, FaultLog, Trigger, load_plan, new_seed, parse_fault, stream
+from ..faults import Fault, FaultError, FaultLog, FaultPlan, Trigger, load_plan, new_seed, parse_fault, stream
 from ..faults.board import FaultBoard
 from ..faults.link import describe
 from ..motion import CLOCK_HZ
@@ -63,17 +64,24 @@ class ModuleFaults:
         self.silent_until = -1
         """The tick before which the firmware answers nothing (a hang)."""
         self._order = 0
+        self.link_plan = FaultPlan()
+        """The link faults of the plans loaded here (a scenario's, `VirtualModule(faults=)`): a
+        server serving this module applies them on its links (`Server.arm`)."""
+        self._ends: dict[tuple, float] = {}     # a held state (power off, a hot driver, ...) -> its end tick
+        self._before: dict[tuple, object] = {}  # what a held state restores when it ends
 
     # --- loading ----------------------------------------------------------------------------------
     def load(self, faults: object, *, board: FaultBoard | None = None) -> None:
         """Arm the module faults of a plan (a file, a dict, a list of faults, a `FaultPlan`); link
-        faults are left to the link. With `board`, its seed, streams and log (a server, sim://)."""
+        faults are kept for the link (`link_plan`). With `board`, its seed, streams and log (a
+        server, sim://)."""
         if board is not None:
             pairs = board.module_faults(self.vm.address)
             self.log, self.seed = board.log, board.seed
             board.attach(self)
         else:
             plan = load_plan(faults)
+            self.link_plan = self.link_plan.merged(FaultPlan(plan.link_faults, plan.seed))
             self.seed = plan.seed if plan.seed is not None else new_seed()
             pairs = [(f, stream(self.seed, "module", self.vm.address, i, f.kind))
                      for i, f in enumerate(plan.faults) if not f.link]
@@ -169,6 +177,22 @@ class ModuleFaults:
         if seconds is not None:
             self._at(self.vm.now + round(seconds * CLOCK_HZ), action)
 
+    def _hold(self, key: tuple, seconds: float | None, release: Callable[[], None], before: object = None) -> None:
+        """A state that faults hold on `key` for `seconds` (None: for good). Faults that overlap on
+        one key end together, when the last of them ends: `release` of that one runs then, once.
+        `before` (what the state restores) is kept from the first of them."""
+        end = math.inf if seconds is None else self.vm.now + round(seconds * CLOCK_HZ)
+        if key not in self._ends:
+            self._before[key] = before
+        self._ends[key] = max(self._ends.get(key, end), end)
+        if seconds is not None:
+            self._at(int(end), partial(self._end, key, end, release))
+
+    def _end(self, key: tuple, end: float, release: Callable[[], None]) -> None:
+        if self._ends.get(key) == end:
+            del self._ends[key]
+            release()
+
     # --- firing -----------------------------------------------------------------------------------
     def fire(self, trig: Trigger, why: str) -> None:
         """Let the fault act now (`why`: what set it off, for the log)."""
@@ -218,18 +242,19 @@ class ModuleFaults:
         vm.eeprom.flush()
         self.powered = False
         self._record(fault, "power_loss", f"power lost for {duration:g} s ({why})")
-        if duration > 0:
-            self._after(duration, self._power_up)
+        if duration > 0:   # off until the last of overlapping power losses ends
+            self._hold(("power",), duration, partial(self._power_up, fault))
         else:
-            self._power_up()
+            self._ends.pop(("power",), None)
+            self._power_up(fault)
 
-    def _power_up(self) -> None:
+    def _power_up(self, fault: Fault | None) -> None:
         vm = self.vm
         self.powered = True
         self.silent_until = -1
         vm.power_up()
         vm.events.clear()
-        self.log.record("power_loss", "power back: RAM parameters from the EEPROM"
+        self.log.record(fault if fault is not None else "power_loss", "power back: RAM parameters from the EEPROM"
                         + (", stored program started (GP77)" if vm.application_status == 1 else ""))
 
     def hang(self, duration: float, *, fault: Fault | None = None, why: str = "on demand") -> None:
@@ -252,24 +277,33 @@ class ModuleFaults:
         aw.set_driver_flags(aw.drive.fault_flags | HOT[level])
         self._record(fault, "overtemperature", f"axis {axis}: {level} (AP208 {HOT[level]:#04x}; {why})"
                      + (", driver off" if aw.drive.shut_down else ""))
-        self._after(duration, lambda: self._cool(aw, axis, fault))
+        self._hold(("hot", axis, level), duration, partial(self._cool, aw, axis, level, fault))
 
-    def _cool(self, aw: AxisWorld, axis: int, fault: Fault | None) -> None:
-        aw.set_driver_flags(aw.drive.fault_flags & ~(OVERTEMPERATURE | PREWARNING))
-        self._record(fault, "overtemperature", f"axis {axis}: cooled down, flags clear, driver on")
+    def _cool(self, aw: AxisWorld, axis: int, level: str, fault: Fault | None) -> None:
+        """`level` is over on `axis`; the flags of a level still held stay (a shutdown implies the
+        pre-warning)."""
+        keep = 0
+        for other, flags in HOT.items():
+            if ("hot", axis, other) in self._ends:
+                keep |= flags
+        aw.set_driver_flags(aw.drive.fault_flags & ~(HOT[level] & ~keep))
+        left = aw.drive.fault_flags & (OVERTEMPERATURE | PREWARNING)
+        self._record(fault, "overtemperature", f"axis {axis}: {level} over, "
+                     + (f"AP208 {left:#04x} still" if left else "flags clear")
+                     + (", driver off" if aw.drive.shut_down else ", driver on"))
 
     def stuck_switch(self, axis: int, switch: str, level: int = 1, duration: float | None = None, *,
                      fault: Fault | None = None, why: str = "on demand") -> None:
         """The `switch` input of `axis` sticks at `level` for `duration` seconds (None: for good)."""
         aw = self._axis(axis)
+        key = ("switch", axis, switch)
         before = aw.switches.forced.get(switch)
         aw.force_switch(switch, level)
         self._record(fault, "stuck_switch", f"axis {axis} {switch} switch stuck at {level} ({why})")
-        self._after(duration, lambda: self._release(aw, axis, switch, before, fault, "stuck_switch"))
+        self._hold(key, duration, partial(self._release, aw, axis, switch, key, fault, "stuck_switch"), before)
 
-    def _release(self, aw: AxisWorld, axis: int, switch: str, before: int | None, fault: Fault | None,
-                 kind: str) -> None:
-        aw.force_switch(switch, before)
+    def _release(self, aw: AxisWorld, axis: int, switch: str, key: tuple, fault: Fault | None, kind: str) -> None:
+        aw.force_switch(switch, self._before.pop(key, None))  # type: ignore[arg-type]
         self._record(fault, kind, f"axis {axis} {switch} switch follows the stage again")
 
     def bouncing_switch(self, axis: int, switch: str, bounces: int = 4, period: float = 0.001, *,
@@ -278,6 +312,7 @@ class ModuleFaults:
         now), then follows the stage again."""
         aw = self._axis(axis)
         aw.switches.update()
+        key = ("switch", axis, switch)
         before = aw.switches.forced.get(switch)
         level = int(not aw.switches.input_level(switch))
         self._record(fault, "bouncing_switch", f"axis {axis} {switch} switch bounces {bounces} times, "
@@ -285,18 +320,20 @@ class ModuleFaults:
         aw.force_switch(switch, level)
         for i in range(1, bounces):
             self._after(i * period, partial(aw.force_switch, switch, (level + i) % 2))
-        self._after(bounces * period, lambda: self._release(aw, axis, switch, before, fault, "bouncing_switch"))
+        self._hold(key, bounces * period, partial(self._release, aw, axis, switch, key, fault, "bouncing_switch"),
+                   before)
 
     def step_loss(self, axis: int = 0, load: float = 2.0, duration: float | None = None, *,
                   fault: Fault | None = None, why: str = "on demand") -> None:
         """A load of `load` (times the torque at 100 % current) on `axis` for `duration` seconds:
         beyond what the motor holds, steps are lost while it moves (docs/world.md)."""
         aw = self._axis(axis)
+        key = ("load", axis)
         before = aw.drive.load
         aw.set_load(load)
         self._record(fault, "step_loss", f"axis {axis}: load {load:g} ({why})")
-        self._after(duration, lambda: self._unload(aw, axis, before, fault))
+        self._hold(key, duration, partial(self._unload, aw, axis, key, fault), before)
 
-    def _unload(self, aw: AxisWorld, axis: int, before: object, fault: Fault | None) -> None:
-        aw.set_load(before)  # type: ignore[arg-type]
+    def _unload(self, aw: AxisWorld, axis: int, key: tuple, fault: Fault | None) -> None:
+        aw.set_load(self._before.pop(key, None))  # type: ignore[arg-type]
         self._record(fault, "step_loss", f"axis {axis}: load back to the scenario's")

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
-from ..protocol.opcodes import COMMANDS, Command, is_control
+from ..protocol.opcodes import COMMANDS, ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, Command, is_control
 from ..protocol.status import Status
 from . import commands as c
 from . import steps as s
@@ -39,7 +39,8 @@ USER_BANK, INTERRUPT_BANK = 2, 3
 TICK_TIMER = (0, 132)
 _NONE, _READ = Effect.NONE, Effect.READ
 _CONTROL = Effect.PROGRAM | Effect.EVENTS | Effect.REQUESTS
-_OK, _INVALID = int(Status.OK), int(Status.INVALID_COMMAND)
+_OK, _INVALID, _NOT_AVAILABLE = int(Status.OK), int(Status.INVALID_COMMAND), int(Status.NOT_AVAILABLE)
+_DOWNLOAD = (ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE)
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,7 +145,7 @@ _SPECS = (
     # the PD28-1021's extended set (PD28-1021 manual 3.5, Table 5)
     _spec(40, _CX, _NONE, step=s.calc_vv), _spec(41, _CX, _NONE, step=s.calc_va),
     _spec(42, _CX, _NONE, step=s.calc_av), _spec(43, _CX, _NONE, step=s.calc_vx),
-    _spec(44, _CX, _NONE, step=s.calc_xv), _spec(45, _CX, _NONE, step=s.calc_v),
+    _spec(44, _CX, _NONE, step=s.calc_xv), _spec(45, c.cmd_calcv, _NONE, step=s.calc_v),
     _spec(46, _NO, WRITE), _spec(48, _NO, Effect.EVENTS, step=s.rst), _spec(49, _NO, _NONE, step=s.djnz),
     _spec(50, _NO, WRITE), _spec(51, _NO, WRITE),
     _spec(55, _NO, _NONE, step=s.siv), _spec(56, _NO, _NONE, step=s.giv), _spec(57, _NO, _NONE, step=s.aiv),
@@ -171,14 +172,24 @@ def available(vm: VirtualModule, number: int) -> bool:
     return number in vm.opcodes and number in TABLE
 
 
-def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool) -> Result:
+def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool,
+            direct: bool = False) -> Result:
     """Run one command in direct mode (or a program's command that acts as in direct mode). In
     download mode (132) the commands other than control commands (`opcodes.is_control`; 138 is
     none) are stored instead (status 101, 3.6.36). A number the module's command set lacks is an
-    "Invalid command" (2)."""
+    "Invalid command" (2).
+
+    `direct`: the request comes from a host that did not open the download under way (another link
+    of a served module, docs/endpoints.md "Several hosts"). It is executed as in direct mode, never
+    stored; that download is not its own to start again or end: its 132 is "Command not available"
+    (6), its 133 does nothing (as in direct mode)."""
     try:
-        if vm.download_mode and not program and not is_control(command):
-            return vm.store_instruction(command, type, motor, value)
+        if vm.download_mode and not program:
+            if direct:
+                if command in _DOWNLOAD:
+                    return _not_own_download(command)
+            elif not is_control(command):
+                return vm.store_instruction(command, type, motor, value)
         spec = TABLE.get(command)
         if spec is None or command not in vm.opcodes:
             return _INVALID, 0
@@ -186,6 +197,11 @@ def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, 
         return spec.handler(vm, type, motor, value, program)
     except TmclStatus as exc:
         return exc.status, 0
+
+
+def _not_own_download(command: int) -> Result:
+    """132 or 133 of a host whose requests are `direct` during another host's download."""
+    return (_NOT_AVAILABLE if command == ENTER_DOWNLOAD_MODE else _OK), 0
 
 
 def suppressible(command: int) -> bool:

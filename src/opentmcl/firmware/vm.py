@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import os
 import struct
+from functools import partial
 from typing import Any, Literal, overload
 
 from ..faults import load_plan
@@ -173,18 +174,26 @@ class VirtualModule:
 
     # --- wire interface -------------------------------------------------------
     @overload
-    def handle(self, frame: bytes, as_reply: Literal[False] = False, *, interface: str = "serial") -> bytes: ...
+    def handle(self, frame: bytes, as_reply: Literal[False] = False, *, interface: str = "serial",
+               direct: bool = False) -> bytes: ...
 
     @overload
-    def handle(self, frame: bytes, as_reply: bool, *, interface: str = "serial") -> Reply | bytes: ...
+    def handle(self, frame: bytes, as_reply: bool, *, interface: str = "serial",
+               direct: bool = False) -> Reply | bytes: ...
 
-    def handle(self, frame: bytes, as_reply: bool = False, *, interface: str = "serial") -> Reply | bytes:
+    def handle(self, frame: bytes, as_reply: bool = False, *, interface: str = "serial",
+               direct: bool = False) -> Reply | bytes:
         """Process one 9-byte request; return the reply bytes (b"" when no reply is due).
 
         `interface` is the link the frame came over: "serial" (or "rs232", "rs485": the module
         answers only its address GP66 / secondary address GP87), "usb" (the address byte is
         ignored, the reply carries the module's own address) or "can". CAN requests restart the
         CAN heartbeat GP82, the others the serial heartbeat GP68 (docs/endpoints.md).
+
+        `direct=True`: the frame comes from a host that did not open the download under way (a
+        served module's other link, docs/endpoints.md "Several hosts"): it is executed as in
+        direct mode even in download mode, never stored (`table.execute`). Without a download
+        under way it changes nothing.
 
         A read that has a pre-bound handler skips the general path (requests.py): the table is
         keyed by the whole frame, so one lookup checks length, address, command, type, motor
@@ -201,10 +210,11 @@ class VirtualModule:
                 return fast(heartbeat, as_reply)  # the heartbeat restarted, the engines at now
         hook = self._hook
         if hook is not None:  # faults decide first (firmware/faults.py)
-            return hook.handle(frame, interface, self._handle_general)
-        return self._handle_general(frame, interface)
+            general = partial(self._handle_general, direct=True) if direct else self._handle_general
+            return hook.handle(frame, interface, general)
+        return self._handle_general(frame, interface, direct)
 
-    def _handle_general(self, frame: bytes, interface: str) -> bytes:
+    def _handle_general(self, frame: bytes, interface: str, direct: bool = False) -> bytes:
         if len(frame) != FRAME_LEN:
             return b""
         target, command, type_, motor, value, check = _REQUEST.unpack(frame)
@@ -220,7 +230,7 @@ class VirtualModule:
             if write is not None:
                 return self._write(write, command, value, address, interface)
         self.touch("can" if interface == "can" else "serial")
-        out = execute(self, command, type_, motor, value, program=False)
+        out = execute(self, command, type_, motor, value, program=False, direct=direct)
         if out is None:  # no reply (command 137)
             return b""
         if out.__class__ is bytes:  # special reply format (136 type 0, 134): suppressed as any other

@@ -542,20 +542,27 @@ class Client:
 
     def _read_frame(self, deadline: float, req: Request | None = None) -> Reply:
         """Read one reply frame, re-synchronising byte by byte past garbage on serial links; a
-        garbled frame is a TmclChecksumError naming `req` (TmclProtocolError without one)."""
+        garbled frame is a TmclChecksumError naming `req` (TmclProtocolError without one). A good
+        frame found only a whole frame or more further on follows a garbled reply (a window of
+        replies): the error names `req`, and that frame is left to be read next."""
         if self._can:
             b = self._recv(CAN_REPLY_LEN, deadline)
             return Reply(self.host_address, b[0], b[1], b[2], _VALUE.unpack_from(b, 3)[0])
         buf = self._recv(FRAME_LEN, deadline)
-        first_bad = None
+        if checksum_ok(buf):
+            return _new_tuple(Reply, _BODY.unpack_from(buf))
+        first_bad, skipped = buf, 0
         while not checksum_ok(buf):
-            first_bad = first_bad or buf
             try:
                 buf = buf[1:] + self._recv(1, deadline)
             except TmclTimeout:
                 if req is not None:
                     raise TmclChecksumError(req, first_bad) from None
                 raise TmclProtocolError(f"reply with wrong checksum: {first_bad.hex(' ')}") from None
+            skipped += 1
+        if skipped >= FRAME_LEN and req is not None:
+            self._held[:0] = buf
+            raise TmclChecksumError(req, first_bad)
         return _new_tuple(Reply, _BODY.unpack_from(buf))
 
     def _no_reply(self, req: Request, timeout: float) -> TmclTimeout:

@@ -71,7 +71,7 @@ def split_url(url: str, address: int | None = None) -> urllib.parse.SplitResult:
     if scheme == "sim" and address is not None:
         # A single virtual module takes the address the caller will talk to,
         # unless the URL sets one ("?address=N" or "NAME@N").
-        query = dict(urllib.parse.parse_qsl(parts.query))
+        query = dict(urllib.parse.parse_qsl(parts.query, keep_blank_values=True))  # a blank value is refused later
         if "address" not in query and "@" not in parts.netloc and "," not in parts.netloc:
             query["address"] = str(address)
             parts = parts._replace(query=urllib.parse.urlencode(query))

@@ -85,7 +85,8 @@ def assemble(source: str, *, filename: str = "<source>", include_path: Iterable[
     the bundled include files, checks that the program fits its memory (an error) and that the
     module can execute every instruction - its opcodes, motors, parameter banks and numbers, ports,
     coordinates and interrupts (`Program.warnings`; errors with `strict`). Without it the TMCM-6212
-    includes are used and nothing is checked. `defines` are extra constants. `origin` is the
+    includes are used and only the commands of direct mode only (138 and the control commands,
+    which no module runs in a program) are warned of. `defines` are extra constants. `origin` is the
     program memory address the program is loaded at (labels are absolute).
     """
     if isinstance(origin, bool) or not isinstance(origin, int) or origin < 0:

@@ -44,15 +44,26 @@ class Finding:
     message: str
 
 
+def direct_only(ins: Instruction) -> Finding | None:
+    """A command of direct mode only in a program, on every module: 138 ("This instruction can only
+    be used in direct mode", TMCM-6212 3.6.35) and the control commands ("can only be used in direct
+    mode and not in a standalone program", 3.6.36). The module skips it (status 6)."""
+    cmd = opcodes.COMMANDS.get(ins.command)
+    if cmd is None or cmd.program:
+        return None
+    name = cmd.mnemonic or f"command {ins.command}"
+    return Finding("command", f"{name} can only be used in direct mode: in a program the module skips it (status 6)")
+
+
 def check(ins: Instruction, profile: ModuleProfile) -> list[Finding]:
     """Every reason why `profile`'s firmware would refuse `ins` (empty: it can execute it)."""
     cmd = opcodes.COMMANDS.get(ins.command)
     name = cmd.mnemonic if cmd is not None and cmd.mnemonic else f"command {ins.command}"
     if ins.command not in profile.opcodes:
         return [Finding("command", f"{name} (command {ins.command}) is not available on {profile.name}")]
-    if cmd is not None and not cmd.program:  # 138 (3.6.35) and the control commands (3.6.36)
-        return [Finding("command", f"{name} can only be used in direct mode: in a program the module skips "
-                                   "it (status 6)")]
+    only = direct_only(ins)
+    if only is not None:
+        return [only]
     out: list[Finding] = []
     for names, rule in _RULES:
         meaning = cmd.naming(names, ins.type) if cmd is not None else None

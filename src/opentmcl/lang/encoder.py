@@ -1,6 +1,7 @@
 """From statements to the program: each operand's value in its field (type, motor/bank 0..255,
 value signed 32 bit), the instructions, the module's checks (lang/capabilities_check.py: warnings,
-errors with `strict`; the program memory size: an error) and the appended STOP."""
+errors with `strict`; the program memory size: an error; without a module only the commands of
+direct mode only) and the appended STOP."""
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
@@ -10,6 +11,7 @@ from ..protocol.frame import to_int32
 from ..protocol.opcodes import MOTOR, TYPE, VALUE
 from .binfile import Instruction
 from .capabilities_check import check as check_instruction
+from .capabilities_check import direct_only
 from .diagnostics import ERROR, WARNING, Diagnostic
 from .errors import AsmError, fail
 from .output import STOP, Program, SourceLine
@@ -71,8 +73,15 @@ def _field_column(stmt: Stmt, fld: str) -> int:
     return stmt.column
 
 
-def _check_module(stmt: Stmt, ins: Instruction, st: State, profile: ModuleProfile) -> None:
-    for finding in check_instruction(ins, profile):
+def _check_module(stmt: Stmt, ins: Instruction, st: State, profile: ModuleProfile | None) -> None:
+    """The module's checks; without a module, only what no module can do (a command of direct mode
+    only in a program, capabilities_check.direct_only)."""
+    if profile is None:
+        only = direct_only(ins)
+        findings = [] if only is None else [only]
+    else:
+        findings = check_instruction(ins, profile)
+    for finding in findings:
         col = _field_column(stmt, finding.field)
         severity = ERROR if st.strict else WARNING
         diag = Diagnostic(stmt.where.file, stmt.where.line, col, finding.message, severity, (stmt.where.seq, col))
@@ -88,8 +97,7 @@ def _encode_all(st: State, profile: ModuleProfile | None) -> tuple[list[Instruct
         except AsmError as exc:
             st.report(exc)
             continue
-        if profile is not None:
-            _check_module(stmt, ins, st, profile)
+        _check_module(stmt, ins, st, profile)
         instructions.append(ins)
         sources.append(SourceLine(stmt.where.file, stmt.where.line, stmt.where.text))
     if st.append_stop:

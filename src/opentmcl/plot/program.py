@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
-from ..trace import MAX_SAMPLES, Mark, Trace
+from ..trace import MAX_SAMPLES, FaultMark, Mark, Trace
 from .events import EngineWatch
 from .recording import Sampler, record
 
@@ -202,4 +202,17 @@ def record_program(module, program=None, axes=(0,), seconds: float | None = None
             program_watch.close()
     if watch is not None and start:
         trace.events = watch.events(start[0], axes)
+    if vm is not None and start:
+        trace.faults = fault_marks(vm, start[0], trace)
     return trace
+
+
+def fault_marks(vm, start: float, trace: Trace) -> list[FaultMark]:
+    """The faults that fired on the in-process module `vm` while `trace` was recorded (its time 0
+    is `start` on the module's clock), at trace time (docs/faults.md "Seeing what fired")."""
+    log = getattr(getattr(vm, "faults", None), "log", None)
+    if log is None or not len(trace):
+        return []
+    end = start + trace.time[-1] + 1e-9
+    return [FaultMark(round(f.t - start, 9), f.kind, f.name or "", f.detail)
+            for f in log.since(0) if start - 1e-9 <= f.t <= end]

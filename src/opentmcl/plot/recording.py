@@ -17,7 +17,10 @@ from __future__ import annotations
 
 from ..trace import CHANNELS, HOST_CHANNELS, MAX_SAMPLES, Trace, check_interval
 
-__all__ = ["MAX_SAMPLES", "Sampler", "check_duration", "record"]
+__all__ = ["MAX_SAMPLES", "SILENCE", "Sampler", "check_duration", "record"]
+
+SILENCE = 10.0
+"""Seconds (the module's clock) a recording goes on while the module answers nothing."""
 
 
 class Sampler:
@@ -55,8 +58,9 @@ class Sampler:
                      channels=HOST_CHANNELS, pulse_div=self.pulse_div)
 
     def sample(self) -> dict[tuple[int, str], float | None]:
-        """(axis, channel) -> the value GAP answers (velocity in the module's unit)."""
-        from ..host import TmclStatusError
+        """(axis, channel) -> the value GAP answers (velocity in the module's unit); None for a
+        value refused or garbled. TmclTimeout when the module does not answer (`record`: a gap)."""
+        from ..host import TmclChecksumError, TmclStatusError
 
         out: dict[tuple[int, str], float | None] = {}
         for ax in self.axes:
@@ -64,7 +68,7 @@ class Sampler:
             for ch, num in self.params.items():
                 try:
                     value: float | None = axis.get(num)
-                except TmclStatusError:
+                except (TmclStatusError, TmclChecksumError):
                     value = None
                 out[(ax, ch)] = value
         return out
@@ -82,16 +86,36 @@ def record(module, axes=(0,), seconds: float = 10.0, interval: float = 0.01, *, 
            sampler: Sampler | None = None) -> Trace:
     """Sample `axes` of a host `Module` every `interval` seconds for `seconds` (module time: virtual
     for sim:// modules, the wall clock for real ones). `until(trace) -> bool` may end it early.
-    `sampler`: a `Sampler` of `module` made before (it reads the microstep settings when made)."""
+    `sampler`: a `Sampler` of `module` made before (it reads the microstep settings when made).
+
+    A sample the module does not answer (a power loss, a hung firmware, a lost reply: docs/faults.md)
+    is a gap, its values None; after `SILENCE` seconds without an answer the time-out ends the
+    recording."""
+    from ..host import TmclTimeout
+
     check_duration(seconds, interval)
     sampler = sampler or Sampler(module, list(axes))
     trace = sampler.trace()
     clock = module.client.transport.monotonic
-    start = clock()
+    start = answered = clock()
     steps = round(seconds / interval)
     for i in range(steps + 1):
-        trace.add(clock() - start, sampler.sample())
-        if until is not None and until(trace):
+        t = clock() - start
+        done = False
+        try:
+            values = sampler.sample()
+        except TmclTimeout:
+            if clock() - answered > SILENCE:
+                raise
+            trace.add(t, {})
+        else:
+            trace.add(t, values)
+            answered = clock()
+            try:
+                done = until is not None and until(trace)
+            except TmclTimeout:   # the module went silent just now: the next sample tells
+                pass
+        if done:
             break
         if i < steps:
             module.sleep(interval)

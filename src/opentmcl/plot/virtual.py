@@ -39,7 +39,9 @@ def run_virtual(program=None, *, module: str = "TMCM-6212", axes=(0,), seconds: 
 
     if vm is None:
         vm = VirtualModule(module, address=address, scenario=scenario)
-    client = Client(InProcessTransport(vm, clock="virtual"), address=vm.address)
+    # A module in virtual time answers at once: a reply missing for `interval` is a module that is
+    # off or hung (docs/faults.md), a gap of one sample in the trace, not seconds of it.
+    client = Client(InProcessTransport(vm, clock="virtual"), address=vm.address, timeout=interval)
     try:
         m = client.module(vm.address, vm.profile)
         return record_program(m, program, axes, seconds, interval, stop_when_idle=stop_when_idle, loops=loops)

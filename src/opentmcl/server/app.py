@@ -6,14 +6,18 @@
     ...
     server.stop()        # endpoints closed, EEPROM flushed (vm.close())
 
+While it runs, the EEPROM files are written by a thread of their own (server/eeprom_writer.py).
+
 `stop()` is idempotent and safe to call from a signal-handling main thread.
 """
 from __future__ import annotations
 
 import time
 
-from ..faults import FaultBoard, FaultError, FaultPlan, load_plan
+from ..faults import FaultBoard, FaultPlan, load_plan
+from ..handover import STOP
 from .bus import ModuleBus, RealTimeRunner
+from .eeprom_writer import EepromWriter
 
 
 def start_all(endpoints) -> None:
@@ -33,12 +37,14 @@ class Server:
     def __init__(self, modules, *, tick: float = 0.01, faults: object = None) -> None:
         self.bus = ModuleBus(modules)
         self.runner = RealTimeRunner(self.bus, tick=tick)
+        self.eeprom_writer = EepromWriter(self.bus)
+        """Writes the EEPROM files outside the bus lock while the server runs."""
         self.endpoints: list = []
         self._started = False
         self._stopped = False
         self.faults: FaultBoard | None = None
         """The armed fault plan (docs/faults.md): `faults.trigger(name)`, `faults.log`."""
-        if faults is not None:
+        if faults is not None or any(_link_plan(vm) for vm in self.bus.modules):
             self.arm(load_plan(faults))
 
     def arm(self, plan: FaultPlan) -> FaultBoard:
@@ -46,16 +52,11 @@ class Server:
         link opened from now on, module faults on their modules; one seed, one log, time in
         seconds since now. FaultError for a fault a module cannot take."""
         start = time.monotonic()
-        for vm in self.bus.modules:  # a scenario's link faults act on the links
-            scenario = getattr(getattr(vm, "world", None), "scenario", None)
-            own = getattr(scenario, "faults", None)
+        for vm in self.bus.modules:  # a module's own link faults (its scenario's) act on the links
+            own = _link_plan(vm)
             if own:
-                plan = plan.merged(FaultPlan(own.link_faults, own.seed))
-        addresses = sorted(getattr(vm, "address", 1) for vm in self.bus.modules)
-        for f in plan.module_faults:
-            if f.address is not None and f.address not in addresses:
-                raise FaultError(f"fault {f.label}: no module at address {f.address} "
-                                 f"(served: {', '.join(map(str, addresses))})")
+                plan = plan.merged(own)
+        plan.check_addresses(getattr(vm, "address", 1) for vm in self.bus.modules)
         board = FaultBoard(plan, clock=lambda: time.monotonic() - start)
         board.lock = self.bus.lock
         for vm in self.bus.modules:
@@ -84,6 +85,7 @@ class Server:
         except BaseException:
             self._started = False
             raise
+        self.eeprom_writer.start()
         self.runner.start()
 
     def stop(self) -> None:
@@ -96,7 +98,8 @@ class Server:
             except OSError:
                 pass
         self.runner.stop()
-        with self.bus.lock:
+        self.eeprom_writer.stop()
+        with self.bus.lock.hold(STOP):  # ahead of requests still under way
             for vm in self.bus.modules:
                 close = getattr(vm, "close", None)
                 if callable(close):
@@ -108,3 +111,9 @@ class Server:
 
     def __exit__(self, *exc) -> None:
         self.stop()
+
+
+def _link_plan(vm) -> FaultPlan:
+    """The link faults a module was given (its scenario's, `VirtualModule(faults=)`)."""
+    own = getattr(getattr(vm, "faults", None), "link_plan", None)
+    return own if isinstance(own, FaultPlan) else FaultPlan()

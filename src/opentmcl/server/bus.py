@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import inspect
 import logging
+import math
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -43,9 +44,10 @@ from typing import NamedTuple, Protocol
 
 from ..faults import FaultBoard
 from ..handover import BACKGROUND, REQUEST, STOP, HandoverLock
-from ..protocol.opcodes import STOP_COMMANDS, keeps_addressing
+from ..protocol.opcodes import ENTER_DOWNLOAD_MODE, STOP_COMMANDS, keeps_addressing
 from . import canmap, vmapi
-from .pacing import REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
+from .downloads import Downloads
+from .pacing import FIRST_SLICE, REQUEST_BUDGET, SLICE_BUDGET, ClockReport, Pacer
 
 
 class AsciiOutput(NamedTuple):
@@ -109,6 +111,9 @@ MIN_STEP = 0.002
 costs the same however short the step, so a burst of requests shares one advance. The modules
 lag the wall clock by at most this much (docs/assumptions.md)."""
 
+
+ENTER_DOWNLOAD = bytes((ENTER_DOWNLOAD_MODE,))
+"""The command byte of 132, which opens a download (server/downloads.py)."""
 
 RUNNING = 1
 """`application_status` of a module whose TMCL program runs (firmware/program.py; TMCM-6212
@@ -178,6 +183,9 @@ class ModuleBus:
              for vm in self.modules] for interface in ("serial", USB))
         self._map: dict[int, list] | None = None  # address byte -> [(vm, key, handle)], built on use
         self._always = [entry for entry in self._serial_handlers if not _mappable(entry[0])]
+        self.downloads = Downloads(clock)
+        """Which link each open program download belongs to (server/downloads.py)."""
+        self._owners = self.downloads.owners  # looked at on every frame: empty unless a download is open
 
     # -- the address map -------------------------------------------------
     def invalidate(self) -> None:
@@ -265,12 +273,17 @@ class ModuleBus:
     runner_attached = False
     """A `RealTimeRunner` works the lag off: requests then take only a lag they can take whole."""
 
-    def sync(self, budget: float = REQUEST_BUDGET, whole: bool | None = None) -> None:
+    _slicing = False
+    """A slice is under way: some modules are advanced, the others not yet (`_advance`)."""
+
+    def sync(self, budget: float = REQUEST_BUDGET, whole: bool | None = None, *,
+             between: bool = False) -> None:
         """Advance every module's virtual time towards the wall clock by at most `budget` CPU seconds
         of simulation (by the cost estimate), unless less than `min_step` has passed (then the
         modules stay at most that far behind). With `whole` (the default while a runner is
         attached: a host request), a lag that costs more is left to the clock thread; else one
-        slice of `budget` is simulated."""
+        slice of `budget` is simulated. With `between` (the clock thread), the stops and requests
+        that wait go first between two modules of the slice. Nothing while a slice is under way."""
         dt = self._clock() - self.pacer.at
         if dt <= 0 or dt < self.min_step:
             return  # the common case on a busy link: no lock needed to find it out
@@ -278,20 +291,34 @@ class ModuleBus:
             whole = self.runner_attached
         with self.lock:
             now = self._clock()
-            if now - self.pacer.at >= self.min_step:
-                self._advance(self.pacer.step(now, budget, whole), now)
+            if now - self.pacer.at >= self.min_step and not self._slicing:
+                first = FIRST_SLICE if self.runner_attached else math.inf
+                self._advance(self.pacer.step(now, budget, whole, first), now, between)
 
-    def _advance(self, seconds: float, now: float) -> None:
+    def _advance(self, seconds: float, now: float, between: bool = False) -> None:
+        """Every module `seconds` ahead; with `between`, the requests waiting are served after each
+        module (a bus of many costly modules must not hold them for the whole slice): those for a
+        module not advanced yet are answered at its time, at most one slice behind."""
         if seconds <= 0:
             return
         work = self.pacer.work_clock()
         running = False
-        for vm in self.modules:
-            running = running or getattr(vm, "application_status", RUNNING) == RUNNING
-            vm.advance(seconds)
+        modules = self.modules
+        last = len(modules) - 1
+        self._slicing = True
+        try:
+            for i, vm in enumerate(modules):
+                running = running or getattr(vm, "application_status", RUNNING) == RUNNING
+                vm.advance(seconds)
+                if between and i < last and self.lock.waiting():
+                    if running:
+                        self._map = None  # a TMCL program may have changed an address (SGP 66)
+                    self.lock.yield_to_waiting()
+        finally:
+            self._slicing = False
         self.pacer.advanced(seconds, self.pacer.work_clock() - work, now)
         if running:
-            self._map = None  # a TMCL program may have changed an address (SGP 66)
+            self._map = None
 
     @property
     def lag(self) -> float:
@@ -308,12 +335,16 @@ class ModuleBus:
             return vm.handle(frame, interface=interface)
         return vm.handle(frame)
 
-    def request(self, frame: bytes, channel: Channel | None = None) -> list[tuple[object, bytes]]:
-        """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply."""
+    def request(self, frame: bytes, channel: Channel | None = None, *,
+                link: object = None) -> list[tuple[object, bytes]]:
+        """Offer a 9-byte frame to every module in binary mode; return (module, reply) for each reply.
+        `link`: the link the frame came over, when it is not `channel` (the served dashboard, which
+        takes no unsolicited replies: server/downloads.py)."""
         replies = []
         with self.lock.hold(urgency(frame)):
             self.sync()
-            if len(frame) == 9 and getattr(channel, "interface", None) != USB:
+            if len(frame) == 9 and getattr(channel, "interface", None) != USB and not (
+                    self._owners or frame[1] == ENTER_DOWNLOAD_MODE):  # else: a download is open or opens
                 table = self._map
                 entries = None if table is None or self._always else table.get(frame[0])
                 if entries is not None and len(entries) == 1:  # one module has the address: the usual bus
@@ -335,7 +366,7 @@ class ModuleBus:
             for vm in self.modules:
                 if getattr(vm, "ascii_mode", False) is True:
                     continue  # reads the line as text (server/stream.py)
-                reply = self.serial_frame(vm, frame, channel)
+                reply = self.serial_frame(vm, frame, channel, link)
                 if reply:
                     replies.append((vm, reply))
         return replies
@@ -344,8 +375,10 @@ class ModuleBus:
         """One 9-byte frame to every module, all in binary mode: [(module, reply, "binary")] for
         each reply. The fast path of `SerialStream`; the caller holds `lock` and has synced."""
         usb = getattr(channel, "interface", None) == USB
-        if not usb and len(frame) == 9:
+        if not usb and len(frame) == 9 and not (self._owners or frame[1] == ENTER_DOWNLOAD_MODE):
             return self._binary_frame(frame, channel)
+        if self._owners or frame[1:2] == ENTER_DOWNLOAD:  # a download is open or opens
+            return self._download_frames(frame, channel)
         out = []
         route = self._route
         for vm, key, handle in self._usb_handlers if usb else self._serial_handlers:
@@ -362,10 +395,15 @@ class ModuleBus:
                 route[key] = channel
         return out
 
-    def serial_frame(self, vm, frame: bytes, channel: Channel | None = None) -> bytes:
-        """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced."""
+    def serial_frame(self, vm, frame: bytes, channel: Channel | None = None, link: object = None) -> bytes:
+        """One 9-byte frame to one module (binary mode); the caller holds `lock` and has synced.
+        `link`: the link the frame came over, when it is not `channel`."""
         usb = getattr(channel, "interface", None) == USB
-        reply = self._handle(vm, frame, USB if usb else "serial")
+        if self._owners or frame[1:2] == ENTER_DOWNLOAD:  # a download is open or opens
+            reply = self.downloads.exchange(vm, frame, USB if usb else "serial",
+                                            channel if link is None else link, self._handle)
+        else:
+            reply = self._handle(vm, frame, USB if usb else "serial")
         if len(frame) == 9 and _changes_map(frame):
             self._map = None
         if channel is not None and (reply or usb or (frame and self._addressed(vm, frame[0]))):
@@ -420,7 +458,10 @@ class ModuleBus:
                     self._route[id(vm)] = channel
                 address = vmapi.global_param(vm, vmapi.GP_SERIAL_ADDRESS)
                 frame = canmap.request_to_frame(data, address)
-                reply = self._handle(vm, frame, "can")
+                if self._owners or data[0] == ENTER_DOWNLOAD_MODE:  # a download is open or opens
+                    reply = self.downloads.exchange(vm, frame, "can", channel, self._handle)
+                else:
+                    reply = self._handle(vm, frame, "can")
                 if reply:
                     payload = canmap.reply_to_payload(reply, data)
                     replies.append((vm, vmapi.global_param(vm, vmapi.GP_CAN_REPLY_ID), payload))
@@ -438,7 +479,7 @@ class ModuleBus:
         """One slice of the clock thread (`SLICE_BUDGET`), taken only when no request waits:
         (the pending events, the seconds the modules still lag behind the wall clock)."""
         with self.lock.hold(BACKGROUND):
-            self.sync(SLICE_BUDGET, whole=False)
+            self.sync(SLICE_BUDGET, whole=False, between=True)
             events = self._events()
             lag = self._clock() - self.pacer.at
         return events, lag
@@ -454,11 +495,30 @@ class ModuleBus:
                     out.append((channel, vm, event))
         return out
 
-    def forget(self, channel: Channel) -> None:
-        """Stop routing events to a channel that went away."""
+    def forget(self, channel: object) -> None:
+        """Stop routing events to a channel (or link) that went away; its program downloads have
+        no owner from now on (server/downloads.py)."""
         with self.lock:
             for key in [k for k, c in self._route.items() if c is channel]:
                 del self._route[key]
+            if self._owners:
+                self.downloads.forget(channel, self.modules)
+
+    def _download_frames(self, frame: bytes, channel: Channel | None) -> list[tuple[object, bytes, str]]:
+        """`serial_frames` while a program download is open or opens: the frame to each module in
+        binary mode (`serial_frame`; the modules filter addresses themselves), so that the one whose
+        download another link owns takes it as a direct-mode request (server/downloads.py). A
+        module that raises is logged and skipped."""
+        out: list[tuple[object, bytes, str]] = []
+        for vm in self.modules:
+            try:
+                reply = self.serial_frame(vm, frame, channel)
+            except Exception:  # a module bug: bad input is answered with a status code
+                logging.getLogger("opentmcl.server").exception("module failed on frame %s", frame.hex(" "))
+                continue
+            if reply:
+                out.append((vm, reply, "binary"))
+        return out
 
 
 class RealTimeRunner:

@@ -39,6 +39,11 @@ class SerialFramer:
         """Bytes of the frame currently being collected."""
         return len(self._partial)
 
+    @property
+    def partial(self) -> bytes:
+        """The bytes of the frame currently being collected."""
+        return bytes(self._partial)
+
     def expire(self, now: float) -> None:
         """Drop a partial frame whose last byte arrived more than `gap` ago."""
         if self._partial and self._last is not None and now - self._last > self.gap:

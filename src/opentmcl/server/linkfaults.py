@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from ..faults import Fate, LinkFaults, corrupt, cut
+from ..faults import LINK_KINDS, Fate, LinkFaults, corrupt, cut
 from ..protocol.frame import FRAME_LEN
 from .stream import BINARY, in_ascii_mode
 
@@ -28,10 +28,14 @@ Write = Callable[..., None]
 """`SerialSession.send_reply(vm, data, pause=...)`."""
 
 
+CAN_KINDS = tuple(kind for kind in LINK_KINDS if kind not in ("split_request", "split_reply"))
+"""The link faults of CAN: a frame is one unit, never cut (docs/assumptions.md)."""
+
+
 def link_faults(bus, scope: str) -> LinkFaults | None:
     """The link faults a new link of `bus` gets (`ModuleBus.faults`, a FaultBoard), or None."""
     board = getattr(bus, "faults", None)
-    return None if board is None else board.link(scope)
+    return None if board is None else board.link(scope, CAN_KINDS if scope == "can" else None)
 
 
 def fields_of(frame: bytes) -> tuple[int, int, int, int] | None:

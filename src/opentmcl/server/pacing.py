@@ -3,9 +3,11 @@
 A served module must answer every request in bounded time whatever it simulates
 (docs/architecture.md "Real time"). The bus therefore never advances its modules by more than
 one slice while it holds its lock: a slice is as much virtual time as `budget` seconds of work
-buy at the measured cost of simulating (CPU seconds per virtual second, `Pacer.cost`), and at
-least `MIN_SLICE`. What is not simulated yet is the modules' **lag** behind the wall clock: the
-clock thread works it off slice by slice, letting every waiting request go first.
+buy at the measured cost of simulating (CPU seconds per virtual second, `Pacer.cost`), at least
+`MIN_SLICE`, and, on a bus with a clock thread, at most `FIRST_SLICE` before the cost is known.
+What is not simulated yet is the modules' **lag** behind the wall clock: the clock thread works it
+off slice by slice, letting every waiting request go first, between two slices and between two
+modules of a slice.
 
 When the simulation cannot keep up (a TMCL program that costs more CPU than the machine has),
 the lag grows. It is caught up as long as it stays within `MAX_LAG`; beyond that, the rest is
@@ -16,6 +18,7 @@ at most once per `LOG_EVERY` seconds (docs/endpoints.md "When the simulation can
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable
 from typing import NamedTuple
@@ -28,6 +31,9 @@ SLICE_BUDGET = 0.002
 """CPU seconds one slice of the clock thread may take (by the cost estimate)."""
 MIN_SLICE = 0.0005
 """Virtual seconds a slice advances at least, however costly the simulation."""
+FIRST_SLICE = 0.01
+"""Virtual seconds a slice advances at most before the cost has been measured (the first slice:
+a TMCL program started from the EEPROM at power-up may be costly)."""
 MAX_LAG = 1.0
 """Seconds the modules' clock may lag the wall clock and still catch up; beyond, it is dropped."""
 LOG_EVERY = 10.0
@@ -67,13 +73,16 @@ class Pacer:
         self._logged = -LOG_EVERY
         self._quiet_dropped = 0.0
 
-    def step(self, now: float, budget: float, whole: bool = False) -> float:
+    def step(self, now: float, budget: float, whole: bool = False, first: float = math.inf) -> float:
         """Virtual seconds to simulate now (the caller holds the bus): all of the lag at `now` when
         `budget` CPU seconds buy it at the estimated cost, else what they buy, at least `MIN_SLICE`
-        (or nothing, if `whole`: a host request leaves a lag it cannot take whole to the clock thread)."""
+        (or nothing, if `whole`: a host request leaves a lag it cannot take whole to the clock thread);
+        at most `first` (the served bus: `FIRST_SLICE`) while the cost is not measured yet."""
         behind = now - self.at
         if behind <= 0:
             return 0.0
+        if not self.cost and behind > first:  # not measured yet: a first slice, to measure
+            return 0.0 if whole else first
         if self.cost * behind <= budget:
             return behind
         if whole:

@@ -116,6 +116,8 @@ class PtyServer:
 
     def stop(self) -> None:
         self._stop.set()
+        if self.session is not None:
+            self.session.closed = True  # a read being handled ends at its next frame (server/stream.py)
         if self._thread is not None:
             self._thread.join(timeout=5)
             self._thread = None

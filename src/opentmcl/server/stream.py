@@ -28,6 +28,7 @@ from typing import NamedTuple
 
 from ..protocol.frame import FRAME_LEN
 from ..protocol.opcodes import keeps_addressing
+from .bus import urgency
 from .framer import DEFAULT_GAP, SerialFramer
 
 log = logging.getLogger("opentmcl.server.stream")  # every frame at DEBUG (docs/host.md "Logging")
@@ -106,8 +107,11 @@ class SerialStream:
         size = len(data)
         if size >= FRAME_LEN and not self._partial:
             # The common case, kept lean: whole frames while every module is between frames and
-            # in binary mode (one frame, or several sent at once by a pipelining host).
-            with bus.lock:
+            # in binary mode (one frame, or several sent at once by a pipelining host). A stop
+            # (MST, 128, 131) takes the bus ahead of the requests waiting (docs/architecture.md).
+            lock = bus.lock
+            lock.acquire(urgency(data))
+            try:
                 for vm in bus.modules:
                     if getattr(vm, "ascii_mode", False) is True:
                         break
@@ -120,6 +124,8 @@ class SerialStream:
                             _log_frames(data, outputs)
                         return outputs
                     return self._feed_frames(data, now, channel)
+            finally:
+                lock.release()
         return self._feed_each(data, now, channel)
 
     def _feed_frames(self, data: bytes, now: float, channel) -> list:
@@ -129,7 +135,14 @@ class SerialStream:
         bus = self.bus
         outputs: list = []
         pos, size = 0, len(data)
+        lock = bus.lock
+        closable = channel if hasattr(channel, "closed") else None
         while size - pos >= FRAME_LEN:
+            if pos:  # between two frames (`_between_frames`, inlined: this loop is hot)
+                if lock.stops_waiting:
+                    lock.yield_to_stops()
+                if closable is not None and closable.closed:
+                    return outputs
             frame = data[pos:pos + FRAME_LEN]
             pos += FRAME_LEN
             self.frames += 1
@@ -143,12 +156,21 @@ class SerialStream:
             outputs += self._feed_each(data[pos:], now, channel)
         return outputs
 
+    def _between_frames(self, channel) -> bool:
+        """Between two frames of one read (a pipelining host may send hundreds, each maybe costly):
+        a stop that waits for the bus goes first (docs/architecture.md "Real time"); False when
+        the link is closing (the server stops): the rest of the read is dropped."""
+        lock = self.bus.lock
+        if lock.stops_waiting:
+            lock.yield_to_stops()
+        return not getattr(channel, "closed", False)
+
     def _feed_each(self, data: bytes, now: float, channel) -> list[Output]:
         """The general case: every module reads the bytes in its own mode."""
         bus = self.bus
         found: list[tuple[int, int, Output]] = []
         frames = 0
-        with bus.lock:
+        with bus.lock.hold(self._urgency(data)):
             bus.sync()
             for index, vm in enumerate(bus.modules):
                 frames = max(frames, self._feed_module(index, vm, data, now, channel, found))
@@ -157,6 +179,11 @@ class SerialStream:
         if len(found) > 1:
             found.sort(key=lambda item: (item[0], item[1]))
         return [item[2] for item in found]
+
+    def _urgency(self, data: bytes) -> int:
+        """The bus lock's class for `data` on the general path: urgent when a stop command is at a
+        frame position, counted from the partial frame the (first) framer holds."""
+        return urgency(self._framers[0].partial + data if self._partial else data)
 
     def _frame(self, vm, frame: bytes, channel) -> bytes:
         try:
@@ -190,6 +217,8 @@ class SerialStream:
             piece = data[pos:pos + need] if pos or need < size else data
             pos += len(piece)
             for frame in framer.feed(piece, now):
+                if frames and not self._between_frames(channel):
+                    return frames
                 frames += 1
                 reply = self._frame(vm, frame, channel)
                 if reply:

@@ -330,6 +330,9 @@ class TcpServer:
             self._sock.close()
         with self._lock:
             conns = list(self._clients)
+            sessions = list(self._clients.values())
+        for session in sessions:
+            session.closed = True  # a read being handled ends at its next frame (server/stream.py)
         for conn in conns:
             try:
                 conn.shutdown(socket.SHUT_RDWR)

@@ -19,8 +19,8 @@ from ..faults import FaultBoard, FaultError, FaultPlan, load_plan, seed_of
 from ..firmware.vm import VirtualModule
 from ..host.client import Client
 from ..host.connect import register_transport
-from ..host.module import Module
 from ..host.errors import TmclUrlError
+from ..host.module import Module
 from ..host.transport import url_query
 from ..host.transports.faulty import FaultyTransport
 from ..host.transports.inprocess import Clock, InProcessTransport, VirtualClock, make_clock, parse_modules
@@ -55,6 +55,7 @@ def with_faults(modules: list[VirtualModule], plan: FaultPlan, clock: str | Cloc
     FaultError for a fault a module cannot take (an axis it lacks)."""
     if not plan:
         return InProcessTransport(modules, clock=clock)
+    plan.check_addresses(vm.address for vm in modules)
     first = modules[0]
     board = FaultBoard(plan, clock=lambda: first.time)
     for vm in modules:
@@ -68,8 +69,12 @@ def with_faults(modules: list[VirtualModule], plan: FaultPlan, clock: str | Cloc
 
 def _plan(query: dict[str, str]) -> FaultPlan:
     """The fault plan of ``?faults=FILE`` and ``?seed=N``."""
+    if "faults" in query and not query["faults"]:
+        raise TmclUrlError("sim://: faults= needs a fault file (docs/faults.md)")
+    if "seed" in query and "faults" not in query:
+        raise TmclUrlError("sim://: seed= belongs to faults=FILE (the seed of its random decisions)")
     try:
-        plan = load_plan(query["faults"]) if query.get("faults") else FaultPlan()
+        plan = load_plan(query["faults"]) if "faults" in query else FaultPlan()
         if "seed" in query:
             try:
                 seed = int(query["seed"], 0)

@@ -158,15 +158,19 @@ class ModuleIndex:
         return await self.lanes.stop.run(self._stop_all)  # its own thread: nothing queues ahead
 
     def _stop_all(self) -> Json:
-        """A running scan is cancelled first: it holds the link for a request (a baud-rate scan for
-        all of it), and it gives the link back at its own rate after the current address."""
+        """A running scan is cancelled first; the served modules are stopped at once (their stops
+        go ahead of the scan's next turn on the link, a baud-rate scan lends the link back at its
+        own rate); the modules the scan found are stopped once it has ended."""
         scanning = bool(self.scanner.status()["running"])
         self.scanner.cancel()
+        out = motion.stop_all(list(self.by_address.values()))
         self.scanner.join(2 * TIMEOUT_MAX + 1.0)  # the current address: version and GGP 66 requests
         link = self.scanner.client
         found = [(int(f["address"]), str(f["version"])) for f in self.scanner.status()["found"]  # type: ignore[attr-defined]
                  if f["address"] not in self.by_address and f["baud"] in (None, getattr(link.transport, "baud", None))]
-        out = motion.stop_all(list(self.by_address.values()), link, found)
+        more = motion.stop_all((), link, found)
+        out["modules"] = [*out["modules"], *more["modules"]]  # type: ignore[misc]
+        out["ok"] = bool(out["ok"]) and bool(more["ok"])
         out["scan_cancelled"] = scanning
         return out
 

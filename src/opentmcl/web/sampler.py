@@ -25,7 +25,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .service import FAST_HZ, HISTORY_SECONDS, Dashboard, DashboardError
+from .service import FAST_HZ, HISTORY_SECONDS, Dashboard, DashboardError, Stopping
 
 log = logging.getLogger("opentmcl.web")
 
@@ -155,6 +155,8 @@ class Sampler:
         while not self.d.closed.is_set():
             try:
                 self.tick()
+            except Stopping:
+                return
             except Exception:  # a bug must not stop the charts (link errors: Dashboard.attempt)
                 log.exception("chart sampling failed")
             with self.lock:

@@ -162,6 +162,8 @@ class Scanner:
             if self._cancel.is_set():
                 return
             with self.gate:  # one turn per address: a stop goes before the next one
+                if self._cancel.is_set():  # cancelled (STOP ALL) while waiting for the turn
+                    return
                 version = self._ask(address, timeout)
                 foreign = version is not None and self._answers_for_another(address, timeout)
             with self._lock:

@@ -28,6 +28,10 @@ if TYPE_CHECKING:
     from ..server.bus import ModuleBus
     from .app import ModuleIndex
 
+STOP_GRACE = 0.5
+"""Seconds `DashboardHandle.stop` waits for the requests under way before it returns."""
+CLOSE_WAIT = 5.0
+"""Seconds the links are kept open after that for requests still under way (not in `stop`)."""
 WS_MAX_SIZE = 64 * 1024  # the page sends nothing on its WebSocket; uvicorn's default is 16 MiB
 
 
@@ -81,18 +85,32 @@ class DashboardHandle:
         return f"{self.url}m/{address}/"
 
     def stop(self) -> None:
+        """Within about `STOP_GRACE` s (issue 28: `serve` ends within 2 s of SIGTERM): a download
+        under way ends at its next instruction (133 sent), a table read at its next batch, the scan
+        at its current address. Requests still under way then keep their links until they end
+        (closed under them, a serial port fails with errors of its own); the links are closed
+        once they have."""
+        for d in self.dashboards:
+            d.closed.set()
         if self.index is not None:
             self.index.close()  # the scan and the modules opened from it
         for d in self.dashboards:
-            d.closed.set()
             d.cancel_run()
         for poller in self._pollers:
             poller.stop()
         self._server.should_exit = True
-        self._thread.join(timeout=5.0)
-        if self._on_stop is not None:
-            self._on_stop()
-            self._on_stop = None
+        self._thread.join(timeout=STOP_GRACE)
+        on_stop, self._on_stop = self._on_stop, None
+        if on_stop is None:
+            return
+        if not self._thread.is_alive():
+            on_stop()
+            return
+        threading.Thread(target=self._close_later, args=(on_stop,), name="dashboard-close", daemon=True).start()
+
+    def _close_later(self, on_stop: Callable[[], None]) -> None:
+        self._thread.join(timeout=CLOSE_WAIT)
+        on_stop()
 
     def __enter__(self) -> DashboardHandle:
         return self

@@ -81,6 +81,10 @@ class DashboardError(ValueError):
     """A request from the page the module or the profile does not allow (shown to the user)."""
 
 
+class Stopping(DashboardError):
+    """The dashboard stops: work of many requests ends at its next one (`Dashboard.closed`)."""
+
+
 @dataclass
 class Sample:
     seq: int
@@ -157,9 +161,12 @@ class Dashboard:
     def read_many(self, requests: list[tuple[int, int, int, int]]) -> list[int | None]:
         """The values of several reads (GAP/GGP/GIO) in `request_many` batches of
         `TURN_REQUESTS` (one turn on the link each), in order: None for a read the module refused
-        (its status) and for all of a batch when the link failed."""
+        (its status) and for all of a batch when the link failed. DashboardError once the
+        dashboard stops (a table or an export of many axes ends at its next batch)."""
         out: list[int | None] = []
         for start in range(0, len(requests), TURN_REQUESTS):
+            if self.closed.is_set():
+                raise Stopping("the dashboard is stopping")
             batch = requests[start:start + TURN_REQUESTS]
 
             def run(batch: list[tuple[int, int, int, int]] = batch) -> list[int | None]:
@@ -435,6 +442,12 @@ class Dashboard:
                 raise DashboardError("download cancelled by STOP ALL (download mode left with 133)")
             if self.lock.stops_waiting:
                 raise DashboardError("download cancelled by a stop command (download mode left with 133)")
+            if self.closed.is_set():
+                raise Stopping("download cancelled: the dashboard is stopping (download mode left with 133)")
+
+        def closing(_done: int, _total: int) -> None:
+            if self.closed.is_set():
+                raise Stopping("verify cancelled: the dashboard is stopping")
         loader = self.loader()
         try:
             # One turn from 132 to 133: a command sent meanwhile would be stored, not executed
@@ -444,7 +457,7 @@ class Dashboard:
                     loader.download(prog.instructions, verify=False, progress=abort_point)
             finally:
                 self.downloading = None
-            loader.verify(prog.instructions)
+            loader.verify(prog.instructions, progress=closing)
             loader.reset()  # 131: program counter, stack, A, X and flags to zero (TMCM-6212 3.6.36)
         except LoaderError as exc:
             raise DashboardError(str(exc)) from None
@@ -604,6 +617,8 @@ class Poller:
                 self.dashboard.sample_fast()
                 if n % SLOW_EVERY == 0:
                     self.dashboard.sample_slow()
+            except Stopping:
+                return
             except Exception:  # a bug must not stop the charts; link errors are handled in Dashboard
                 log.exception("dashboard sampling failed")
             n += 1

@@ -1,11 +1,17 @@
 // Faults on demand (docs/faults.md, docs/dashboard.md "Faults"): a panel of the overview, shown when
-// the served plan names faults; the button fires the chosen one (the server checks the name).
+// the link has a fault plan; the button fires the chosen named fault (the server checks the name),
+// and the list of what fired follows the plan while the panel is in view.
 "use strict";
 (() => {
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
+const REFRESH_MS = 1000;
+let shown = "";
 
 function show(st) {
+  const text = st.fired.join("\n");
+  if (text === shown) return;
+  shown = text;
   $("faults-fired").replaceChildren(...st.fired.slice().reverse().map(f => el("li", {}, f)));
 }
 
@@ -18,19 +24,26 @@ async function trigger() {
   } catch (e) { log(`  ${e.message}`, "err"); }
 }
 
+async function refresh() {
+  const panel = $("faults-panel");
+  if (!panel || panel.offsetParent === null || document.hidden) return;
+  try { show(await api("api/faults")); } catch (_) { /* the next look tells */ }
+}
+
 async function mount() {
   let st;
   try { st = await api("api/faults"); } catch (_) { return; }
-  if (!st.names.length) return;
+  if (st.seed === null) return;   // no fault plan on this link
+  const controls = st.names.length ? [
+    el("select", {id: "fault-name", title: "the named faults of the served fault plan"},
+       ...st.names.map(n => el("option", {value: n}, n))),
+    el("button", {id: "btn-fault", onclick: trigger}, "Trigger")] : [];
   $("view-overview").append(el("div", {id: "faults-panel"},
     el("h2", {}, "Faults"),
-    el("div", {class: "toolbar"},
-      el("select", {id: "fault-name", title: "the named faults of the served fault plan"},
-         ...st.names.map(n => el("option", {value: n}, n))),
-      el("button", {id: "btn-fault", onclick: trigger}, "Trigger"),
-      el("span", {class: "hint"}, `seed ${st.seed}`)),
+    el("div", {class: "toolbar"}, ...controls, el("span", {class: "hint"}, `seed ${st.seed}`)),
     el("ul", {id: "faults-fired", class: "hint"})));
   show(st);
+  setInterval(refresh, REFRESH_MS);
 }
 
 mount();
