@@ -245,9 +245,10 @@ class WorldReads:
         for position, velocity, axis, rotor, numbers, missing in self.parts:
             slipping = rotor.slipping
             start = len(out)
-            append(position())                 # WORLD_CHANNELS: position, velocity, the world's
-            append(velocity())                 # readings, the stage
-            readings(axis, numbers, out)
+            counter = position()               # WORLD_CHANNELS: position (AP1, the engine's
+            append(counter)                    # position: the counter the stage follows),
+            append(velocity())                 # velocity, the world's readings, the stage
+            readings(axis, numbers, out, counter)
             append(rotor.phys)
             if slipping and not rotor.slipping:
                 ended = True

@@ -73,8 +73,10 @@ class Switches:
         if ram.get(14, 0):
             left, right = right, left
         if 24 in aw.params:
-            right ^= bool(ram.get(24, 0))
-            left ^= bool(ram.get(25, 0))
+            if ram.get(24, 0):
+                right = not right
+            if ram.get(25, 0):
+                left = not left
         elif (0, 79) in aw.vm.profile.global_parameters:
             pol = bool(aw.vm.globals.get_raw(0, 79))
             left ^= pol

@@ -230,12 +230,15 @@ class World:
         self.vm.sync()
         return self.readings(axis, (number,))[0]
 
-    def readings(self, axis: Motor, numbers: tuple[int, ...], out: list[Any] | None = None) -> list[int | None]:
+    def readings(self, axis: Motor, numbers: tuple[int, ...], out: list[Any] | None = None,
+                 counter: int | None = None) -> list[int | None]:
         """Several of the world's readings of one axis at once, each what GAP answers, appended to
         `out` (a new list by default): the stage follows the counter, the switches are looked at
-        and the current in use is found once (the engines are at now)."""
+        and the current in use is found once (the engines are at now). `counter`: the engine's
+        position now (AP1), if read already."""
         aw = self.axes_world[axis.index]
-        counter = aw.engine.position  # the engine's state, read once
+        if counter is None:
+            counter = aw.engine.position  # the engine's state, read once
         aw.rotor.follow(counter)
         aw.switches.update()
         if out is None:

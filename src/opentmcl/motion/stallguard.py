@@ -63,13 +63,13 @@ class CurrentModel:
         if counter is None:
             counter = e.position
         last = self._last_counter
-        moved = 0 if last is None else abs(counter - last)
         self._last_counter = counter
         ram = aw.ram
         if not (ram.get(172, 0) and moving and abs(e.velocity) >= abs(aw.axis.to_engine(182, ram.get(182, 0)))):
             self.cs_act = None
             self._microsteps = 0
             return
+        moved = 0 if last is None else abs(counter - last)
         cs = self.cs(aw)
         per = (1 << aw.p(140, 8)) * (4 if aw.p(173) else 1)   # AP173: one measurement per 4 fullsteps
         self._microsteps += moved
