@@ -14,9 +14,12 @@ The instruction count is exact: the interpreter's own counter of executed instru
 counted pass + the position in the current pass (global parameter 130, program counter), and
 for the timer variant one RETI per interrupt (one per virtual millisecond). Where the counter
 does not exist the main loop's count from the variable is used (RETIs left out).
-Reference: the minimal-handler floor (bench_polling.py) in the same run.
+Reference: the minimal-handler floor (bench_polling.py) in the same run. Both are timed with
+CPU time (issue 33: at least 1 M instructions per CPU second).
 """
 from __future__ import annotations
+
+import time
 
 import figures
 from bench_polling import FAR, floor_rate
@@ -130,16 +133,26 @@ def check(vm: VirtualModule, wire: Wire, loop: int, tick: int, timer: bool, t0: 
                            f"{main} counted by the program, {interrupts} timer interrupts")
 
 
+A_MILLION = Goal(">=", 1_000_000, text=">= 1,000,000")  # instructions per CPU s (issue 33)
+
+
 def measure(quick: bool = False) -> list[Figure]:
+    """The four loops and the floor, timed with this process's CPU time (issue 33's goal is per
+    CPU second), whatever clock the other figures use."""
     rounds, budget = (1, 0.05) if quick else (3, 0.4)
     out = []
-    for timer in (False, True):
-        for moving in (False, True):
-            floor, got = best_of(rounds, [lambda: floor_rate(budget / 2),
-                                          lambda t=timer, m=moving: rate(t, m, budget)])
-            what = (f"interpreter GAP loop, {'moving' if moving else 'standing'} axis"
-                    f"{', 1 ms timer interrupt' if timer else ''}, instructions/wall s")
-            out.append(Figure(what, got, floor, Goal(">=", 400_000, text=">= 400,000"), "floor calls/s"))
+    clock = figures.clock
+    figures.clock = time.process_time
+    try:
+        for timer in (False, True):
+            for moving in (False, True):
+                floor, got = best_of(rounds, [lambda: floor_rate(budget / 2),
+                                              lambda t=timer, m=moving: rate(t, m, budget)])
+                what = (f"interpreter GAP loop, {'moving' if moving else 'standing'} axis"
+                        f"{', 1 ms timer interrupt' if timer else ''}, instructions/CPU s")
+                out.append(Figure(what, got, floor, A_MILLION, "floor calls/CPU s"))
+    finally:
+        figures.clock = clock
     return out
 
 

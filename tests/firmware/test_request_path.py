@@ -443,3 +443,46 @@ def test_a_prebound_ggp_of_an_unsigned_timer_period_answers_its_32_bits(period, 
     assert second[4:8] == (period & 0xFFFF_FFFF).to_bytes(4, "big")
     assert second[8] == sum(second[:8]) & 0xFF
     assert Reply.decode(second).value == wire
+
+
+# --- a reply handed over as a value (as_reply, the in-process host) ---------------------------
+@pytest.mark.parametrize("name", MODULES)
+def test_a_reply_handed_over_as_a_value_is_the_reply_on_the_wire(name):
+    """Manual 3.2: the reply is reply address, module address, status, command and a 4-byte value.
+    `handle(frame, as_reply=True)` (docs/architecture.md "Request path": what `sim://` asks for)
+    hands a pre-bound read's reply over as a `Reply`: for every bound GAP of moving axes, it is
+    the reply the same request gets as bytes at the same instant, decoded; over time it follows
+    the axis (a position read after 10 ms is another value); every other request comes as bytes."""
+    vm = busy(name)
+    seen = 0
+    for step in range(2):
+        for m in range(len(vm.axes)):
+            for n in sorted(vm.axes[m].readable):
+                raw = frame(6, n, m)
+                wire = vm.handle(raw)
+                if not vm.is_prebound(raw):
+                    continue
+                value = vm.handle(raw, True)
+                assert value.__class__ is Reply and value == Reply.decode(wire), (n, m)
+                seen += 1
+        vm.advance(0.01)
+    assert seen >= 2 * 40 * len(vm.axes)
+    before = vm.handle(frame(6, 1, 0), True)
+    vm.advance(0.01)
+    assert vm.engine_now(0).moving and vm.handle(frame(6, 1, 0), True).value != before.value
+    write = vm.handle(frame(5, 4, 0, 1234), True)
+    assert write.__class__ is bytes and Reply.decode(write).status == 100
+
+
+@pytest.mark.parametrize(("period", "wire"), [
+    (0x7FFF_FFFF, 0x7FFF_FFFF), (0x8000_0000, -0x8000_0000), (0xFFFF_FFFF, -1)])
+def test_a_reply_value_of_an_unsigned_timer_period_is_its_32_bits_signed(period, wire):
+    """TMCM-6212 5.4 bank 3 timer 0 period 0 .. 4294967295 ms; manual 3.2's value is 32 bits: the
+    `Reply` handed over in process carries the value a host decodes from the wire (2^31 and
+    2^32 - 1 as -2^31 and -1)."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    assert Host(vm)(9, 0, 3, wire).status == 100
+    raw = frame(10, 0, 3)
+    first = vm.handle(raw)
+    assert vm.is_prebound(raw)
+    assert vm.handle(raw, True) == Reply.decode(first) and Reply.decode(first).value == wire
