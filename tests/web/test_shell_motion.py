@@ -112,6 +112,18 @@ def test_velocity_range_is_the_target_speed_range(motion):
     wait_until(lambda: gap(six, TARGET_SPEED, 4) == 7999774, "AP2 = 7999774")
 
 
+def test_a_poll_keeps_what_the_user_typed(motion):
+    """docs/dashboard.md "Motion": the view reads every axis again periodically; the velocity field
+    keeps what the user typed across those reads, even a value the module would refuse (the poll
+    rewrote it with the last valid one, so the click after it sent that one instead of refusing)."""
+    page, _, _ = motion
+    page.fill("#motion-4-velocity", "7999775")
+    for _ in range(2):  # two whole rounds of reads of axis 4 after the typing
+        with page.expect_response(lambda r: r.url.endswith("api/motion/4"), timeout=TIMEOUT_MS):
+            pass
+    assert page.input_value("#motion-4-velocity") == "7999775"
+
+
 def test_velocity_unit_follows_unit_mode(motion):
     """TMCM-6212 manual 4.1 AP255 "Unit mode": 1 (default) pps, 0 "the internal units of the TMC5130
     are used directly". The velocity field stays in pps (issue 31: physical units), and the module

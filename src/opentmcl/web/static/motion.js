@@ -7,7 +7,7 @@
 (() => {
 const {api, el, log} = window.OpenTMCL;
 const $ = id => document.getElementById(id);
-const M = {axes: 0, timer: null, info: {}, busy: false, raw: {}};
+const M = {axes: 0, timer: null, info: {}, busy: false, raw: {}, shownAs: {}};
 
 const UNIT_TEXT = {pps: "pps", internal: "internal units"};
 const SLIDER = 1000;   // slider steps: 0 is standstill, 1..1000 spread logarithmically from 1 to the maximum
@@ -23,6 +23,7 @@ function toSlider(v, max) { return v < 1 || max < 1 ? 0 : clamp(Math.round(Math.
 // The velocity field shows the axis's unit; M.raw[i] is the module value it stands for.
 function showVelocity(i, raw) {
   M.raw[i] = raw;
+  M.shownAs[i] = shownAs(i);
   const u = U();
   $(`motion-${i}-velocity`).value = physical() ? u.fmt(u.velocity(i, raw), 6) : raw;
   const internal = M.info[i] && M.info[i].unit === "internal";
@@ -96,7 +97,11 @@ function tools(i, ov) {
       el("span", {id: `motion-${i}-units`, class: "units-box"})));
 }
 
-function unitTexts(i) {
+// What the velocity field's text depends on besides the value: it is written again only when this
+// changes (or the units were chosen anew), so a poll never overwrites what the user is typing.
+function shownAs(i) { return `${physical() ? "physical" : "module"} ${(M.info[i] || {}).unit}`; }
+
+function unitTexts(i, chosen = false) {
   const info = M.info[i];
   if (!info) return;
   const u = U(), unit = $(`motion-${i}-unit`);
@@ -104,7 +109,7 @@ function unitTexts(i) {
   unit.title = physical() ? `${u.describe(i)}; the module takes ${UNIT_TEXT[info.unit] || info.unit}` :
     info.unit === "internal" ? "internal units of the motion controller (AP255 = 0, or a TMC429 module)" : "microsteps per second (AP255 = 1)";
   $(`motion-${i}-target-unit`).textContent = physical() ? u.positionUnit(i) : "µsteps";
-  if (M.raw[i] !== undefined) showVelocity(i, M.raw[i]);
+  if (M.raw[i] !== undefined && (chosen || M.shownAs[i] !== shownAs(i))) showVelocity(i, M.raw[i]);
 }
 
 function showInfo(i, info) {
@@ -152,7 +157,7 @@ OpenTMCL.registerView("motion", {
   },
   show() {
     refresh(); M.timer = setInterval(refresh, 500);
-    if (U() && !M.subscribed) { M.subscribed = true; U().onChange(() => { for (let i = 0; i < M.axes; i++) unitTexts(i); }); }
+    if (U() && !M.subscribed) { M.subscribed = true; U().onChange(() => { for (let i = 0; i < M.axes; i++) unitTexts(i, true); }); }
   },
   hide() { clearInterval(M.timer); M.timer = null; },
 });
