@@ -455,7 +455,7 @@ def test_a_reply_handed_over_as_a_value_is_the_reply_on_the_wire(name):
     the axis (a position read after 10 ms is another value); every other request comes as bytes."""
     vm = busy(name)
     seen = 0
-    for step in range(2):
+    for _ in range(2):
         for m in range(len(vm.axes)):
             for n in sorted(vm.axes[m].readable):
                 raw = frame(6, n, m)
