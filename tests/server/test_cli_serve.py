@@ -345,10 +345,12 @@ def test_pty_of_a_bus_is_rs485(serve):
 @pytest.mark.parametrize(("argv", "says"), [
     (["--module", "TMCM-6212", "--module", "TMCM-6212", "--pty", "--interface", "usb"], "one module"),
     (["--module", "TMCM-6212", "--tcp", "127.0.0.1:0", "--interface", "rs232"], "applies to --pty"),
-    (["--module", "TMCM-6212", "--pty", "--pace", "--interface", "usb"], "baud rate")])
+    (["--module", "TMCM-6212", "--pty", "--pace", "--interface", "usb"], "baud rate"),
+    (["--module", "PD28-1021", "--pty", "--interface", "usb"], "no USB port")])
 def test_bad_interface_use_is_a_one_line_error(capsys, argv, says):
     """USB carries one module; --interface describes the pty only; --pace paces at GP65, the
-    "RS485 baud rate" (manual 5.1), which a USB link does not have."""
+    "RS485 baud rate" (manual 5.1), which a USB link does not have; the PD28-1021 has no USB port
+    (its manual's title page: "RS485 interface"), so the pty cannot stand for one."""
     assert main(["serve", *argv]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and says in err

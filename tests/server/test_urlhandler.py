@@ -179,9 +179,11 @@ def test_one_module_port_is_usb_and_ignores_the_address_byte():
 
 
 @pytest.mark.parametrize(("url", "says"), [("opentmcl://TMCM-6212?interface=can", "usb, rs485, rs232"),
-                                           ("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=usb", "one module")])
+                                           ("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=usb", "one module"),
+                                           ("opentmcl://PD28-1021?interface=usb", "no USB port")])
 def test_bad_interface_in_the_url_is_refused(url, says):
-    """usb carries one module; only usb, rs485 and rs232 are serial interfaces; rs485 filters."""
+    """usb carries one module, of a module that has USB (not the PD28-1021: "RS485 interface" on
+    its manual's title page); only usb, rs485 and rs232 are serial interfaces; rs485 filters."""
     with pytest.raises(serial.SerialException, match=says):
         serial.serial_for_url(url)
     with serial.serial_for_url("opentmcl://TMCM-6212@1,TMCM-6212@2?interface=rs485", timeout=0.2) as port:

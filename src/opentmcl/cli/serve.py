@@ -223,7 +223,7 @@ def build_server(args: argparse.Namespace, out: TextIO = sys.stdout, err: TextIO
     if tcp_spec is not None or args.host:
         _add_tcp(server, args, tcp_spec or DEFAULT_TCP)
     if args.pty:
-        _add_pty(server, args, len(modules))
+        _add_pty(server, args, modules)
     if args.can:
         _add(server, args, "can", args.can)
     for item in extra:
@@ -303,13 +303,13 @@ def _add_tcp(server: Server, args: argparse.Namespace, spec: str) -> None:
     _add(server, args, "tcp", f"[{host}]:{port}" if ":" in host else f"{host}:{port}")
 
 
-def _add_pty(server: Server, args: argparse.Namespace, module_count: int) -> None:
+def _add_pty(server: Server, args: argparse.Namespace, modules: list[VirtualModule]) -> None:
     """--pty [--link PATH] [--interface]: the interface must suit the modules and --pace."""
     if sys.platform == "win32":
         raise CliError("--pty needs a POSIX system")
     from ..server.bus import interface_error
 
-    problem = args.interface and interface_error(args.interface, module_count, args.pace)
+    problem = args.interface and interface_error(args.interface, modules, args.pace)
     if problem:
         raise CliError(f"--interface {args.interface}: {problem}")
     _add(server, args, "pty", "")

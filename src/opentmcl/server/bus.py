@@ -38,7 +38,7 @@ import logging
 import math
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from functools import partial
 from typing import NamedTuple, Protocol
 
@@ -94,12 +94,15 @@ def has_usb(module) -> bool:
     return bool(getattr(getattr(profile, "capabilities", None), "usb", True))
 
 
-def interface_error(interface: str, count: int, paced: bool) -> str | None:
-    """Why a serial endpoint cannot stand for `interface` with `count` modules, or None."""
+def interface_error(interface: str, modules: Sequence[object], paced: bool) -> str | None:
+    """Why a serial endpoint cannot stand for `interface` with `modules` (as for
+    `default_interface`), or None."""
     if interface not in SERIAL_INTERFACES:
         return f"interface must be one of {', '.join(SERIAL_INTERFACES)}, got {interface!r}"
-    if interface == USB and count != 1:
+    if interface == USB and len(modules) != 1:
         return "a USB link carries one module; use rs485 for a bus of several"
+    if interface == USB and not has_usb(modules[0]):
+        return "the module has no USB port (its profile's capability usb = false); use rs485"
     if interface == USB and paced:
         # GP65 is the "RS485 baud rate" (TMCM-6212 5.1); a module's USB port has no baud rate.
         return "a USB link has no baud rate to pace at (GP65 is the RS485 baud rate); use rs485 or rs232"

@@ -33,7 +33,7 @@ class PtyServer:
         if session is SerialSession:  # the proxy's own session relays bytes and filters nothing
             if interface is None:
                 interface = default_interface(bus.modules, pace_bytes)
-            problem = interface_error(interface, len(bus.modules), pace_bytes)
+            problem = interface_error(interface, bus.modules, pace_bytes)
             if problem:
                 raise ValueError(problem)
         self.interface = interface

@@ -71,7 +71,7 @@ def parse_url(url: str) -> PortOptions:
     eeprom, gap, pace, interface = _query_options(parts.query, url)
     if interface is None:
         interface = default_interface(modules, pace)
-    problem = interface_error(interface, len(modules), pace)
+    problem = interface_error(interface, modules, pace)
     if problem:
         raise ValueError(problem)
     if len(eeprom) > len(modules):
