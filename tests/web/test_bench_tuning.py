@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from .benchkit import TIMEOUT_MS, console_has, fresh_page, served, wait_until
+from .benchkit import TIMEOUT_MS, console_has, fresh_page, open_view, served, wait_until
 
 GAP = 6
 
@@ -94,6 +94,26 @@ def test_false_stall_check(tuning):
     assert page.inner_text("#sg-check-result") == "no stall in 1 s at the working speed"
     console_has(page, "> ROR 1, 51200")
     wait_until(lambda: gap(six, 2, 1) == 0 and gap(six, 3, 1) == 0, "MST at the end of the check")
+
+
+def test_coolstep_fields_chosen_survive_a_read_until_applied(tuning):
+    """docs/dashboard.md "Tuning": coolStep's fields (SEMIN AP172, SEMAX AP170, manual 4.1) are
+    written together by Apply. Choices made before it stay on the page when the view reads the
+    module's values again (here: another view and back), and nothing is written meanwhile; the
+    meaning follows them: (1 + 2 + 1) * 32 = 128."""
+    page, six = tuning
+    choose_axis(page, 2)
+    page.wait_for_selector("#cs-semin", timeout=TIMEOUT_MS)
+    page.select_option("#cs-semin", "1")
+    page.select_option("#cs-semax", "2")
+    page.evaluate("document.getElementById('cs-semin').dataset.before = 'yes'")  # gone once the table is drawn again
+    open_view(page, "motion")
+    open_view(page, "tuning")
+    page.wait_for_function("document.getElementById('cs-semin') && !document.getElementById('cs-semin').dataset.before",
+                           timeout=TIMEOUT_MS)
+    assert page.input_value("#cs-semin") == "1" and page.input_value("#cs-semax") == "2"
+    assert page.inner_text("#cs-semax-meaning").startswith("upper threshold 128")
+    assert [gap(six, n, 2) for n in (172, 170)] == [0, 0]
 
 
 def test_coolstep_lowers_the_current_and_shows_the_energy_saved(tuning):

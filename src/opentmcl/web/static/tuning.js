@@ -18,7 +18,9 @@ const COOLSTEP = [
   {name: "SEDN", number: 169, meaning: v => `current down step after ${[32, 8, 2, 1][v]} reading(s) above the upper threshold`},
   {name: "SEIMIN", number: 168, meaning: (v, all) => `minimum current ${v ? "1/4" : "1/2"} of CS${minimumMa(v, all)}`},
 ];
-const T = {ctx: null, axis: 0, client: null, series: [], since: 0, timer: null, rows: [], values: {}, params: {},
+// `edits`: coolStep fields chosen on the page but not applied yet (parameter -> value); a read of
+// the module's values keeps them, Apply or another axis ends them.
+const T = {ctx: null, axis: 0, client: null, series: [], since: 0, timer: null, rows: [], values: {}, params: {}, edits: {},
            stall: false, stallAt: null, check: null, loadInfo: null, busy: false};
 window.dashboard.tuning = T;  // for the browser tests and the curious
 
@@ -99,6 +101,7 @@ async function readValues() {
   const r = await api("api/setup/read", {values: numbers.map(number => ({kind: "axis", index: axis, number}))});
   if (axis !== T.axis) return;
   for (const v of r.values) T.values[v.number] = v.value;
+  Object.assign(T.values, T.edits);  // what the user chose and has not applied yet stays on the page
   showSettings();
 }
 
@@ -127,7 +130,7 @@ function coolStepTable() {
       ...Array.from({length: p.max - p.min + 1}, (_, k) => el("option", {value: p.min + k}, `${p.min + k}`)));
     if (v !== undefined && v !== null) input.value = String(v);
     input.addEventListener("change", () => {
-      T.values[f.number] = Number(input.value);
+      T.values[f.number] = T.edits[f.number] = Number(input.value);
       $(`cs-${f.name.toLowerCase()}-meaning`).textContent = f.meaning(Number(input.value), T.values);
     });
     rows.push(el("tr", {}, el("td", {}, el("b", {}, f.name)), el("td", {title: p.description}, `AP ${f.number} ${p.title}`),
@@ -233,6 +236,7 @@ async function applyCoolStep() {
   try {
     const r = await api("api/setup/apply", {writes, module: T.ctx.overview.address});
     log(`  coolStep settings applied (${r.sent.length} SAP)`, "ok");
+    T.edits = {};
     T.energy = [];
     await readValues();
   } catch (e) { log(`  ${e.message}`, "err"); }
@@ -358,7 +362,7 @@ function energy(scale, ma) {
 
 // ---------------------------------------------------------------- axis and view
 async function selectAxis(axis) {
-  T.axis = axis; T.rows = []; T.values = {};
+  T.axis = axis; T.rows = []; T.values = {}; T.edits = {};
   setStall(false);
   $("sg-check-result").textContent = "";
   try {
