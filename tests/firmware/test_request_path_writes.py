@@ -1,7 +1,7 @@
-"""Pre-bound SAP and SGP (issue 16 item 2; firmware/dispatch.py `setter`).
+"""Pre-bound SAP and SGP (issue 16 item 2; firmware/requests.py `RequestPath`).
 
 A SAP, or an SGP of a user variable (bank 2), that has succeeded once is answered afterwards by the
-same setter bound to its axis or bank (`Axis.set`, `GlobalParameters.set`), keyed by the frame's
+same setter bound to its axis or bank (`Motor.set`, `GlobalParameters.set`), keyed by the frame's
 address, command, type and motor bytes: the value of each frame is checked as before (TMCM-6212
 manual 3.2.1: 4 invalid value, 5 EEPROM locked), GP255 suppresses the reply (5.1), download mode
 stores the frame (3.6.36), and the write marks the engines for a new look at their next events.
@@ -112,3 +112,19 @@ def test_bound_sap_on_usb_and_with_another_address():
     assert send(vm, frame(5, 6, 0, 110), interface="usb").status == 100
     assert vm.handle(frame(5, 6, 0, 120, address=2)) == b""
     assert vm.request(6, 6, 0).value == 110
+
+
+@pytest.mark.parametrize("command, type_, motor, value", [(5, 4, 0, 1000), (5, 140, 2, 4), (9, 3, 2, 42)])
+def test_bound_write_declares_the_effect_of_the_command_table(command, type_, motor, value, monkeypatch):
+    """Issue 33 "One command table ... for each opcode it gives its effect" and docs/architecture.md
+    "Time": "Whoever adds a command gives its effect in the table and nothing else". A bound SAP
+    (TMCM-6212 3.6.5) or SGP to a user variable (3.6.7, bank 2) tells the scheduler the same effect
+    as the same frame on the general path: the table's, not one of its own."""
+    vm = VirtualModule("TMCM-6212", address=1)
+    effects = []
+    prepare = vm.scheduler.prepare
+    monkeypatch.setattr(vm.scheduler, "prepare", lambda effect: (effects.append(int(effect)), prepare(effect)))
+    raw = frame(command, type_, motor, value)
+    assert send(vm, raw).status == 100 and vm.is_prebound(raw)  # the general path, then bound
+    assert send(vm, raw).status == 100                          # the bound setter
+    assert len(effects) == 2 and effects[0] == effects[1], effects

@@ -35,7 +35,7 @@ from .reference import ReferenceSearch
 from .requests import RequestPath, Setter, reply_bytes
 from .scheduler import Scheduler
 from .status import TmclStatus
-from .table import execute, suppressible
+from .table import TABLE, execute, suppressible
 from .world import ScenarioSource, World
 
 _REQUEST = struct.Struct(">BBBBiB")
@@ -228,7 +228,7 @@ class VirtualModule:
         if self._writes and interface in OF_INTERFACE:
             write = self._writes.get(bytes(frame[:4]))
             if write is not None:
-                return self._write(write, command, value, address, interface)
+                return self._write(write, command, type_, motor, value, address, interface)
         self.touch("can" if interface == "can" else "serial")
         out = execute(self, command, type_, motor, value, program=False, direct=direct)
         if out is None:  # no reply (command 137)
@@ -249,10 +249,11 @@ class VirtualModule:
         """GP255 = 1 suppresses the reply of a successful `command` (TMCM-6212 5.1, table.suppressible)."""
         return self.globals.ram.get(_SUPPRESS) == 1 and suppressible(command)
 
-    def _write(self, write: Setter, command: int, value: int, address: int, interface: str) -> bytes:
-        """A pre-bound SAP/SGP: what `execute` does for it, without the lookups."""
+    def _write(self, write: Setter, command: int, type_: int, motor: int, value: int, address: int,
+               interface: str) -> bytes:
+        """A pre-bound SAP/SGP: what `execute` does for it (the table's effect), without the lookups."""
         self.touch(OF_INTERFACE[interface])
-        self.scheduler.prepare(Effect.ENGINES if command == 5 else Effect.NONE)
+        self.scheduler.prepare(TABLE[command].effect_of(type_, motor))
         try:
             write(value)
         except TmclStatus as exc:
