@@ -3,7 +3,8 @@
 - "No module reads another module's private attributes": a name with a leading underscore that a
   file of the package defines (an attribute set on `self`, a method, a class attribute, a module
   global) is used only by that file, through `self`/`cls` or its own objects; no other file reads it
-  on an object or imports it. Dunder names are public protocol.
+  on an object (also spelt as a string: getattr, setattr, hasattr, delattr) or imports it. Dunder
+  names are public protocol.
 - "The firmware package has no import cycle through vm.py": the imports a module runs (imports
   under `if TYPE_CHECKING:` excluded, imports inside functions included) form no cycle that passes
   through `opentmcl.firmware.vm`.
@@ -50,7 +51,23 @@ def _read_elsewhere(tree: ast.AST) -> list[tuple[int, str]]:
                 out.append((node.lineno, node.attr))
         elif isinstance(node, ast.ImportFrom):
             out += [(node.lineno, alias.name) for alias in node.names if _private(alias.name)]
+        elif _by_string(node):  # getattr(vm.scheduler, "_limit"): the name spelt as a string
+            out.append((node.lineno, node.args[1].value))
     return out
+
+
+_BY_NAME = ("getattr", "setattr", "hasattr", "delattr")
+
+
+def _by_string(node: ast.AST) -> bool:
+    """getattr/setattr/hasattr/delattr of a private name given as a string on an object other than
+    self/cls (what neither mypy nor import-linter sees; issue 33: `_accel.c` looked names up so)."""
+    if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in _BY_NAME
+            and len(node.args) >= 2):
+        return False
+    obj, name = node.args[0], node.args[1]
+    return (isinstance(name, ast.Constant) and isinstance(name.value, str) and _private(name.value)
+            and not (isinstance(obj, ast.Name) and obj.id in ("self", "cls")))
 
 
 def test_no_module_reads_another_modules_private_names():
