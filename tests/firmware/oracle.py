@@ -12,17 +12,21 @@ from opentmcl.firmware.effects import Effect
 from opentmcl.firmware.interpreter import Interpreter
 from opentmcl.firmware.scheduler import Scheduler
 
+AFRESH = Effect.ENGINES | Effect.EVENTS
+"""Dropped before every look-up: the limit and the engines' own next events too, so that a command
+whose effect the table under-declares shows as a difference from the product."""
+
 
 class ReferenceScheduler(Scheduler):
     """Every next event looked up afresh; no limit carried to the next `advance`."""
 
     def limit_event(self) -> int | None:
-        self.invalidate(Effect.EVENTS)
+        self.invalidate(AFRESH)
         return super().limit_event()
 
     def advance_to(self, until: int) -> None:
         super().advance_to(until)
-        self.invalidate(Effect.EVENTS)
+        self.invalidate(AFRESH)
 
 
 class ReferenceInterpreter(Interpreter):

@@ -10,6 +10,7 @@ states), 3.6.1-3.6.4 (ROR, MST, MVP), 3.6.9 (SGP; GP68 "Serial heartbeat ... the
 stopped" when no command came for that many ms), 3.5.6.4 and bank 3 (timer periods)."""
 from __future__ import annotations
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -132,6 +133,30 @@ def test_a_command_ends_the_carry():
     calls = loop_lookups(fast)
     run_polls(fast, ref, 5)
     assert calls[0] > 0
+
+
+@pytest.mark.parametrize("bound", [False, True])
+def test_a_faster_speed_written_during_a_move_brings_the_arrival_forward(bound):
+    """TMCM-6212 4.1 AP4 "maximum positioning speed" written during a move (3.6.5 SAP, on the general
+    path or answered by the pre-bound setter) speeds the move up, and the arrival is reported
+    (3.6.35, command 138) at the new, earlier tick, as in the reference: a command table that
+    under-declares SAP's effect (issue 33: "Whoever adds a command gives its effect in the table")
+    leaves the engines' next events stale, and the product then reports at the old tick."""
+    fast, ref = pair()
+    for vm in (fast, ref):
+        vm.handle(frame(5, 4, 0, 1000))  # the frame's shape is bound from now on
+        vm.handle(frame(138, 0, 0, 1))
+        vm.handle(frame(4, 0, 0, 20000))  # 20 s at 1000 pps, under 1 s at 50000
+        vm.advance(0.5)
+        vm.next_event_in()
+        if not bound:
+            vm.forget_requests()
+        assert vm.is_prebound(frame(5, 4, 0, 50000)) == bound
+        vm.handle(frame(5, 4, 0, 50000))
+        vm.advance(3.0)
+    got = state(fast)
+    assert got == state(ref)
+    assert len(got[-1]) == 1 and got[3][0][1] == 20000  # arrived within the 3 s, event sent
 
 
 def test_a_general_read_ends_the_carry():
