@@ -141,3 +141,17 @@ def test_every_profile_opcode_is_in_the_table():
     for name in module_names():
         for number in load_profile(name).opcodes:
             assert by_number(number).number == number, (name, number)
+
+
+def test_every_command_has_its_name_in_op():
+    """TMCM-6212 3.5 and PD86-1180 4.5 list the commands by mnemonic and number; 3.6.36 and 4.6.39
+    the control commands 128-139 by name. `Op` names each command of `COMMANDS` once: by its
+    mnemonic where it has one (ROR 1, MST 3, SAP 5, GAP 6, RETI 38, CALL 80), and nothing else."""
+    from opentmcl.protocol.opcodes import COMMANDS, Op
+
+    assert sorted(Op) == sorted(COMMANDS)
+    for number, command in COMMANDS.items():
+        if command.mnemonic is not None:
+            assert Op(number).name == command.mnemonic, number
+    assert (Op.ROR, Op.MST, Op.SAP, Op.GAP, Op.RETI, Op.CALL) == (1, 3, 5, 6, 38, 80)
+    assert (Op.STOP_APPLICATION, Op.ENTER_DOWNLOAD_MODE, Op.REQUEST_TARGET_REACHED_EVENT) == (128, 132, 138)

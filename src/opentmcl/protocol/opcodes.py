@@ -346,22 +346,102 @@ _COMMANDS: tuple[Command, ...] = (
 COMMANDS: Mapping[int, Command] = MappingProxyType({c.number: c for c in _COMMANDS})
 _BY_MNEMONIC: Mapping[str, Command] = MappingProxyType({c.mnemonic: c for c in _COMMANDS if c.mnemonic})
 
-# Control command numbers by name (TMCM-6212 3.6.36).
-STOP_APPLICATION = 128
-RUN_APPLICATION = 129
-STEP_APPLICATION = 130
-RESET_APPLICATION = 131
-ENTER_DOWNLOAD_MODE = 132
-EXIT_DOWNLOAD_MODE = 133
-READ_PROGRAM_MEMORY = 134
-GET_APPLICATION_STATUS = 135
-GET_FIRMWARE_VERSION = 136
-RESTORE_FACTORY_SETTINGS = 137
-REQUEST_TARGET_REACHED_EVENT = 138
-ENTER_ASCII_MODE = 139
+
+
+class Op(IntEnum):
+    """Every command number by its name: the mnemonic (TMCM-6212 3.5, PD86-1180 4.5) or, for the
+    commands without one, the name of the manuals' control command table (TMCM-6212 3.6.36, 3.6.35,
+    PD86-1180 4.6.39). Code outside this module names a command by `Op`, never by its number
+    (tests/protocol/test_opcodes.py checks that `Op` and `COMMANDS` agree)."""
+
+    ROR = 1
+    ROL = 2
+    MST = 3
+    MVP = 4
+    SAP = 5
+    GAP = 6
+    STAP = 7
+    RSAP = 8
+    SGP = 9
+    GGP = 10
+    STGP = 11
+    RSGP = 12
+    RFS = 13
+    SIO = 14
+    GIO = 15
+    CALC = 19
+    COMP = 20
+    JC = 21
+    JA = 22
+    CSUB = 23
+    RSUB = 24
+    EI = 25
+    DI = 26
+    WAIT = 27
+    STOP = 28
+    SCO = 30
+    GCO = 31
+    CCO = 32
+    CALCX = 33
+    AAP = 34
+    AGP = 35
+    CLE = 36
+    VECT = 37
+    RETI = 38
+    ACO = 39
+    CALCVV = 40
+    CALCVA = 41
+    CALCAV = 42
+    CALCVX = 43
+    CALCXV = 44
+    CALCV = 45
+    MVPA = 46
+    RST = 48
+    DJNZ = 49
+    ROLA = 50
+    RORA = 51
+    SIV = 55
+    GIV = 56
+    AIV = 57
+    UF0 = 64
+    UF1 = 65
+    UF2 = 66
+    UF3 = 67
+    UF4 = 68
+    UF5 = 69
+    UF6 = 70
+    UF7 = 71
+    CALL = 80
+    STOP_APPLICATION = 128
+    RUN_APPLICATION = 129
+    STEP_APPLICATION = 130
+    RESET_APPLICATION = 131
+    ENTER_DOWNLOAD_MODE = 132
+    EXIT_DOWNLOAD_MODE = 133
+    READ_PROGRAM_MEMORY = 134
+    GET_APPLICATION_STATUS = 135
+    GET_FIRMWARE_VERSION = 136
+    RESTORE_FACTORY_SETTINGS = 137
+    REQUEST_TARGET_REACHED_EVENT = 138
+    ENTER_ASCII_MODE = 139
+
+
+# Control command numbers by name (TMCM-6212 3.6.36), as plain names too.
+STOP_APPLICATION = int(Op.STOP_APPLICATION)
+RUN_APPLICATION = int(Op.RUN_APPLICATION)
+STEP_APPLICATION = int(Op.STEP_APPLICATION)
+RESET_APPLICATION = int(Op.RESET_APPLICATION)
+ENTER_DOWNLOAD_MODE = int(Op.ENTER_DOWNLOAD_MODE)
+EXIT_DOWNLOAD_MODE = int(Op.EXIT_DOWNLOAD_MODE)
+READ_PROGRAM_MEMORY = int(Op.READ_PROGRAM_MEMORY)
+GET_APPLICATION_STATUS = int(Op.GET_APPLICATION_STATUS)
+GET_FIRMWARE_VERSION = int(Op.GET_FIRMWARE_VERSION)
+RESTORE_FACTORY_SETTINGS = int(Op.RESTORE_FACTORY_SETTINGS)
+REQUEST_TARGET_REACHED_EVENT = int(Op.REQUEST_TARGET_REACHED_EVENT)
+ENTER_ASCII_MODE = int(Op.ENTER_ASCII_MODE)
 FACTORY_RESET_KEY = 1234  # value that command 137 requires
-MOTOR_STOP = 3  # MST (3.6.3)
-SET_GLOBAL_PARAMETER = 9  # SGP (3.6.7)
+MOTOR_STOP = int(Op.MST)  # MST (3.6.3)
+SET_GLOBAL_PARAMETER = int(Op.SGP)  # SGP (3.6.7)
 CONTROL_FIRST = 128
 """Numbers from here up are reserved for control commands (3.6.36); see `is_control`."""
 STOP_COMMANDS = frozenset({MOTOR_STOP, STOP_APPLICATION, RESET_APPLICATION})
