@@ -76,9 +76,10 @@ def test_regenerated_captures_replay_cleanly(regenerated):
         for options, address in runs:
             module = options[1] if options[0] == "--module" else None
             scenario = options[1] if options[0] == "--scenario" else None
-            # the captures were made from served modules on this machine: their clock trails the wall
-            # clock, on a busy one by tens of ms (56 ms beside two CPU burners; docs/capture.md)
-            report = replay(regenerated / name, module, address=address, scenario=scenario, clock_lag=0.5)
+            # served modules answer from a clock up to 2 ms behind, more on a loaded machine; their
+            # 138 events reach the wire later on a busy machine too (56 ms beside two CPU burners)
+            report = replay(regenerated / name, module, address=address, scenario=scenario, clock_lag=0.05,
+                            tolerance=["latency=0.5"])
             assert report.ok, report.text()
             assert report.compared > 4
 

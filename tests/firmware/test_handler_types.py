@@ -23,9 +23,7 @@ EMPTY = inspect.Parameter.empty
 def _handlers():
     yield from ((f"TABLE[{n}].handler", spec.handler) for n, spec in sorted(TABLE.items()))
     yield from ((f"TABLE[{n}].step", spec.step) for n, spec in sorted(TABLE.items()) if spec.step)
-    yield "program_control", program.program_control
     yield "store_instruction", program.store_instruction
-    yield "VirtualModule.program_control", VirtualModule.program_control
     yield "VirtualModule.store_instruction", VirtualModule.store_instruction
 
 

@@ -11,13 +11,14 @@ remainder computed as a - (a / b) * b produce. See docs/assumptions.md.
 from __future__ import annotations
 
 from ..protocol.frame import to_int32
+from ..protocol.opcodes import Op
 
 ADD, SUB, MUL, DIV, MOD, AND, OR, XOR, NOT, LOAD, SWAP = range(11)
-CALCX, CALCV = 33, 45  # TMCM-6212 3.6.26; PD28-1021 Table 5 (user variable and direct value)
+CALCV = int(Op.CALCV)  # PD28-1021 Table 5 (a variable and a direct value)
 
 
 def last_operation(command: int) -> int:
-    """The highest operation type of CALCX (33) and the CALCxx commands (40-45): SWAP, but LOAD for
+    """The highest operation type of CALCX (TMCM-6212 3.6.26) and the CALCxx commands: SWAP, but LOAD for
     CALCV, whose source is a constant it cannot exchange with (docs/assumptions.md "PD28-1021
     extended set"). A type above it is "3 Wrong type", in direct mode and in a program alike."""
     return LOAD if command == CALCV else SWAP

@@ -15,9 +15,10 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Protocol
 
 from ..protocol.frame import to_int32
+from ..protocol.opcodes import Op
 from ..protocol.replies import encode_version_string_reply
 from ..protocol.status import Status
-from .calc import CALCV, CALCX, last_operation
+from .calc import last_operation
 from .status import TmclStatus
 
 if TYPE_CHECKING:
@@ -284,13 +285,13 @@ def cmd_calcx(vm: VirtualModule, type: int, motor: int, value: int, program: boo
     """CALCX and the PD28-1021's CALCVV ... CALCXV in direct mode: no effect (7.6), but an operation
     beyond the list (TMCM-6212 3.6.26: types 0 ADD ... 10 SWAP) is "3 Wrong type" (Table 4), as
     CALC's type beyond LOAD is and as the same instruction in a program is."""
-    return _operation(type, last_operation(CALCX))
+    return _operation(type, last_operation(Op.CALCX))
 
 
 def cmd_calcv(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """The PD28-1021's CALCV in direct mode: as CALCX, but its operations end at LOAD (it has no
     second register to SWAP with; calc.last_operation)."""
-    return _operation(type, last_operation(CALCV))
+    return _operation(type, last_operation(Op.CALCV))
 
 
 def _operation(type: int, last: int) -> Result:
@@ -330,11 +331,3 @@ def cmd_137(vm: VirtualModule, type: int, motor: int, value: int, program: bool)
 def cmd_139(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     vm.ascii_mode = True
     return OK, 0
-
-
-def control_handler(number: int) -> CommandHandler:
-    """The handler of control command `number` (128-135, 3.6.36: program.program_control)."""
-    def handler(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
-        return vm.program_control(number, type, value)
-    handler.__name__ = f"cmd_{number}"
-    return handler

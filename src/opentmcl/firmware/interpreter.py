@@ -30,7 +30,7 @@ from .effects import Effect
 from .program import RESET, RUNNING, STEPPING, STOPPED
 from .requests import reader, store
 from .status import TmclStatus
-from .table import TABLE, WITH_ACCUMULATOR, execute
+from .table import Spec, available, execute
 
 if TYPE_CHECKING:
     from .vm import VirtualModule
@@ -43,8 +43,6 @@ PURE, READ, RETURN, EVENT = 0, 1, 2, 3
 to a program that was not in a WAIT; never (it is an event of the scheduler)."""
 Compiled = tuple[int, Effect, steps.Step]
 """(how it may run ahead, its effect, its step)."""
-RETI, AGP, GAP, GGP, GIO = 38, 35, 6, 10, 15
-USER_BANK = 2
 
 
 @dataclass(slots=True)
@@ -58,8 +56,8 @@ class Context:
     wait: wait.Wait | None
 
 
-def _kind(effect: Effect, command: int) -> int:
-    if command == RETI:
+def _kind(effect: Effect, spec: Spec) -> int:
+    if spec.returns:
         return RETURN
     if effect == Effect.NONE:
         return PURE
@@ -102,25 +100,23 @@ class Interpreter:
 
     def _compile(self, command: int, type: int, motor: int, value: int) -> Compiled:
         vm = self.vm
-        spec = TABLE.get(command)
-        if spec is None or command not in vm.opcodes:  # not in this module's command set
+        spec = available(vm, command)
+        if spec is None:  # not in this module's command set
             return PURE, Effect.NONE, steps.failing(self, command, int(Status.INVALID_COMMAND))
         if not spec.command.program:  # a control command: direct mode only (3.6.36)
             return PURE, Effect.NONE, steps.failing(self, command, int(Status.NOT_AVAILABLE))
         effect = spec.effect_of(type, motor)
-        kind = _kind(effect, command)
+        kind = _kind(effect, spec)
         if spec.step is not None:
             return kind, effect, spec.step(self, command, type, motor, value)
-        if command in WITH_ACCUMULATOR:
-            direct, type_of = WITH_ACCUMULATOR[command]
+        if spec.accumulator is not None:
+            direct, type_of = spec.accumulator
             return kind, effect, steps.with_accumulator(direct, type_of)(self, command, type, motor, value, execute)
         if spec.binds == "read":
             read = reader(vm, command, type, motor)
             if read is not None:
-                engines = ([vm.axes[motor].engine] if command == GAP
-                           else [] if command == GGP and motor == USER_BANK else None)
-                return kind, effect, steps.bound_read(self, read, engines)
-        if command == AGP:
+                return kind, effect, steps.bound_read(self, read, spec.read_engines(vm, type, motor))
+        if spec.binds == "store":
             put = store(vm, type, motor)
             if put is not None:
                 return kind, effect, steps.bound_store(self, put)

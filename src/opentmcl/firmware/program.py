@@ -16,10 +16,11 @@ from ..protocol.status import Status
 from .status import TmclStatus
 
 if TYPE_CHECKING:
-    from .commands import StatusReply
+    from .commands import Result, StatusReply
     from .vm import VirtualModule
 
 STOPPED, RUNNING, STEPPING, RESET = 0, 1, 2, 3
+_OK = int(Status.OK)
 EMPTY = (0, 0, 0, 0)
 
 
@@ -58,47 +59,70 @@ def store_instruction(vm: VirtualModule, command: int, type: int, motor: int, va
     return int(Status.LOADED), 0
 
 
-def program_control(vm: VirtualModule, command: int, type: int, value: int) -> StatusReply | bytes:
-    """Commands 128-135."""
+# --- the control commands 128-135 (3.6.36), each a handler of the command table ----------------
+def stop_application(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """128: stop the running program."""
+    vm.interpreter.stop()
+    return _OK, 0
+
+
+def run_application(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """129: type 0 from the current address, type 1 from the address in the value."""
+    if type == 1:
+        if not 0 <= value < vm.program.size:
+            raise TmclStatus(4)
+        vm.interpreter.run(value)
+    elif type == 0:
+        vm.interpreter.run(None)
+    else:
+        raise TmclStatus(3)
+    return _OK, 0
+
+
+def step_application(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """130: execute one instruction."""
+    vm.interpreter.step()
+    return _OK, 0
+
+
+def reset_application(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """131: stop and set the program counter to 0."""
+    vm.interpreter.reset()
+    return _OK, 0
+
+
+def enter_download_mode(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """132: store the following commands from the address in the value (not with GP81 = 2 or 3)."""
     mem = vm.program
-    if command == 128:
-        vm.interpreter.stop()
-    elif command == 129:
-        if type == 1:
-            if not 0 <= value < mem.size:
-                raise TmclStatus(4)
-            vm.interpreter.run(value)
-        elif type == 0:
-            vm.interpreter.run(None)
-        else:
-            raise TmclStatus(3)
-    elif command == 130:
-        vm.interpreter.step()
-    elif command == 131:
-        vm.interpreter.reset()
-    elif command == 132:
-        if mem.protection in (2, 3):
-            raise TmclStatus(4)
-        if not 0 <= value < mem.size:
-            raise TmclStatus(4)
-        vm.interpreter.stop()
-        vm.download_mode = True
-        vm.download_pointer = value
-        vm.eeprom.deferred = True
-    elif command == 133:
-        if vm.download_mode:
-            vm.download_mode = False
-            vm.eeprom.deferred = False
-            mem.save()
-    elif command == 134:
-        if mem.protection in (1, 3):
-            raise TmclStatus(4)
-        if not 0 <= value < mem.size:
-            raise TmclStatus(4)
-        return read_reply(vm, mem.code[value])
-    elif command == 135:
-        return int(Status.OK), vm.interpreter.status(type)
-    return int(Status.OK), 0
+    if mem.protection in (2, 3) or not 0 <= value < mem.size:
+        raise TmclStatus(4)
+    vm.interpreter.stop()
+    vm.download_mode = True
+    vm.download_pointer = value
+    vm.eeprom.deferred = True
+    return _OK, 0
+
+
+def exit_download_mode(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """133: leave download mode and write the program to the EEPROM in one go."""
+    if vm.download_mode:
+        vm.download_mode = False
+        vm.eeprom.deferred = False
+        vm.program.save()
+    return _OK, 0
+
+
+def read_program_memory(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """134: the instruction at the address in the value (not with GP81 = 1 or 3)."""
+    mem = vm.program
+    if mem.protection in (1, 3) or not 0 <= value < mem.size:
+        raise TmclStatus(4)
+    return read_reply(vm, mem.code[value])
+
+
+def get_application_status(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
+    """135: the program's state, or with type 1 its program counter."""
+    return _OK, vm.interpreter.status(type)
 
 
 def read_reply(vm: VirtualModule, ins: tuple[int, int, int, int]) -> bytes:

@@ -20,9 +20,10 @@ from functools import partial
 from typing import TYPE_CHECKING
 
 from ..protocol.frame import Reply, to_int32
+from ..protocol.opcodes import Op
 from .effects import Effect
 from .status import TmclStatus
-from .table import TABLE
+from .table import TABLE, available
 
 if TYPE_CHECKING:
     from .vm import VirtualModule
@@ -32,7 +33,7 @@ Entry = Callable[..., "Reply | bytes"]
 (`as_reply`) as a `Reply` (`_entry`)."""
 Setter = Callable[[int], None]
 Read = Callable[[], int]
-SAP, GAP, SGP, GGP, GIO = 5, 6, 9, 10, 15
+SAP, GAP, SGP, GGP, AGP = int(Op.SAP), int(Op.GAP), int(Op.SGP), int(Op.GGP), int(Op.AGP)
 OK = 100
 USER_BANK = 2
 MAX_BOUND = 4096  # pre-bound frames kept at most (each differs in address, type, motor or value)
@@ -84,8 +85,8 @@ def _entry(vm: VirtualModule, head: bytes, read: Read) -> Entry:
 def reader(vm: VirtualModule, command: int, type_: int, motor: int) -> Read | None:
     """The bound read of GAP `type_, motor`, GGP `type_, bank` or GIO `port, bank` when it is a pure
     read the module answers (the command table's effect), else None."""
-    spec = TABLE.get(command)
-    if spec is None or spec.binds != "read" or command not in vm.opcodes or spec.effect_of(type_, motor) & ~_PURE:
+    spec = available(vm, command)
+    if spec is None or spec.binds != "read" or spec.effect_of(type_, motor) & ~_PURE:
         return None
     try:
         if command == GAP:
@@ -113,7 +114,7 @@ def handler(vm: VirtualModule, command: int, type_: int, motor: int) -> Entry | 
 def store(vm: VirtualModule, type_: int, bank: int) -> Setter | None:
     """A program's AGP to a user variable (bank 2, manual 3.6.35: the accumulator is copied there);
     None where the general path must answer (another bank, an index the module lacks)."""
-    if 35 not in vm.opcodes or bank != USER_BANK or bank not in vm.profile.global_banks \
+    if available(vm, AGP) is None or bank != USER_BANK or bank not in vm.profile.global_banks \
             or not 0 <= type_ < len(vm.user_vars):
         return None
     return partial(vm.user_vars.__setitem__, type_)
@@ -156,7 +157,7 @@ class RequestPath:
         """The same setter the general path reaches (`Motor.set`, `GlobalParameters.set`, which
         check the value and raise the status), bound to its axis or bank."""
         vm = self.vm
-        if command not in vm.opcodes:
+        if available(vm, command) is None:
             return None
         if command == SAP and 0 <= motor < len(vm.axes):
             return partial(vm.axes[motor].set, type_)

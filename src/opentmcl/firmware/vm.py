@@ -30,7 +30,7 @@ from .interpreter import Interpreter
 from .interrupts import Interrupts
 from .io import IOBanks
 from .motor import Motor
-from .program import ProgramMemory, program_control, store_instruction
+from .program import ProgramMemory, store_instruction
 from .reference import ReferenceSearch
 from .requests import RequestPath, Setter, reply_bytes
 from .scheduler import Scheduler
@@ -395,9 +395,6 @@ class VirtualModule:
     def clear_error_flags(self, which: int) -> None:
         """CLE: 0 all, 1 ETO, 2 EAL, 3 EDV, 4 EPO, 5 ESD (flag bit = 1 << (which - 1))."""
         self.flags &= ~0x1F if which == 0 else ~(1 << (which - 1))  # arithmetic flags stay (flags.py)
-
-    def program_control(self, command: int, type: int, value: int) -> StatusReply | bytes:
-        return program_control(self, command, type, value)
 
     def store_instruction(self, command: int, type: int, motor: int, value: int) -> StatusReply:
         return store_instruction(self, command, type, motor, value)
