@@ -57,8 +57,9 @@ def _class_of_annotation(node: ast.expr | None, classes: dict[str, ast.ClassDef]
 class _Receivers:
     """The class of the object an attribute is read on, where this file alone shows it: `self`/`cls`;
     the name of a class of this file; a parameter annotated with one; a local bound to `C(...)`,
-    `C.__new__(...)`, `cls(...)` or a method of the same class annotated to return one; `self.attr`
-    bound so in a method of the same class (or annotated so in its body). Anything else: unknown."""
+    `C.__new__(...)`, `cls(...)` or a call of a method annotated to return one on an object so
+    shown; `self.attr` bound so in a method of the same class (or annotated so in its body).
+    Anything else: unknown."""
 
     def __init__(self, tree: ast.AST) -> None:
         self.classes = {n.name: n for n in ast.walk(tree) if isinstance(n, ast.ClassDef)}
@@ -122,14 +123,21 @@ class _Receivers:
                 return owner if f.id == "cls" else f.id
             if isinstance(f, ast.Attribute) and f.attr == "__new__" and isinstance(f.value, ast.Name):
                 return f.value.id if f.value.id in self.classes else None
-            if isinstance(f, ast.Attribute) and _is_self(f.value) and owner:
-                return self._returns(owner, f.attr)
+            if isinstance(f, ast.Attribute):
+                cls = self.class_of(f.value, owner, env)
+                return self._returns(cls, f.attr) if cls else None
         return None
 
-    def _returns(self, owner: str, method: str) -> str | None:
-        for node in self.classes[owner].body:
+    def _returns(self, name: str, method: str) -> str | None:
+        """The class of this file that method `method` of class `name` (or of a base in this file)
+        is annotated to return."""
+        cls = self.classes[name]
+        for node in cls.body:
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == method:
                 return _class_of_annotation(node.returns, self.classes)
+        for base in cls.bases:
+            if isinstance(base, ast.Name) and base.id in self.classes and base.id != name:
+                return self._returns(base.id, method)
         return None
 
     def _bind_attributes(self, name: str, cls: ast.ClassDef) -> None:
