@@ -72,6 +72,24 @@ def test_the_same_program_warns_for_a_one_axis_module(tmp_path):
     assert r.stderr == "two.tmc:2:5: warning: ROL: motor 1 does not exist on PD86-1180 (motor 0 only)\n"
 
 
+def test_the_assembler_says_138_is_direct_mode_only(tmp_path):
+    """Issue 29 item 4. TMCM-6212 manual 3.6.35 "This instruction can only be used in direct mode":
+    `asm --module` warns, as it warns of what the module would refuse (docs/tmcl-assembler.md
+    "Checking against a module"); --strict refuses (exit 2, nothing written). `asm` without
+    --module warns too: no module runs it."""
+    src = tmp_path / "p.tmc"
+    src.write_text("    MVP ABS, 0, 500\n    RAW 138, 1, 0, 1\n")
+    out = tmp_path / "p.bin"
+    r = cli("asm", src, "-o", out, "--module", "TMCM-6212", cwd=tmp_path)
+    warning = f"{src}:2:9: warning: command 138 can only be used in direct mode: in a program the module skips it (status 6)"
+    assert (r.returncode, r.stderr.strip()) == (0, warning)
+    out.unlink()
+    r = cli("asm", src, "-o", out, "--module", "TMCM-6212", "--strict", cwd=tmp_path)
+    assert r.returncode == 2 and not out.exists()
+    r = cli("asm", src, "-o", out, cwd=tmp_path)    # no module: 138 is direct mode only on every one
+    assert (r.returncode, r.stderr.strip()) == (0, warning)
+
+
 def test_module_profile_file(tmp_path):
     """--module FILE takes a profile file (docs/profiles.md)."""
     (tmp_path / "two.toml").write_text('extends = "TMCM-6212"\n[module]\nname = "TMCM-2212"\naxes = 2\n')

@@ -2,13 +2,21 @@
 error handling."""
 from __future__ import annotations
 
+import re
 import shutil
+import socket
+import time
 from pathlib import Path
 
 from opentmcl.cli import main
+from opentmcl.protocol.frame import Reply, Request
+
+from ..capture.helpers import Tool, cli
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 TIMER = "tmcm6212_3.5.6.4_timer_interrupt.tmc"
+WAIT = 30.0  # seconds a condition may take on a loaded machine; nothing here is timed
+GGP, STATUS = 10, 135
 
 
 def test_asm_then_run_the_timer_example(tmp_path, capsys):
@@ -47,6 +55,60 @@ def test_load_over_a_url(capsys):
     assert main(["load", str(EXAMPLES / "tmcm6212_7.2_main_loop.tmc"), "--to", "sim://TMCM-6212",
                  "--start", "5", "--run"]) == 0
     assert capsys.readouterr().out.splitlines() == ["loaded 8 instructions at 5..12, verified", "running from 5"]
+
+
+def test_load_run_starts_a_fresh_program_at_its_first_instruction(tmp_path):
+    """Issue 29 item 10. TMCM-6212 manual 3.6.36: 129 "0 – from current address, 1 – from specific
+    address"; 132/133 say nothing of the program counter, so after a download it stays where the
+    last program stopped (docs/assumptions.md). `opentmcl load --run` starts at the program's first
+    instruction (129 type 1, the load address): the second program's first SGP runs. The module is
+    an `opentmcl serve` process; every `load` is a process of its own."""
+    first = tmp_path / "first.tmc"
+    first.write_text("    SGP 8, 2, 1\n    SGP 8, 2, 2\n    SGP 8, 2, 3\n    SGP 8, 2, 4\n")
+    second = tmp_path / "second.tmc"
+    second.write_text("    SGP 9, 2, 42\n    SGP 8, 2, 5\n    SGP 8, 2, 6\n    SGP 8, 2, 7\n    SGP 8, 2, 8\n")
+    with Tool("serve", "--module", "TMCM-6212", "--tcp", "127.0.0.1:0") as p:
+        url = p.endpoint("tcp")
+        r = cli("load", str(first), "--to", url, "--run")
+        assert r.returncode == 0, r.stderr
+        _wait_user_variable(url, 8, 4)
+        assert _status(url) & 0xFFFF == 4                   # stopped on the appended STOP
+        r = cli("load", str(second), "--to", url)            # no --run: the counter stays
+        assert r.returncode == 0, r.stderr
+        assert _status(url) & 0xFFFF == 4
+        r = cli("load", str(second), "--to", url, "--run")
+        assert r.returncode == 0 and "running from 0" in r.stdout, r.stderr
+        _wait_user_variable(url, 8, 8)
+        assert _user_variable(url, 9) == 42                 # its first instruction ran
+
+
+def _frames(url: str, *requests: tuple[int, int, int, int]) -> list[Reply]:
+    host, port = re.match(r"tcp://([\d.]+):(\d+)", url).groups()
+    with socket.create_connection((host, int(port)), timeout=WAIT) as s:
+        out = []
+        for req in requests:
+            s.sendall(Request(1, *req).encode())
+            buf = b""
+            while len(buf) < 9:
+                buf += s.recv(9 - len(buf))
+            out.append(Reply.decode(buf))
+        return out
+
+
+def _user_variable(url: str, n: int) -> int:
+    return _frames(url, (GGP, n, 2, 0))[0].value
+
+
+def _status(url: str) -> int:
+    """135 type 1: mode, wait flag and program counter (TMCM-6212 3.6.36)."""
+    return _frames(url, (STATUS, 1, 0, 0))[0].value
+
+
+def _wait_user_variable(url: str, n: int, want: int) -> None:
+    deadline = time.monotonic() + WAIT
+    while _user_variable(url, n) != want:
+        assert time.monotonic() < deadline, f"user variable {n} never became {want}"
+        time.sleep(0.02)
 
 
 def test_errors_are_one_line_messages(tmp_path, capsys):

@@ -5,6 +5,8 @@ from pathlib import Path
 
 from opentmcl.cli import main
 
+from ..capture.helpers import cli
+
 EXAMPLES = Path(__file__).parent / "examples"
 
 
@@ -22,6 +24,23 @@ def test_asm_then_disasm_round_trip(tmp_path, capsys):
     out2 = tmp_path / "q.bin"
     assert main(["asm", str(src), "-o", str(out2)]) == 0
     assert out2.read_bytes() == data
+
+
+def test_asm_counts_what_disasm_lists(tmp_path):
+    """Issue 29 item 9: `asm` said "14 instructions" where `disasm` shows 13. It counts the source's
+    instructions apart from the STOP it appends (docs/tmcl-assembler.md), in the singular for one,
+    and without the appended STOP it says why `disasm` lists one fewer for a final STOP."""
+    src, out = tmp_path / "p.tmc", tmp_path / "p.bin"
+    src.write_text("    MVP ABS, 0, 500\n    STOP\n")
+    r = cli("asm", str(src), "-o", str(out))
+    assert r.stdout.strip() == f"{out}: 2 instructions + appended STOP = 3 records, 0 labels"
+    assert len(cli("disasm", str(out)).stdout.splitlines()) == 2
+    r = cli("asm", str(src), "-o", str(out), "--no-stop")
+    assert r.stdout.strip() == f"{out}: 2 instructions (disasm lists 1: it leaves a final STOP out), 0 labels"
+    assert len(cli("disasm", str(out)).stdout.splitlines()) == 1
+    src.write_text("Here:\n    MVP ABS, 0, 500\n")
+    r = cli("asm", str(src), "-o", str(out))
+    assert r.stdout.strip() == f"{out}: 1 instruction + appended STOP = 2 records, 1 label"
 
 
 def test_asm_listing_and_symbols_to_stdout(tmp_path, capsys):

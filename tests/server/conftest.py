@@ -7,9 +7,10 @@ import subprocess
 import pytest
 
 from opentmcl import VirtualModule
-from opentmcl.server import Server, TcpServer
+from opentmcl.server import PtyServer, Server, TcpServer
 
 from ..capture.helpers import Tool
+from .helpers import Link
 
 GAP = 0.03  # short inter-byte gap so that resynchronisation tests stay quick
 
@@ -67,3 +68,22 @@ def serve():
             p.kill()
         else:
             p.proc.communicate(timeout=20)
+
+
+@pytest.fixture
+def pty_link():
+    """`pty_link(name, **vm args)`: a module served alone on a pty (USB when its profile has USB),
+    and a `Link` to it; both closed afterwards."""
+    started = []
+
+    def serve(name: str, **kw) -> Link:
+        server = Server([VirtualModule(name, address=1, **kw)])
+        pty = server.add(PtyServer(server.bus))
+        server.start()
+        started.append((server, Link(pty.path)))
+        return started[-1][1]
+
+    yield serve
+    for server, lk in started:
+        lk.close()
+        server.stop()

@@ -5,7 +5,12 @@ import socket
 import time
 import uuid
 
+import serial
+
+from opentmcl.lang import assemble
 from opentmcl.protocol.frame import Reply, Request
+
+WAIT = 30.0  # seconds a condition may take on a loaded machine; nothing here is timed
 
 # TMCM-6212 manual 3.6.8 example: GGP 66, 0 -> 01 0A 42 00 00 00 00 00 4D
 GGP_66 = bytes.fromhex("010A4200000000004D")
@@ -86,3 +91,63 @@ def only_session(tcp, timeout: float = 10.0):
         time.sleep(0.002)
     [session] = tcp.sessions
     return session
+
+
+class Link:
+    """A host on a served port: whole 9-byte frames out, replies in (pyserial on the pty)."""
+
+    def __init__(self, path: str, address: int = 1) -> None:
+        self.port = serial.Serial(path, 9600, timeout=0.2)
+        self.address = address
+        self.unsolicited: list[Reply] = []
+
+    def send(self, command: int, type_: int = 0, motor: int = 0, value: int = 0, address: int | None = None) -> None:
+        self.port.write(Request(self.address if address is None else address, command, type_, motor,
+                                value).encode())
+
+    def read(self, n: int = 9) -> bytes:
+        deadline, buf = time.monotonic() + WAIT, b""
+        while len(buf) < n and time.monotonic() < deadline:
+            buf += self.port.read(n - len(buf))
+        assert len(buf) == n, f"wanted {n} bytes, got {buf!r}"
+        return buf
+
+    def reply(self) -> Reply:
+        """The next reply; unsolicited ones (status 128, command 138) are set aside."""
+        while True:
+            r = Reply.decode(self.read())
+            if r.status != 128:
+                return r
+            self.unsolicited.append(r)
+
+    def ask(self, command: int, type_: int = 0, motor: int = 0, value: int = 0) -> Reply:
+        self.send(command, type_, motor, value)
+        r = self.reply()
+        assert r.command == command
+        return r
+
+    def value(self, command: int, type_: int = 0, motor: int = 0, value: int = 0) -> int:
+        r = self.ask(command, type_, motor, value)
+        assert r.status == 100, r
+        return r.value
+
+    def until(self, command: int, type_: int, motor: int, want) -> int:
+        """Poll until `want(value)` holds or WAIT has passed; the last value read."""
+        deadline = time.monotonic() + WAIT
+        while True:
+            got = self.value(command, type_, motor)
+            if want(got) or time.monotonic() > deadline:
+                return got
+            time.sleep(0.01)
+
+    def download(self, source: str, module: str) -> list:
+        """132, the assembled instructions (each status 101), 133 (manual 3.6.36)."""
+        program = assemble(source, module=module).instructions
+        assert self.ask(132).status == 100
+        for ins in program:
+            assert self.ask(ins.command, ins.type, ins.motor, ins.value).status == 101, ins
+        assert self.ask(133).status == 100
+        return program
+
+    def close(self) -> None:
+        self.port.close()

@@ -1,6 +1,7 @@
 """`opentmcl serve` as a user runs it: a real process, real sockets, real signals."""
 import json
 import os
+import re
 import select
 import signal
 import socket
@@ -12,9 +13,10 @@ import pytest
 from opentmcl import VirtualModule
 from opentmcl.cli import CliError, main
 from opentmcl.cli.serve import assign_addresses, parse_hostport
+from opentmcl.protocol.frame import Reply
 from opentmcl.server.tcp import EVICT_SILENT
 
-from .helpers import GGP_66, is_ok, recv_exactly, reply, request, unique_channel
+from .helpers import GGP_66, Link, is_ok, recv_exactly, reply, request, unique_channel
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals and ptys")
 
@@ -340,6 +342,31 @@ def test_pty_of_a_bus_is_rs485(serve):
         port.write(request(0, 10, 66, 0))
         assert port.read(9) == b""
     assert p.stop()[0] == 0
+
+
+@pytest.mark.parametrize(("name", "interface"), [("PD28-1021", "rs485"), ("TMCM-6212", "usb"), ("PD86-1180", "usb")])
+def test_serve_takes_the_interface_the_manual_lists(serve, name, interface):
+    """Issue 29 item 8. PD28-1021 manual, title page: "RS485 interface" (no USB): `opentmcl serve
+    --pty` stands for an RS-485 line, where "the module will ... reply ... only" to its address (3:
+    "strict master/slave relationship"), so a frame to address 2 gets no reply. The TMCM-6212 ("USB
+    full speed (12Mbit/s) device interface", 1) and the PD86-1180 ("USB, RS232, RS485 and CAN") are
+    served as USB, where the address byte is ignored (docs/endpoints.md)."""
+    ggp = 10
+    p = serve("--module", name, "--pty")
+    [line] = [x for x in p.lines if x.startswith("pty ")]
+    path, shown = re.match(r"pty (\S+) .*\((\w+)\)$", line).groups()
+    assert shown == interface
+    lk = Link(path)
+    try:
+        lk.send(ggp, 66, 0, 0, address=2)               # another address
+        r = lk.ask(ggp, 66, 0)                          # the next reply on the line
+        assert (r.status, r.value) == (100, 1)
+        if interface == "usb":
+            assert Reply.decode(lk.read()).command == ggp   # the frame to address 2 came first
+        else:
+            assert lk.port.read(9) == b""
+    finally:
+        lk.close()
 
 
 @pytest.mark.parametrize(("argv", "says"), [

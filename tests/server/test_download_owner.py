@@ -5,8 +5,8 @@ control commands) are not executed but stored in the TMCL memory"; 133 "exit dow
 the download mode. All following commands are executed normally again"; 134 "read program
 memory". The manual knows one host per module; a served module has several links. The requests
 of the links that did not open the download are executed as in direct mode and never stored; the
-owner's are stored as the manual says. Found by tests/web/test_bench_done.py, where the served
-dashboard's polling GAPs were stored into a program another host downloaded.
+owner's are stored as the manual says. Found by tests/web/test_bench_served_and_on_a_link.py, where
+the served dashboard's polling GAPs were stored into a program another host downloaded.
 
 Every test runs real endpoints (an `opentmcl serve` process, or a `Server` with its TCP endpoint
 and the served dashboard's `BusTransport`) over real sockets.

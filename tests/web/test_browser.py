@@ -4,7 +4,9 @@ Screenshots go to test-artifacts/ (CI keeps them). Skipped without /usr/bin/chro
 """
 from __future__ import annotations
 
+from .benchkit import console_has
 from .conftest import ARTIFACTS
+from .shellkit import bench, wait_until, watched_page
 
 TIMEOUT_MS = 60000  # only a guard against hanging: the tests wait for a state, they do not time anything
 
@@ -86,6 +88,34 @@ def test_switch_output_and_force_input(page, served):
     page.wait_for_function("document.getElementById('io-val-0-1').textContent === '1 (forced)'",
                            timeout=TIMEOUT_MS)
     assert served.dashboard.module.digital_input(1) == 1
+
+
+def test_io_actions_are_logged_in_the_console(browser):
+    """Issue 31 item 6: like the motion tools, I/O actions show in the console: SIO 1, 2, 1 (manual
+    3.6.12) with the value read back, and forcing/releasing an input of the virtual module; GIO over
+    a TCP connection of the same bus (3.6.13) confirms them."""
+    with bench(("TMCM-6212", 1)) as b:
+        m = b.client(1)
+        messages: list[str] = []
+        page = watched_page(browser, b.handle.module_url(1), messages)
+        try:
+            open_view(page, "io")
+            page.click("#io-out-2-1")
+            console_has(page, "> SIO 1, 2, 1")
+            console_has(page, "OUT1 = 1")
+            assert m.client.reply(15, 1, 2).value == 1
+            page.fill("#io-force-0-2", "1")
+            page.click("#io-force-0-2 + button")
+            console_has(page, "> force IN2 (bank 0, port 2) to 1 (virtual module)")
+            wait_until(lambda: m.client.reply(15, 2, 0).value == 1, "IN2 forced to 1")
+            page.click("#io-force-0-2 + button + button")
+            console_has(page, "> release IN2 (bank 0, port 2; virtual module)")
+            wait_until(lambda: m.client.reply(15, 2, 0).value == 0, "IN2 released")
+            page.click("#io-out-2-1")
+            console_has(page, "> SIO 1, 2, 0")
+        finally:
+            page.close()
+        assert not messages, messages
 
 
 def test_bus_with_two_modules_has_a_selector(browser, served_bus):

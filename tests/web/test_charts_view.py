@@ -107,6 +107,24 @@ def test_several_charts_axes_and_removal(page, served):
     assert b not in page.evaluate("Object.keys(window.dashboard.charts)")
 
 
+def test_a_new_chart_is_brought_into_view_at_1366x768(page):
+    """Issue 31 item 6: Add chart at 1366x768 (two charts shown already): the new one is scrolled
+    into the viewport, with no console error or warning."""
+    messages: list[str] = []
+    page.on("console", lambda m: messages.append(f"{m.type}: {m.text}") if m.type in ("error", "warning") else None)
+    page.set_viewport_size({"width": 1366, "height": 768})
+    page.click("#views-nav a[data-view='charts']")
+    page.wait_for_selector("#view-charts", state="visible", timeout=TIMEOUT_MS)
+    page.wait_for_selector("#chart-velocity .uplot", timeout=TIMEOUT_MS)
+    page.click("#btn-chart-add")
+    page.wait_for_function("document.querySelectorAll('.chart-card').length === 3", timeout=TIMEOUT_MS)
+    page.wait_for_timeout(300)
+    box = page.eval_on_selector(".chart-card:last-child", "e => e.getBoundingClientRect().toJSON()")
+    assert box["top"] >= 0 and box["bottom"] <= 768, box
+    page.click(".chart-card:last-child .btn-remove")
+    assert not messages, messages
+
+
 def test_png_export_is_a_png(page, served):
     open_charts(page)
     wait_count(page, "position", 3)

@@ -1,6 +1,7 @@
 """The workbench layout (issue 14 item 7, docs/dashboard.md "Views"): a navigation of six views,
-the overview on a 1366x768 screen without scrolling, readable status lamps, currents in the
-manual's terms with the raw value, a favicon, and no console error or warning on any view."""
+the overview on a 1366x768 screen without scrolling, most of a 1920x1080 screen used (issue 31
+item 6), readable status lamps, currents in the manual's terms with the raw value, a favicon, and
+no console error or warning on any view."""
 from __future__ import annotations
 
 import http.client
@@ -55,6 +56,25 @@ def test_overview_fits_a_1366x768_screen(shell):
     assert viewport == 768 and height <= viewport
     width, vw = page.evaluate("[document.documentElement.scrollWidth, window.innerWidth]")
     assert width <= vw
+
+
+@pytest.mark.parametrize("view", ["overview", "motion"])
+def test_a_1920x1080_screen_is_mostly_used(shell, view):
+    """Issue 31 item 6: "at 1920x1080 more than half the screen is empty". The header, the view and
+    the Direct-mode panel now cover at least 60 % of the screen (the overview's six axis cards and
+    the six motion tools grow, the console takes the height; before: 38 % and 51 %)."""
+    page, _, messages, _ = shell
+    page.set_viewport_size({"width": 1920, "height": 1080})
+    open_view(page, view)
+    page.wait_for_timeout(300)
+    covered = page.evaluate("""(() => {
+        const boxes = ['header', '#views-nav', 'section.view:not([hidden])', '#console-section']
+          .map(s => document.querySelector(s).getBoundingClientRect());
+        const clip = (lo, hi, max) => Math.max(0, Math.min(hi, max) - Math.max(lo, 0));
+        return boxes.reduce((sum, r) => sum + clip(r.left, r.right, innerWidth) * clip(r.top, r.bottom, innerHeight), 0)
+               / (innerWidth * innerHeight); })()""")
+    assert covered >= 0.6, covered
+    assert not messages, messages
 
 
 def _luminance(rgb: str) -> float:

@@ -1,10 +1,12 @@
 """Stop-all (issue 14 item 1, docs/dashboard.md "Stop all"): the header's STOP ALL button and the
-Escape key stop the program and every axis of every module on the bus. The motors are watched
+Escape key stop the program and every axis of every module on the bus; its result chip stays in
+the header until the program or a motor runs again (issue 31 item 6). The motors are watched
 through a TCP client of the same bus, as TMCL-IDE would watch them."""
 from __future__ import annotations
 
 import pytest
 
+from .benchkit import store_program
 from .shellkit import ACTUAL_SPEED, TIMEOUT_MS, bench, open_view, wait_until, watched_page
 
 # Keeps turning motor 2: a stop-all that left the program running would see it start again.
@@ -123,6 +125,56 @@ def test_stop_all_is_not_queued_behind_pending_requests(browser):
             assert Loader(six).status().mode == 0
             page.wait_for_function("window.stepped.length === 6", timeout=TIMEOUT_MS)
             assert page.evaluate("window.stepped") == ["cancelled by STOP ALL"] * 6
+        finally:
+            page.close()
+        assert not messages, messages
+
+
+# A program that runs until stopped (WAIT TICKS: "one tick is 10 milliseconds", manual 3.6.20).
+LOOP = "Loop:\n    WAIT TICKS, 0, 10\n    JA Loop\n"
+
+
+def _overlap(a: dict, b: dict) -> bool:
+    return a["left"] < b["right"] and b["left"] < a["right"] and a["top"] < b["bottom"] and b["top"] < a["bottom"]
+
+
+def _rect(page, selector: str) -> dict:
+    return page.eval_on_selector(selector, "e => e.getBoundingClientRect().toJSON()")
+
+
+def test_stopped_chip_goes_when_the_program_runs_or_a_motor_moves_again(browser):
+    """Issue 31 item 6. STOP ALL stops the program (128) and every axis (MST, manual 3.6.3); its
+    result chip sits in the header, clear of the Direct-mode panel, and goes away once the program
+    runs again (129 from another host, manual 3.6.36) or, after a second STOP ALL, once a motor turns
+    again (ROR, 3.6.1)."""
+    from opentmcl.lang import assemble
+
+    with bench(("TMCM-6212", 1)) as b:
+        m = b.client(1)
+        messages: list[str] = []
+        page = watched_page(browser, b.handle.module_url(1), messages)
+        try:
+            page.set_viewport_size({"width": 1366, "height": 768})
+            store_program(b, assemble(LOOP, module="TMCM-6212").instructions)
+            m.client.request(129, 0, 0, 0)
+            wait_until(lambda: m.client.request(135, 1, 0, 0).value >> 24 == 1, "the program runs")
+            page.click("#btn-stop-all")
+            page.wait_for_function("document.getElementById('stop-all-result').className === 'ok'", timeout=TIMEOUT_MS)
+            chip, header = _rect(page, "#stop-all-result"), _rect(page, "header")
+            assert not _overlap(chip, _rect(page, "#console-section h2"))
+            assert not _overlap(chip, _rect(page, "#btn-stop-all"))
+            assert header["top"] <= chip["top"] and chip["bottom"] <= header["bottom"]
+            page.wait_for_timeout(600)  # a few state updates: the stopped program and motors keep the chip
+            assert page.inner_text("#stop-all-result") == "TMCM-6212 @1: stopped"
+            m.client.request(129, 0, 0, 0)
+            page.wait_for_function("document.getElementById('stop-all-result').textContent === ''", timeout=TIMEOUT_MS)
+            page.click("#btn-stop-all")
+            page.wait_for_function("document.getElementById('stop-all-result').className === 'ok'", timeout=TIMEOUT_MS)
+            page.wait_for_timeout(600)
+            assert page.inner_text("#stop-all-result") == "TMCM-6212 @1: stopped"
+            m.client.request(1, 0, 2, 10000)  # ROR 2, 10000
+            page.wait_for_function("document.getElementById('stop-all-result').textContent === ''", timeout=TIMEOUT_MS)
+            m.client.request(3, 0, 2, 0)
         finally:
             page.close()
         assert not messages, messages

@@ -1,8 +1,10 @@
-"""Issue 31 "Done when": in the browser against `opentmcl serve --module TMCM-6212 --web`, and
-against the same module reached through `opentmcl dashboard --to tcp://...`, an engineer sets up a
-motor in rpm and mA, tunes stallGuard2 so that a load stops the axis, sets up and runs a reference
-search, and reads back the stored program. Real processes; every effect is confirmed with GAP over
-the test's own TCP connection to the module (processes.watcher), never through the dashboard."""
+"""The tuning bench's four jobs end to end, the same on a module the dashboard serves and on one it
+reaches over a link (issue 31 "Done when"): in the browser against `opentmcl serve --module
+TMCM-6212 --web`, and against the same module reached through `opentmcl dashboard --to tcp://...`,
+an engineer sets up a motor in rpm and mA, tunes stallGuard2 so that a load stops the axis, sets up
+and runs a reference search, and reads back the stored program. Real processes; every effect is
+confirmed with GAP over the test's own TCP connection to the module (processes.watcher), never
+through the dashboard."""
 from __future__ import annotations
 
 import urllib.parse
@@ -50,7 +52,9 @@ def module(mode: str, scenario: str):
 
 
 @pytest.fixture(scope="module", params=["serve", "dashboard"])
-def done(request, browser, tmp_path_factory):
+def workbench(request, browser, tmp_path_factory):
+    """The bench's page on the module served one way or the other ("serve" or "dashboard"), and the
+    test's own TCP connection to the module; yields (mode, page, tcp)."""
     path = tmp_path_factory.mktemp("scenario") / "bench.toml"
     path.write_text(SCENARIO)
     with module(request.param, str(path)) as (served, url), watcher(served) as tcp:
@@ -84,11 +88,11 @@ def next_step(page, selector: str) -> None:
     page.wait_for_selector(selector, timeout=TIMEOUT_MS)
 
 
-def test_set_up_a_motor_in_rpm_and_ma(done):
+def test_set_up_a_motor_in_rpm_and_ma(workbench):
     """TMCM-6212 manual 1 / 4.1 (1.1 A RMS at AP6 = 255, 32 steps) and 6.5 (51200 pps = 60 rpm):
     800 mA is nearest to step 23 of 32 (23/32 of 1100 mA = 791 mA): AP6 = 183, its top; 90 rpm is
     AP4 = 76800."""
-    _, page, tcp = done
+    _, page, tcp = workbench
     wizard(page, "motor", 1)
     next_step(page, "#wiz-run-ma")
     page.fill("#wiz-run-ma", "800")
@@ -106,12 +110,12 @@ def test_set_up_a_motor_in_rpm_and_ma(done):
     page.wait_for_function("document.getElementById('axis-1-max_current').textContent === '791 mA (183)'", timeout=TIMEOUT_MS)
 
 
-def test_tune_stallguard2_so_that_a_load_stops_the_axis(done):
+def test_tune_stallguard2_so_that_a_load_stops_the_axis(workbench):
     """Manual 6.3: stall detection with AP174 and AP181. Served in this process, the load comes
     from the page's load control (axis 3); through `dashboard --to` the page has no such control
     (a module on a link) and the load comes from the machine, here the scenario's 0.45 from
     30000 microsteps on (axis 2). AP174 = -8 and AP181 = 25600 set from the tool; the axis stops."""
-    mode, page, tcp = done
+    mode, page, tcp = workbench
     axis = 3 if mode == "serve" else 2
     open_view(page, "tuning")
     page.select_option("#tune-axis", str(axis))
@@ -137,10 +141,10 @@ def test_tune_stallguard2_so_that_a_load_stops_the_axis(done):
     page.wait_for_function("document.getElementById('tune-stall').textContent === 'STALL'", timeout=TIMEOUT_MS)
 
 
-def test_set_up_and_run_a_reference_search(done):
+def test_set_up_and_run_a_reference_search(workbench):
     """Manual 6.1 mode 1 "search left stop switch only" on the stage: the origin is set at the left
     switch (-50000 from the start): RFS STATUS 0, AP1 = 0, AP197 = -50000."""
-    _, page, tcp = done
+    _, page, tcp = workbench
     wizard(page, "reference", 0)
     page.check("#wiz-mode-1")
     next_step(page, "#wiz-switch-left")
@@ -159,13 +163,13 @@ def test_set_up_and_run_a_reference_search(done):
     page.click("#wizard-finish")
 
 
-def test_read_back_the_stored_program(done):
+def test_read_back_the_stored_program(workbench):
     """Manual 3.6.36: the program downloaded from the editor (132 ... 133) is read back with 134 and
     is the same as the editor's; the test's own 134 over TCP reads the instructions assembled."""
     from opentmcl.host.loader import Loader
     from opentmcl.lang import assemble
 
-    _, page, tcp = done
+    _, page, tcp = workbench
     open_view(page, "program")
     page.wait_for_selector(".CodeMirror", timeout=TIMEOUT_MS)
     page.evaluate(f"OpenTMCL.programEditor.setSource({PROGRAM!r})")
