@@ -29,7 +29,8 @@ ISSUE_16 = ("floor: vm.handle GAP round trips/s", "sim:// Module.request GAP rou
             "interpreter GAP loop, standing axis, instructions", "interpreter GAP loop, moving axis, 1 ms timer")
 # issue 33: "`Trace.sample` of six axes ... Measure it against the 54 GAP reads it stands for (`vm.request`)
 # in the same run"
-ISSUE_33 = ("trace Trace.sample of 6 moving axes, samples/s", "trace Trace.sample of 6 moving axes against the former",
+ISSUE_33 = ("polling 6 axes every 10 ms: axis.position_reached + axis.position",
+            "trace Trace.sample of 6 moving axes, samples/s", "trace Trace.sample of 6 moving axes against the former",
             "trace run of 6 moving axes sampled every 10 ms")
 OLDER = ("6212 six axes, 10-revolution moves", "PD86-1180 pulse_div=ramp_div=0", "TMC429 fast vs per-tick speed-up",
          "in-process round trips per s", "memory world trace MB per hour at 10 ms",
