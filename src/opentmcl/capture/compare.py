@@ -14,7 +14,7 @@ from functools import cached_property
 
 from ..modules.state import UNREPRODUCIBLE, moving_class
 from ..protocol.frame import FRAME_LEN
-from ..protocol.opcodes import format_instruction
+from ..protocol.opcodes import AXIS_COMMANDS, PROGRAM_CONTROL, Op, format_instruction
 from ..protocol.status import Status, message
 from .causes import Check, Divergence
 from .format import Capture
@@ -22,20 +22,15 @@ from .moves import Move, events_of
 from .outcome import ReplayReport
 from .timing import Slot
 from .tolerance import Tolerance
-from .twin import GAP, Result, TwinRun, windowed
+from .twin import Result, TwinRun, windowed
 
-IDENTITY = 136
-"""Command 136: the firmware string (type 0) or binary version (type 1)."""
-EVENT = 138
-PROGRAM_COMMANDS = frozenset(range(128, 136))
 PROGRAM_GLOBALS = (128, 129, 130)   # GGP 128 status, 129 download mode, 130 program counter (bank 0)
-AXIS_COMMANDS = (1, 2, 3, 4, 5, 6, 7, 8, 13, 30, 31)
 DURATIONS = "move durations"
 
 
 def request_text(rec: dict) -> str:
     """A request as the manual writes it (136 with what it asks for)."""
-    if rec["command"] == IDENTITY:
+    if rec["command"] == Op.GET_FIRMWARE_VERSION:
         return f"136 {rec['type']} ({'firmware string' if rec['type'] == 0 else 'binary version'})"
     text = format_instruction(rec["command"], rec["type"], rec["motor"], rec["value"])
     return text or f"command {rec['command']} type {rec['type']} motor {rec['motor']} value {rec['value']}"
@@ -113,13 +108,13 @@ class Comparer:
         """identity (136), programs (128..135, GGP 128..130), status codes (writes, refused
         requests), ramp shape (moving axis values, RFS STATUS), else parameters."""
         command = rec["command"]
-        if command == IDENTITY:
+        if command == Op.GET_FIRMWARE_VERSION:
             return "identity"
-        if command in PROGRAM_COMMANDS or (command == 10 and rec["motor"] == 0 and rec["type"] in PROGRAM_GLOBALS):
+        if command in PROGRAM_CONTROL or (command == Op.GGP and rec["motor"] == 0 and rec["type"] in PROGRAM_GLOBALS):
             return "programs"
         if status_check:
             return "status codes"
-        if command == GAP and moving_class(self.name(rec)) is not None or command == 13 and rec["type"] == 2:
+        if command == Op.GAP and moving_class(self.name(rec)) is not None or command == Op.RFS and rec["type"] == 2:
             return "ramp shape"
         return "parameters"
 
@@ -129,7 +124,7 @@ class Comparer:
         return None
 
     def engine(self, rec: dict) -> bool:
-        if rec["command"] not in (5, 6):
+        if rec["command"] not in (Op.SAP, Op.GAP):
             return False
         p = self.profile.axis_parameters.get(rec["type"])
         return p is not None and bool(p.engine)
@@ -141,7 +136,7 @@ class Comparer:
         if d is not None:
             d.area, d.axis, d.n = area, axis, rec["n"]
             self.report.divergences.append(d)
-        write = (rec["command"], rec["type"], rec["motor"]) if rec["command"] in (5, 9, 14) else None
+        write = (rec["command"], rec["type"], rec["motor"]) if rec["command"] in (Op.SAP, Op.SGP, Op.SIO) else None
         self.checks.append(Check(float(rec["t"]), area, ok, axis, d, rest, self.engine(rec),
                                  program=area == "programs", write=write))
 
@@ -157,7 +152,7 @@ class Comparer:
         captured = slot.reply
         if captured is None or not any(case.raws):
             self._missing_reply(case, captured)
-        elif captured["kind"] in ("version", "memory") or case.rec["command"] == 134:
+        elif captured["kind"] in ("version", "memory") or case.rec["command"] == Op.READ_PROGRAM_MEMORY:
             self._whole_reply(case, captured)
         else:
             self._frame(case, captured)
@@ -212,7 +207,7 @@ class Comparer:
             self.diverge(case, self.area(rec, True), "status", _status_value(c_status, c_value), twin)
         elif same[0][:2] != captured["bytes"][:2]:
             self.diverge(case, self.area(rec, True), "reply address", captured["raw"][:5], same[0][:2].hex(" "))
-        elif not windowed(rec, self.profile) and rec["command"] != IDENTITY:
+        elif not windowed(rec, self.profile) and rec["command"] != Op.GET_FIRMWARE_VERSION:
             self._returned_value(case, same, c_value)
         else:
             self.compare_value(case, c_status, c_value)
@@ -240,7 +235,7 @@ class Comparer:
             return
         lo, hi = min(lows), max(highs)
         if lo - tol <= c_value <= hi + tol:
-            self.check(rec, area, True, rest=rec["command"] == GAP and rec["type"] == 1 and lo == hi)
+            self.check(rec, area, True, rest=rec["command"] == Op.GAP and rec["type"] == 1 and lo == hi)
             return
         twin = str(lo) if lo == hi else f"{lo}..{hi}"
         if tol:
@@ -254,7 +249,7 @@ class Comparer:
         lists = [list(run.events) for run in runs]
         self.report.events += len(expected)
         for i, (start, ev) in enumerate(expected):
-            rec = {**ev, "command": EVENT, "type": 0, "motor": 0, "n": ev["n"]}
+            rec = {**ev, "command": Op.REQUEST_TARGET_REACHED_EVENT, "type": 0, "motor": 0, "n": ev["n"]}
             differs = event_difference(start, ev, [lst[i] for lst in lists if i < len(lst)], self.tol)
             if differs is None:
                 self.check(rec, DURATIONS, True)
@@ -270,13 +265,13 @@ class Comparer:
             if self.cap.truncated is not None and t >= self.cap.truncated:
                 continue   # after the capture stopped at its size cap
             if all(len(other) > i for other in lists):
-                rec = {"command": EVENT, "type": 0, "motor": 0, "n": None, "t": t}
+                rec = {"command": Op.REQUEST_TARGET_REACHED_EVENT, "type": 0, "motor": 0, "n": None, "t": t}
                 self.check(rec, DURATIONS, False, Divergence(t, "event (command 138)", None, "event",
                                                              "no event", f"motor mask {_value(raw)}"))
 
     def moves(self, moves: list[Move]) -> None:
         for m in moves:
-            rec = {"command": 4, "type": 0, "motor": m.axis, "n": m.n, "t": m.t}
+            rec = {"command": Op.MVP, "type": 0, "motor": m.axis, "n": m.n, "t": m.t}
             if m.ok:
                 self.check(rec, DURATIONS, True)
                 continue

@@ -31,14 +31,22 @@ from typing import TYPE_CHECKING, Any
 
 from ..host.errors import TmclError, TmclStatusError
 from ..modules.state import is_state
+from ..protocol.opcodes import (
+    ENTER_DOWNLOAD_MODE,
+    EXIT_DOWNLOAD_MODE,
+    GET_FIRMWARE_VERSION,
+    RUN_APPLICATION,
+    STOP_APPLICATION,
+    Op,
+)
 from .snapshot import KEEP
 
 if TYPE_CHECKING:
     from ..modules.profile import ModuleProfile
 
-GAP, SAP, GGP, SGP, GIO = 6, 5, 10, 9, 15
-ROR, MST, MVP, RFS, WAIT, STOP = 1, 3, 4, 13, 27, 28
-STOP_PROGRAM, RUN_PROGRAM, DOWNLOAD, END_DOWNLOAD, READ_MEMORY = 128, 129, 132, 133, 134
+# plain ints for the requests of a run (`Client.request` keeps plain-int requests ready)
+_GAP, _SAP, _GGP, _SGP, _GIO = int(Op.GAP), int(Op.SAP), int(Op.GGP), int(Op.SGP), int(Op.GIO)
+_ROR, _MST, _MVP, _RFS, _WAIT, _STOP = int(Op.ROR), int(Op.MST), int(Op.MVP), int(Op.RFS), int(Op.WAIT), int(Op.STOP)
 INT32 = (-(1 << 31), (1 << 31) - 1)
 SKIP_AXIS = frozenset({255})
 """AP255 (unit mode) re-expresses every velocity and acceleration in the other unit."""
@@ -91,13 +99,13 @@ class Battery:
             return None
 
     def read(self, number: int, motor: int) -> int | None:
-        return self.send(GAP, number, motor)
+        return self.send(_GAP, number, motor)
 
     # -- phases ------------------------------------------------------------------------------
     def run(self) -> None:
         try:
             self.identity()
-            if self.options.allow_motion and self.send(GGP, 128, 0) == 1:
+            if self.options.allow_motion and self.send(_GGP, 128, 0) == 1:
                 raise ConformError("a TMCL program is running on the module: stop it before a motion run "
                                    "(opentmcl send '128 0, 0, 0' --to URL)")
             self.survey()
@@ -113,8 +121,8 @@ class Battery:
 
     def identity(self) -> None:
         self.mark("identity", None, "136 firmware string and version")
-        self.client.request(136, 0, 0, 0)
-        self.send(136, 1)
+        self.client.request(GET_FIRMWARE_VERSION, 0, 0, 0)
+        self.send(GET_FIRMWARE_VERSION, 1)
 
     def survey(self) -> None:
         prof = self.profile
@@ -126,12 +134,12 @@ class Battery:
         self.mark("survey", None, "every readable global parameter, user variable and port")
         for (bank, number), p in sorted(prof.global_parameters.items()):
             if p.readable:
-                self.send(GGP, number, bank)
+                self.send(_GGP, number, bank)
         for n in range(prof.user_variables):
-            self.send(GGP, n, 2)
+            self.send(_GGP, n, 2)
         for (bank, port), io in sorted(prof.io.items()):
             if "R" in io.access:
-                self.send(GIO, port, bank)
+                self.send(_GIO, port, bank)
 
     def _edges(self, p) -> list[int]:
         values = []
@@ -152,27 +160,27 @@ class Battery:
                 if before is None:
                     continue
                 for value in self._edges(p):
-                    if self.send(SAP, number, axis, value) is not None:
-                        self.send(SAP, number, axis, before)
+                    if self.send(_SAP, number, axis, value) is not None:
+                        self.send(_SAP, number, axis, before)
         self.mark("edges", None, "range edges of every writable global parameter that moves nothing")
         for (bank, number), p in sorted(prof.global_parameters.items()):
             if not (p.readable and p.writable) or is_state(p.name) or (bank, number) in KEEP \
                     or "A" in p.access or bank == 2:
                 continue
-            before = self.send(GGP, number, bank)
+            before = self.send(_GGP, number, bank)
             if before is None:
                 continue
             for value in self._edges(p):
-                if self.send(SGP, number, bank, value) is not None:
-                    self.send(SGP, number, bank, before)
+                if self.send(_SGP, number, bank, value) is not None:
+                    self.send(_SGP, number, bank, before)
 
     # -- motion ------------------------------------------------------------------------------
     def setting(self, number: int, axis: int, value: int) -> bool:
         """SAP that is restored at the end; False when the module refuses it."""
         before = self.read(number, axis)
-        if before is None or self.send(SAP, number, axis, value) is None:
+        if before is None or self.send(_SAP, number, axis, value) is None:
             return False
-        self.restore.append((SAP, number, axis, before))
+        self.restore.append((_SAP, number, axis, before))
         return True
 
     def motion(self, axis: int) -> None:
@@ -199,12 +207,12 @@ class Battery:
         self.rotate(axis, fast, x0, travel)
         self.stop(axis, x0, travel)
         self.move(axis, x0, x0, travel)
-        if opts.program and {DOWNLOAD, RUN_PROGRAM} <= set(prof.opcodes):
+        if opts.program and {ENTER_DOWNLOAD_MODE, RUN_APPLICATION} <= set(prof.opcodes):
             self.program(axis, x0, max(1, travel // 8), travel)
         if opts.reference:
             self.mark("reference", axis, "RFS START until RFS STATUS is 0")
-            self.send(RFS, 0, axis)
-            self.poll(axis, lambda: self.send(RFS, 2, axis) == 0, None, 0, 120.0)
+            self.send(_RFS, 0, axis)
+            self.poll(axis, lambda: self.send(_RFS, 2, axis) == 0, None, 0, 120.0)
 
     def ramp(self, axis: int, speed: int, accel: int) -> None:
         self.setting(4, axis, speed)
@@ -224,7 +232,7 @@ class Battery:
             self.read(3, axis)
             x = self.read(1, axis)
             if x0 is not None and x is not None and abs(x - x0) > travel:
-                self.send(MST, 0, axis)
+                self.send(_MST, 0, axis)
                 raise ConformError(f"axis {axis} left the allowed travel ({x} from {x0}); stopped it")
             if done():
                 return
@@ -237,19 +245,19 @@ class Battery:
 
     def move(self, axis: int, target: int, x0: int, travel: int) -> None:
         speed, accel = self.read(4, axis) or 1, self.read(5, axis) or 1
-        self.send(MVP, 0, axis, target)
+        self.send(_MVP, 0, axis, target)
         self.poll(axis, lambda: self.read(8, axis) == 1, x0, travel, self._limit(travel, speed, accel))
 
     def rotate(self, axis: int, speed: int, x0: int, travel: int) -> None:
         accel = self.read(5, axis) or 1
-        self.send(ROR, 0, axis, speed)
+        self.send(_ROR, 0, axis, speed)
         guard = int(travel * TRAVEL_GUARD)
         self.poll(axis, lambda: self.read(3, axis) == speed, x0, guard, self._limit(0, speed, accel))
         self.read(3, axis)   # a few readings at constant speed
         self.read(1, axis)
 
     def stop(self, axis: int, x0: int, travel: int) -> None:
-        self.send(MST, 0, axis)
+        self.send(_MST, 0, axis)
         self.poll(axis, lambda: self.read(3, axis) == 0, x0, travel, 30.0)
 
     def program(self, axis: int, x0: int, length: int, travel: int) -> None:
@@ -264,29 +272,29 @@ class Battery:
                 self.skipped.append("program: the module refuses to read its program memory (code protection?)")
                 return
             kept.append((m.command, m.type, m.motor, m.value))
-        words = [(MVP, 1, axis, length), (WAIT, 1, axis, 0), (MVP, 1, axis, -length), (WAIT, 1, axis, 0),
-                 (STOP, 0, 0, 0)]
+        words = [(_MVP, 1, axis, length), (_WAIT, 1, axis, 0), (_MVP, 1, axis, -length), (_WAIT, 1, axis, 0),
+                 (_STOP, 0, 0, 0)]
         if not self.download(start, words):
             self.skipped.append("program: the module refuses the download (code protection?)")
             return
         try:
             self.program_started = True
-            self.send(RUN_PROGRAM, 1, 0, start)
-            self.poll(axis, lambda: self.send(GGP, 128, 0) == 0, x0, travel, 60.0)
+            self.send(RUN_APPLICATION, 1, 0, start)
+            self.poll(axis, lambda: self.send(_GGP, 128, 0) == 0, x0, travel, 60.0)
             self.program_started = False
         finally:
             self.download(start, kept)
 
     def download(self, start: int, words: list[tuple[int, int, int, int]]) -> bool:
         try:
-            self.client.request(DOWNLOAD, 0, 0, start)
+            self.client.request(ENTER_DOWNLOAD_MODE, 0, 0, start)
         except TmclStatusError:
             return False
         try:
             for word in words:
                 self.client.request(*word)
         finally:
-            self.client.request(END_DOWNLOAD, 0, 0, 0)
+            self.client.request(EXIT_DOWNLOAD_MODE, 0, 0, 0)
         return True
 
     # -- the end -----------------------------------------------------------------------------
@@ -304,9 +312,9 @@ class Battery:
         """MST to every axis (and stop a program this run started), then restore what can be."""
         try:
             if self.program_started:
-                self.send(STOP_PROGRAM)
+                self.send(STOP_APPLICATION)
             for axis in range(self.profile.axes):
-                self.send(MST, 0, axis)
+                self.send(_MST, 0, axis)
         except BaseException:  # the link is gone: nothing more can be sent
             return
         try:

@@ -11,9 +11,12 @@ from __future__ import annotations
 
 from ..protocol.frame import FRAME_LEN, Reply, Request, checksum_ok
 from ..protocol.opcodes import (
+    AXIS_PARAMETER,
     COMMANDS,
     ENTER_ASCII_MODE,
     GET_FIRMWARE_VERSION,
+    GLOBAL_PARAMETER,
+    PORT,
     READ_PROGRAM_MEMORY,
     REQUEST_TARGET_REACHED_EVENT,
 )
@@ -26,9 +29,6 @@ the module itself keeps 128 characters of a line)."""
 MAX_PENDING = 1024
 """Most requests waiting for their replies (docs/capture.md): a host may pipeline this many; beyond,
 the oldest are forgotten. Over twice the 455 frames a full 4 KiB pty or serial driver buffer holds."""
-_AXIS = {5: "SAP", 6: "GAP", 7: "STAP", 8: "RSAP"}
-_GLOBAL = {9: "SGP", 10: "GGP", 11: "STGP", 12: "RSGP"}
-_IO = {14: "SIO", 15: "GIO"}
 
 
 def mnemonic(command: int) -> str:
@@ -37,14 +37,17 @@ def mnemonic(command: int) -> str:
 
 
 def parameter_name(profile, command: int, type_: int, motor: int) -> str | None:
-    """The name of the parameter or port a request addresses, from `profile`, or None."""
-    if profile is None:
+    """The name of the parameter or port a request addresses, from `profile`, or None: the type
+    field of an axis parameter command, a global parameter command (bank in the motor field) or
+    an I/O command (`Command.meanings`, TMCM-6212 3.6.5-3.6.13)."""
+    cmd = COMMANDS.get(command)
+    if profile is None or cmd is None:
         return None
-    if command in _AXIS:
+    if cmd.naming(AXIS_PARAMETER, type_):
         p = profile.axis_parameters.get(type_)
-    elif command in _GLOBAL:
+    elif cmd.naming(GLOBAL_PARAMETER, type_):
         p = profile.global_parameters.get((motor, type_))
-    elif command in _IO:
+    elif cmd.naming(PORT, type_):
         p = profile.io.get((motor, type_))
     else:
         return None

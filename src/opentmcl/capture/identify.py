@@ -9,7 +9,7 @@ from __future__ import annotations
 import os
 from typing import TYPE_CHECKING
 
-from .compare import IDENTITY
+from ..protocol.opcodes import Op
 from .format import Capture
 from .snapshot import snapshot_of
 from .tolerance import ReplayError
@@ -58,7 +58,7 @@ def binary_version(cap: Capture) -> int | None:
     requests = {r["n"]: r for r in cap.frames if r["kind"] == "request"}
     for rec in cap.frames:
         req = requests.get(rec.get("request")) if rec["kind"] == "reply" else None
-        if req is not None and req["command"] == IDENTITY and req["type"] == 1 and rec.get("status") == 100:
+        if req is not None and req["command"] == Op.GET_FIRMWARE_VERSION and req["type"] == 1 and rec.get("status") == 100:
             return int(rec["value"])
     return None
 

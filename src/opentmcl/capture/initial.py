@@ -10,16 +10,16 @@ import os
 from collections.abc import Callable
 
 from ..modules.state import moving_class
+from ..protocol.opcodes import CONTROL_FIRST, MOTION_COMMANDS, Op
 from .format import Capture
 from .snapshot import Snapshot, SnapshotError, apply_snapshot, snapshot_from_file, snapshot_of
 from .timing import Slot
 from .tolerance import ReplayError
-from .twin import GAP
 
 IDLE = 10.0
 """Seconds a twin may stand before the capture: longer than the longest power-down delay of the
 profiles (TMCM-6212 AP214: 4.17 s), after which a standing motor gets its standby current."""
-INFERRED = {(GAP, 0): "target_position", (GAP, 1): "actual_position", (GAP, 209): "encoder_position"}
+INFERRED = {(Op.GAP, 0): "target_position", (Op.GAP, 1): "actual_position", (Op.GAP, 209): "encoder_position"}
 """The reads a state is inferred from (AP0, AP1, AP209)."""
 
 
@@ -34,8 +34,8 @@ def inferred_state(cap_slots: list[Slot], profile, address: int) -> tuple[Snapsh
         if rec["kind"] != "request" or rec["address"] != address:
             continue
         motor = rec["motor"]
-        if rec["command"] in (1, 2, 3, 4, 5, 13) or rec["command"] >= 128:
-            touched.add(motor if rec["command"] < 128 else -1)
+        if rec["command"] in MOTION_COMMANDS or rec["command"] == Op.SAP or rec["command"] >= CONTROL_FIRST:
+            touched.add(motor if rec["command"] < CONTROL_FIRST else -1)
             continue
         if -1 in touched or motor in touched or motor >= profile.axes:
             continue
@@ -82,7 +82,7 @@ def _readings(snap: Snapshot, vm) -> tuple[int, int]:
             p = vm.profile.axis_parameters.get(number)
             if p is None or p.writable or motor >= vm.profile.axes or moving_class(p.name) not in ("load", "flag"):
                 continue
-            reply = vm.request(GAP, number, motor, 0)
+            reply = vm.request(Op.GAP, number, motor, 0)
             if reply is not None and reply.status == 100:
                 same, other = (same + 1, other) if reply.value == value else (same, other + 1)
     return same, other

@@ -12,12 +12,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..protocol.opcodes import format_instruction
+from ..protocol.opcodes import Op, format_instruction
 from .timing import Slot
-from .twin import MST, MVP, RFS, ROL, ROR, SAP, TwinRun
-
-GAP = 6
-EVENT_COMMAND = 138
+from .twin import TwinRun
 
 
 @dataclass
@@ -59,15 +56,15 @@ class Move:
 
 def _kind(rec: dict) -> tuple[str, int] | None:
     command, type_, value = rec["command"], rec["type"], rec["value"]
-    if command == MVP and type_ in (0, 1) or command == SAP and type_ == 0:
+    if command == Op.MVP and type_ in (0, 1) or command == Op.SAP and type_ == 0:
         return "position", value
-    if command in (ROR, ROL):
-        return "speed", value if command == ROR else -value
-    if command == MST:
+    if command in (Op.ROR, Op.ROL):
+        return "speed", value if command == Op.ROR else -value
+    if command == Op.MST:
         return "speed", 0
-    if command == SAP and type_ == 2:
+    if command == Op.SAP and type_ == 2:
         return "speed", value
-    if command == RFS and type_ == 0:
+    if command == Op.RFS and type_ == 0:
         return "search", 0
     return None
 
@@ -78,11 +75,11 @@ def _verdict(kind: str, target: int, slot: Slot) -> bool | None:
     if reply is None or reply.get("status") != 100:
         return None
     value = reply["value"]
-    if kind == "position" and rec["command"] == GAP and rec["type"] == 8:
+    if kind == "position" and rec["command"] == Op.GAP and rec["type"] == 8:
         return value == 1
-    if kind == "speed" and rec["command"] == GAP and rec["type"] == 3:
+    if kind == "speed" and rec["command"] == Op.GAP and rec["type"] == 3:
         return value == target
-    if kind == "search" and rec["command"] == RFS and rec["type"] == 2:
+    if kind == "search" and rec["command"] == Op.RFS and rec["type"] == 2:
         return value == 0
     return None
 
@@ -155,7 +152,7 @@ def _twin_duration(runs: list[TwinRun], n: int) -> tuple[float, float] | None:
 def _speed_before(slots: list[Slot], i: int, motor: int, address: int) -> int | None:
     for slot in reversed(slots[:i]):
         rec, reply = slot.rec, slot.reply
-        if rec["kind"] == "request" and rec["address"] == address and rec["command"] == GAP \
+        if rec["kind"] == "request" and rec["address"] == address and rec["command"] == Op.GAP \
                 and rec["type"] == 3 and rec["motor"] == motor and reply is not None and reply.get("status") == 100:
             return int(reply["value"])
     return None
@@ -181,4 +178,4 @@ def acceleration_estimates(moves: list[Move]) -> dict[int, dict[str, tuple[float
 def events_of(cap_frames: list[dict], starts: dict[int, float], address: int) -> list[tuple[float, dict]]:
     """The command-138 events of `address`: (start on the wire, record)."""
     return [(starts.get(r["n"], float(r["t"])), r) for r in cap_frames
-            if r["kind"] == "event" and r.get("address") == address and r.get("command") == EVENT_COMMAND]
+            if r["kind"] == "event" and r.get("address") == address and r.get("command") == Op.REQUEST_TARGET_REACHED_EVENT]

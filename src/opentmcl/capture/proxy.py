@@ -20,6 +20,7 @@ import urllib.parse
 
 from .. import __version__
 from ..host.errors import TmclConnectionError, TmclError, TmclStatusError, TmclTimeout, TmclUrlError
+from ..protocol.opcodes import GET_FIRMWARE_VERSION
 from ..server.app import start_all
 from .decode import HOST, MODULE, Decoder
 from .format import FAULT, CaptureWriter, fault_record
@@ -59,10 +60,10 @@ class ModuleReader:
 
     def identity(self) -> tuple[str, int | None]:
         """The firmware string (136 type 0) and binary version (136 type 1, None if refused)."""
-        reply = self._retry(lambda: self.client.request(136, 0, 0, 0))
+        reply = self._retry(lambda: self.client.request(GET_FIRMWARE_VERSION, 0, 0, 0))
         if reply is None:
             raise TmclError("the module refuses command 136 (firmware version)")
-        return str(reply.text), self.ask(136, 1, 0)
+        return str(reply.text), self.ask(GET_FIRMWARE_VERSION, 1, 0)
 
 
 class ProxySession:

@@ -21,6 +21,7 @@ import os
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from ..protocol.opcodes import MOTION_COMMANDS, Op
 from .causes import Divergence, group
 from .compare import Comparer
 from .format import Capture, fault_notes, read_capture
@@ -32,7 +33,7 @@ from .schedule import Schedule
 from .snapshot import apply_snapshot
 from .timing import CLOCK_LAG, Slot, module_starts, slots
 from .tolerance import ReplayError, Tolerance, as_tolerance
-from .twin import GAP, Twin, TwinRun
+from .twin import Twin, TwinRun
 
 if TYPE_CHECKING:
     from ..firmware.vm import VirtualModule
@@ -42,8 +43,6 @@ __all__ = ["Divergence", "ReplayError", "ReplayReport", "Tolerance", "assert_rep
 
 POLICIES = ("hi", "lo", "early", "late")
 """The twins (capture/twin.py): the highest and lowest positions, the earliest and latest actions."""
-MOTION_COMMANDS = (1, 2, 3, 4, 13)
-"""ROR, ROL, MST, MVP, RFS: the axes they move are traced for the plots."""
 
 
 def replay(capture: str | os.PathLike | Capture, module: str | os.PathLike | None = None, *,
@@ -156,7 +155,7 @@ def _real_traces(cap_slots: list[Slot], address: int, axes: set[int]) -> dict[in
     out: dict[int, dict[str, list]] = {m: {"position": [], "speed": []} for m in axes}
     for slot in cap_slots:
         rec, reply = slot.rec, slot.reply
-        if rec["kind"] != "request" or rec["address"] != address or rec["command"] != GAP or reply is None \
+        if rec["kind"] != "request" or rec["address"] != address or rec["command"] != Op.GAP or reply is None \
                 or reply.get("status") != 100 or rec["motor"] not in out or rec["type"] not in (1, 3):
             continue
         key = "position" if rec["type"] == 1 else "speed"

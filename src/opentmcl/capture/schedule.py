@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import heapq
 
+from ..protocol.opcodes import Op
 from .timing import Slot
-from .twin import FACTORY_RESET, READS_OF, Twin, TwinRun, windowed
+from .twin import READS_OF, Twin, TwinRun, windowed
 
 
 def last_writes(slots: list[Slot], reads: list[bool]) -> list[int]:
@@ -26,7 +27,7 @@ def last_writes(slots: list[Slot], reads: list[bool]) -> list[int]:
             out.append(max(written.get((rec["command"], rec["type"], rec["motor"]), -1), written.get(("all",), -1)))
             continue
         out.append(-1)
-        if rec["kind"] == "request" and rec["command"] == FACTORY_RESET:
+        if rec["kind"] == "request" and rec["command"] == Op.RESTORE_FACTORY_SETTINGS:
             written[("all",)] = i
         elif rec["kind"] == "request" and rec["command"] in READS_OF:
             written[(READS_OF[rec["command"]], rec["type"], rec["motor"])] = i

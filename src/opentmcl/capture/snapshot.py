@@ -18,13 +18,15 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 from ..modules.state import SET_STATE, UNREPRODUCIBLE, is_state
+from ..protocol.opcodes import ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, Op
 
 if TYPE_CHECKING:
     from ..modules.profile import ModuleProfile
     from .format import Capture
 
-GAP, GGP, GIO, SAP, SGP, SIO, MST, MVP = 6, 10, 15, 5, 9, 14, 3, 4
-READ_MEMORY, DOWNLOAD, END_DOWNLOAD = 134, 132, 133
+# plain ints for the requests of a snapshot (`Client.request` keeps plain-int requests ready)
+_GAP, _GGP, _GIO, _SAP, _SGP, _SIO = int(Op.GAP), int(Op.GGP), int(Op.GIO), int(Op.SAP), int(Op.SGP), int(Op.SIO)
+_MST, _MVP = int(Op.MST), int(Op.MVP)
 USER_VARIABLE_BANK = 2
 OUTPUT_BANK = 2
 ROWS_PER_RECORD = 100
@@ -87,18 +89,18 @@ def take_snapshot(ask: Ask, profile: ModuleProfile, address: int, *, scope: str 
     for motor in range(profile.axes):
         values = {}
         for number in _axis_numbers(profile, scope):
-            v = ask(GAP, number, motor, 0)
+            v = ask(_GAP, number, motor, 0)
             if v is not None:
                 values[number] = v
         snap.axis[motor] = values
     for bank, number in _global_keys(profile, scope):
-        v = ask(GGP, number, bank, 0)
+        v = ask(_GGP, number, bank, 0)
         if v is not None:
             snap.globals[(bank, number)] = v
     if scope == "full":
         for (bank, port), p in sorted(profile.io.items()):
             if "R" in p.access:
-                v = ask(GIO, port, bank, 0)
+                v = ask(_GIO, port, bank, 0)
                 if v is not None:
                     snap.io[(bank, port)] = v
     if program and read_memory is not None:
@@ -262,7 +264,7 @@ def _differing(vm, snap: Snapshot) -> list[str]:
         for number, value in sorted(values.items()):
             p = prof.axis_parameters.get(number)
             if p is not None and p.writable and not is_state(p.name) and motor < prof.axes:
-                reply = vm.request(GAP, number, motor, 0)
+                reply = vm.request(_GAP, number, motor, 0)
                 if reply is not None and reply.status == 100 and reply.value != value:
                     out.append(f"axis {motor} {p.name} {value} (profile {reply.value})")
     for (bank, number), value in sorted(snap.globals.items()):
@@ -270,7 +272,7 @@ def _differing(vm, snap: Snapshot) -> list[str]:
         name = p.name if p is not None else f"user variable {number}" if bank == USER_VARIABLE_BANK else None
         if name is None or (p is not None and (not p.writable or is_state(p.name))):
             continue
-        reply = vm.request(GGP, number, bank, 0)
+        reply = vm.request(_GGP, number, bank, 0)
         if reply is not None and reply.status == 100 and reply.value != value:
             out.append(f"{name} {value} (profile {reply.value})")
     return out
@@ -297,8 +299,8 @@ def _apply_globals(vm, snap: Snapshot, notes: list[str]) -> None:
         user = bank == USER_VARIABLE_BANK and p is None and number < prof.user_variables
         if (bank, number) in KEEP or not (user or (p is not None and p.writable and not is_state(p.name))):
             continue
-        if _differs(vm, GGP, number, bank, value):
-            _set(vm, notes, f"GP {bank}:{number}", SGP, number, bank, value)
+        if _differs(vm, _GGP, number, bank, value):
+            _set(vm, notes, f"GP {bank}:{number}", _SGP, number, bank, value)
 
 
 def _apply_axis_settings(vm, snap: Snapshot, notes: list[str]) -> None:
@@ -309,30 +311,30 @@ def _apply_axis_settings(vm, snap: Snapshot, notes: list[str]) -> None:
             p = prof.axis_parameters.get(number)
             if p is None or not p.writable or is_state(p.name) or motor >= prof.axes:
                 continue
-            if _differs(vm, GAP, number, motor, value):
-                _set(vm, notes, f"axis {motor} {p.name}", SAP, number, motor, value)
+            if _differs(vm, _GAP, number, motor, value):
+                _set(vm, notes, f"axis {motor} {p.name}", _SAP, number, motor, value)
 
 
 def _apply_outputs(vm, snap: Snapshot, notes: list[str]) -> None:
     """Writable outputs (bank 2)."""
     for (bank, port), value in sorted(snap.io.items()):
         p = vm.profile.io.get((bank, port))
-        if bank == OUTPUT_BANK and p is not None and "W" in p.access and _differs(vm, GIO, port, bank, value):
-            _set(vm, notes, f"output {port}", SIO, port, bank, value)
+        if bank == OUTPUT_BANK and p is not None and "W" in p.access and _differs(vm, _GIO, port, bank, value):
+            _set(vm, notes, f"output {port}", _SIO, port, bank, value)
 
 
 def _apply_program(vm, program: dict[int, tuple[int, int, int, int]], notes: list[str]) -> None:
     """Download the read instructions (132 ... 133) where they were read."""
     if not program:
         return
-    reply = vm.request(DOWNLOAD, 0, 0, min(program))
+    reply = vm.request(ENTER_DOWNLOAD_MODE, 0, 0, min(program))
     if reply is None or reply.status != 100:
         notes.append("the twin refuses the program download (132)")
         return
     for index in range(min(program), max(program) + 1):
         command, type_, motor, value = program.get(index, (0, 0, 0, 0))
         vm.request(command, type_, motor, value)
-    vm.request(END_DOWNLOAD, 0, 0, 0)
+    vm.request(EXIT_DOWNLOAD_MODE, 0, 0, 0)
 
 
 def _apply_position(vm, motor: int, values: dict[int, int], notes: list[str]) -> None:
@@ -347,11 +349,11 @@ def _apply_position(vm, motor: int, values: dict[int, int], notes: list[str]) ->
     if actual is None:
         return
     target = actual if target is None else target
-    _set(vm, notes, f"axis {motor} actual_position", SAP, 1, motor, target)
-    _set(vm, notes, f"axis {motor} target_position", MVP, 0, motor, target)
+    _set(vm, notes, f"axis {motor} actual_position", _SAP, 1, motor, target)
+    _set(vm, notes, f"axis {motor} target_position", _MVP, 0, motor, target)
     if target != actual:
-        vm.request(MST, 0, motor, 0)
-        _set(vm, notes, f"axis {motor} actual_position", SAP, 1, motor, actual)
+        vm.request(_MST, 0, motor, 0)
+        _set(vm, notes, f"axis {motor} actual_position", _SAP, 1, motor, actual)
 
 
 def apply_snapshot(vm, snap: Snapshot, *, scope: str = "all") -> list[str]:
@@ -376,10 +378,10 @@ def apply_snapshot(vm, snap: Snapshot, *, scope: str = "all") -> list[str]:
         for number, value in sorted(values.items()):
             p = prof.axis_parameters.get(number)
             if p is not None and number not in (0, 1, 2) and p.name in SET_STATE and p.writable \
-                    and _differs(vm, GAP, number, motor, value):
-                _set(vm, notes, f"axis {motor} {p.name}", SAP, number, motor, value)
+                    and _differs(vm, _GAP, number, motor, value):
+                _set(vm, notes, f"axis {motor} {p.name}", _SAP, number, motor, value)
     for (bank, number), value in sorted(snap.globals.items()):
         p = prof.global_parameters.get((bank, number))
         if p is not None and p.name in SET_STATE and p.name not in UNREPRODUCIBLE and p.writable:
-            _set(vm, notes, f"GP {bank}:{number} {p.name}", SGP, number, bank, value)
+            _set(vm, notes, f"GP {bank}:{number} {p.name}", _SGP, number, bank, value)
     return notes

@@ -20,18 +20,20 @@ from dataclasses import dataclass, field
 from ..modules.state import READ_CLEARS
 from ..motion import CLOCK_HZ
 from ..protocol.frame import FRAME_LEN
+from ..protocol.opcodes import MOTION_COMMANDS, Op
 from .decode import parameter_name
 from .timing import Slot
 
-GAP, GGP, GIO, GCO, RFS, APP_STATUS = 6, 10, 15, 31, 13, 135
-ROR, ROL, MST, MVP, SAP, RSAP, SGP, SIO = 1, 2, 3, 4, 5, 8, 9, 14
-READS_OF = {SAP: GAP, RSAP: GAP, SGP: GGP, SIO: GIO}
+READS_OF = {Op.SAP: Op.GAP, Op.RSAP: Op.GAP, Op.SGP: Op.GGP, Op.SIO: Op.GIO}
 """A setting written and the command that reads it back (same type and motor or bank)."""
-FACTORY_RESET = 137
-MOTION = frozenset({ROR, ROL, MST, MVP, RFS, SAP, RSAP})
+MOTION = MOTION_COMMANDS | {Op.SAP, Op.RSAP}
 """Requests whose instant of action may change where an axis goes (`Twin.effect`)."""
-NO_MOTION = frozenset({SGP, SIO, 138, 7, 11, 134, 136, GAP, GGP, GIO, GCO, APP_STATUS})
+NO_MOTION = frozenset({Op.SGP, Op.SIO, Op.REQUEST_TARGET_REACHED_EVENT, Op.STAP, Op.STGP, Op.READ_PROGRAM_MEMORY,
+                       Op.GET_FIRMWARE_VERSION, Op.GAP, Op.GGP, Op.GIO, Op.GCO, Op.GET_APPLICATION_STATUS})
 """Requests that do not change where an axis goes (SGP: unless a program runs)."""
+WINDOWED = frozenset({Op.GAP, Op.GGP, Op.GIO, Op.GCO, Op.GET_APPLICATION_STATUS})
+"""Reads whose answer is followed over the sampling interval (`windowed`; RFS STATUS too)."""
+_GAP, _GGP, _RFS = int(Op.GAP), int(Op.GGP), int(Op.RFS)  # plain ints for the twin's reads
 APPLICATION_STATUS = 128
 """GGP 128: 1 while a TMCL program runs."""
 MAX_STEPS = 400
@@ -44,9 +46,9 @@ def windowed(rec: dict, profile) -> bool:
     """A read whose answer is followed over its sampling interval (GAP, GGP, GIO, GCO, 135, RFS
     STATUS), except a value its reading changes (AP207)."""
     command = rec.get("command")
-    if command == RFS:
+    if command == Op.RFS:
         return rec.get("type") == 2
-    if command not in (GAP, GGP, GIO, GCO, APP_STATUS):
+    if command not in WINDOWED:
         return False
     return parameter_name(profile, command, rec["type"], rec["motor"]) not in READ_CLEARS
 
@@ -163,7 +165,7 @@ class Twin:
             return
         w.result.include(value)
         if w.position:
-            speed = self.read(GAP, 3, w.motor)
+            speed = self.read(_GAP, 3, w.motor)
             if speed is None:
                 return
             t = self.now()
@@ -180,7 +182,7 @@ class Twin:
             points = self.run.trace.setdefault(motor, [])
             if len(points) >= MAX_TRACE:
                 continue
-            x, v = self.read(GAP, 1, motor), self.read(GAP, 3, motor)
+            x, v = self.read(_GAP, 1, motor), self.read(_GAP, 3, motor)
             if x is not None and v is not None and (not points or points[-1][0] != t):
                 points.append((t, x, v))
 
@@ -188,11 +190,11 @@ class Twin:
     def check_watches(self) -> None:
         for n, w in list(self.watches.items()):
             if w.kind == "position":
-                done = self.read(GAP, 8, w.motor) == 1
+                done = self.read(_GAP, 8, w.motor) == 1
             elif w.kind == "speed":
-                done = self.read(GAP, 3, w.motor) == w.value
+                done = self.read(_GAP, 3, w.motor) == w.value
             else:
-                done = self.read(RFS, 2, w.motor) == 0
+                done = self.read(_RFS, 2, w.motor) == 0
             if done:
                 self.run.done[n] = self.now()
                 del self.watches[n]
@@ -201,15 +203,15 @@ class Twin:
         """After a motion request that succeeded: watch for its end (superseding the axis's last)."""
         command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
         kind = None
-        if command == MVP or (command == SAP and type_ == 0):
+        if command == Op.MVP or (command == Op.SAP and type_ == 0):
             kind, target = "position", 0
-        elif command in (ROR, ROL):
-            kind, target = "speed", value if command == ROR else -value
-        elif command == MST:
+        elif command in (Op.ROR, Op.ROL):
+            kind, target = "speed", value if command == Op.ROR else -value
+        elif command == Op.MST:
             kind, target = "speed", 0
-        elif command == SAP and type_ == 2:
+        elif command == Op.SAP and type_ == 2:
             kind, target = "speed", value
-        elif command == RFS and type_ == 0:
+        elif command == Op.RFS and type_ == 0:
             kind, target = "search", 0
         if kind is None or motor >= self.vm.profile.axes:
             return
@@ -226,19 +228,19 @@ class Twin:
         reference search, a ramp setting changed while the axis moves)."""
         command, type_, motor = rec["command"], rec["type"], rec["motor"]
         if command in NO_MOTION:
-            return None if command == SGP and self.read(GGP, APPLICATION_STATUS, 0) == 1 else 0
+            return None if command == Op.SGP and self.read(_GGP, APPLICATION_STATUS, 0) == 1 else 0
         if command not in MOTION or motor >= self.vm.profile.axes:
             return None
-        v0 = self.read(GAP, 3, motor)
-        x0 = self.read(GAP, 1, motor)
+        v0 = self.read(_GAP, 3, motor)
+        x0 = self.read(_GAP, 1, motor)
         if v0 is None or x0 is None:
             return None
-        if command in (SAP, RSAP) and type_ not in (0, 1, 2, 4):
+        if command in (Op.SAP, Op.RSAP) and type_ not in (0, 1, 2, 4):
             p = self.vm.profile.axis_parameters.get(type_)
             return None if v0 and p is not None and p.engine else 0   # a ramp setting while moving
-        if command == RSAP:
+        if command == Op.RSAP:
             return None if v0 else 0
-        if command == SAP and type_ == 1:
+        if command == Op.SAP and type_ == 1:
             return -_sign(v0)   # a position overwritten later keeps the distance run until then
         v1 = self.asked_speed(rec, v0, x0)
         return None if v1 is None else _sign(v0 - v1)
@@ -247,17 +249,17 @@ class Twin:
         """The speed a motion request sends its axis to (signed; a move to a position at its
         maximum speed AP4), from speed `v0` at position `x0`; None when not known (RFS START, MVP COORD)."""
         command, type_, value = rec["command"], rec["type"], rec["value"]
-        if command == MST or (command == RFS and type_ == 1):
+        if command == Op.MST or (command == Op.RFS and type_ == 1):
             return 0
-        if command in (ROR, ROL):
-            return value if command == ROR else -value
-        if command == SAP and type_ == 2:
+        if command in (Op.ROR, Op.ROL):
+            return value if command == Op.ROR else -value
+        if command == Op.SAP and type_ == 2:
             return value
-        if command == SAP and type_ == 4:
+        if command == Op.SAP and type_ == 4:
             return _sign(v0) * value
-        if command == MVP and type_ in (0, 1) or command == SAP and type_ == 0:
-            target = value if type_ == 0 or command == SAP else x0 + value
-            vmax = self.read(GAP, 4, rec["motor"]) or 0
+        if command == Op.MVP and type_ in (0, 1) or command == Op.SAP and type_ == 0:
+            target = value if type_ == 0 or command == Op.SAP else x0 + value
+            vmax = self.read(_GAP, 4, rec["motor"]) or 0
             return _sign(target - x0) * vmax
         return None
 
@@ -283,7 +285,7 @@ class Twin:
         if not self.vm.accepts_address(rec["address"]):
             self.run.skipped.add(rec["n"])   # another module's request (the twin follows GP66/GP87)
             return
-        running = self.read(GGP, APPLICATION_STATUS, 0) == 1
+        running = self.read(_GGP, APPLICATION_STATUS, 0) == 1
         raw = self.vm.handle(rec["bytes"]) if len(rec["bytes"]) == FRAME_LEN else b""
         result = self.run.results.setdefault(rec["n"], Result(raw, self.now()))
         result.raw, result.t, result.running = raw, self.now(), running
@@ -303,7 +305,7 @@ class Twin:
         module by a window would cut the interval where the module still sampled."""
         if rec["kind"] != "request":
             return False
-        if rec["command"] == FACTORY_RESET:
+        if rec["command"] == Op.RESTORE_FACTORY_SETTINGS:
             return True
         return READS_OF.get(rec["command"]) == read["command"] and rec["type"] == read["type"] \
             and rec["motor"] == read["motor"]
@@ -312,7 +314,7 @@ class Twin:
         rec = slot.rec
         n = rec["n"]
         result = self.run.results.setdefault(n, Result(b"", self.now()))
-        position = rec["command"] == GAP and rec["type"] in (1, 209)
+        position = rec["command"] == Op.GAP and rec["type"] in (1, 209)
         w = self.windows[n] = _Window(n, rec["command"], rec["type"], rec["motor"], position, result)
         if self.vm.accepts_address(rec["address"]):
             self.sample(w)

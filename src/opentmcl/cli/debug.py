@@ -35,6 +35,7 @@ import threading
 from collections.abc import Callable, Iterator
 from typing import TYPE_CHECKING, TextIO
 
+from ..protocol.opcodes import Op
 from . import CliError
 from .load import add_connection_options, download, read_program, target_name
 from .run import DEFAULT_MODULE, open_target
@@ -253,7 +254,7 @@ class DebugShell(cmd.Cmd):
             return
         number = _number(parts[1], "set var N VALUE", minimum=0)
         value = _number(parts[2], "set var N VALUE")
-        self.dbg.loader.request(9, number, 2, value)
+        self.dbg.loader.request(Op.SGP, number, 2, value)
         self.say(f"var{number} = {value}")
 
 

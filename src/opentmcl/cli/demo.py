@@ -9,6 +9,7 @@ import argparse
 import math
 from typing import TYPE_CHECKING
 
+from ..protocol.opcodes import Op
 from . import CliError, about_file
 
 if TYPE_CHECKING:
@@ -31,17 +32,17 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 def _plan(vm: VirtualModule) -> list[tuple[int, int, int, int]]:
     """Requests (command, type, motor, value): each axis gets its own ramp and target."""
-    reqs = []
+    reqs: list[tuple[int, int, int, int]] = []
     fast = vm.profile.capabilities.velocity_unit == "pps"
     for axis in range(vm.profile.axes):
         speed = (20000 + 10000 * axis) if fast else 400 + 200 * axis
         accel = (40000 + 20000 * axis) if fast else 100 + 50 * axis
-        reqs += [(5, 4, axis, speed), (5, 5, axis, accel)]
+        reqs += [(Op.SAP, 4, axis, speed), (Op.SAP, 5, axis, accel)]
         if axis % 3 == 2:
-            reqs.append((1, 0, axis, speed // 2))       # ROR: velocity mode
+            reqs.append((Op.ROR, 0, axis, speed // 2))  # velocity mode
         else:
             sign = 1 if axis % 2 == 0 else -1
-            reqs.append((4, 0, axis, sign * (12000 + 8000 * axis)))  # MVP ABS
+            reqs.append((Op.MVP, 0, axis, sign * (12000 + 8000 * axis)))  # ABS
     return reqs
 
 
@@ -166,7 +167,7 @@ def _print_table(vm: VirtualModule, duration: float, interval: float, axes: list
 
 def _axis_parameter(vm: VirtualModule, number: int, axis: int) -> int:
     """GAP `number` of `axis` (command 6)."""
-    reply = vm.request(6, number, axis)
+    reply = vm.request(Op.GAP, number, axis)
     if reply is None:
         raise CliError(f"module gave no reply to GAP {number} {axis}")
     return reply.value

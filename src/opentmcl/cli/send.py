@@ -19,6 +19,7 @@ import argparse
 import os
 from typing import TYPE_CHECKING
 
+from ..protocol.opcodes import GET_FIRMWARE_VERSION
 from . import CliError
 
 if TYPE_CHECKING:
@@ -97,7 +98,7 @@ def _name_the_module(client: Client, args: argparse.Namespace) -> None:
     if module_of(args) is not None:
         return
     try:
-        reply = client.request(136, 0, 0, 0)
+        reply = client.request(GET_FIRMWARE_VERSION, 0, 0, 0)
         if isinstance(reply, VersionReply):
             args.module = profile_for_version(reply.text).name
     except (TmclError, ValueError):

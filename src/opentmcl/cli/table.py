@@ -5,7 +5,7 @@ from __future__ import annotations
 import shutil
 from collections.abc import Sequence
 
-GAP = 2
+COLUMN_GAP = 2  # spaces between two columns
 
 
 def width() -> int:
@@ -21,12 +21,12 @@ def fit(header: Sequence[str], rows: Sequence[Sequence[str]], columns: int, keep
     velocity); blocks are separated by an empty line. A group wider than `columns` alone gets a
     block of its own."""
     widths = [max(len(h), *(len(r[i]) for r in rows)) if rows else len(h) for i, h in enumerate(header)]
-    base = sum(widths[:keep]) + GAP * max(0, keep - 1)
+    base = sum(widths[:keep]) + COLUMN_GAP * max(0, keep - 1)
     blocks: list[list[int]] = []
     used = base
     for start in range(keep, len(header), group):
         members = list(range(start, min(start + group, len(header))))
-        need = sum(GAP + widths[i] for i in members)
+        need = sum(COLUMN_GAP + widths[i] for i in members)
         if not blocks or used + need > columns:
             blocks.append([])
             used = base
@@ -37,7 +37,7 @@ def fit(header: Sequence[str], rows: Sequence[Sequence[str]], columns: int, keep
         cols = list(range(keep)) + block
         if n:
             lines.append("")
-        head = (" " * GAP).join(header[i].rjust(widths[i]) for i in cols)
+        head = (" " * COLUMN_GAP).join(header[i].rjust(widths[i]) for i in cols)
         lines += [head, "-" * len(head)]
-        lines += [(" " * GAP).join(r[i].rjust(widths[i]) for i in cols) for r in rows]
+        lines += [(" " * COLUMN_GAP).join(r[i].rjust(widths[i]) for i in cols) for r in rows]
     return lines

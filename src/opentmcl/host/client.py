@@ -28,6 +28,15 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, ClassVar
 
 from ..protocol.frame import FRAME_LEN, FrameError, Reply, Request, checksum_ok, to_int32
+from ..protocol.opcodes import (
+    ALWAYS_ANSWERED,
+    GET_APPLICATION_STATUS,
+    GET_FIRMWARE_VERSION,
+    READ_PROGRAM_MEMORY,
+    REQUEST_TARGET_REACHED_EVENT,
+    UNANSWERED,
+    Op,
+)
 from ..protocol.replies import MemoryReply, is_version_request
 from ..protocol.status import Status, is_success
 from .errors import (
@@ -50,18 +59,9 @@ if TYPE_CHECKING:
     from ..modules.profile import ModuleProfile
     from .module import Module
 
-READ_PROGRAM_MEMORY = 134  # control command with a special reply format (manual 3.6.36)
-GET_APPLICATION_STATUS = 135  # control command (manual 3.6.36)
-GET_FIRMWARE_VERSION = 136  # control command, type 0 = string, 1 = binary (manual 3.6.36)
-RESTORE_FACTORY_SETTINGS = 137  # "This command does not send a reply."
-REQUEST_TARGET_POSITION_REACHED_EVENT = 138  # manual 3.6.35
-
-NO_REPLY = frozenset({RESTORE_FACTORY_SETTINGS})
-GAP, SGP, GGP, GIO = 6, 9, 10, 15
+_GAP, _SGP, _GGP, _GIO = int(Op.GAP), int(Op.SGP), int(Op.GGP), int(Op.GIO)  # plain ints: the request path
 SUPPRESS_REPLY = 255  # GP255 "Suppress reply" (TMCM-6212 manual 5.1)
-ANSWERED_ALWAYS = frozenset({GAP, GGP, GIO})
-"""Commands whose reply GP255 never suppresses ("not for GAP, GGP and GIO commands")."""
-FENCES = ((GGP, 66, 0), (GAP, 1, 0), (GET_FIRMWARE_VERSION, 1, 0), (GIO, 0, 0), (GET_APPLICATION_STATUS, 0, 0))
+FENCES = ((_GGP, 66, 0), (_GAP, 1, 0), (GET_FIRMWARE_VERSION, 1, 0), (_GIO, 0, 0), (GET_APPLICATION_STATUS, 0, 0))
 """Reads every module answers (serial address GP66, actual position AP1, binary version, input 0,
 program status): the first whose command no lost request to that module had brings the link back
 in step."""
@@ -119,7 +119,7 @@ def _check_value(value: int) -> int:
 def has_special_reply(command: int, type: int) -> bool:
     """True for the requests not answered in the 9-byte reply format of manual 3.2: 134 (read
     program memory), 136 type 0 (version string) and 137 (no reply)."""
-    return command in NO_REPLY or command == READ_PROGRAM_MEMORY or is_version_request(command, type)
+    return command in UNANSWERED or command == READ_PROGRAM_MEMORY or is_version_request(command, type)
 
 
 def check_address(value: int) -> int:
@@ -146,9 +146,9 @@ class _Plain:
         self.seen: Reply = _NO_REPLY
         """The last plain reply handed over as a `Reply` value (`Transport.exchange`): the same
         object again needs no look."""
-        self.silent = request.command not in ANSWERED_ALWAYS
+        self.silent = request.command not in ALWAYS_ANSWERED
         """GP255 = 1 suppresses its reply when it succeeds."""
-        self.quiets = request.command == SGP and request.type == SUPPRESS_REPLY and request.motor == 0 \
+        self.quiets = request.command == _SGP and request.type == SUPPRESS_REPLY and request.motor == 0 \
             and request.value == 1
         """SGP 255, 0, 1: its own reply is suppressed already."""
 
@@ -295,7 +295,7 @@ class Client:
         of the request before the fence's is its reply, none means it succeeded silently (a
         `Reply` with status 100 and value 0 is returned). The fence's value is the module's GP255."""
         req = plain.request
-        fence = Request(req.address, GGP, SUPPRESS_REPLY, 0, 0)
+        fence = Request(req.address, _GGP, SUPPRESS_REPLY, 0, 0)
         self.transport.send_many([plain.frame, self._wire(fence)])
         deadline = self.transport.monotonic() + timeout
         answer: Reply | None = None
@@ -309,7 +309,7 @@ class Client:
                 self.stray_replies += 1
             elif reply.command == req.command and answer is None:
                 answer = reply
-            elif reply.command == GGP:
+            elif reply.command == _GGP:
                 break
             else:
                 self.stray_replies += 1
@@ -470,7 +470,7 @@ class Client:
 
     def _read_answer(self, req: Request, timeout: float) -> Answer:
         """The answer to a request already sent, as `request` reads it."""
-        if req.command in NO_REPLY:
+        if req.command in UNANSWERED:
             return None
         if is_version_request(req.command, req.type):
             return self._read_version(req, timeout)
@@ -642,7 +642,7 @@ class Client:
         return -1 if self.transport.frame_format == "can" else address
 
     def _take_event(self, reply: Reply) -> bool:
-        if reply.status == Status.POSITION_REACHED_EVENT and reply.command == REQUEST_TARGET_POSITION_REACHED_EVENT:
+        if reply.status == Status.POSITION_REACHED_EVENT and reply.command == REQUEST_TARGET_REACHED_EVENT:
             key = self._event_key(reply.module_address)
             self._events[key] = self._events.get(key, 0) | (reply.value & 0xFFFFFFFF)
             return True

@@ -27,7 +27,7 @@ from typing import Protocol
 
 from ..lang.assembler import ExpressionError, evaluate
 from ..lang.binfile import Instruction
-from ..protocol.opcodes import format_instruction
+from ..protocol.opcodes import GET_APPLICATION_STATUS, Op, format_instruction
 from .errors import (
     TmclStatusError,
     TmclTypeError,
@@ -42,6 +42,7 @@ from .module import Module
 INSTRUCTION_SECONDS = 0.0001  # one TMCL instruction of the virtual modules (100 µs)
 WAIT_SLICE = 0.01             # how long the debugger lets a WAIT run between two looks
 POLL = 0.05                   # status polling period while the program runs freely
+_GAP, _GGP, _GIO = int(Op.GAP), int(Op.GGP), int(Op.GIO)  # plain ints for the watches' requests
 
 # Bits of the program flags word (layout of firmware/flags.py; Loader.flags).
 FLAG_NAMES = ((0x100, "ZE"), (0x200, "EQ"), (0x400, "GT"), (0x800, "LT"),
@@ -77,22 +78,22 @@ class SourceText(Protocol):
 
 
 def _gio(port: int, bank: int) -> Reader:
-    return lambda ld: ld.request(15, port, bank).value
+    return lambda ld: ld.request(_GIO, port, bank).value
 
 
 def _gap(param: int, motor: int) -> Reader:
-    return lambda ld: ld.request(6, param, motor).value
+    return lambda ld: ld.request(_GAP, param, motor).value
 
 
 def _ggp(number: int, bank: int) -> Reader:
-    return lambda ld: ld.request(10, number, bank).value
+    return lambda ld: ld.request(_GGP, number, bank).value
 
 
 _SIMPLE: dict[str, Reader] = {
-    "a": lambda ld: ld.request(135, 2).value,
-    "x": lambda ld: ld.request(135, 3).value,
-    "pc": lambda ld: ld.request(135, 1).value & 0xFFFF,
-    "state": lambda ld: MODES.get((ld.request(135, 1).value >> 24) & 0xFF, "?"),
+    "a": lambda ld: ld.request(GET_APPLICATION_STATUS, 2).value,
+    "x": lambda ld: ld.request(GET_APPLICATION_STATUS, 3).value,
+    "pc": lambda ld: ld.request(GET_APPLICATION_STATUS, 1).value & 0xFFFF,
+    "state": lambda ld: MODES.get((ld.request(GET_APPLICATION_STATUS, 1).value >> 24) & 0xFF, "?"),
 }
 _INDEXED: dict[str, Callable[[int], Reader]] = {
     "var": lambda n: _ggp(n, 2), "out": lambda n: _gio(n, 2), "in": lambda n: _gio(n, 0),

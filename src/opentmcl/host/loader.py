@@ -23,14 +23,23 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 from ..lang.binfile import BinFileError, Instruction, decode
 from ..protocol.frame import Reply, to_int32
+from ..protocol.opcodes import (
+    ENTER_DOWNLOAD_MODE,
+    EXIT_DOWNLOAD_MODE,
+    GET_APPLICATION_STATUS,
+    RESET_APPLICATION,
+    RUN_APPLICATION,
+    STEP_APPLICATION,
+    STOP_APPLICATION,
+    Op,
+)
 from .client import Client, check_address
 from .errors import TmclError, TmclStatusError, TmclTypeError, check_int, check_timeout
 
 if TYPE_CHECKING:
     from .module import Module
 
-STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
-ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY, GET_APPLICATION_STATUS = 132, 133, 134, 135
+_GGP = int(Op.GGP)  # a plain int, which `Client.request` keeps ready to send
 MODES = {0: "stop", 1: "run", 2: "step", 3: "reset"}  # GP128 / 135 (TMCM-6212 manual 5.1)
 Progress = Callable[[int, int], None]
 """A progress callback: (instructions done, instructions in all)."""
@@ -209,7 +218,7 @@ class Loader:
 
     def variable(self, number: int) -> int:
         """User variable `number` (GGP <number>, 2)."""
-        return self.request(10, number, 2).value
+        return self.request(_GGP, number, 2).value
 
     def wait_stopped(self, timeout: float, poll: float = 0.01) -> AppStatus:
         """Poll 135 until the program is no longer running (STOP reached) or `timeout` passes."""

@@ -19,10 +19,21 @@ from ..modules.names import NameIndex
 from ..modules.names import norm as _norm
 from ..modules.profile import IOPort, ModuleProfile, Param, load_profile, module_names
 from ..protocol.frame import Reply
+from ..protocol.opcodes import (
+    ENTER_DOWNLOAD_MODE,
+    EXIT_DOWNLOAD_MODE,
+    GET_APPLICATION_STATUS,
+    GET_FIRMWARE_VERSION,
+    REQUEST_TARGET_REACHED_EVENT,
+    RESET_APPLICATION,
+    RESTORE_FACTORY_SETTINGS,
+    RUN_APPLICATION,
+    STEP_APPLICATION,
+    STOP_APPLICATION,
+    Op,
+)
 from . import units
 from .client import (
-    GET_FIRMWARE_VERSION,
-    REQUEST_TARGET_POSITION_REACHED_EVENT,
     Answer,
     Client,
     VersionReply,
@@ -40,13 +51,12 @@ from .errors import (
     check_timeout,
 )
 
-# Command numbers (TMCM-6212 manual 3.4.1, 3.6.36).
-ROR, ROL, MST, MVP, SAP, GAP, STAP, RSAP = 1, 2, 3, 4, 5, 6, 7, 8
-SGP, GGP, STGP, RSGP, RFS, SIO, GIO = 9, 10, 11, 12, 13, 14, 15
-SCO, GCO, CCO = 30, 31, 32
-STOP_APPLICATION, RUN_APPLICATION, STEP_APPLICATION, RESET_APPLICATION = 128, 129, 130, 131
-ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, READ_PROGRAM_MEMORY = 132, 133, 134
-GET_APPLICATION_STATUS, RESTORE_FACTORY_SETTINGS = 135, 137
+# Command numbers as plain ints, which `Client.request` keeps ready to send (TMCM-6212 manual 3.4.1).
+_ROR, _ROL, _MST, _MVP = int(Op.ROR), int(Op.ROL), int(Op.MST), int(Op.MVP)
+_SAP, _GAP, _STAP, _RSAP = int(Op.SAP), int(Op.GAP), int(Op.STAP), int(Op.RSAP)
+_SGP, _GGP, _STGP, _RSGP = int(Op.SGP), int(Op.GGP), int(Op.STGP), int(Op.RSGP)
+_RFS, _SIO, _GIO = int(Op.RFS), int(Op.SIO), int(Op.GIO)
+_SCO, _GCO, _CCO = int(Op.SCO), int(Op.GCO), int(Op.CCO)
 MVP_ABS, MVP_REL, MVP_COORD = 0, 1, 2
 RFS_START, RFS_STOP, RFS_STATUS = 0, 1, 2
 USER_VARIABLE_BANK = 2  # SGP/GGP bank 2: TMCL user variables (TMCM-6212 manual 5.3)
@@ -197,67 +207,67 @@ class Axis:
 
     def get(self, name: str | int) -> int:
         """GAP <parameter>, <axis> (manual 3.6.6)."""
-        return self._req(GAP, self._number(name)).value
+        return self._req(_GAP, self._number(name)).value
 
     def set(self, name: str | int, value: int) -> None:
         """SAP <parameter>, <axis>, <value> (manual 3.6.5)."""
-        self._req(SAP, self._number(name), value)
+        self._req(_SAP, self._number(name), value)
 
     def store(self, name: str | int) -> None:
         """STAP <parameter>, <axis>: store in EEPROM (PD86-1180 manual 4.6.7)."""
-        self._req(STAP, self._number(name))
+        self._req(_STAP, self._number(name))
 
     def restore(self, name: str | int) -> None:
         """RSAP <parameter>, <axis>: restore from EEPROM (PD86-1180 manual 4.6.8)."""
-        self._req(RSAP, self._number(name))
+        self._req(_RSAP, self._number(name))
 
     @property
     def position(self) -> int:
         """Actual position (axis parameter 1) in microsteps."""
-        return self._req(GAP, 1).value
+        return self._req(_GAP, 1).value
 
     @position.setter
     def position(self, value: int) -> None:
-        self._req(SAP, 1, value)
+        self._req(_SAP, 1, value)
 
     @property
     def target_position(self) -> int:
-        return self._req(GAP, 0).value
+        return self._req(_GAP, 0).value
 
     @property
     def actual_speed(self) -> int:
-        return self._req(GAP, 3).value
+        return self._req(_GAP, 3).value
 
     @property
     def position_reached(self) -> bool:
         """Axis parameter 8: "always set when target position and actual position are equal"."""
-        return bool(self._req(GAP, 8).value)
+        return bool(self._req(_GAP, 8).value)
 
     # --- motion -------------------------------------------------------------------
     def rotate(self, velocity: int) -> None:
         """ROR <axis>, v for v >= 0, else ROL <axis>, -v (manual 3.6.1, 3.6.2)."""
         check_int(velocity, "velocity")
         if velocity >= 0:
-            self._req(ROR, 0, velocity)
+            self._req(_ROR, 0, velocity)
         else:
-            self._req(ROL, 0, -velocity)
+            self._req(_ROL, 0, -velocity)
 
     def rotate_right(self, velocity: int) -> None:
-        self._req(ROR, 0, velocity)
+        self._req(_ROR, 0, velocity)
 
     def rotate_left(self, velocity: int) -> None:
-        self._req(ROL, 0, velocity)
+        self._req(_ROL, 0, velocity)
 
     def stop(self) -> None:
         """MST <axis> (manual 3.6.3)."""
-        self._req(MST)
+        self._req(_MST)
 
     def _move(self, type: int, value: int, wait: bool, timeout: float | None) -> None:
         if timeout is not None:
             check_timeout(timeout)
         if wait:
             self.module.request_position_reached_event(1 << self.number)
-        self._req(MVP, type, value)
+        self._req(_MVP, type, value)
         if wait:
             self.module.wait_position_reached(1 << self.number, MOTION_TIMEOUT if timeout is None else timeout)
 
@@ -285,30 +295,30 @@ class Axis:
         if timeout is not None:
             check_timeout(timeout)
         _check_poll(poll)
-        self._req(RFS, RFS_START)
+        self._req(_RFS, RFS_START)
         if wait:
             self.module._poll(lambda: not self.reference_search_active(), timeout, poll,
                               f"reference search of axis {self.number} did not finish")
 
     def stop_reference_search(self) -> None:
-        self._req(RFS, RFS_STOP)
+        self._req(_RFS, RFS_STOP)
 
     def reference_search_active(self) -> bool:
         """RFS STATUS: 0 = no reference search active (manual 3.6.11)."""
-        return self._req(RFS, RFS_STATUS).value != 0
+        return self._req(_RFS, RFS_STATUS).value != 0
 
     # --- coordinates -----------------------------------------------------------
     def set_coordinate(self, coordinate: int, position: int) -> None:
         """SCO <coordinate>, <axis>, <position> (manual 3.6.22)."""
-        self._req(SCO, coordinate, position)
+        self._req(_SCO, coordinate, position)
 
     def get_coordinate(self, coordinate: int) -> int:
         """GCO <coordinate>, <axis> (manual 3.6.23)."""
-        return self._req(GCO, coordinate).value
+        return self._req(_GCO, coordinate).value
 
     def capture_coordinate(self, coordinate: int) -> None:
         """CCO <coordinate>, <axis> (manual 3.6.24)."""
-        self._req(CCO, coordinate)
+        self._req(_CCO, coordinate)
 
     # --- units --------------------------------------------------------------------
     def _has(self, number: int) -> bool:
@@ -316,11 +326,11 @@ class Axis:
 
     def microstep_resolution(self) -> int:
         """Axis parameter 140 (0 = full step ... 8 = 256 microsteps)."""
-        return self._req(GAP, 140).value
+        return self._req(_GAP, 140).value
 
     def fullstep_resolution(self) -> int:
         """Axis parameter 202 (full steps per round); 200 when the module has no such parameter."""
-        return self._req(GAP, 202).value if self._has(202) else 200
+        return self._req(_GAP, 202).value if self._has(202) else 200
 
     def pps_to_rps(self, pps: float) -> float:
         return units.pps_to_rps(pps, self.microstep_resolution(), self.fullstep_resolution())
@@ -337,7 +347,7 @@ class Axis:
     def _divisors(self) -> tuple[int, int]:
         if not (self._has(153) and self._has(154)):
             raise TmclError(f"{self.module.profile.name} has no pulse/ramp divisors (axis parameters 153/154)")
-        return self._req(GAP, 154).value, self._req(GAP, 153).value
+        return self._req(_GAP, 154).value, self._req(_GAP, 153).value
 
     def velocity_to_pps(self, velocity: int) -> float:
         """TMC429 internal velocity (0..2047) -> pps with this axis's pulse divisor (PD86-1180 manual 5)."""
@@ -455,22 +465,22 @@ class Module:
     def get_global(self, name: str | int, bank: int | None = None) -> int:
         """GGP <parameter>, <bank> (manual 3.6.8). A name implies its bank."""
         number, bank = self._gp(name, bank)
-        return self.reply(GGP, number, bank).value
+        return self.reply(_GGP, number, bank).value
 
     def set_global(self, name: str | int, value: int, bank: int | None = None) -> None:
         """SGP <parameter>, <bank>, <value> (manual 3.6.7)."""
         number, bank = self._gp(name, bank)
-        self.request(SGP, number, bank, value)
+        self.request(_SGP, number, bank, value)
 
     def store_global(self, name: str | int, bank: int | None = None) -> None:
         """STGP <parameter>, <bank> (manual 3.6.9)."""
         number, bank = self._gp(name, bank)
-        self.request(STGP, number, bank)
+        self.request(_STGP, number, bank)
 
     def restore_global(self, name: str | int, bank: int | None = None) -> None:
         """RSGP <parameter>, <bank> (manual 3.6.10)."""
         number, bank = self._gp(name, bank)
-        self.request(RSGP, number, bank)
+        self.request(_RSGP, number, bank)
 
     def _var(self, index: int) -> int:
         if isinstance(index, bool) or not isinstance(index, int) or not 0 <= index < self.profile.user_variables:
@@ -480,19 +490,19 @@ class Module:
 
     def get_variable(self, index: int) -> int:
         """GGP <index>, 2: TMCL user variable (manual 5.3)."""
-        return self.reply(GGP, self._var(index), USER_VARIABLE_BANK).value
+        return self.reply(_GGP, self._var(index), USER_VARIABLE_BANK).value
 
     def set_variable(self, index: int, value: int) -> None:
         """SGP <index>, 2, <value>."""
-        self.request(SGP, self._var(index), USER_VARIABLE_BANK, value)
+        self.request(_SGP, self._var(index), USER_VARIABLE_BANK, value)
 
     def store_variable(self, index: int) -> None:
         """STGP <index>, 2: store a user variable in EEPROM (manual 3.6.9)."""
-        self.request(STGP, self._var(index), USER_VARIABLE_BANK)
+        self.request(_STGP, self._var(index), USER_VARIABLE_BANK)
 
     def restore_variable(self, index: int) -> None:
         """RSGP <index>, 2 (manual 3.6.10)."""
-        self.request(RSGP, self._var(index), USER_VARIABLE_BANK)
+        self.request(_RSGP, self._var(index), USER_VARIABLE_BANK)
 
     # --- inputs and outputs (manual 3.6.12, 3.6.13) ------------------------------
     def _port(self, port: int | str, kind: str) -> IOPort:
@@ -506,37 +516,37 @@ class Module:
     def digital_input(self, port: int | str) -> int:
         """GIO <port>, <digital input bank> (bank 0 on the TMCM-6212)."""
         p = self._port(port, "digital")
-        return self.reply(GIO, p.port, p.bank).value
+        return self.reply(_GIO, p.port, p.bank).value
 
     def analog_input(self, port: int | str) -> int:
         """GIO <port>, <analog input bank> (bank 1 on the TMCM-6212): 0..65535."""
         p = self._port(port, "analog")
-        return self.reply(GIO, p.port, p.bank).value
+        return self.reply(_GIO, p.port, p.bank).value
 
     def output(self, port: int | str) -> int:
         """GIO <port>, <output bank>: the state of a digital output (bank 2)."""
         p = self._port(port, "output")
-        return self.reply(GIO, p.port, p.bank).value
+        return self.reply(_GIO, p.port, p.bank).value
 
     def set_output(self, port: int | str, value: int) -> None:
         """SIO <port>, <output bank>, <value> (bank 2)."""
         p = self._port(port, "output")
         value = int(value) if isinstance(value, bool) else check_int(value, "output value")
-        self.request(SIO, p.port, p.bank, value)
+        self.request(_SIO, p.port, p.bank, value)
 
     def get_io(self, port: int, bank: int) -> int:
         """GIO <port>, <bank> with raw numbers."""
-        return self.reply(GIO, port, bank).value
+        return self.reply(_GIO, port, bank).value
 
     def set_io(self, port: int, bank: int, value: int) -> None:
         """SIO <port>, <bank>, <value> with raw numbers."""
-        self.request(SIO, port, bank, value)
+        self.request(_SIO, port, bank, value)
 
     # --- events and motion ------------------------------------------------------------
     def request_position_reached_event(self, mask: int, *, every: bool = False) -> None:
         """Command 138: ask for a status-128 reply when the motors in `mask` reach their target,
         for the next MVP only or (`every`) for every MVP (manual 3.6.35)."""
-        self.request(REQUEST_TARGET_POSITION_REACHED_EVENT, 1 if every else 0, 0, mask)
+        self.request(REQUEST_TARGET_REACHED_EVENT, 1 if every else 0, 0, mask)
 
     def wait_position_reached(self, mask: int, timeout: float | None = None) -> int:
         """Block until the status-128 replies for every motor in `mask` have arrived."""

@@ -20,9 +20,11 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 from ..modules.profile import ModuleProfile, Param
+from ..protocol.opcodes import Op
 from .errors import TmclValueError
-from .module import GAP, GGP, SAP, SGP, Module
+from .module import Module
 
+_GAP, _GGP, _SAP, _SGP = int(Op.GAP), int(Op.GGP), int(Op.SAP), int(Op.SGP)  # plain ints for the requests
 FORMAT = "opentmcl-parameters"
 FORMAT_VERSION = 1
 MAX_TEXT = 1 << 20       # characters of a parameter-set file read at most
@@ -91,7 +93,7 @@ def members(profile: ModuleProfile) -> list[tuple[str, int, Param]]:
 
 
 def _read(module: Module, kind: str, index: int, number: int) -> int:
-    return module.reply(GAP if kind == "axis" else GGP, number, index).value
+    return module.reply(_GAP if kind == "axis" else _GGP, number, index).value
 
 
 def export_set(module: Module) -> ParamSet:
@@ -258,5 +260,5 @@ def apply(module: Module, changes: Iterable[Change | Entry]) -> int:
     entries = [Entry(c.kind, c.index, c.number, c.name, c.value) for c in items]
     check(prof, ParamSet(prof.name, "", tuple(entries)))
     for e in entries:
-        module.request(SAP if e.kind == "axis" else SGP, e.number, e.index, e.value)
+        module.request(_SAP if e.kind == "axis" else _SGP, e.number, e.index, e.value)
     return len(entries)

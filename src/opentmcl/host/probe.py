@@ -14,19 +14,24 @@ from typing import TYPE_CHECKING
 
 from ..modules.profile import STORABLE_USER_VARIABLES, load_profile
 from ..modules.state import SNAPSHOT_TABLES, is_state
+from ..protocol.opcodes import COMMANDS, GET_FIRMWARE_VERSION, Op
 from .client import Client, VersionReply
 from .errors import TmclError, TmclStatusError, TmclTimeout
 
 if TYPE_CHECKING:
     from ..modules.profile import IOPort, ModuleProfile, Param
 
-GAP, GGP, GIO, VERSION = 6, 10, 15, 136
+_GAP, _GGP, _GIO = int(Op.GAP), int(Op.GGP), int(Op.GIO)  # plain ints, which `Client.request` keeps ready
 GLOBAL_BANKS = (0, 2, 3)
 IO_BANKS = (0, 1, 2)
 NUMBERS = range(256)
 PORTS = range(255)
 """Port 255 reads a whole bank as a bit mask (PD86-1180 manual 4.6.14): not a port of its own."""
 MAX_AXES = 16
+GUESSED_OPCODES = tuple(n for n in COMMANDS if n <= Op.ACO or Op.STOP_APPLICATION <= n <= Op.REQUEST_TARGET_REACHED_EVENT)
+"""The command set written for a firmware no built-in profile matches (a guess the user edits):
+the commands up to ACO 39 of the manuals' overviews (TMCM-6212 3.4.1, PD86-1180 4.4.1) and the
+control commands with 138 (TMCM-6212 3.6.35, 3.6.36)."""
 
 
 class ProbeError(TmclError):
@@ -80,7 +85,7 @@ def _no_progress(text: str) -> None:
 def _version_string(client: Client) -> str:
     """Command 136 type 0, the version string (PD86-1180 manual 4.6.39)."""
     try:
-        reply = client.request(VERSION, 0, 0, 0)
+        reply = client.request(GET_FIRMWARE_VERSION, 0, 0, 0)
     except TmclError as exc:
         raise ProbeError(f"the module does not answer command 136 (firmware version): {exc}") from None
     if not isinstance(reply, VersionReply):  # pragma: no cover - Client.request returns one for 136 type 0
@@ -91,7 +96,7 @@ def _version_string(client: Client) -> str:
 def _version_binary(client: Client) -> int | None:
     """Command 136 type 1, the version number; None when the module refuses it."""
     try:
-        return client.reply(VERSION, 1, 0, 0).value
+        return client.reply(GET_FIRMWARE_VERSION, 1, 0, 0).value
     except TmclStatusError:
         return None
     except TmclError as exc:  # the string reply carries no module address; this one does (USB: GP66)
@@ -109,20 +114,20 @@ def probe(client: Client, *, max_seconds: float = 300.0, progress: Progress = _n
     binary = _version_binary(client)
     progress(f"firmware {version!r}")
     axes = 0
-    while axes < MAX_AXES and ask.read(GAP, 1, axes) is not None:
+    while axes < MAX_AXES and ask.read(_GAP, 1, axes) is not None:
         axes += 1
     result = ProbeResult(version, binary, axes)
     ask.total = ask.requests + len(NUMBERS) * (axes + len(GLOBAL_BANKS)) + len(PORTS) * len(IO_BANKS)
     for motor in range(axes):
-        axis = {n: v for n in NUMBERS if (v := ask.read(GAP, n, motor)) is not None}
+        axis = {n: v for n in NUMBERS if (v := ask.read(_GAP, n, motor)) is not None}
         result.axis[motor] = axis
         progress(f"axis {motor}: {len(axis)} axis parameters")
     for bank in GLOBAL_BANKS:
-        found = {(bank, n): v for n in NUMBERS if (v := ask.read(GGP, n, bank)) is not None}
+        found = {(bank, n): v for n in NUMBERS if (v := ask.read(_GGP, n, bank)) is not None}
         result.globals.update(found)
         progress(f"bank {bank}: {len(found)} global parameters")
     for bank in IO_BANKS:
-        ports = {(bank, p): v for p in PORTS if (v := ask.read(GIO, p, bank)) is not None}
+        ports = {(bank, p): v for p in PORTS if (v := ask.read(_GIO, p, bank)) is not None}
         result.io.update(ports)
         progress(f"I/O bank {bank}: {len(ports)} ports")
     progress(f"done: {ask.requests} read requests")
@@ -229,7 +234,7 @@ def _standalone_module(result: ProbeResult) -> list[str]:
             f"axes = {max(1, result.axes)}", 'engine = "linear"',
             f"firmware_version = {_toml(result.firmware_version)}",
             f"firmware_binary = {result.firmware_binary or 0}", "program_memory = 2048",
-            "opcodes = " + _toml(list(range(1, 40)) + list(range(128, 139))),
+            "opcodes = " + _toml(list(GUESSED_OPCODES)),
             *_linear_capabilities()]
 
 

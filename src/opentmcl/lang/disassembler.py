@@ -81,11 +81,6 @@ def _type_name(cmd: opcodes.Command, ins: Instruction, names: _Names) -> str | N
     return text
 
 
-def _always_an_axis(cmd: opcodes.Command) -> bool:
-    """Does the motor field name an axis whatever the type (not WAIT's, 3.6.20)?"""
-    return any(m.names == opcodes.AXIS and m.field == MOTOR and m.types is None for m in cmd.meanings)
-
-
 def _names(cmd: opcodes.Command, what: str, fld: str, type: int) -> bool:
     """Does field `fld` of `cmd` name a `what` (opcodes.Meaning) with this type field?"""
     meaning = cmd.naming(what, type)
@@ -98,7 +93,7 @@ def _operand_text(cmd: opcodes.Command, fld: str, ins: Instruction, labels: Mapp
     text = None
     if fld == TYPE:
         text = _type_name(cmd, ins, names)
-    elif fld == MOTOR and _always_an_axis(cmd):
+    elif fld == MOTOR and cmd.number in opcodes.AXIS_COMMANDS:  # an axis whatever the type
         text = names.motors.get(num)
     elif fld == VALUE and cmd.label:
         text = labels.get(num)

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..protocol.opcodes import Op
 from .binfile import Instruction, encode
 from .diagnostics import Diagnostic
 
-STOP = Instruction(28, 0, 0, 0)
+STOP = Instruction(int(Op.STOP), 0, 0, 0)
 """Appended after the last instruction unless the source says #nostop (docs/tmcl-assembler.md)."""
 
 

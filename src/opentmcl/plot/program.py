@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable
 
+from ..protocol.opcodes import GET_APPLICATION_STATUS, Op
 from ..trace import MAX_SAMPLES, FaultMark, Mark, Trace
 from .events import EngineWatch
 from .recording import Sampler, record
@@ -31,8 +32,8 @@ def auto_seconds(interval: float) -> float:
     return min(AUTO_SECONDS, MAX_SAMPLES * interval)
 
 
-JA = 22                 # TMCL opcode of JA (manual 3.4.1 Table 5)
-EXITS = (21, 49)        # JC, DJNZ: conditional jumps that may leave a loop
+EXITS = frozenset({Op.JC, Op.DJNZ})
+"""Conditional jumps that may leave a loop (TMCM-6212 manual 3.6.16; PD28-1021 manual 3.5)."""
 
 
 def loop_bodies(program) -> list[tuple[int, int]]:
@@ -44,7 +45,7 @@ def loop_bodies(program) -> list[tuple[int, int]]:
         return any(code[a][0] in EXITS and not first <= code[a][3] <= last for a in range(first, last + 1))
 
     return [(ins[3], address) for address, ins in enumerate(code)
-            if ins[0] == JA and 0 <= ins[3] <= address and not leaves(ins[3], address)]
+            if ins[0] == Op.JA and 0 <= ins[3] <= address and not leaves(ins[3], address)]
 
 
 def instruction_texts(program) -> dict[int, str]:
@@ -113,7 +114,7 @@ class ProgramWatch:
         self.jumps = JumpWatch(vm, [last for _, last in self.bodies]) if has_vm else None
 
     def __call__(self, trace: Trace) -> bool:
-        word = self.loader.request(135, 1).value & 0xFFFFFFFF
+        word = self.loader.request(GET_APPLICATION_STATUS, 1).value & 0xFFFFFFFF
         mode, pc = word >> 24, word & 0xFFFF
         executed = getattr(getattr(self.vm, "interpreter", None), "executed", None)
         if self.jumps is not None:

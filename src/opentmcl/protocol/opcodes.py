@@ -448,6 +448,34 @@ STOP_COMMANDS = frozenset({MOTOR_STOP, STOP_APPLICATION, RESET_APPLICATION})
 """Requests that stop motion or a program: a served module takes them before other waiting
 requests (docs/architecture.md "Real time")."""
 
+# --- named sets of commands (one definition each; code elsewhere tests membership) -------------
+
+AXIS_COMMANDS: frozenset[Op] = frozenset(
+    Op(c.number) for c in _COMMANDS
+    if any(m.field == MOTOR and m.names == AXIS and m.types is None for m in c.meanings))
+"""The commands whose motor field selects an axis whatever the type field, read from
+`Command.meanings` (TMCM-6212 3.4.1 "<motor number>"): ROR, ROL, MST, MVP, SAP, GAP, STAP, RSAP,
+RFS, SCO, GCO, CCO, AAP, ACO, MVPA, ROLA, RORA. Not WAIT, whose motor is an axis only for some
+conditions (3.6.20)."""
+MOTION_COMMANDS: frozenset[Op] = frozenset({
+    Op.ROR, Op.ROL, Op.MST, Op.MVP, Op.RFS, Op.MVPA, Op.ROLA, Op.RORA})
+"""The commands that start or stop a motion of the axis in their motor field: "rotate right",
+"rotate left", "motor stop", "move to position" (TMCM-6212 3.6.1-3.6.4), "reference search"
+(3.6.11) and the PD28-1021's MVPA, ROLA, RORA (PD28-1021 3.5 Table 5)."""
+PROGRAM_CONTROL: frozenset[Op] = frozenset({
+    Op.STOP_APPLICATION, Op.RUN_APPLICATION, Op.STEP_APPLICATION, Op.RESET_APPLICATION,
+    Op.ENTER_DOWNLOAD_MODE, Op.EXIT_DOWNLOAD_MODE, Op.READ_PROGRAM_MEMORY, Op.GET_APPLICATION_STATUS})
+"""The control commands that act on the TMCL program or report on it: stop, run, step, reset
+the application, enter and exit download mode, read program memory, get application status
+(TMCM-6212 3.6.36 Table 13, 128-135). Not 136 (firmware version), 137 (factory settings) or 139
+(ASCII mode, PD86-1180 4.6.39)."""
+UNANSWERED: frozenset[Op] = frozenset(Op(c.number) for c in _COMMANDS if not c.replies)
+"""The commands the module answers with no reply: 137 ("This command does not send a reply",
+TMCM-6212 3.6.36), from `Command.replies`."""
+ALWAYS_ANSWERED: frozenset[Op] = frozenset({Op.GAP, Op.GGP, Op.GIO})
+"""The commands whose reply GP255 never suppresses: "The reply will not be suppressed for GAP,
+GGP and GIO commands" (TMCM-6212 5.1, global parameter 255)."""
+
 
 def is_control(number: int) -> bool:
     """Is `number` a control command, which download mode (132) executes instead of storing

@@ -14,14 +14,13 @@ module only moves between them and the modules' serial frames.
 from __future__ import annotations
 
 from ..protocol import can as codec
+from ..protocol import replies
 from ..protocol.frame import FRAME_LEN, Reply, Request
-
-CMD_FIRMWARE_VERSION = 136
 
 
 def is_version_request(data: bytes) -> bool:
-    """Command 136 type 0 (string version): its reply has the special format."""
-    return len(data) >= 2 and data[0] == CMD_FIRMWARE_VERSION and data[1] == 0
+    """A CAN request for command 136 type 0 (string version): its reply has the special format."""
+    return len(data) >= 2 and replies.is_version_request(data[0], data[1])
 
 
 def request_to_frame(data: bytes, address: int) -> bytes:

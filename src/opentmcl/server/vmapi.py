@@ -13,6 +13,7 @@ from collections.abc import Callable
 from functools import partial
 
 from ..protocol.frame import FRAME_LEN, Reply, Request
+from ..protocol.opcodes import Op
 
 GP_BAUD_RATE = 65
 GP_SERIAL_ADDRESS = 66
@@ -24,8 +25,6 @@ GP_HOST_ADDRESS = 76
 GP_CAN_HEARTBEAT = 82
 GP_CAN_SECONDARY = 83
 GP_SERIAL_SECONDARY = 87
-
-GGP = 10
 
 BAUD_RATES = {0: 9600, 1: 14400, 2: 19200, 3: 28800, 4: 38400, 5: 57600, 6: 76800, 7: 115200,
               8: 230400, 9: 250000, 10: 500000, 11: 1000000}
@@ -43,7 +42,7 @@ def global_param(vm, number: int) -> int:
     if callable(getter):
         return int(getter(0, number))
     address = getattr(vm, "address", 1)
-    reply = vm.handle(Request(address, GGP, number, 0, 0).encode())
+    reply = vm.handle(Request(address, Op.GGP, number, 0, 0).encode())
     if len(reply) != FRAME_LEN:
         return DEFAULTS.get(number, 0)
     decoded = Reply.decode(reply, verify=False)

@@ -14,11 +14,11 @@ from collections.abc import Iterable, Sequence
 from ..handover import STOP
 from ..host import Client, TmclError
 from ..host.module import profile_for_version
-from ..protocol.opcodes import STOP_APPLICATION, by_mnemonic
+from ..protocol.opcodes import STOP_APPLICATION, Op
 from .link import link_gate
 from .service import Dashboard, DashboardError
 
-MST, RFS = by_mnemonic("MST").number, by_mnemonic("RFS").number
+_MST, _RFS, _GAP = int(Op.MST), int(Op.RFS), int(Op.GAP)  # plain ints for the requests
 RFS_STATUS = 2
 TARGET_SPEED, MAX_POSITIONING_SPEED, UNIT_MODE = 2, 4, 255
 POSITION_KEYS = {"target_position": 0, "position": 1, "actual_speed": 3}
@@ -44,7 +44,7 @@ def stop_module(d: Dashboard) -> dict[str, object]:
     stopped = []
     for axis in range(d.profile.axes):
         try:
-            d.act(lambda a=axis: d.module.request(MST, 0, a, 0))
+            d.act(lambda a=axis: d.module.request(_MST, 0, a, 0))
             stopped.append(axis)
         except DashboardError as exc:
             errors.append(f"MST {axis}: {exc}")
@@ -66,11 +66,11 @@ def stop_found(client: Client, address: int, version: str) -> dict[str, object]:
     stopped = []
     gate = link_gate(client)
     for command, axis in ([(STOP_APPLICATION, 0)] if STOP_APPLICATION in opcodes else []) + \
-            [(MST, a) for a in range(axes)]:
+            [(_MST, a) for a in range(axes)]:
         try:
             with gate.hold(STOP):
                 client.request(command, 0, axis, 0, address=address)
-            if command == MST:
+            if command == _MST:
                 stopped.append(axis)
         except TmclError as exc:
             errors.append(f"{'program stop' if command == STOP_APPLICATION else f'MST {axis}'}: {exc}")
@@ -95,7 +95,7 @@ def velocity_unit(d: Dashboard, axis: int) -> str:
     if caps.velocity_unit == "tmc429":
         return "internal"
     if caps.unit_mode and UNIT_MODE in d.profile.axis_parameters:
-        mode = d.attempt(lambda: d.module.reply(6, UNIT_MODE, axis).value)
+        mode = d.attempt(lambda: d.module.reply(_GAP, UNIT_MODE, axis).value)
         if mode == 0:
             return "internal"
     return "pps"
@@ -111,19 +111,19 @@ def motion_info(d: Dashboard, axis: int) -> dict[str, object]:
         "axis": axis, "unit": velocity_unit(d, axis),
         "velocity_min": 0 if speed is None else max(0, speed.min),
         "velocity_max": 0 if speed is None else speed.max,
-        "max_positioning_speed": d.attempt(lambda: d.module.reply(6, MAX_POSITIONING_SPEED, axis).value),
+        "max_positioning_speed": d.attempt(lambda: d.module.reply(_GAP, MAX_POSITIONING_SPEED, axis).value),
     }
     for key, number in POSITION_KEYS.items():
-        out[key] = d.attempt(lambda n=number: d.module.reply(6, n, axis).value) if number in params else None
+        out[key] = d.attempt(lambda n=number: d.module.reply(_GAP, n, axis).value) if number in params else None
     out["rfs_status"] = _rfs_status(d, axis)
     return out
 
 
 def _rfs_status(d: Dashboard, axis: int) -> int | None:
     """RFS STATUS: 0 "no ref. search active", other values "reference search active" (3.6.11)."""
-    if RFS not in d.profile.opcodes:
+    if Op.RFS not in d.profile.opcodes:
         return None
     try:
-        return d.module.reply(RFS, RFS_STATUS, axis).value
+        return d.module.reply(_RFS, RFS_STATUS, axis).value
     except TmclError:
         return None

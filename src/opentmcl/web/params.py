@@ -26,7 +26,7 @@ from ..host import TmclError, paramset
 from . import units
 from .lanes import Busy, Lanes
 from .sampler import Sampler
-from .service import Dashboard, DashboardError
+from .service import READ_COMMANDS, Dashboard, DashboardError
 
 Json = dict[str, object]
 MAX_FILE = paramset.MAX_TEXT
@@ -103,7 +103,8 @@ class ParamsApi:
             raise DashboardError(f"{p.name} has axes 0..{p.axes - 1}, not {axis}")
         axis_numbers = [n for n, q in sorted(p.axis_parameters.items()) if q.readable]
         globals_ = [(b, n) for (b, n), q in sorted(p.global_parameters.items()) if q.readable]
-        values = d.read_many([(6, n, axis, 0) for n in axis_numbers] + [(10, n, b, 0) for b, n in globals_])
+        gap, ggp = READ_COMMANDS["axis"], READ_COMMANDS["global"]
+        values = d.read_many([(gap, n, axis, 0) for n in axis_numbers] + [(ggp, n, b, 0) for b, n in globals_])
         axis_values = {str(n): v for n, v in zip(axis_numbers, values, strict=False)}
         global_values = {f"{b}:{n}": v for (b, n), v in zip(globals_, values[len(axis_numbers):], strict=True)}
         return {"axis": axis, "values": {"axis": axis_values, "global": global_values},

@@ -25,7 +25,7 @@ from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from .service import FAST_HZ, HISTORY_SECONDS, Dashboard, DashboardError, Stopping
+from .service import FAST_HZ, HISTORY_SECONDS, READ_COMMANDS, Dashboard, DashboardError, Stopping
 
 log = logging.getLogger("opentmcl.web")
 
@@ -33,7 +33,6 @@ MAX_SERIES = 16         # series per client
 MAX_CLIENTS = 8         # clients per module
 IDLE_SECONDS = 15.0     # a client that has not polled for this long is dropped
 ROWS_KEPT = int(HISTORY_SECONDS * FAST_HZ) + FAST_HZ
-KINDS = {"axis": 6, "global": 10, "io": 15}  # GAP, GGP, GIO (TMCM-6212 manual 3.6.6, 3.6.8, 3.6.15)
 
 Series = tuple[str, int, int]   # (kind, axis/bank, number/port)
 Row = list[float | int | None]  # [seq, t, value per series]
@@ -77,7 +76,7 @@ class Sampler:
 
     def check(self, kind: object, index: object, number: object) -> Series:
         """A series the profile can read, or DashboardError."""
-        if kind not in KINDS or not all(isinstance(x, int) and not isinstance(x, bool) for x in (index, number)):
+        if kind not in READ_COMMANDS or not all(isinstance(x, int) and not isinstance(x, bool) for x in (index, number)):
             raise DashboardError(f"a series is {{kind: axis|global|io, index, number}}, not {kind!r}, {index!r}, {number!r}"[:200])
         assert isinstance(kind, str) and isinstance(index, int) and isinstance(number, int)
         p = self.d.profile
@@ -135,7 +134,7 @@ class Sampler:
         with self.lock:
             self._expire(self.clock())
             wanted = {s: None for c in self.clients.values() for s in c.series}
-        values = dict(zip(wanted, self.d.read_many([(KINDS[s[0]], s[2], s[1], 0) for s in wanted]), strict=True))
+        values = dict(zip(wanted, self.d.read_many([(READ_COMMANDS[s[0]], s[2], s[1], 0) for s in wanted]), strict=True))
         t = round(self.d.clock() - self.d.start, 4)
         seq = next(self.seq)
         with self.lock:

@@ -25,10 +25,12 @@ from functools import partial
 from ..host import Client, TmclError, VersionReply
 from ..host.errors import TmclConnectionError, TmclTimeout
 from ..modules.profile import ModuleProfile
+from ..protocol.opcodes import GET_FIRMWARE_VERSION, Op
 from .link import link_gate
 from .service import DashboardError
 
-VERSION, GGP, SERIAL_ADDRESS = 136, 10, 66
+SERIAL_ADDRESS = 66
+_GGP = int(Op.GGP)  # a plain int, which `Client.request` keeps ready to send
 ADDRESSES = range(1, 256)
 # GP65 "RS485 baud rate" 0..11 (TMCM-6212 manual 5.1) without the rows "Not supported by PCs".
 BAUD_RATES = (9600, 14400, 19200, 28800, 38400, 57600, 115200)
@@ -178,7 +180,7 @@ class Scanner:
 
     def _ask(self, address: int, timeout: float) -> str | None:
         try:
-            reply = self.client.request(VERSION, 0, 0, 0, address=address, timeout=timeout)
+            reply = self.client.request(GET_FIRMWARE_VERSION, 0, 0, 0, address=address, timeout=timeout)
         except TmclTimeout:
             return None
         except TmclConnectionError:
@@ -192,7 +194,7 @@ class Scanner:
         counts as a stray reply) or with another value than `address`."""
         strays = self.client.stray_replies
         try:
-            value = self.client.reply(GGP, SERIAL_ADDRESS, 0, address=address, timeout=timeout).value
+            value = self.client.reply(_GGP, SERIAL_ADDRESS, 0, address=address, timeout=timeout).value
         except TmclConnectionError:
             raise
         except TmclError:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 from ..handover import STOP
 from ..host import Module, TmclError, TmclStatusError, VersionReply
 from ..protocol.frame import Reply
-from ..protocol.opcodes import COMMANDS, GLOBAL_PARAMETER, STOP_COMMANDS
+from ..protocol.opcodes import COMMANDS, GLOBAL_PARAMETER, STOP_COMMANDS, Op
 from ..protocol.status import message
 from .link import TURN_REQUESTS, LinkLoader, LinkModule, link_gate
 
@@ -39,7 +39,11 @@ USER_VARIABLES_SHOWN = 8  # variables 0..7 are always shown, plus those the prog
 # Axis parameters of the axis cards (TMCM-6212 manual 4.1, PD86-1180 manual 5).
 CARD_PARAMS = {"target_position": 0, "position": 1, "velocity": 3, "target_reached": 8, "home": 9,
                "right": 10, "left": 11, "load": 206, "current": 180, "max_current": 6}
-STAP, RSAP, STGP, RSGP = 7, 8, 11, 12
+# plain ints for the requests, which `Client.request` keeps ready to send
+_SAP, _GAP, _SGP, _GGP = int(Op.SAP), int(Op.GAP), int(Op.SGP), int(Op.GGP)
+_SIO, _GIO = int(Op.SIO), int(Op.GIO)
+READ_COMMANDS = {"axis": _GAP, "global": _GGP, "io": _GIO}
+"""The command that reads a value of each kind: GAP, GGP, GIO (TMCM-6212 manual 3.6.6, 3.6.8, 3.6.13)."""
 USER_BANK = 2
 
 
@@ -231,7 +235,7 @@ class Dashboard:
                 "virtual": self.vm is not None, "io": ports, "fast_hz": FAST_HZ,
                 "history_seconds": HISTORY_SECONDS,
                 "velocity_unit": getattr(p.axis_parameters.get(3), "unit", "") or "pps",
-                "has_stap": STAP in p.opcodes, "has_rsap": RSAP in p.opcodes, "has_stgp": STGP in p.opcodes,
+                "has_stap": Op.STAP in p.opcodes, "has_rsap": Op.RSAP in p.opcodes, "has_stgp": Op.STGP in p.opcodes,
                 "program_memory": p.program_memory, "reference_modes": reference_modes(p),
                 "capabilities": {"encoder": p.capabilities.encoder, "encoder_counts": p.capabilities.encoder_counts,
                                  "null_channel": p.capabilities.null_channel,
@@ -240,7 +244,7 @@ class Dashboard:
     # --- sampling --------------------------------------------------------------------------
     def sample_fast(self) -> Sample:
         """Position (axis parameter 1) and actual speed (3) of every axis."""
-        values = self.read_many([(6, n, ax, 0) for ax in range(self.profile.axes) for n in (1, 3)])
+        values = self.read_many([(_GAP, n, ax, 0) for ax in range(self.profile.axes) for n in (1, 3)])
         pos, vel = values[0::2], values[1::2]
         self.seq += 1
         s = Sample(self.seq, round(self.clock() - self.start, 4), pos, vel)
@@ -251,7 +255,7 @@ class Dashboard:
         """Axis cards, outputs/inputs and program status."""
         have = self.profile.axis_parameters
         shown = [num for num in CARD_PARAMS.values() if num in have]
-        values = iter(self.read_many([(6, num, ax, 0) for ax in range(self.profile.axes) for num in shown]))
+        values = iter(self.read_many([(_GAP, num, ax, 0) for ax in range(self.profile.axes) for num in shown]))
         axes = [{key: next(values) if num in have else None for key, num in CARD_PARAMS.items()}
                 for _ in range(self.profile.axes)]
         state = {"axes": axes, "io": self.read_io(), "program": self.program_state(),
@@ -267,26 +271,26 @@ class Dashboard:
         """The axis parameter table of `axis` with its values (GAP, read in batches)."""
         axis = self.check_axis(axis)
         params = sorted(self.profile.axis_parameters.values(), key=lambda p: p.number)
-        values = iter(self.read_many([(6, p.number, axis, 0) for p in params if p.readable]))
+        values = iter(self.read_many([(_GAP, p.number, axis, 0) for p in params if p.readable]))
         out = []
         for p in params:
             row = _param_info(p, axis)
             row["value"] = next(values) if p.readable else None
-            row["can_store"] = p.storable and STAP in self.profile.opcodes
-            row["can_restore"] = p.storable and RSAP in self.profile.opcodes
+            row["can_store"] = p.storable and Op.STAP in self.profile.opcodes
+            row["can_restore"] = p.storable and Op.RSAP in self.profile.opcodes
             out.append(row)
         return out
 
     def global_parameters(self) -> list[dict]:
         """The global parameter table with its values (GGP, read in batches)."""
         params = sorted(self.profile.global_parameters.items())
-        values = iter(self.read_many([(10, num, bank, 0) for (bank, num), p in params if p.readable]))
+        values = iter(self.read_many([(_GGP, num, bank, 0) for (bank, num), p in params if p.readable]))
         out = []
         for (bank, _num), p in params:
             row = _param_info(p, bank)
             row["value"] = next(values) if p.readable else None
-            row["can_store"] = p.storable and STGP in self.profile.opcodes
-            row["can_restore"] = p.storable and RSGP in self.profile.opcodes
+            row["can_store"] = p.storable and Op.STGP in self.profile.opcodes
+            row["can_restore"] = p.storable and Op.RSGP in self.profile.opcodes
             out.append(row)
         return out
 
@@ -296,23 +300,23 @@ class Dashboard:
         p = self.profile.axis_parameters.get(number)
         if p is None or not p.writable:
             raise DashboardError(f"axis parameter {number} is not writable on {self.profile.name}")
-        self.act(lambda: self.module.request(5, number, axis, int(value)))
-        return self.act(lambda: self.module.reply(6, number, axis).value) if p.readable else int(value)
+        self.act(lambda: self.module.request(_SAP, number, axis, int(value)))
+        return self.act(lambda: self.module.reply(_GAP, number, axis).value) if p.readable else int(value)
 
     def set_global_parameter(self, bank: int, number: int, value: int) -> int:
         p = self.profile.global_parameters.get((bank, number))
         if p is None or not p.writable:
             raise DashboardError(f"global parameter {number} of bank {bank} is not writable on {self.profile.name}")
-        self.act(lambda: self.module.request(9, number, bank, int(value)))
-        return self.act(lambda: self.module.reply(10, number, bank).value) if p.readable else int(value)
+        self.act(lambda: self.module.request(_SGP, number, bank, int(value)))
+        return self.act(lambda: self.module.reply(_GGP, number, bank).value) if p.readable else int(value)
 
     def store(self, kind: str, number: int, axis_or_bank: int, restore: bool = False) -> None:
         """STAP/RSAP (axis) or STGP/RSGP (global), manual 3.6.7-3.6.10 / PD86-1180 4.6.7-4.6.8."""
         if kind == "axis":
-            command = RSAP if restore else STAP
+            command = int(Op.RSAP if restore else Op.STAP)
             axis_or_bank = self.check_axis(axis_or_bank)
         elif kind == "global":
-            command = RSGP if restore else STGP
+            command = int(Op.RSGP if restore else Op.STGP)
         else:
             raise DashboardError(f"unknown parameter kind {kind!r}")
         if command not in self.profile.opcodes:
@@ -364,7 +368,7 @@ class Dashboard:
         out = []
         forced = self._forced()
         ports = sorted(self.profile.io.values(), key=lambda i: (i.bank, i.port))
-        values = iter(self.read_many([(15, io.port, io.bank, 0) for io in ports if "R" in io.access]))
+        values = iter(self.read_many([(_GIO, io.port, io.bank, 0) for io in ports if "R" in io.access]))
         for io in ports:
             value = next(values) if "R" in io.access else None
             out.append({"bank": io.bank, "port": io.port, "name": io.name, "kind": io.kind, "value": value,
@@ -381,8 +385,8 @@ class Dashboard:
         io = self.profile.io.get((bank, port))
         if io is None or io.kind != "output":
             raise DashboardError(f"no output port {port} in bank {bank}")
-        self.act(lambda: self.module.request(14, port, bank, int(value)))
-        return self.act(lambda: self.module.reply(15, port, bank).value)
+        self.act(lambda: self.module.request(_SIO, port, bank, int(value)))
+        return self.act(lambda: self.module.reply(_GIO, port, bank).value)
 
     def force_input(self, bank: int, port: int, value: int | None) -> None:
         """Virtual modules only: hold an input at `value` (None releases it). No TMCL command
@@ -580,7 +584,7 @@ class Dashboard:
             if src is not None and src.file == "<editor>":
                 line = src.line
         shown = self._variables_shown()
-        variables = dict(zip(shown, self.read_many([(10, n, USER_BANK, 0) for n in shown]), strict=True))
+        variables = dict(zip(shown, self.read_many([(_GGP, n, USER_BANK, 0) for n in shown]), strict=True))
         return {"seq": seq, "mode": st.mode, "mode_name": st.mode_name, "waiting": st.waiting, "pc": st.pc, "line": line,
                 "a": st.accumulator, "x": st.x_register, "flags": describe_flags(st.flags),
                 "variables": variables, "breakpoints": sorted(self.breakpoints),

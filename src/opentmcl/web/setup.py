@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 from ..host import TmclError
 from ..modules.profile import ModuleProfile
-from ..protocol.opcodes import format_instruction
-from .service import Dashboard, DashboardError
+from ..protocol.opcodes import Op, format_instruction
+from .service import READ_COMMANDS, Dashboard, DashboardError
 
-GAP, SAP, STAP, GGP, SGP, STGP, GIO = 6, 5, 7, 10, 9, 11, 15
 MAX_ITEMS = 64   # values one request may read or write
+_SAP, _SGP = int(Op.SAP), int(Op.SGP)  # plain ints for the requests
 
 
 @dataclass(frozen=True)
@@ -66,8 +66,7 @@ def items(d: Dashboard, raw: object, *, writing: bool = False) -> list[Item]:
 
 
 def _read_request(it: Item) -> tuple[int, int, int, int]:
-    command = {"axis": GAP, "global": GGP, "io": GIO}[it.kind]
-    return (command, it.number, it.index, 0)
+    return (READ_COMMANDS[it.kind], it.number, it.index, 0)
 
 
 def read(d: Dashboard, raw: object) -> list[dict[str, object]]:
@@ -76,6 +75,16 @@ def read(d: Dashboard, raw: object) -> list[dict[str, object]]:
     values = d.read_many([_read_request(it) for it in wanted])
     return [{"kind": it.kind, "index": it.index, "number": it.number, "value": v}
             for it, v in zip(wanted, values, strict=True)]
+
+
+def _write_command(it: Item) -> int:
+    """SAP for an axis parameter, SGP for a global one (TMCM-6212 manual 3.6.5, 3.6.7)."""
+    return _SAP if it.kind == "axis" else _SGP
+
+
+def _store_command(it: Item) -> Op:
+    """STAP for an axis parameter, STGP for a global one (PD86-1180 manual 4.6.7, TMCM-6212 3.6.9)."""
+    return Op.STAP if it.kind == "axis" else Op.STGP
 
 
 def _text(command: int, it: Item, value: int = 0) -> str:
@@ -112,9 +121,9 @@ def apply(d: Dashboard, raw: object, store: bool = False) -> dict[str, object]:
     sent: list[str] = []
     try:
         for (it, value), before in zip(writes, old, strict=True):
-            d.act(lambda it=it, value=value: d.module.request(SAP if it.kind == "axis" else SGP, it.number, it.index, value))
+            d.act(lambda it=it, value=value: d.module.request(_write_command(it), it.number, it.index, value))
             done.append((it, int(before or 0)))
-            sent.append(_text(SAP if it.kind == "axis" else SGP, it, value))
+            sent.append(_text(_write_command(it), it, value))
     except DashboardError as exc:
         undone = _undo(d, done)
         raise DashboardError(f"{exc}: nothing kept ({undone})") from None
@@ -138,9 +147,9 @@ def _undo(d: Dashboard, done: list[tuple[Item, int]], restore_stored: list[Item]
     failed = []
     for it, before in reversed(done):
         try:
-            d.module.request(SAP if it.kind == "axis" else SGP, it.number, it.index, before)
+            d.module.request(_write_command(it), it.number, it.index, before)
             if restore_stored and it in restore_stored:
-                d.module.request(STAP if it.kind == "axis" else STGP, it.number, it.index, 0)
+                d.module.request(_store_command(it), it.number, it.index, 0)
         except TmclError as exc:
             failed.append(f"{it.kind} parameter {it.number}: {exc}")
     if failed:
@@ -151,11 +160,11 @@ def _undo(d: Dashboard, done: list[tuple[Item, int]], restore_stored: list[Item]
 def _store(d: Dashboard, written: list[Item], stored: list[str], not_stored: list[str], kept: list[Item]) -> None:
     """STAP/STGP of each written item the module can store; `stored` and `kept` grow as they go."""
     for it in written:
-        command = STAP if it.kind == "axis" else STGP
+        command = _store_command(it)
         p = d.profile.axis_parameters[it.number] if it.kind == "axis" else d.profile.global_parameters[(it.index, it.number)]
         if command not in d.profile.opcodes:
             not_stored.append(f"{it.kind} parameter {it.number}: {d.profile.name} has no "
-                              f"{'STAP' if command == STAP else 'STGP'}")
+                              f"{command.name}")
             continue
         if not p.storable:
             not_stored.append(f"{it.kind} parameter {it.number}: not storable on {d.profile.name}")

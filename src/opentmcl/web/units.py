@@ -17,7 +17,7 @@ import math
 import tomllib
 
 from ..host import units as hu
-from .service import Dashboard, DashboardError
+from .service import READ_COMMANDS, Dashboard, DashboardError
 
 KINDS = ("pps", "rps", "rpm", "user")
 FULLSTEPS_DEFAULT = 200    # "with most motors 200 (1.8°)" (TMCM-6212 manual 6.5)
@@ -28,7 +28,7 @@ MAX_NAME = 12
 def _read(d: Dashboard, axis: int) -> dict[int, int | None]:
     """AP140, 202, 153, 154 and 255 of `axis` where the profile has them (one batch)."""
     have = [n for n in (MICROSTEPS, FULLSTEPS, RAMP_DIV, PULSE_DIV, UNIT_MODE) if n in d.profile.axis_parameters]
-    return dict(zip(have, d.read_many([(6, n, axis, 0) for n in have]), strict=True))
+    return dict(zip(have, d.read_many([(READ_COMMANDS["axis"], n, axis, 0) for n in have]), strict=True))
 
 
 def _factors(d: Dashboard, v: dict[int, int | None]) -> tuple[str, float, float]:
