@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from opentmcl.capture.decode import HOST, MODULE, Decoder
 from opentmcl.modules.profile import load_profile
+from opentmcl.protocol.frame import Request
+from opentmcl.protocol.opcodes import Op
 
 # TMCM-6212 manual 3.6.8 example: GGP 66, 0 -> 01 0A 42 00 00 00 00 00 4D
 GGP_66 = bytes.fromhex("010A4200000000004D")
@@ -119,3 +121,14 @@ def test_long_ascii_text_is_split_into_bounded_records():
     assert all(len(json.dumps({"record": "frame", **r})) < MAX_LINE_BYTES for r in recs)
     (line,) = d.feed(0.0, HOST, b"AGAP 1, 0\r")
     assert line["text"] == "AGAP 1, 0\r"
+
+
+def test_aap_and_agp_name_the_parameter_their_type_field_numbers():
+    """TMCM-6212 3.6.27 AAP "<parameter number>, <motor number>" and 3.6.28 AGP "<parameter number>,
+    <bank number>" (docs/capture.md `parameter`): named as SAP 4, 0 and SGP 66, 0 are; ACO's type is
+    a coordinate (3.6.25), no parameter."""
+    d = decoder()
+    aap, agp, aco = (d.feed(1.0, HOST, Request(1, c, t, 0, 0).encode())[0]
+                     for c, t in ((Op.AAP, 4), (Op.AGP, 66), (Op.ACO, 4)))
+    assert aap["parameter"] == "max_positioning_speed" and agp["parameter"] == "serial_address"
+    assert "parameter" not in aco

@@ -225,3 +225,16 @@ def test_an_engine_keyword_the_engine_lacks_is_a_profile_error(tmp_path, parent)
     done = cli("demo", "--module", path, "--duration", "0.1")
     assert done.returncode == 2 and "warp" in done.stderr and "internal error" not in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+
+
+def test_a_probed_module_without_a_built_in_match_guesses_the_base_command_set(tmp_path):
+    """docs/profiles.md `profile probe`: the standalone skeleton's `opcodes` are the commands 1-39
+    of the manuals' overviews (TMCM-6212 3.4.1, PD86-1180 4.4.1: no 16-18 or 29) and the control
+    commands with 138 (3.6.35, 3.6.36), not the PD86-1180's 139 or the PD28-1021's extended set."""
+    from opentmcl.host.probe import ProbeResult, skeleton
+
+    path = tmp_path / "probed.toml"
+    path.write_text(skeleton(ProbeResult("9999V100", None, 1, {0: {4: 1000}}), "sim://"))
+    ops = load_profile(str(path)).opcodes
+    assert {1, 15, 19, 28, 30, 39, 128, 138} <= ops
+    assert not {16, 17, 18, 29, 40, 64, 80, 139} & ops
