@@ -28,7 +28,15 @@ from dataclasses import dataclass
 from types import MappingProxyType
 from typing import TYPE_CHECKING
 
-from ..protocol.opcodes import COMMANDS, ENTER_DOWNLOAD_MODE, EXIT_DOWNLOAD_MODE, Command, Op, is_control
+from ..protocol.opcodes import (
+    ALWAYS_ANSWERED,
+    COMMANDS,
+    ENTER_DOWNLOAD_MODE,
+    EXIT_DOWNLOAD_MODE,
+    Command,
+    Op,
+    is_control,
+)
 from ..protocol.status import Status
 from . import commands as c
 from . import program as p
@@ -243,9 +251,8 @@ def _not_own_download(command: int) -> Result:
 
 def suppressible(command: int) -> bool:
     """May GP255 = 1 suppress the reply? "The reply will not be suppressed for GAP, GGP and GIO
-    commands" (TMCM-6212 manual 5.1): not for the reads the request path binds."""
-    spec = TABLE.get(command)
-    return spec is None or spec.binds != "read"
+    commands" (TMCM-6212 manual 5.1, `opcodes.ALWAYS_ANSWERED`, the rule the host reads too)."""
+    return command not in ALWAYS_ANSWERED
 
 
 def _ok(status: int) -> bool:

@@ -18,6 +18,7 @@ from typing import Any, Literal, overload
 from ..faults import load_plan
 from ..modules.profile import ModuleProfile, load_profile
 from ..protocol.frame import FRAME_LEN, Reply, encode_frame
+from ..protocol.opcodes import REQUEST_TARGET_REACHED_EVENT
 from ..protocol.status import Status
 from .ascii import AsciiInterface
 from .commands import StatusReply
@@ -386,7 +387,7 @@ class VirtualModule:
         if self.axes[i].engine.position_reached:
             self.armed &= ~(1 << i)
             self.events.append(Reply(self.host_address, self.address, Status.POSITION_REACHED_EVENT,
-                                     138, 1 << i).encode())
+                                     REQUEST_TARGET_REACHED_EVENT, 1 << i).encode())
 
     # --- services used by the command handlers ---------------------------------------
     def reference_search(self, axis: Motor) -> ReferenceSearch:
