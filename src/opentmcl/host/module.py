@@ -224,7 +224,7 @@ class Axis:
     @property
     def position(self) -> int:
         """Actual position (axis parameter 1) in microsteps."""
-        return self._req(_GAP, 1).value
+        return self.module.reply(_GAP, 1, self.number).value  # (`_req` inlined: the most polled read)
 
     @position.setter
     def position(self, value: int) -> None:
@@ -241,7 +241,7 @@ class Axis:
     @property
     def position_reached(self) -> bool:
         """Axis parameter 8: "always set when target position and actual position are equal"."""
-        return bool(self._req(_GAP, 8).value)
+        return self.module.reply(_GAP, 8, self.number).value != 0
 
     # --- motion -------------------------------------------------------------------
     def rotate(self, velocity: int) -> None:
