@@ -12,7 +12,7 @@ import pytest
 from opentmcl.capture import replay
 
 from .helpers import cli
-from .recorder import planted_session
+from .recorder import planted_session, record, reply_of
 
 
 @pytest.fixture(scope="module")
@@ -89,3 +89,17 @@ def test_the_same_session_on_the_twin_itself_agrees_everywhere(tmp_path):
     report = replay(planted_session(tmp_path, "TMCM-6212"), "TMCM-6212")
     assert report.ok and not report.causes
     assert all(ok == total for ok, total in report.areas.values()) and report.areas["move durations"][1] >= 4
+
+
+def test_a_move_to_a_stored_coordinate_is_measured_like_any_position_move(tmp_path):
+    """TMCM-6212 3.6.4 MVP COORD "moves the motor to a previously stored coordinate" (SCO, 3.6.22),
+    and AP8 reports it reached (4.1) as for MVP ABS: the report measures its duration, module
+    against twin, as it does for MVP ABS (capture/moves.py; before, only ABS and REL counted)."""
+    steps = [(0.0, (30, 1, 0, 20_000)), (0.01, (4, 2, 0, 1))]   # SCO 1, 0, 20000; MVP COORD, 0, 1
+    steps += [(0.02 + 0.05 * k, (6, 8, 0, 0)) for k in range(60)]  # GAP 8, 0 until it is reached
+    path = record(tmp_path / "coord.jsonl", steps)
+    assert reply_of(path, lambda r: r.get("command") == 6 and r.get("kind") == "reply" and r["value"] == 1)
+    report = replay(path, "TMCM-6212")
+    moves = [m for m in report.moves if m.request.startswith("MVP COORD")]
+    assert len(moves) == 1 and moves[0].kind == "position" and moves[0].ok and moves[0].twin is not None
+    assert moves[0].real[0] <= moves[0].twin_mid <= moves[0].real[1] + 0.05

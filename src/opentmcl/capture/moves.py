@@ -1,6 +1,7 @@
 """Move durations, the module's against the twin's (docs/capture.md "Reports").
 
-A move is a motion request that succeeded: MVP (and SAP 0) ends when the axis reports its target
+A move is a motion request that succeeded (`twin.move_end`, the twins' rule too): MVP (ABS, REL,
+COORD; and SAP 0) ends when the axis reports its target
 reached (AP8 = 1, or the command-138 event), ROR/ROL/MST (and SAP 2) when the speed the host reads
 (AP3) is the one asked for, RFS START when RFS STATUS reads 0. The module's end lies between the
 last read that says "not yet" and the first that says "done", each within its window
@@ -14,7 +15,7 @@ from dataclasses import dataclass
 
 from ..protocol.opcodes import Op, format_instruction
 from .timing import Slot
-from .twin import TwinRun
+from .twin import TwinRun, move_end
 
 
 @dataclass
@@ -54,21 +55,6 @@ class Move:
                 "percent": None if self.percent is None else round(self.percent, 2), "ok": self.ok}
 
 
-def _kind(rec: dict) -> tuple[str, int] | None:
-    command, type_, value = rec["command"], rec["type"], rec["value"]
-    if command == Op.MVP and type_ in (0, 1) or command == Op.SAP and type_ == 0:
-        return "position", value
-    if command in (Op.ROR, Op.ROL):
-        return "speed", value if command == Op.ROR else -value
-    if command == Op.MST:
-        return "speed", 0
-    if command == Op.SAP and type_ == 2:
-        return "speed", value
-    if command == Op.RFS and type_ == 0:
-        return "search", 0
-    return None
-
-
 def _verdict(kind: str, target: int, slot: Slot) -> bool | None:
     """Does this read (or event) say the move is done (True), not yet (False), or nothing (None)?"""
     rec, reply = slot.rec, slot.reply
@@ -85,7 +71,7 @@ def _verdict(kind: str, target: int, slot: Slot) -> bool | None:
 
 
 def _axis_motion(rec: dict, address: int) -> bool:
-    return rec["kind"] == "request" and rec["address"] == address and _kind(rec) is not None
+    return rec["kind"] == "request" and rec["address"] == address and move_end(rec) is not None
 
 
 def find_moves(slots: list[Slot], events: list[tuple[float, dict]], runs: list[TwinRun], address: int,
@@ -96,7 +82,7 @@ def find_moves(slots: list[Slot], events: list[tuple[float, dict]], runs: list[T
         rec = start.rec
         if not _axis_motion(rec, address) or start.reply is None or start.reply.get("status") != 100:
             continue
-        kind, target = _kind(rec)  # type: ignore[misc]
+        kind, target = move_end(rec)  # type: ignore[misc]
         motor = rec["motor"]
         last_no, first_yes = _reads_after(slots, i, kind, target, address)
         if kind == "position":

@@ -93,6 +93,25 @@ class _Watch:
     value: int = 0
 
 
+def move_end(rec: dict) -> tuple[str, int] | None:
+    """What ends the move a request starts, and the value that tells it (docs/capture.md "Reports"):
+    "position" for MVP ABS, REL or COORD and SAP 0 (TMCM-6212 3.6.4, 4.1: AP8 "target position
+    reached"; the value is the request's), "speed" for ROR, ROL (the signed speed asked), MST (0) and
+    SAP 2 (AP3 reaching it), "search" for RFS START (RFS STATUS 0, 3.6.11); None for anything else."""
+    command, type_, value = rec["command"], rec["type"], rec["value"]
+    if command == Op.MVP and type_ in (0, 1, 2) or command == Op.SAP and type_ == 0:
+        return "position", value
+    if command == Op.ROR or command == Op.ROL:
+        return "speed", value if command == Op.ROR else -value
+    if command == Op.MST:
+        return "speed", 0
+    if command == Op.SAP and type_ == 2:
+        return "speed", value
+    if command == Op.RFS and type_ == 0:
+        return "search", 0
+    return None
+
+
 @dataclass
 class TwinRun:
     """A twin's answers (`results` by request number), events, and motion timing."""
@@ -201,20 +220,11 @@ class Twin:
 
     def watch(self, rec: dict) -> None:
         """After a motion request that succeeded: watch for its end (superseding the axis's last)."""
-        command, type_, motor, value = rec["command"], rec["type"], rec["motor"], rec["value"]
-        kind = None
-        if command == Op.MVP or (command == Op.SAP and type_ == 0):
-            kind, target = "position", 0
-        elif command in (Op.ROR, Op.ROL):
-            kind, target = "speed", value if command == Op.ROR else -value
-        elif command == Op.MST:
-            kind, target = "speed", 0
-        elif command == Op.SAP and type_ == 2:
-            kind, target = "speed", value
-        elif command == Op.RFS and type_ == 0:
-            kind, target = "search", 0
-        if kind is None or motor >= self.vm.profile.axes:
+        motor = rec["motor"]
+        end = move_end(rec)
+        if end is None or motor >= self.vm.profile.axes:
             return
+        kind, target = end
         for n in [n for n, w in self.watches.items() if w.motor == motor]:
             del self.watches[n]
         self.watches[rec["n"]] = _Watch(rec["n"], motor, kind, target)
