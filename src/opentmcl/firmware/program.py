@@ -21,6 +21,8 @@ if TYPE_CHECKING:
 
 STOPPED, RUNNING, STEPPING, RESET = 0, 1, 2, 3
 _OK = int(Status.OK)
+WRITE_PROTECTED, READ_PROTECTED = (2, 3), (1, 3)
+"""GP81 code protection: 2 and 3 forbid overwriting (132), 1 and 3 reading back (134)."""
 EMPTY = (0, 0, 0, 0)
 
 
@@ -36,6 +38,12 @@ class ProgramMemory:
     @property
     def protection(self) -> int:
         return self.vm.globals.get_raw(0, 81)
+
+    def check(self, address: int, protected: tuple[int, ...] = ()) -> None:
+        """Status 4 unless `address` lies in the program memory and GP81 (code protection) is
+        none of `protected`."""
+        if protected and self.protection in protected or not 0 <= address < self.size:
+            raise TmclStatus(4)
 
     def store(self, address: int, ins: tuple[int, int, int, int]) -> None:
         self.code[address] = ins
@@ -69,8 +77,7 @@ def stop_application(vm: VirtualModule, type: int, motor: int, value: int, progr
 def run_application(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """129: type 0 from the current address, type 1 from the address in the value."""
     if type == 1:
-        if not 0 <= value < vm.program.size:
-            raise TmclStatus(4)
+        vm.program.check(value)
         vm.interpreter.run(value)
     elif type == 0:
         vm.interpreter.run(None)
@@ -93,9 +100,7 @@ def reset_application(vm: VirtualModule, type: int, motor: int, value: int, prog
 
 def enter_download_mode(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """132: store the following commands from the address in the value (not with GP81 = 2 or 3)."""
-    mem = vm.program
-    if mem.protection in (2, 3) or not 0 <= value < mem.size:
-        raise TmclStatus(4)
+    vm.program.check(value, WRITE_PROTECTED)
     vm.interpreter.stop()
     vm.download_mode = True
     vm.download_pointer = value
@@ -114,10 +119,8 @@ def exit_download_mode(vm: VirtualModule, type: int, motor: int, value: int, pro
 
 def read_program_memory(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:
     """134: the instruction at the address in the value (not with GP81 = 1 or 3)."""
-    mem = vm.program
-    if mem.protection in (1, 3) or not 0 <= value < mem.size:
-        raise TmclStatus(4)
-    return read_reply(vm, mem.code[value])
+    vm.program.check(value, READ_PROTECTED)
+    return read_reply(vm, vm.program.code[value])
 
 
 def get_application_status(vm: VirtualModule, type: int, motor: int, value: int, program: bool) -> Result:

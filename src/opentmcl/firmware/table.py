@@ -204,17 +204,10 @@ _SPECS = (
 TABLE: Mapping[int, Spec] = MappingProxyType({spec.number: spec for spec in _SPECS})
 """Every TMCL command the firmware knows, by number."""
 
-WITH_ACCUMULATOR: Mapping[int, tuple[int, Callable[[int], int]]] = MappingProxyType(
-    {spec.number: spec.accumulator for spec in _SPECS if spec.accumulator is not None})
-"""MVPA, ROLA, RORA: the direct-mode command they run with the accumulator as value."""
-
 
 def available(vm: VirtualModule, number: int) -> Spec | None:
     """The command's entry if the module has it (the profile's command set), else None."""
     return TABLE.get(number) if number in vm.opcodes else None
-
-
-_available = available
 
 
 def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, *, program: bool,
@@ -235,7 +228,7 @@ def execute(vm: VirtualModule, command: int, type: int, motor: int, value: int, 
                     return _not_own_download(command)
             elif not is_control(command):
                 return vm.store_instruction(command, type, motor, value)
-        spec = _available(vm, command)
+        spec = available(vm, command)
         if spec is None:
             return _INVALID, 0
         vm.scheduler.prepare(spec.effect_of(type, motor))
