@@ -139,7 +139,10 @@ def test_an_error_or_ctrl_c_sends_mst_to_every_axis_first(tmp_path):
                                                                                                    "restore"]
         assert cli("send", "128 0, 0, 0", "--to", url).returncode == 0   # stop the program
         log = tmp_path / "c.jsonl"
-        proc = subprocess.Popen([sys.executable, "-m", "opentmcl", "conform", url, *MOTION, "--capture", str(log)],
+        # a first move far longer than the wait for its mark, so the Ctrl-C lands inside the run
+        # even on a busy machine (with MOTION's 20000 µsteps the run could end before it)
+        long = [("2000000" if a == "20000" else a) for a in MOTION]
+        proc = subprocess.Popen([sys.executable, "-m", "opentmcl", "conform", url, *long, "--capture", str(log)],
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE)
         deadline = time.monotonic() + 60
         while not (log.exists() and '"phase":"move"' in log.read_text()):
