@@ -142,8 +142,11 @@ def test_an_error_or_ctrl_c_sends_mst_to_every_axis_first(tmp_path):
         # a first move far longer than the wait for its mark, so the Ctrl-C lands inside the run
         # even on a busy machine (with MOTION's 20000 µsteps the run could end before it)
         long = [("2000000" if a == "20000" else a) for a in MOTION]
+        # SIGINT as at a terminal: a shell that starts jobs in the background (CI's, `nohup ... &`)
+        # hands them SIGINT ignored, and a Python started so keeps it ignored
         proc = subprocess.Popen([sys.executable, "-m", "opentmcl", "conform", url, *long, "--capture", str(log)],
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
         deadline = time.monotonic() + 60
         while not (log.exists() and '"phase":"move"' in log.read_text()):
             assert proc.poll() is None and time.monotonic() < deadline

@@ -119,6 +119,7 @@ def test_cancel_at_any_step_leaves_nothing_applied(six):
     assert commands(page) == ["SAP 6, 2, 255"]  # the last valid value: 100 % of the maximum
     page.click("#wizard-apply")
     wait_until(lambda: gap(m, 6, 2) == 255, "AP6 = 255 applied")
+    page.wait_for_selector("#wizard-applied", timeout=TIMEOUT_MS)  # the page has the old values to write back
     page.click("#wizard-cancel")
     console_has(page, "Motor cancelled: 1 value(s) written back")
     assert gap(m, 6, 2) == 128
@@ -175,6 +176,7 @@ def test_reference_search_switch_polarity_of_the_pd86_1180(pd86):
     assert commands(page) == ["SAP 193, 0, 2", "SGP 79, 0, 1"]
     page.click("#wizard-apply")
     wait_until(lambda: m.client.reply(GGP, 79, 0).value == 1 and gap(m, 193, 0) == 2, "mode 2 and GP79 = 1")
+    page.wait_for_selector("#wizard-applied", timeout=TIMEOUT_MS)  # the page has the old values to write back
     page.click("#wizard-cancel")
     console_has(page, "Reference search cancelled: 2 value(s) written back")
     assert m.client.reply(GGP, 79, 0).value == 0 and gap(m, 193, 0) == 1
@@ -236,5 +238,6 @@ def test_encoder_prescaler_of_the_pd86_1180(pd86):
     assert commands(page) == ["SAP 210, 0, 6404", "SAP 212, 0, 100"]
     page.click("#wizard-apply")
     wait_until(lambda: gap(m, 210, 0) == 6404 and gap(m, 212, 0) == 100, "AP210 = 6404, AP212 = 100")
+    page.wait_for_selector("#wizard-applied", timeout=TIMEOUT_MS)  # the page has the old values to write back
     page.click("#wizard-cancel")
     wait_until(lambda: gap(m, 210, 0) == 6400 and gap(m, 212, 0) == 0, "written back")
